@@ -1,0 +1,339 @@
+//! Element matrices for linear isotropic elasticity on isoparametric hexahedra.
+//!
+//! The formulation mirrors CalculiX so that eigenfrequencies computed from
+//! these matrices match CalculiX on the same mesh: C3D8 is the plain
+//! displacement element with full 2x2x2 Gauss integration (no incompatible
+//! modes, no reduced integration), C3D20 uses full 3x3x3 integration, and the
+//! consistent mass uses the same rule as the stiffness.
+//!
+//! Degrees of freedom are three translations per node, node-major:
+//! `[u0x, u0y, u0z, u1x, u1y, u1z, ...]`.
+
+pub mod gauss;
+pub mod hex20;
+pub mod hex8;
+
+use gauss::GaussOrder;
+use std::fmt;
+
+/// Largest node count of any supported element; sizes the stack buffers of
+/// the integration loop so that it never allocates.
+pub const MAX_NODES_PER_ELEMENT: usize = 20;
+
+/// Supported solid element types.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ElementKind {
+    /// 8-node trilinear hexahedron (CalculiX C3D8).
+    Hex8,
+    /// 20-node quadratic serendipity hexahedron (CalculiX C3D20).
+    Hex20,
+}
+
+impl ElementKind {
+    pub const fn nodes_per_element(self) -> usize {
+        match self {
+            ElementKind::Hex8 => hex8::NODE_COUNT,
+            ElementKind::Hex20 => hex20::NODE_COUNT,
+        }
+    }
+
+    pub const fn name(self) -> &'static str {
+        match self {
+            ElementKind::Hex8 => "hex8",
+            ElementKind::Hex20 => "hex20",
+        }
+    }
+
+    /// Natural coordinates (each -1, 0 or +1) of the element's nodes in
+    /// C3D8/C3D20 order. The mesher uses this table so that connectivity and
+    /// shape functions can never disagree about the node order.
+    pub const fn natural_node_coords(self) -> &'static [[i8; 3]] {
+        match self {
+            ElementKind::Hex8 => &hex8::NATURAL_COORDS,
+            ElementKind::Hex20 => &hex20::NATURAL_COORDS,
+        }
+    }
+
+    /// Gauss rule used for both stiffness and mass (CalculiX full integration).
+    pub const fn gauss_order(self) -> GaussOrder {
+        match self {
+            ElementKind::Hex8 => GaussOrder::Two,
+            ElementKind::Hex20 => GaussOrder::Three,
+        }
+    }
+
+    fn shape_functions(self, xi: [f64; 3], n: &mut [f64], dn: &mut [[f64; 3]]) {
+        match self {
+            ElementKind::Hex8 => hex8::shape_functions(xi, n, dn),
+            ElementKind::Hex20 => hex20::shape_functions(xi, n, dn),
+        }
+    }
+}
+
+impl fmt::Display for ElementKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Isotropic linear elastic material.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Elasticity {
+    /// Young's modulus.
+    pub e: f64,
+    /// Poisson's ratio.
+    pub nu: f64,
+}
+
+impl Elasticity {
+    /// Positive-definite strain energy needs E > 0 and -1 < nu < 0.5.
+    pub fn validate(&self) -> Result<(), ElementError> {
+        let ok = self.e.is_finite() && self.e > 0.0 && self.nu > -1.0 && self.nu < 0.5;
+        if ok { Ok(()) } else { Err(ElementError::InvalidMaterial { e: self.e, nu: self.nu }) }
+    }
+
+    /// Lame parameters (lambda, mu).
+    pub fn lame(&self) -> (f64, f64) {
+        let lambda = self.e * self.nu / ((1.0 + self.nu) * (1.0 - 2.0 * self.nu));
+        let mu = self.e / (2.0 * (1.0 + self.nu));
+        (lambda, mu)
+    }
+
+    /// 6x6 constitutive matrix in Voigt order xx, yy, zz, xy, yz, zx acting on
+    /// engineering shear strains (gamma = 2 epsilon). CalculiX orders the
+    /// shear components xy, xz, yz; for an isotropic material the matrix is
+    /// invariant under that permutation, so the element matrices are equal.
+    pub fn d_matrix(&self) -> [[f64; 6]; 6] {
+        let (lambda, mu) = self.lame();
+        let mut d = [[0.0; 6]; 6];
+        for (i, row) in d.iter_mut().enumerate().take(3) {
+            for (j, v) in row.iter_mut().enumerate().take(3) {
+                *v = if i == j { lambda + 2.0 * mu } else { lambda };
+            }
+        }
+        for (i, row) in d.iter_mut().enumerate().skip(3) {
+            row[i] = mu;
+        }
+        d
+    }
+}
+
+/// Why an element matrix could not be computed.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ElementError {
+    /// `coords` does not hold one point per element node.
+    WrongNodeCount { kind: ElementKind, expected: usize, got: usize },
+    /// The output buffer has the wrong length.
+    WrongOutputSize { expected: usize, got: usize },
+    /// A node coordinate is NaN or infinite.
+    NonFiniteCoordinate { node: usize },
+    /// E <= 0 or nu outside (-1, 0.5).
+    InvalidMaterial { e: f64, nu: f64 },
+    /// Density not finite and positive.
+    InvalidDensity { rho: f64 },
+    /// Inverted or degenerate element: det J <= 0 at a Gauss point.
+    NonPositiveJacobian { kind: ElementKind, gauss_point: usize, xi: [f64; 3], det: f64 },
+}
+
+impl fmt::Display for ElementError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ElementError::WrongNodeCount { kind, expected, got } => {
+                write!(f, "{kind} element needs {expected} node coordinates, got {got}")
+            }
+            ElementError::WrongOutputSize { expected, got } => {
+                write!(f, "element matrix buffer must hold {expected} entries, got {got}")
+            }
+            ElementError::NonFiniteCoordinate { node } => {
+                write!(f, "element node {node} has a non-finite coordinate")
+            }
+            ElementError::InvalidMaterial { e, nu } => write!(
+                f,
+                "invalid elastic material (E = {e}, nu = {nu}): need E > 0 and -1 < nu < 0.5"
+            ),
+            ElementError::InvalidDensity { rho } => {
+                write!(f, "invalid density {rho}: must be finite and positive")
+            }
+            ElementError::NonPositiveJacobian { kind, gauss_point, xi, det } => write!(
+                f,
+                "{kind} element is inverted or degenerate: Jacobian determinant {det:e} at Gauss point \
+                 {gauss_point} (natural coordinates {:.4}, {:.4}, {:.4})",
+                xi[0], xi[1], xi[2]
+            ),
+        }
+    }
+}
+
+impl std::error::Error for ElementError {}
+
+/// Element stiffness matrix (3n x 3n, row-major, node-major DoFs) written to
+/// `out`, which must have exactly `(3n)^2` entries.
+pub fn element_stiffness(
+    kind: ElementKind,
+    coords: &[[f64; 3]],
+    mat: &Elasticity,
+    out: &mut [f64],
+) -> Result<(), ElementError> {
+    mat.validate()?;
+    let n = kind.nodes_per_element();
+    let dofs = 3 * n;
+    check_output(out, dofs * dofs)?;
+    let d = mat.d_matrix();
+    out.fill(0.0);
+
+    // D * B_b for every node, reused for all node pairs at one Gauss point.
+    let mut db = [[[0.0; 3]; 6]; MAX_NODES_PER_ELEMENT];
+    for_each_gauss_point(kind, coords, |_, grad, weight| {
+        for (db_b, g) in db.iter_mut().zip(grad) {
+            let b = strain_displacement(g);
+            for (r, row) in db_b.iter_mut().enumerate() {
+                for (j, v) in row.iter_mut().enumerate() {
+                    *v = (0..6).map(|k| d[r][k] * b[k][j]).sum::<f64>() * weight;
+                }
+            }
+        }
+        // Only the upper block triangle is accumulated; the mirror below keeps
+        // the matrix exactly symmetric regardless of rounding.
+        for a in 0..n {
+            let b_a = strain_displacement(&grad[a]);
+            for (b, db_b) in db.iter().enumerate().take(n).skip(a) {
+                for i in 0..3 {
+                    for j in 0..3 {
+                        let k: f64 = (0..6).map(|r| b_a[r][i] * db_b[r][j]).sum();
+                        out[(3 * a + i) * dofs + 3 * b + j] += k;
+                    }
+                }
+            }
+        }
+    })?;
+    mirror_upper_blocks(out, n, 3);
+    Ok(())
+}
+
+/// Scalar consistent mass matrix (n x n, row-major) `M_ab = int rho N_a N_b dV`
+/// written to `out`, which must have exactly `n^2` entries.
+///
+/// The full 3n x 3n mass matrix for node-major DoFs is this matrix Kronecker
+/// the 3x3 identity (`M_full[3a+i][3b+j] = M[a][b] * delta_ij`); the caller
+/// expands it, which keeps the element output 9 times smaller.
+pub fn element_mass(
+    kind: ElementKind,
+    coords: &[[f64; 3]],
+    rho: f64,
+    out: &mut [f64],
+) -> Result<(), ElementError> {
+    if !(rho.is_finite() && rho > 0.0) {
+        return Err(ElementError::InvalidDensity { rho });
+    }
+    let n = kind.nodes_per_element();
+    check_output(out, n * n)?;
+    out.fill(0.0);
+    for_each_gauss_point(kind, coords, |shape, _, weight| {
+        for a in 0..n {
+            for b in a..n {
+                out[a * n + b] += rho * shape[a] * shape[b] * weight;
+            }
+        }
+    })?;
+    mirror_upper_blocks(out, n, 1);
+    Ok(())
+}
+
+fn check_output(out: &[f64], expected: usize) -> Result<(), ElementError> {
+    if out.len() == expected {
+        Ok(())
+    } else {
+        Err(ElementError::WrongOutputSize { expected, got: out.len() })
+    }
+}
+
+/// Strain-displacement block of one node for engineering strains in Voigt
+/// order xx, yy, zz, xy, yz, zx; `g` is the physical gradient of its shape
+/// function.
+fn strain_displacement(g: &[f64; 3]) -> [[f64; 3]; 6] {
+    [
+        [g[0], 0.0, 0.0],
+        [0.0, g[1], 0.0],
+        [0.0, 0.0, g[2]],
+        [g[1], g[0], 0.0],
+        [0.0, g[2], g[1]],
+        [g[2], 0.0, g[0]],
+    ]
+}
+
+/// Copies the upper block triangle (blocks of `block` x `block`, `n` blocks
+/// per side) onto the lower one.
+fn mirror_upper_blocks(m: &mut [f64], n: usize, block: usize) {
+    let size = n * block;
+    for row in 0..size {
+        for col in 0..size {
+            if col / block < row / block {
+                m[row * size + col] = m[col * size + row];
+            }
+        }
+    }
+}
+
+/// Runs `f(shape, physical_gradients, det_j * weight)` at every Gauss point of
+/// the element's rule. Only the first `nodes_per_element` entries of the
+/// slices passed to `f` are meaningful.
+fn for_each_gauss_point(
+    kind: ElementKind,
+    coords: &[[f64; 3]],
+    mut f: impl FnMut(&[f64], &[[f64; 3]], f64),
+) -> Result<(), ElementError> {
+    let n = kind.nodes_per_element();
+    if coords.len() != n {
+        return Err(ElementError::WrongNodeCount { kind, expected: n, got: coords.len() });
+    }
+    if let Some(node) = coords.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
+        return Err(ElementError::NonFiniteCoordinate { node });
+    }
+    let mut shape = [0.0; MAX_NODES_PER_ELEMENT];
+    let mut dn = [[0.0; 3]; MAX_NODES_PER_ELEMENT];
+    let mut grad = [[0.0; 3]; MAX_NODES_PER_ELEMENT];
+    for (gauss_point, (xi, weight)) in gauss::hex_points(kind.gauss_order()).enumerate() {
+        kind.shape_functions(xi, &mut shape[..n], &mut dn[..n]);
+        // J[i][j] = d x_j / d xi_i.
+        let mut jac = [[0.0; 3]; 3];
+        for (dn_a, x_a) in dn.iter().zip(coords) {
+            for i in 0..3 {
+                for j in 0..3 {
+                    jac[i][j] += dn_a[i] * x_a[j];
+                }
+            }
+        }
+        let (det, inv) = invert3(&jac);
+        // Written as a negation so that a NaN determinant is rejected too.
+        if !(det > 0.0) {
+            return Err(ElementError::NonPositiveJacobian { kind, gauss_point, xi, det });
+        }
+        // dN/dx = J^-1 dN/dxi.
+        for (g, dn_a) in grad.iter_mut().zip(&dn).take(n) {
+            for (i, g_i) in g.iter_mut().enumerate() {
+                *g_i = inv[i][0] * dn_a[0] + inv[i][1] * dn_a[1] + inv[i][2] * dn_a[2];
+            }
+        }
+        f(&shape[..n], &grad[..n], det * weight);
+    }
+    Ok(())
+}
+
+/// Determinant and inverse (via the adjugate) of a 3x3 matrix. The inverse is
+/// meaningless when the determinant is zero; callers check it first.
+fn invert3(m: &[[f64; 3]; 3]) -> (f64, [[f64; 3]; 3]) {
+    let c00 = m[1][1] * m[2][2] - m[1][2] * m[2][1];
+    let c01 = m[1][2] * m[2][0] - m[1][0] * m[2][2];
+    let c02 = m[1][0] * m[2][1] - m[1][1] * m[2][0];
+    let det = m[0][0] * c00 + m[0][1] * c01 + m[0][2] * c02;
+    let r = 1.0 / det;
+    let inv = [
+        [c00 * r, (m[0][2] * m[2][1] - m[0][1] * m[2][2]) * r, (m[0][1] * m[1][2] - m[0][2] * m[1][1]) * r],
+        [c01 * r, (m[0][0] * m[2][2] - m[0][2] * m[2][0]) * r, (m[0][2] * m[1][0] - m[0][0] * m[1][2]) * r],
+        [c02 * r, (m[0][1] * m[2][0] - m[0][0] * m[2][1]) * r, (m[0][0] * m[1][1] - m[0][1] * m[1][0]) * r],
+    ];
+    (det, inv)
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,172 @@
+//! The reduced flexible body as the runtime sees it: modal coordinates q with unit modal mass and
+//! diagonal stiffness, the flange shapes, and the inertia invariants of the floating frame.
+//! Everything is resolved in the body frame B, whose origin is the mount flange's reference point
+//! and whose axes are the world axes of the undeformed part.
+
+use crate::format::{Container, FormatError};
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct FlangeShapes {
+    pub name: String,
+    /// Reference point of the flange in B [m].
+    pub position: [f64; 3],
+    /// 6 x n, row-major: rows 0..3 translation u, rows 3..6 rotation phi of the flange per unit q.
+    pub shapes: Vec<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReducedBody {
+    pub guid: String,
+    pub model_name: String,
+    /// Name of the mount (motion) flange carrying the body frame.
+    pub mount: String,
+    /// Modal angular frequencies [rad/s], ascending; reduced stiffness = diag(omega^2), mass = I.
+    pub omega: Vec<f64>,
+    /// Rayleigh damping defaults (D = alpha M + beta K), the FMU parameters' start values.
+    pub alpha: f64,
+    pub beta: f64,
+    pub mass: f64,
+    /// m * c: first moment of mass about the body origin, undeformed [kg m].
+    pub first_moment: [f64; 3],
+    /// Inertia tensor about the body origin, undeformed, row-major [kg m^2].
+    pub inertia: [f64; 9],
+    /// C_t = T^T M Phi (3 x n): momentum of the elastic motion per unit q'.
+    pub c_t: Vec<f64>,
+    /// C_r = R_X^T M Phi (3 x n): angular momentum about the origin per unit q'.
+    pub c_r: Vec<f64>,
+    /// Force flanges (loaded or free), in the order of the FMU's variables.
+    pub flanges: Vec<FlangeShapes>,
+}
+
+impl ReducedBody {
+    pub fn n_modes(&self) -> usize {
+        self.omega.len()
+    }
+
+    pub fn to_container(&self) -> Container {
+        let n = self.n_modes();
+        let mut c = Container::new();
+        c.put_text("guid", &self.guid);
+        c.put_text("model_name", &self.model_name);
+        c.put_text("mount.name", &self.mount);
+        c.put_array("omega", &[n], &self.omega);
+        c.put_array("damping.alpha", &[1], &[self.alpha]);
+        c.put_array("damping.beta", &[1], &[self.beta]);
+        c.put_array("mass", &[1], &[self.mass]);
+        c.put_array("first_moment", &[3], &self.first_moment);
+        c.put_array("inertia", &[3, 3], &self.inertia);
+        c.put_array("c_t", &[3, n], &self.c_t);
+        c.put_array("c_r", &[3, n], &self.c_r);
+        c.put_array("flange.count", &[1], &[self.flanges.len() as f64]);
+        for (i, f) in self.flanges.iter().enumerate() {
+            c.put_text(&format!("flange.{i}.name"), &f.name);
+            c.put_array(&format!("flange.{i}.position"), &[3], &f.position);
+            c.put_array(&format!("flange.{i}.shapes"), &[6, n], &f.shapes);
+        }
+        c
+    }
+
+    pub fn from_container(c: &Container) -> Result<Self, FormatError> {
+        let n = match c.dims("omega")? {
+            [n] => *n,
+            other => {
+                return Err(FormatError::Shape { name: "omega".into(), found: other.to_vec(), expected: vec![0] });
+            }
+        };
+        let omega = c.array("omega", &[n])?.to_vec();
+        if let Some(bad) = omega.iter().position(|w| !(w.is_finite() && *w > 0.0)) {
+            return Err(FormatError::Malformed(format!(
+                "modal frequency omega[{bad}] = {} is not a positive number",
+                omega[bad]
+            )));
+        }
+        let count = c.scalar("flange.count")?;
+        if !(count >= 0.0 && count.fract() == 0.0 && count < 1e4) {
+            return Err(FormatError::Malformed(format!("flange.count = {count}")));
+        }
+        let mut flanges = Vec::new();
+        for i in 0..count as usize {
+            flanges.push(FlangeShapes {
+                name: c.text(&format!("flange.{i}.name"))?.to_owned(),
+                position: to3(c.array(&format!("flange.{i}.position"), &[3])?),
+                shapes: c.array(&format!("flange.{i}.shapes"), &[6, n])?.to_vec(),
+            });
+        }
+        let mut inertia = [0.0; 9];
+        inertia.copy_from_slice(c.array("inertia", &[3, 3])?);
+        Ok(Self {
+            guid: c.text("guid")?.to_owned(),
+            model_name: c.text("model_name")?.to_owned(),
+            mount: c.text("mount.name")?.to_owned(),
+            omega,
+            alpha: c.scalar("damping.alpha")?,
+            beta: c.scalar("damping.beta")?,
+            mass: c.scalar("mass")?,
+            first_moment: to3(c.array("first_moment", &[3])?),
+            inertia,
+            c_t: c.array("c_t", &[3, n])?.to_vec(),
+            c_r: c.array("c_r", &[3, n])?.to_vec(),
+            flanges,
+        })
+    }
+
+    pub fn to_bytes(&self) -> Vec<u8> {
+        self.to_container().to_bytes()
+    }
+
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, FormatError> {
+        Self::from_container(&Container::from_bytes(bytes)?)
+    }
+}
+
+fn to3(s: &[f64]) -> [f64; 3] {
+    [s[0], s[1], s[2]]
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// A two-mode body with one force flange, for runtime unit tests.
+    pub fn two_mode_body() -> ReducedBody {
+        ReducedBody {
+            guid: "{test}".into(),
+            model_name: "Test".into(),
+            mount: "base".into(),
+            omega: vec![10.0, 2000.0],
+            alpha: 0.5,
+            beta: 1e-4,
+            mass: 2.0,
+            first_moment: [1.0, 0.0, 0.0],
+            inertia: [0.1, 0.0, 0.0, 0.0, 0.7, 0.0, 0.0, 0.0, 0.7],
+            c_t: vec![0.0, 0.1, 0.3, 0.0, 0.0, 0.2],
+            c_r: vec![0.0, 0.0, 0.0, -0.2, 0.0, 0.0],
+            flanges: vec![FlangeShapes {
+                name: "tip".into(),
+                position: [1.0, 0.0, 0.0],
+                shapes: vec![0.0, 0.1, 0.5, 0.0, 0.0, 0.3, 0.2, 0.0, 0.0, -0.6, 0.0, 0.0],
+            }],
+        }
+    }
+
+    #[test]
+    fn round_trip_through_bytes() {
+        let b = two_mode_body();
+        assert_eq!(ReducedBody::from_bytes(&b.to_bytes()).unwrap(), b);
+    }
+
+    #[test]
+    fn missing_entry_is_named() {
+        let mut c = two_mode_body().to_container();
+        let mut c2 = Container::new();
+        // rebuild without c_r
+        for name in ["guid", "model_name", "mount.name"] {
+            c2.put_text(name, c.text(name).unwrap());
+        }
+        c2.put_array("omega", &[2], &[10.0, 2000.0]);
+        let err = ReducedBody::from_container(&c2).unwrap_err();
+        assert!(matches!(err, FormatError::Missing(_)), "{err}");
+        c.put_array("omega", &[2], &[10.0, -1.0]);
+        assert!(ReducedBody::from_container(&c).unwrap_err().to_string().contains("omega[1]"));
+    }
+}
