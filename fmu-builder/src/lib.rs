@@ -1,1 +1,13 @@
+//! fmu-builder: from a finite-element description of an elastic part to an FMI 2.0 FMU of the
+//! reduced flexible body. Modules follow the data: spec -> mesh -> fe/assembly -> flange ->
+//! reduce -> ffrf -> fmu.
 
+pub mod assembly;
+pub mod eigen;
+pub mod error;
+pub mod fe;
+pub mod flange;
+pub mod mesh;
+pub mod reduce;
+pub mod sparse;
+pub mod spec;

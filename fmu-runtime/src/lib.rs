@@ -8,3 +8,8 @@ pub mod format;
 pub mod kinematics;
 pub mod propagator;
 pub mod reduced;
+pub mod fmi;
+pub mod fmu;
+pub mod interface;
+
+export_fmi2!(crate::fmu::BodyFmu);

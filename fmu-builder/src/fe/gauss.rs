@@ -55,7 +55,13 @@ mod tests {
 
     /// Exact integral of x^a y^b z^c over [-1,1]^3.
     fn exact_monomial(a: u32, b: u32, c: u32) -> f64 {
-        let line = |p: u32| if p % 2 == 1 { 0.0 } else { 2.0 / (p as f64 + 1.0) };
+        let line = |p: u32| {
+            if p % 2 == 1 {
+                0.0
+            } else {
+                2.0 / (p as f64 + 1.0)
+            }
+        };
         line(a) * line(b) * line(c)
     }
 
@@ -73,7 +79,10 @@ mod tests {
                     for c in 0..=max_degree {
                         let got = integrate(order, a, b, c);
                         let want = exact_monomial(a, b, c);
-                        assert!((got - want).abs() < 1e-14, "{order:?} x^{a} y^{b} z^{c}: {got} vs {want}");
+                        assert!(
+                            (got - want).abs() < 1e-14,
+                            "{order:?} x^{a} y^{b} z^{c}: {got} vs {want}"
+                        );
                     }
                 }
             }

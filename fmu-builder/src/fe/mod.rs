@@ -89,7 +89,14 @@ impl Elasticity {
     /// Positive-definite strain energy needs E > 0 and -1 < nu < 0.5.
     pub fn validate(&self) -> Result<(), ElementError> {
         let ok = self.e.is_finite() && self.e > 0.0 && self.nu > -1.0 && self.nu < 0.5;
-        if ok { Ok(()) } else { Err(ElementError::InvalidMaterial { e: self.e, nu: self.nu }) }
+        if ok {
+            Ok(())
+        } else {
+            Err(ElementError::InvalidMaterial {
+                e: self.e,
+                nu: self.nu,
+            })
+        }
     }
 
     /// Lame parameters (lambda, mu).
@@ -122,7 +129,11 @@ impl Elasticity {
 #[derive(Debug, Clone, PartialEq)]
 pub enum ElementError {
     /// `coords` does not hold one point per element node.
-    WrongNodeCount { kind: ElementKind, expected: usize, got: usize },
+    WrongNodeCount {
+        kind: ElementKind,
+        expected: usize,
+        got: usize,
+    },
     /// The output buffer has the wrong length.
     WrongOutputSize { expected: usize, got: usize },
     /// A node coordinate is NaN or infinite.
@@ -132,17 +143,32 @@ pub enum ElementError {
     /// Density not finite and positive.
     InvalidDensity { rho: f64 },
     /// Inverted or degenerate element: det J <= 0 at a Gauss point.
-    NonPositiveJacobian { kind: ElementKind, gauss_point: usize, xi: [f64; 3], det: f64 },
+    NonPositiveJacobian {
+        kind: ElementKind,
+        gauss_point: usize,
+        xi: [f64; 3],
+        det: f64,
+    },
 }
 
 impl fmt::Display for ElementError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            ElementError::WrongNodeCount { kind, expected, got } => {
-                write!(f, "{kind} element needs {expected} node coordinates, got {got}")
+            ElementError::WrongNodeCount {
+                kind,
+                expected,
+                got,
+            } => {
+                write!(
+                    f,
+                    "{kind} element needs {expected} node coordinates, got {got}"
+                )
             }
             ElementError::WrongOutputSize { expected, got } => {
-                write!(f, "element matrix buffer must hold {expected} entries, got {got}")
+                write!(
+                    f,
+                    "element matrix buffer must hold {expected} entries, got {got}"
+                )
             }
             ElementError::NonFiniteCoordinate { node } => {
                 write!(f, "element node {node} has a non-finite coordinate")
@@ -154,7 +180,12 @@ impl fmt::Display for ElementError {
             ElementError::InvalidDensity { rho } => {
                 write!(f, "invalid density {rho}: must be finite and positive")
             }
-            ElementError::NonPositiveJacobian { kind, gauss_point, xi, det } => write!(
+            ElementError::NonPositiveJacobian {
+                kind,
+                gauss_point,
+                xi,
+                det,
+            } => write!(
                 f,
                 "{kind} element is inverted or degenerate: Jacobian determinant {det:e} at Gauss point \
                  {gauss_point} (natural coordinates {:.4}, {:.4}, {:.4})",
@@ -192,13 +223,14 @@ pub fn element_stiffness(
                 }
             }
         }
-        // Only the upper block triangle is accumulated; the mirror below keeps
-        // the matrix exactly symmetric regardless of rounding.
+        // Only the upper triangle is accumulated; the mirror below keeps the
+        // matrix exactly symmetric regardless of rounding.
         for a in 0..n {
             let b_a = strain_displacement(&grad[a]);
             for (b, db_b) in db.iter().enumerate().take(n).skip(a) {
                 for i in 0..3 {
-                    for j in 0..3 {
+                    let first_j = if b == a { i } else { 0 };
+                    for j in first_j..3 {
                         let k: f64 = (0..6).map(|r| b_a[r][i] * db_b[r][j]).sum();
                         out[(3 * a + i) * dofs + 3 * b + j] += k;
                     }
@@ -206,7 +238,7 @@ pub fn element_stiffness(
             }
         }
     })?;
-    mirror_upper_blocks(out, n, 3);
+    mirror_upper_triangle(out, 3 * n);
     Ok(())
 }
 
@@ -235,7 +267,7 @@ pub fn element_mass(
             }
         }
     })?;
-    mirror_upper_blocks(out, n, 1);
+    mirror_upper_triangle(out, n);
     Ok(())
 }
 
@@ -243,7 +275,10 @@ fn check_output(out: &[f64], expected: usize) -> Result<(), ElementError> {
     if out.len() == expected {
         Ok(())
     } else {
-        Err(ElementError::WrongOutputSize { expected, got: out.len() })
+        Err(ElementError::WrongOutputSize {
+            expected,
+            got: out.len(),
+        })
     }
 }
 
@@ -261,15 +296,11 @@ fn strain_displacement(g: &[f64; 3]) -> [[f64; 3]; 6] {
     ]
 }
 
-/// Copies the upper block triangle (blocks of `block` x `block`, `n` blocks
-/// per side) onto the lower one.
-fn mirror_upper_blocks(m: &mut [f64], n: usize, block: usize) {
-    let size = n * block;
-    for row in 0..size {
-        for col in 0..size {
-            if col / block < row / block {
-                m[row * size + col] = m[col * size + row];
-            }
+/// Copies the upper triangle of the `size` x `size` matrix onto the lower.
+fn mirror_upper_triangle(m: &mut [f64], size: usize) {
+    for row in 1..size {
+        for col in 0..row {
+            m[row * size + col] = m[col * size + row];
         }
     }
 }
@@ -284,7 +315,11 @@ fn for_each_gauss_point(
 ) -> Result<(), ElementError> {
     let n = kind.nodes_per_element();
     if coords.len() != n {
-        return Err(ElementError::WrongNodeCount { kind, expected: n, got: coords.len() });
+        return Err(ElementError::WrongNodeCount {
+            kind,
+            expected: n,
+            got: coords.len(),
+        });
     }
     if let Some(node) = coords.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
         return Err(ElementError::NonFiniteCoordinate { node });
@@ -304,9 +339,13 @@ fn for_each_gauss_point(
             }
         }
         let (det, inv) = invert3(&jac);
-        // Written as a negation so that a NaN determinant is rejected too.
-        if !(det > 0.0) {
-            return Err(ElementError::NonPositiveJacobian { kind, gauss_point, xi, det });
+        if det.is_nan() || det <= 0.0 {
+            return Err(ElementError::NonPositiveJacobian {
+                kind,
+                gauss_point,
+                xi,
+                det,
+            });
         }
         // dN/dx = J^-1 dN/dxi.
         for (g, dn_a) in grad.iter_mut().zip(&dn).take(n) {
@@ -328,9 +367,21 @@ fn invert3(m: &[[f64; 3]; 3]) -> (f64, [[f64; 3]; 3]) {
     let det = m[0][0] * c00 + m[0][1] * c01 + m[0][2] * c02;
     let r = 1.0 / det;
     let inv = [
-        [c00 * r, (m[0][2] * m[2][1] - m[0][1] * m[2][2]) * r, (m[0][1] * m[1][2] - m[0][2] * m[1][1]) * r],
-        [c01 * r, (m[0][0] * m[2][2] - m[0][2] * m[2][0]) * r, (m[0][2] * m[1][0] - m[0][0] * m[1][2]) * r],
-        [c02 * r, (m[0][1] * m[2][0] - m[0][0] * m[2][1]) * r, (m[0][0] * m[1][1] - m[0][1] * m[1][0]) * r],
+        [
+            c00 * r,
+            (m[0][2] * m[2][1] - m[0][1] * m[2][2]) * r,
+            (m[0][1] * m[1][2] - m[0][2] * m[1][1]) * r,
+        ],
+        [
+            c01 * r,
+            (m[0][0] * m[2][2] - m[0][2] * m[2][0]) * r,
+            (m[0][2] * m[1][0] - m[0][0] * m[1][2]) * r,
+        ],
+        [
+            c02 * r,
+            (m[0][1] * m[2][0] - m[0][0] * m[2][1]) * r,
+            (m[0][0] * m[1][1] - m[0][1] * m[1][0]) * r,
+        ],
     ];
     (det, inv)
 }

@@ -1,0 +1,181 @@
+//! Lowest eigenpairs of K x = lambda M x (K positive definite, M positive semidefinite) by
+//! shift-invert Lanczos in the M inner product: the operator K^-1 M is self-adjoint in it, its
+//! largest eigenvalues 1/lambda are the modes we want, and one sparse Cholesky of K serves every
+//! iteration. Full re-orthogonalisation (twice) keeps the basis M-orthonormal to round-off; when
+//! the Krylov space is too small for the requested accuracy it is enlarged and the run repeated
+//! from the best Ritz combination.
+
+use crate::error::{BuildError, Result};
+use crate::sparse::{Sparse, SpdSolver, mul_new};
+use faer::{Mat, Side};
+
+pub struct Eigenpairs {
+    /// Ascending eigenvalues lambda = omega^2.
+    pub values: Vec<f64>,
+    /// M-orthonormal eigenvectors, one per column.
+    pub vectors: Mat<f64>,
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Deterministic start vector with all components non-zero (no symmetry can hide a mode from it).
+fn start_vector(n: usize) -> Vec<f64> {
+    let mut s: u64 = 0x9E37_79B9_7F4A_7C15;
+    (0..n)
+        .map(|_| {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            0.5 + (s >> 11) as f64 / (1u64 << 53) as f64
+        })
+        .collect()
+}
+
+/// The `count` lowest eigenpairs; relative residual tolerance `tol` on 1/lambda.
+pub fn lowest(k: &SpdSolver, m: &Sparse, count: usize, tol: f64) -> Result<Eigenpairs> {
+    let n = k.n();
+    let count = count.min(n);
+    if count == 0 {
+        return Ok(Eigenpairs { values: Vec::new(), vectors: Mat::zeros(n, 0) });
+    }
+    let mut dim = (2 * count + 20).max(count + 30).min(n);
+    let mut start = start_vector(n);
+    loop {
+        let (pairs, converged, next_start) = lanczos(k, m, count, dim, &start, tol)?;
+        if converged || dim == n {
+            if !converged {
+                return Err(BuildError::Numerical(format!(
+                    "eigensolver: {count} modes did not converge to {tol:e} even with the full space"
+                )));
+            }
+            return Ok(pairs);
+        }
+        start = next_start;
+        dim = (dim + dim / 2).min(n);
+    }
+}
+
+/// One Lanczos run of `dim` steps. Returns the `count` lowest Ritz pairs, whether they converged,
+/// and a restart vector (sum of the wanted Ritz vectors).
+fn lanczos(
+    k: &SpdSolver,
+    m: &Sparse,
+    count: usize,
+    dim: usize,
+    start: &[f64],
+    tol: f64,
+) -> Result<(Eigenpairs, bool, Vec<f64>)> {
+    let n = k.n();
+    let mut v = Mat::<f64>::zeros(n, dim);
+    let mut mv = Mat::<f64>::zeros(n, dim);
+    let mut alpha = vec![0.0; dim];
+    let mut beta = vec![0.0; dim];
+    let mut w = Mat::<f64>::zeros(n, 1);
+    // v0 = start / |start|_M
+    w.col_mut(0).as_mut().copy_from(faer::ColRef::from_slice(start));
+    let mw = mul_new(m, w.as_ref());
+    let norm = dot(w.col(0).try_as_col_major().unwrap().as_slice(), mw.col(0).try_as_col_major().unwrap().as_slice()).sqrt();
+    if !(norm > 0.0) {
+        return Err(BuildError::Numerical("eigensolver: the mass matrix vanishes on the start vector".into()));
+    }
+    for i in 0..n {
+        v[(i, 0)] = w[(i, 0)] / norm;
+        mv[(i, 0)] = mw[(i, 0)] / norm;
+    }
+    let mut steps = dim;
+    for j in 0..dim {
+        // w = K^-1 M v_j
+        for i in 0..n {
+            w[(i, 0)] = mv[(i, j)];
+        }
+        k.solve_in_place(w.as_mut());
+        // full re-orthogonalisation in the M inner product, twice (Kahan-Parlett "twice is enough")
+        for pass in 0..2 {
+            for i in 0..=j {
+                let c: f64 = (0..n).map(|r| mv[(r, i)] * w[(r, 0)]).sum();
+                if pass == 0 && i == j {
+                    alpha[j] = c;
+                } else if i == j {
+                    alpha[j] += c;
+                }
+                for r in 0..n {
+                    w[(r, 0)] -= c * v[(r, i)];
+                }
+            }
+        }
+        let mw = mul_new(m, w.as_ref());
+        let b = (0..n).map(|r| w[(r, 0)] * mw[(r, 0)]).sum::<f64>().max(0.0).sqrt();
+        beta[j] = b;
+        if j + 1 == dim {
+            break;
+        }
+        if b <= 1e-13 * alpha[j].abs() {
+            // invariant subspace: every eigenpair in it is exact
+            steps = j + 1;
+            break;
+        }
+        for r in 0..n {
+            v[(r, j + 1)] = w[(r, 0)] / b;
+            mv[(r, j + 1)] = mw[(r, 0)] / b;
+        }
+    }
+    // Ritz values of the tridiagonal T (projection of K^-1 M)
+    let mut t = Mat::<f64>::zeros(steps, steps);
+    for j in 0..steps {
+        t[(j, j)] = alpha[j];
+        if j + 1 < steps {
+            t[(j, j + 1)] = beta[j];
+            t[(j + 1, j)] = beta[j];
+        }
+    }
+    let evd = t
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|e| BuildError::Numerical(format!("eigensolver: tridiagonal eigenproblem failed: {e:?}")))?;
+    let s = evd.S();
+    let u = evd.U();
+    // largest theta first
+    let count = count.min(steps);
+    let mut values = Vec::with_capacity(count);
+    let mut vectors = Mat::<f64>::zeros(n, count);
+    let mut converged = true;
+    let mut restart = vec![0.0; n];
+    let last_beta = beta[steps - 1];
+    for c in 0..count {
+        let idx = steps - 1 - c;
+        let theta = s[idx];
+        if !(theta > 0.0) {
+            return Err(BuildError::Numerical(format!("eigensolver: non-positive Ritz value {theta:e}")));
+        }
+        let residual = (last_beta * u[(steps - 1, idx)]).abs();
+        if steps == dim && residual > tol * theta {
+            converged = false;
+        }
+        values.push(1.0 / theta);
+        for r in 0..n {
+            let mut x = 0.0;
+            for j in 0..steps {
+                x += v[(r, j)] * u[(j, idx)];
+            }
+            vectors[(r, c)] = x;
+            restart[r] += x;
+        }
+    }
+    Ok((Eigenpairs { values, vectors }, converged, restart))
+}
+
+/// All eigenpairs with omega below `omega_max`, at least `min_count` of them.
+pub fn below(k: &SpdSolver, m: &Sparse, omega_max: f64, min_count: usize, tol: f64) -> Result<Eigenpairs> {
+    let mut count = min_count.max(10);
+    loop {
+        let pairs = lowest(k, m, count, tol)?;
+        let n_below = pairs.values.iter().filter(|&&l| l.sqrt() < omega_max).count();
+        if n_below < pairs.values.len() || pairs.values.len() >= k.n() {
+            let keep = n_below.max(min_count).min(pairs.values.len());
+            let vectors = pairs.vectors.subcols(0, keep).to_owned();
+            return Ok(Eigenpairs { values: pairs.values[..keep].to_vec(), vectors });
+        }
+        count *= 2;
+    }
+}

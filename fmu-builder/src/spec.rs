@@ -1,0 +1,311 @@
+//! The input file: JSON checked against `schemas/fmu-builder-input.schema.json` (the single
+//! source of truth, embedded at compile time), then read into typed structs. Checks the schema
+//! cannot express (a flange naming a box that does not exist, two mounts) follow here; checks
+//! that need the mesh (a flange selecting no node) live with the mesh and flanges.
+
+use crate::error::{BuildError, Result};
+use serde::Deserialize;
+use std::path::Path;
+
+pub const SCHEMA: &str = include_str!("../../schemas/fmu-builder-input.schema.json");
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Spec {
+    #[serde(rename = "$schema", default)]
+    pub schema: Option<String>,
+    pub name: String,
+    #[serde(default)]
+    pub description: Option<String>,
+    pub geometry: Geometry,
+    pub material: Material,
+    #[serde(default)]
+    pub damping: Damping,
+    pub flanges: Vec<FlangeSpec>,
+    pub reduction: Reduction,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Element {
+    #[default]
+    Hex20,
+    Hex8,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Geometry {
+    #[serde(default)]
+    pub element: Element,
+    pub boxes: Vec<BoxSpec>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxSpec {
+    pub min: [f64; 3],
+    pub max: [f64; 3],
+    pub elements: [usize; 3],
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    #[serde(rename = "E")]
+    pub e: f64,
+    pub nu: f64,
+    pub rho: f64,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct Damping {
+    #[serde(default)]
+    pub alpha: f64,
+    #[serde(default)]
+    pub beta: f64,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Role {
+    Motion,
+    Force,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FlangeSpec {
+    pub name: String,
+    pub role: Role,
+    pub nodes: NodeSelector,
+    #[serde(default)]
+    pub reference_point: Option<[f64; 3]>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum NodeSelector {
+    BoxFace { #[serde(rename = "box")] box_index: usize, face: Face },
+    Plane { point: [f64; 3], normal: [f64; 3], #[serde(default)] tolerance: Option<f64> },
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+pub enum Face {
+    #[serde(rename = "-x")]
+    MinusX,
+    #[serde(rename = "+x")]
+    PlusX,
+    #[serde(rename = "-y")]
+    MinusY,
+    #[serde(rename = "+y")]
+    PlusY,
+    #[serde(rename = "-z")]
+    MinusZ,
+    #[serde(rename = "+z")]
+    PlusZ,
+}
+
+impl Face {
+    /// (axis, upper side?)
+    pub fn axis_side(self) -> (usize, bool) {
+        match self {
+            Face::MinusX => (0, false),
+            Face::PlusX => (0, true),
+            Face::MinusY => (1, false),
+            Face::PlusY => (1, true),
+            Face::MinusZ => (2, false),
+            Face::PlusZ => (2, true),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    #[default]
+    CraigBampton,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Reduction {
+    #[serde(default)]
+    pub method: Method,
+    #[serde(default)]
+    pub modes: Option<usize>,
+    #[serde(default)]
+    pub max_frequency: Option<f64>,
+}
+
+/// JSON pointer `/flanges/1/nodes` -> `flanges[1].nodes`, the way users read their file.
+fn field_path(pointer: &str) -> String {
+    let mut out = String::new();
+    for token in pointer.split('/').skip(1) {
+        let token = token.replace("~1", "/").replace("~0", "~");
+        if token.chars().all(|c| c.is_ascii_digit()) && !token.is_empty() {
+            out.push_str(&format!("[{token}]"));
+        } else {
+            if !out.is_empty() {
+                out.push('.');
+            }
+            out.push_str(&token);
+        }
+    }
+    out
+}
+
+impl Spec {
+    pub fn from_file(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| BuildError::io(path, e))?;
+        Self::from_str(path, &text)
+    }
+
+    /// Parse `text` (read from `path`, used in messages).
+    pub fn from_str(path: &Path, text: &str) -> Result<Self> {
+        let value: serde_json::Value = serde_json::from_str(text).map_err(|e| {
+            BuildError::input(path, format!("line {} column {}", e.line(), e.column()), format!("not valid JSON: {e}"))
+        })?;
+        let schema: serde_json::Value =
+            serde_json::from_str(SCHEMA).map_err(|e| BuildError::Numerical(format!("embedded schema: {e}")))?;
+        let validator = jsonschema::validator_for(&schema)
+            .map_err(|e| BuildError::Numerical(format!("embedded schema does not compile: {e}")))?;
+        let mut problems: Vec<(String, String)> = validator
+            .iter_errors(&value)
+            .map(|e| (field_path(&e.instance_path().to_string()), e.to_string()))
+            .collect();
+        if !problems.is_empty() {
+            // the deepest path is the most specific complaint (oneOf reports at the parent too)
+            problems.sort_by_key(|(f, _)| std::cmp::Reverse(f.matches(['.', '[']).count()));
+            let (field, message) = problems.remove(0);
+            let more = if problems.is_empty() { String::new() } else { format!(" (and {} more problems)", problems.len()) };
+            return Err(BuildError::input(
+                path,
+                if field.is_empty() { "(top level)".to_string() } else { field },
+                format!("{message}{more}; see schemas/fmu-builder-input.schema.json"),
+            ));
+        }
+        let spec: Spec = serde_json::from_value(value)
+            .map_err(|e| BuildError::input(path, "", format!("does not match the input format: {e}")))?;
+        spec.check(path)?;
+        Ok(spec)
+    }
+
+    fn check(&self, path: &Path) -> Result<()> {
+        let mounts: Vec<usize> =
+            self.flanges.iter().enumerate().filter(|(_, f)| f.role == Role::Motion).map(|(i, _)| i).collect();
+        match mounts.len() {
+            1 => {}
+            0 => {
+                return Err(BuildError::input(
+                    path,
+                    "flanges",
+                    "no flange has role \"motion\": a mounted body needs exactly one (free-floating bodies are not supported yet)",
+                ));
+            }
+            _ => {
+                return Err(BuildError::input(
+                    path,
+                    format!("flanges[{}].role", mounts[1]),
+                    format!("a second \"motion\" flange; only one mount is supported (flanges[{}] is the mount)", mounts[0]),
+                ));
+            }
+        }
+        for (i, f) in self.flanges.iter().enumerate() {
+            if let Some(j) = self.flanges[..i].iter().position(|g| g.name == f.name) {
+                return Err(BuildError::input(
+                    path,
+                    format!("flanges[{i}].name"),
+                    format!("\"{}\" is already the name of flanges[{j}]", f.name),
+                ));
+            }
+            match &f.nodes {
+                NodeSelector::BoxFace { box_index, .. } if *box_index >= self.geometry.boxes.len() => {
+                    return Err(BuildError::input(
+                        path,
+                        format!("flanges[{i}].nodes.box_face.box"),
+                        format!("box {box_index} does not exist: geometry.boxes has {} boxes (indices from 0)", self.geometry.boxes.len()),
+                    ));
+                }
+                NodeSelector::Plane { normal, .. } if normal.iter().map(|c| c * c).sum::<f64>() == 0.0 => {
+                    return Err(BuildError::input(path, format!("flanges[{i}].nodes.plane.normal"), "the normal is the zero vector"));
+                }
+                _ => {}
+            }
+        }
+        for (i, b) in self.geometry.boxes.iter().enumerate() {
+            for axis in 0..3 {
+                if !(b.max[axis] > b.min[axis]) {
+                    return Err(BuildError::input(
+                        path,
+                        format!("geometry.boxes[{i}]"),
+                        format!(
+                            "degenerate box: max[{axis}] = {} must be greater than min[{axis}] = {}",
+                            b.max[axis], b.min[axis]
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    pub fn mount_index(&self) -> usize {
+        self.flanges.iter().position(|f| f.role == Role::Motion).unwrap_or(0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GOOD: &str = r#"{
+      "name": "Beam",
+      "geometry": { "boxes": [ { "min": [0,0,0], "max": [1,0.01,0.02], "elements": [10,1,1] } ] },
+      "material": { "E": 2e11, "nu": 0.3, "rho": 7850 },
+      "flanges": [
+        { "name": "base", "role": "motion", "nodes": { "box_face": { "box": 0, "face": "-x" } } },
+        { "name": "tip", "role": "force", "nodes": { "plane": { "point": [1,0,0], "normal": [1,0,0] } } }
+      ],
+      "reduction": { "modes": 4 }
+    }"#;
+
+    fn err(text: &str) -> String {
+        Spec::from_str(Path::new("in.json"), text).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn good_input_parses() {
+        let s = Spec::from_str(Path::new("in.json"), GOOD).unwrap();
+        assert_eq!(s.geometry.element, Element::Hex20);
+        assert_eq!(s.mount_index(), 0);
+        assert_eq!(s.reduction.modes, Some(4));
+    }
+
+    #[test]
+    fn bad_inputs_name_the_field() {
+        let e = err("{ \"name\": ");
+        assert!(e.contains("in.json") && e.contains("line 1") && e.contains("not valid JSON"), "{e}");
+        let e = err(&GOOD.replace("\"rho\": 7850", "\"rho\": 7850, \"colour\": 1"));
+        assert!(e.contains("material") && e.contains("colour"), "{e}");
+        let e = err(&GOOD.replace("\"E\": 2e11", "\"E\": 0"));
+        assert!(e.contains("material.E"), "{e}");
+        let e = err(&GOOD.replace("\"nu\": 0.3", "\"nu\": 0.5"));
+        assert!(e.contains("material.nu"), "{e}");
+        let e = err(&GOOD.replace("\"nu\": 0.3", "\"nu\": -1.2"));
+        assert!(e.contains("material.nu"), "{e}");
+        let e = err(&GOOD.replace("\"max\": [1,0.01,0.02]", "\"max\": [1,0.0,0.02]"));
+        assert!(e.contains("geometry.boxes[0]") && e.contains("degenerate"), "{e}");
+        let e = err(&GOOD.replace("\"box\": 0", "\"box\": 3"));
+        assert!(e.contains("flanges[0].nodes.box_face.box"), "{e}");
+        let e = err(&GOOD.replace("\"name\": \"tip\"", "\"name\": \"base\""));
+        assert!(e.contains("flanges[1].name"), "{e}");
+        let e = err(&GOOD.replace("\"role\": \"force\"", "\"role\": \"motion\""));
+        assert!(e.contains("flanges[1].role"), "{e}");
+        let e = err(&GOOD.replace("\"modes\": 4", "\"modes\": 4, \"max_frequency\": 10"));
+        assert!(e.contains("reduction"), "{e}");
+        let e = err(&GOOD.replace("\"face\": \"-x\"", "\"face\": \"left\""));
+        assert!(e.contains("flanges[0].nodes"), "{e}");
+    }
+}

@@ -1,0 +1,991 @@
+//! Generic implementations of the 44 FMI 2.0 functions; `export_fmi2!` forwards to them.
+//!
+//! Every function runs under [`guarded`], which owns the cross-cutting rules: null
+//! component, calling sequence, panics never unwinding into C, logging of failures
+//! and the move to the Error state after a model failure.
+//!
+//! # Safety
+//! Every function has the contract of its namesake in the FMI 2.0 standard: an
+//! fmi2Component from fmi2Instantiate of the same `M`, arrays of the stated length,
+//! NUL-terminated strings. NULL pointers are detected and refused, not dereferenced.
+#![allow(non_snake_case, non_upper_case_globals, clippy::missing_safety_doc)]
+
+use std::any::Any;
+use std::ffi::{CStr, CString, c_char};
+use std::panic::{AssertUnwindSafe, catch_unwind};
+
+use super::access::check_settable;
+use super::instance::{Instance, Snapshot};
+use super::logger::{Category, Logger};
+use super::resource::parse_resource_location;
+use super::state::{self as spec, FnSpec, ModelState};
+use super::types::fmi2Status::{fmi2Discard, fmi2Error, fmi2Fatal, fmi2OK};
+use super::types::*;
+use super::{Interface, Model, VarInfo, VarType};
+
+/// Why a call failed; decides what happens to the instance.
+pub enum Failure {
+    /// Refused by the state machine; the message is complete.
+    State(String),
+    /// Bad arguments or unsupported feature: nothing was computed, the instance stays usable.
+    Usage(String),
+    /// The model returned Err: its state is unknown, so the instance enters Error.
+    Model(String),
+}
+
+type Outcome = Result<fmi2Status, Failure>;
+
+fn usage(msg: impl Into<String>) -> Failure {
+    Failure::Usage(msg.into())
+}
+
+fn not_supported(capability: &str) -> Outcome {
+    Err(usage(format!(
+        "not supported by this FMU (capability flag {capability}=false)"
+    )))
+}
+
+fn panic_message(payload: &(dyn Any + Send)) -> &str {
+    payload
+        .downcast_ref::<&str>()
+        .copied()
+        .or_else(|| payload.downcast_ref::<String>().map(String::as_str))
+        .unwrap_or("(non-string panic payload)")
+}
+
+/// Common prologue and epilogue of every function taking an fmi2Component.
+#[inline]
+unsafe fn guarded<M: Model>(
+    c: fmi2Component,
+    rules: &FnSpec,
+    body: impl FnOnce(&mut Instance<M>) -> Outcome,
+) -> fmi2Status {
+    // Without an instance there is no logger to tell anyone.
+    if c.is_null() {
+        return fmi2Error;
+    }
+    let ptr = c.cast::<Instance<M>>();
+    let result = catch_unwind(AssertUnwindSafe(|| {
+        // SAFETY: a non-null fmi2Component is one we returned from fmi2Instantiate.
+        let inst = unsafe { &mut *ptr };
+        if let Some(msg) = rules.refuse(inst.state, inst.interface) {
+            return Err(Failure::State(msg));
+        }
+        body(inst)
+    }));
+    // SAFETY: the borrow inside the closure has ended, whether it returned or unwound.
+    let inst = unsafe { &mut *ptr };
+    match result {
+        Ok(Ok(status)) => status,
+        Ok(Err(Failure::State(msg))) => {
+            inst.logger.error(&msg);
+            fmi2Error
+        }
+        Ok(Err(Failure::Usage(msg))) => {
+            inst.logger.error(&format!("{}: {msg}", rules.name));
+            fmi2Error
+        }
+        Ok(Err(Failure::Model(msg))) => {
+            inst.state = ModelState::Error;
+            inst.logger.error(&format!("{}: {msg}", rules.name));
+            fmi2Error
+        }
+        Err(payload) => {
+            let msg = format!(
+                "{}: panic in the model: {}",
+                rules.name,
+                panic_message(&*payload)
+            );
+            // A panic while recovering leaves nothing to recover to.
+            if rules.name == spec::fmi2Reset.name {
+                inst.state = ModelState::Fatal;
+                inst.logger.fatal(&msg);
+                fmi2Fatal
+            } else {
+                inst.state = ModelState::Error;
+                inst.logger.error(&msg);
+                fmi2Error
+            }
+        }
+    }
+}
+
+/// A C array as a slice; C may pass NULL when the length is zero.
+unsafe fn in_slice<'a, T>(p: *const T, n: usize, what: &str) -> Result<&'a [T], Failure> {
+    if n == 0 {
+        Ok(&[])
+    } else if p.is_null() {
+        Err(usage(format!("argument {what} must not be NULL")))
+    } else {
+        // SAFETY: the host promises `n` valid elements.
+        Ok(unsafe { std::slice::from_raw_parts(p, n) })
+    }
+}
+
+unsafe fn out_slice<'a, T>(p: *mut T, n: usize, what: &str) -> Result<&'a mut [T], Failure> {
+    if n == 0 {
+        Ok(&mut [])
+    } else if p.is_null() {
+        Err(usage(format!("argument {what} must not be NULL")))
+    } else {
+        // SAFETY: the host promises `n` writable elements.
+        Ok(unsafe { std::slice::from_raw_parts_mut(p, n) })
+    }
+}
+
+unsafe fn out_ref<'a, T>(p: *mut T, what: &str) -> Result<&'a mut T, Failure> {
+    // SAFETY: non-null out pointers point to a writable T by contract.
+    unsafe { p.as_mut() }.ok_or_else(|| usage(format!("argument {what} must not be NULL")))
+}
+
+fn check_len(n: usize, expected: usize, what: &str) -> Result<(), Failure> {
+    if n == expected {
+        Ok(())
+    } else {
+        Err(usage(format!("{what} = {n} but the model has {expected}")))
+    }
+}
+
+fn var_of_type<M: Model>(model: &M, vr: u32, expected: VarType) -> Result<VarInfo, Failure> {
+    let info = model
+        .var_info(vr)
+        .ok_or_else(|| usage(format!("unknown value reference {vr}")))?;
+    if info.var_type != expected {
+        return Err(usage(format!(
+            "value reference {vr} is a {:?} variable, not {expected:?}",
+            info.var_type
+        )));
+    }
+    Ok(info)
+}
+
+fn settable<M: Model>(inst: &Instance<M>, vr: u32, expected: VarType) -> Result<(), Failure> {
+    let info = var_of_type(&inst.model, vr, expected)?;
+    check_settable(&info, inst.state).map_err(|e| usage(format!("value reference {vr}: {e}")))
+}
+
+fn model_err(vr: u32) -> impl FnOnce(String) -> Failure {
+    move |e| Failure::Model(format!("value reference {vr}: {e}"))
+}
+
+fn to_bool(b: fmi2Boolean) -> bool {
+    b != fmi2False
+}
+
+fn from_bool(b: bool) -> fmi2Boolean {
+    if b { fmi2True } else { fmi2False }
+}
+
+// ---------------------------------------------------------------------------
+// Inquiry and instance life cycle
+// ---------------------------------------------------------------------------
+
+pub fn fmi2GetTypesPlatform() -> *const c_char {
+    fmi2TypesPlatform.as_ptr()
+}
+
+pub fn fmi2GetVersion() -> *const c_char {
+    fmi2Version.as_ptr()
+}
+
+pub unsafe fn fmi2Instantiate<M: Model>(
+    instanceName: fmi2String,
+    fmuType: fmi2Type,
+    fmuGUID: fmi2String,
+    fmuResourceLocation: fmi2String,
+    functions: *const fmi2CallbackFunctions,
+    _visible: fmi2Boolean,
+    loggingOn: fmi2Boolean,
+) -> fmi2Component {
+    // SAFETY: non-null pointers from the host are valid for the duration of the call.
+    let callbacks = unsafe { functions.as_ref() }
+        .copied()
+        .unwrap_or(fmi2CallbackFunctions::NONE);
+    let name = if instanceName.is_null() {
+        CString::default()
+    } else {
+        unsafe { CStr::from_ptr(instanceName) }.to_owned()
+    };
+    let logger = Logger::new(
+        name,
+        callbacks.logger,
+        callbacks.componentEnvironment,
+        to_bool(loggingOn),
+    );
+
+    let result = catch_unwind(AssertUnwindSafe(|| -> Result<(M, Interface), String> {
+        if logger.instance_name().is_empty() {
+            return Err("missing instance name".into());
+        }
+        let interface = match fmuType {
+            fmi2ModelExchange => Interface::ModelExchange,
+            fmi2CoSimulation => Interface::CoSimulation,
+            other => return Err(format!("invalid fmuType {other}")),
+        };
+        let resources = if fmuResourceLocation.is_null() {
+            None
+        } else {
+            let uri = unsafe { CStr::from_ptr(fmuResourceLocation) };
+            let uri = uri
+                .to_str()
+                .map_err(|_| "fmuResourceLocation is not valid UTF-8".to_string())?;
+            Some(parse_resource_location(uri)?)
+        };
+        logger.trace(|| {
+            let dir = resources
+                .as_deref()
+                .map_or("none".into(), |p| p.display().to_string());
+            format!("fmi2Instantiate: {interface:?}, resources {dir}")
+        });
+        let model = M::instantiate(resources.as_deref(), interface)?;
+        let guid = if fmuGUID.is_null() {
+            None
+        } else {
+            Some(unsafe { CStr::from_ptr(fmuGUID) }.to_string_lossy())
+        };
+        if guid.as_deref() != Some(model.guid()) {
+            return Err(format!(
+                "GUID mismatch: expected {} got {}",
+                model.guid(),
+                guid.as_deref().unwrap_or("NULL")
+            ));
+        }
+        Ok((model, interface))
+    }));
+    match result {
+        Ok(Ok((model, interface))) => {
+            Box::into_raw(Box::new(Instance::new(model, interface, logger, callbacks))).cast()
+        }
+        Ok(Err(msg)) => {
+            logger.error(&format!("fmi2Instantiate: {msg}"));
+            std::ptr::null_mut()
+        }
+        Err(payload) => {
+            logger.error(&format!(
+                "fmi2Instantiate: panic in the model: {}",
+                panic_message(&*payload)
+            ));
+            std::ptr::null_mut()
+        }
+    }
+}
+
+pub unsafe fn fmi2FreeInstance<M: Model>(c: fmi2Component) {
+    if c.is_null() {
+        return;
+    }
+    // Allowed in every state: refusing would only leak the instance.
+    let _ = catch_unwind(AssertUnwindSafe(|| {
+        // SAFETY: `c` came from Box::into_raw in fmi2Instantiate and is freed only here.
+        let instance = unsafe { Box::from_raw(c.cast::<Instance<M>>()) };
+        instance.logger.trace(|| "fmi2FreeInstance".into());
+        drop(instance);
+    }));
+}
+
+pub unsafe fn fmi2SetDebugLogging<M: Model>(
+    c: fmi2Component,
+    loggingOn: fmi2Boolean,
+    nCategories: usize,
+    categories: *const fmi2String,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2SetDebugLogging, |inst| {
+            let names = in_slice(categories, nCategories, "categories[]")?;
+            let mut list = Vec::with_capacity(names.len());
+            for &name in names {
+                if name.is_null() {
+                    return Err(usage("argument categories[] contains NULL"));
+                }
+                let name = CStr::from_ptr(name).to_bytes();
+                let category = Category::from_name(name).ok_or_else(|| {
+                    usage(format!(
+                        "unknown log category \"{}\"",
+                        String::from_utf8_lossy(name)
+                    ))
+                })?;
+                list.push(category);
+            }
+            inst.logger.set_debug_logging(to_bool(loggingOn), &list);
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2SetupExperiment<M: Model>(
+    c: fmi2Component,
+    toleranceDefined: fmi2Boolean,
+    tolerance: fmi2Real,
+    startTime: fmi2Real,
+    stopTimeDefined: fmi2Boolean,
+    stopTime: fmi2Real,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2SetupExperiment, |inst| {
+            if !startTime.is_finite() {
+                return Err(usage(format!(
+                    "startTime must be finite but is {startTime}"
+                )));
+            }
+            inst.logger
+                .trace(|| format!("fmi2SetupExperiment: startTime {startTime}"));
+            inst.tolerance = to_bool(toleranceDefined).then_some(tolerance);
+            inst.start_time = startTime;
+            inst.time = startTime;
+            inst.stop_time = to_bool(stopTimeDefined).then_some(stopTime);
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2EnterInitializationMode<M: Model>(c: fmi2Component) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2EnterInitializationMode, |inst| {
+            inst.logger.trace(|| "fmi2EnterInitializationMode".into());
+            inst.model
+                .enter_initialization(inst.start_time)
+                .map_err(Failure::Model)?;
+            inst.state = ModelState::InitializationMode;
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2ExitInitializationMode<M: Model>(c: fmi2Component) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2ExitInitializationMode, |inst| {
+            inst.logger.trace(|| "fmi2ExitInitializationMode".into());
+            inst.model.exit_initialization().map_err(Failure::Model)?;
+            inst.state = match inst.interface {
+                Interface::ModelExchange => ModelState::EventMode,
+                Interface::CoSimulation => ModelState::StepComplete,
+            };
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2Terminate<M: Model>(c: fmi2Component) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2Terminate, |inst| {
+            inst.logger.trace(|| "fmi2Terminate".into());
+            inst.state = ModelState::Terminated;
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2Reset<M: Model>(c: fmi2Component) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2Reset, |inst| {
+            inst.logger.trace(|| "fmi2Reset".into());
+            inst.model.reset().map_err(Failure::Model)?;
+            inst.reset_experiment();
+            Ok(fmi2OK)
+        })
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Getting and setting variable values
+// ---------------------------------------------------------------------------
+
+pub unsafe fn fmi2GetReal<M: Model>(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2GetReal, |inst| {
+            let vrs = in_slice(vr, nvr, "vr[]")?;
+            let values = out_slice(value, nvr, "value[]")?;
+            for (&r, v) in vrs.iter().zip(values) {
+                var_of_type(&inst.model, r, VarType::Real)?;
+                *v = inst.model.get_real(r).map_err(model_err(r))?;
+            }
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2GetInteger<M: Model>(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Integer,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2GetInteger, |inst| {
+            let vrs = in_slice(vr, nvr, "vr[]")?;
+            let values = out_slice(value, nvr, "value[]")?;
+            for (&r, v) in vrs.iter().zip(values) {
+                var_of_type(&inst.model, r, VarType::Integer)?;
+                *v = inst.model.get_integer(r).map_err(model_err(r))?;
+            }
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2GetBoolean<M: Model>(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2GetBoolean, |inst| {
+            let vrs = in_slice(vr, nvr, "vr[]")?;
+            let values = out_slice(value, nvr, "value[]")?;
+            for (&r, v) in vrs.iter().zip(values) {
+                var_of_type(&inst.model, r, VarType::Boolean)?;
+                *v = from_bool(inst.model.get_boolean(r).map_err(model_err(r))?);
+            }
+            Ok(fmi2OK)
+        })
+    }
+}
+
+/// The returned pointers stay valid until the next fmi2GetString or fmi2FreeInstance.
+pub unsafe fn fmi2GetString<M: Model>(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2String,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2GetString, |inst| {
+            let vrs = in_slice(vr, nvr, "vr[]")?;
+            let values = out_slice(value, nvr, "value[]")?;
+            inst.string_buffer.clear();
+            for (&r, v) in vrs.iter().zip(values) {
+                var_of_type(&inst.model, r, VarType::String)?;
+                let s = inst.model.get_string(r).map_err(model_err(r))?;
+                let s = CString::new(s).map_err(|_| {
+                    Failure::Model(format!("value reference {r}: string contains NUL"))
+                })?;
+                // The CString's heap buffer does not move when the Vec grows.
+                *v = s.as_ptr();
+                inst.string_buffer.push(s);
+            }
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2SetReal<M: Model>(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Real,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2SetReal, |inst| {
+            let vrs = in_slice(vr, nvr, "vr[]")?;
+            let values = in_slice(value, nvr, "value[]")?;
+            for (&r, &v) in vrs.iter().zip(values) {
+                settable(inst, r, VarType::Real)?;
+                inst.model.set_real(r, v).map_err(model_err(r))?;
+            }
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2SetInteger<M: Model>(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Integer,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2SetInteger, |inst| {
+            let vrs = in_slice(vr, nvr, "vr[]")?;
+            let values = in_slice(value, nvr, "value[]")?;
+            for (&r, &v) in vrs.iter().zip(values) {
+                settable(inst, r, VarType::Integer)?;
+                inst.model.set_integer(r, v).map_err(model_err(r))?;
+            }
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2SetBoolean<M: Model>(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Boolean,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2SetBoolean, |inst| {
+            let vrs = in_slice(vr, nvr, "vr[]")?;
+            let values = in_slice(value, nvr, "value[]")?;
+            for (&r, &v) in vrs.iter().zip(values) {
+                settable(inst, r, VarType::Boolean)?;
+                inst.model
+                    .set_boolean(r, to_bool(v))
+                    .map_err(model_err(r))?;
+            }
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2SetString<M: Model>(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2String,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2SetString, |inst| {
+            let vrs = in_slice(vr, nvr, "vr[]")?;
+            let values = in_slice(value, nvr, "value[]")?;
+            for (&r, &v) in vrs.iter().zip(values) {
+                settable(inst, r, VarType::String)?;
+                if v.is_null() {
+                    return Err(usage(format!("value for value reference {r} is NULL")));
+                }
+                let s = CStr::from_ptr(v).to_str().map_err(|_| {
+                    usage(format!("value for value reference {r} is not valid UTF-8"))
+                })?;
+                inst.model.set_string(r, s).map_err(model_err(r))?;
+            }
+            Ok(fmi2OK)
+        })
+    }
+}
+
+// ---------------------------------------------------------------------------
+// FMU state: an fmi2FMUstate is a Box<Snapshot<M>> (canGetAndSetFMUstate=true)
+// ---------------------------------------------------------------------------
+
+pub unsafe fn fmi2GetFMUstate<M: Model>(
+    c: fmi2Component,
+    FMUstate: *mut fmi2FMUstate,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2GetFMUstate, |inst| {
+            let slot = out_ref(FMUstate, "FMUstate")?;
+            let snapshot = inst.snapshot();
+            if slot.is_null() {
+                *slot = Box::into_raw(Box::new(snapshot)).cast();
+            } else {
+                // The standard lets the host hand back a state to be overwritten in place.
+                *slot.cast::<Snapshot<M>>() = snapshot;
+            }
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2SetFMUstate<M: Model>(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2SetFMUstate, |inst| {
+            let snapshot = FMUstate
+                .cast::<Snapshot<M>>()
+                .as_ref()
+                .ok_or_else(|| usage("argument FMUstate must not be NULL"))?;
+            inst.restore(snapshot);
+            inst.logger
+                .trace(|| format!("fmi2SetFMUstate: time {}", inst.time));
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2FreeFMUstate<M: Model>(
+    c: fmi2Component,
+    FMUstate: *mut fmi2FMUstate,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2FreeFMUstate, |_inst| {
+            let slot = out_ref(FMUstate, "FMUstate")?;
+            if !slot.is_null() {
+                drop(Box::from_raw(slot.cast::<Snapshot<M>>()));
+                *slot = std::ptr::null_mut();
+            }
+            Ok(fmi2OK)
+        })
+    }
+}
+
+// Serialization needs a byte encoding of M; a later issue adds it to the Model trait
+// and implements these three here (canSerializeFMUstate stays false until then).
+
+pub unsafe fn fmi2SerializedFMUstateSize<M: Model>(
+    c: fmi2Component,
+    _FMUstate: fmi2FMUstate,
+    _size: *mut usize,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2SerializedFMUstateSize, |_| {
+            not_supported("canSerializeFMUstate")
+        })
+    }
+}
+
+pub unsafe fn fmi2SerializeFMUstate<M: Model>(
+    c: fmi2Component,
+    _FMUstate: fmi2FMUstate,
+    _serializedState: *mut fmi2Byte,
+    _size: usize,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2SerializeFMUstate, |_| {
+            not_supported("canSerializeFMUstate")
+        })
+    }
+}
+
+pub unsafe fn fmi2DeSerializeFMUstate<M: Model>(
+    c: fmi2Component,
+    _serializedState: *const fmi2Byte,
+    _size: usize,
+    _FMUstate: *mut fmi2FMUstate,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2DeSerializeFMUstate, |_| {
+            not_supported("canSerializeFMUstate")
+        })
+    }
+}
+
+/// Partial derivatives need model support; a later issue adds a trait method for them here.
+pub unsafe fn fmi2GetDirectionalDerivative<M: Model>(
+    c: fmi2Component,
+    _vUnknown_ref: *const fmi2ValueReference,
+    _nUnknown: usize,
+    _vKnown_ref: *const fmi2ValueReference,
+    _nKnown: usize,
+    _dvKnown: *const fmi2Real,
+    _dvUnknown: *mut fmi2Real,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2GetDirectionalDerivative, |_| {
+            not_supported("providesDirectionalDerivative")
+        })
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Model Exchange
+// ---------------------------------------------------------------------------
+
+pub unsafe fn fmi2EnterEventMode<M: Model>(c: fmi2Component) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2EnterEventMode, |inst| {
+            inst.state = ModelState::EventMode;
+            Ok(fmi2OK)
+        })
+    }
+}
+
+/// The trait has no discrete states or time events yet, so event iteration ends at once.
+pub unsafe fn fmi2NewDiscreteStates<M: Model>(
+    c: fmi2Component,
+    eventInfo: *mut fmi2EventInfo,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2NewDiscreteStates, |_inst| {
+            *out_ref(eventInfo, "eventInfo")? = fmi2EventInfo {
+                newDiscreteStatesNeeded: fmi2False,
+                terminateSimulation: fmi2False,
+                nominalsOfContinuousStatesChanged: fmi2False,
+                valuesOfContinuousStatesChanged: fmi2False,
+                nextEventTimeDefined: fmi2False,
+                nextEventTime: 0.0,
+            };
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2EnterContinuousTimeMode<M: Model>(c: fmi2Component) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2EnterContinuousTimeMode, |inst| {
+            inst.state = ModelState::ContinuousTimeMode;
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2CompletedIntegratorStep<M: Model>(
+    c: fmi2Component,
+    _noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
+    enterEventMode: *mut fmi2Boolean,
+    terminateSimulation: *mut fmi2Boolean,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2CompletedIntegratorStep, |_inst| {
+            let enter = out_ref(enterEventMode, "enterEventMode")?;
+            let terminate = out_ref(terminateSimulation, "terminateSimulation")?;
+            *enter = fmi2False;
+            *terminate = fmi2False;
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2SetTime<M: Model>(c: fmi2Component, time: fmi2Real) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2SetTime, |inst| {
+            inst.time = time;
+            inst.model.set_time(time);
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2SetContinuousStates<M: Model>(
+    c: fmi2Component,
+    x: *const fmi2Real,
+    nx: usize,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2SetContinuousStates, |inst| {
+            check_len(nx, inst.model.n_states(), "nx")?;
+            inst.model.set_continuous_states(in_slice(x, nx, "x[]")?);
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2GetDerivatives<M: Model>(
+    c: fmi2Component,
+    derivatives: *mut fmi2Real,
+    nx: usize,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2GetDerivatives, |inst| {
+            check_len(nx, inst.model.n_states(), "nx")?;
+            let dx = out_slice(derivatives, nx, "derivatives[]")?;
+            inst.model.get_derivatives(dx).map_err(Failure::Model)?;
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2GetEventIndicators<M: Model>(
+    c: fmi2Component,
+    eventIndicators: *mut fmi2Real,
+    ni: usize,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2GetEventIndicators, |inst| {
+            check_len(ni, inst.model.n_event_indicators(), "ni")?;
+            let z = out_slice(eventIndicators, ni, "eventIndicators[]")?;
+            inst.model.get_event_indicators(z).map_err(Failure::Model)?;
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2GetContinuousStates<M: Model>(
+    c: fmi2Component,
+    x: *mut fmi2Real,
+    nx: usize,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2GetContinuousStates, |inst| {
+            check_len(nx, inst.model.n_states(), "nx")?;
+            inst.model.get_continuous_states(out_slice(x, nx, "x[]")?);
+            Ok(fmi2OK)
+        })
+    }
+}
+
+pub unsafe fn fmi2GetNominalsOfContinuousStates<M: Model>(
+    c: fmi2Component,
+    x_nominal: *mut fmi2Real,
+    nx: usize,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2GetNominalsOfContinuousStates, |inst| {
+            check_len(nx, inst.model.n_states(), "nx")?;
+            inst.model
+                .get_nominals(out_slice(x_nominal, nx, "x_nominal[]")?);
+            Ok(fmi2OK)
+        })
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Co-Simulation
+// ---------------------------------------------------------------------------
+
+/// Input interpolation would go here once models support it.
+pub unsafe fn fmi2SetRealInputDerivatives<M: Model>(
+    c: fmi2Component,
+    _vr: *const fmi2ValueReference,
+    _nvr: usize,
+    _order: *const fmi2Integer,
+    _value: *const fmi2Real,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2SetRealInputDerivatives, |_| {
+            not_supported("canInterpolateInputs")
+        })
+    }
+}
+
+/// Output extrapolation would go here once models support it.
+pub unsafe fn fmi2GetRealOutputDerivatives<M: Model>(
+    c: fmi2Component,
+    _vr: *const fmi2ValueReference,
+    _nvr: usize,
+    _order: *const fmi2Integer,
+    _value: *mut fmi2Real,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2GetRealOutputDerivatives, |_| {
+            not_supported("maxOutputDerivativeOrder>0")
+        })
+    }
+}
+
+/// Relative tolerance between the host's communication point and our accumulated time:
+/// both are sums of the same step sizes, possibly rounded in a different order.
+const TIME_TOLERANCE: f64 = 1e-9;
+
+pub unsafe fn fmi2DoStep<M: Model>(
+    c: fmi2Component,
+    currentCommunicationPoint: fmi2Real,
+    communicationStepSize: fmi2Real,
+    _noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
+) -> fmi2Status {
+    let (t, h) = (currentCommunicationPoint, communicationStepSize);
+    unsafe {
+        guarded::<M>(c, &spec::fmi2DoStep, |inst| {
+            // Also rejects NaN.
+            if !(h > 0.0 && h.is_finite()) {
+                return Err(usage(format!(
+                    "communicationStepSize must be > 0 but is {h}"
+                )));
+            }
+            // Scale by every magnitude involved so the check stays relative near t = 0.
+            let scale = inst
+                .time
+                .abs()
+                .max(t.abs())
+                .max(inst.start_time.abs())
+                .max(h);
+            if !t.is_finite() || (t - inst.time).abs() > TIME_TOLERANCE * scale {
+                return Err(usage(format!(
+                    "currentCommunicationPoint = {t} but the FMU is at time {}",
+                    inst.time
+                )));
+            }
+            inst.logger
+                .trace(|| format!("fmi2DoStep: t = {t}, h = {h}"));
+            let result = inst.model.do_step(inst.time, h);
+            inst.last_do_step_status = if result.is_ok() { fmi2OK } else { fmi2Error };
+            result.map_err(Failure::Model)?;
+            inst.time += h;
+            Ok(fmi2OK)
+        })
+    }
+}
+
+/// Allowed only while a step is pending, which never happens: the state check refuses it.
+pub unsafe fn fmi2CancelStep<M: Model>(c: fmi2Component) -> fmi2Status {
+    unsafe { guarded::<M>(c, &spec::fmi2CancelStep, |_| Ok(fmi2OK)) }
+}
+
+/// fmi2Discard is the standard's answer for a status kind the slave cannot provide.
+fn status_unavailable<M: Model>(
+    inst: &Instance<M>,
+    function: &str,
+    kind: fmi2StatusKind,
+) -> Outcome {
+    inst.logger.warning(
+        fmi2Discard,
+        &format!(
+            "{function}: status kind {kind} is not available (fmi2DoStep is never asynchronous)"
+        ),
+    );
+    Ok(fmi2Discard)
+}
+
+pub unsafe fn fmi2GetStatus<M: Model>(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Status,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2GetStatus, |inst| {
+            let value = out_ref(value, "value")?;
+            if s == fmi2DoStepStatus {
+                *value = inst.last_do_step_status;
+                Ok(fmi2OK)
+            } else {
+                status_unavailable(inst, "fmi2GetStatus", s)
+            }
+        })
+    }
+}
+
+pub unsafe fn fmi2GetRealStatus<M: Model>(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2GetRealStatus, |inst| {
+            let value = out_ref(value, "value")?;
+            if s == fmi2LastSuccessfulTime {
+                *value = inst.time;
+                Ok(fmi2OK)
+            } else {
+                status_unavailable(inst, "fmi2GetRealStatus", s)
+            }
+        })
+    }
+}
+
+pub unsafe fn fmi2GetIntegerStatus<M: Model>(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Integer,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2GetIntegerStatus, |inst| {
+            out_ref(value, "value")?;
+            status_unavailable(inst, "fmi2GetIntegerStatus", s)
+        })
+    }
+}
+
+pub unsafe fn fmi2GetBooleanStatus<M: Model>(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2GetBooleanStatus, |inst| {
+            let value = out_ref(value, "value")?;
+            if s == fmi2Terminated {
+                // The model never asks to end the simulation.
+                *value = fmi2False;
+                Ok(fmi2OK)
+            } else {
+                status_unavailable(inst, "fmi2GetBooleanStatus", s)
+            }
+        })
+    }
+}
+
+pub unsafe fn fmi2GetStringStatus<M: Model>(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2String,
+) -> fmi2Status {
+    unsafe {
+        guarded::<M>(c, &spec::fmi2GetStringStatus, |inst| {
+            out_ref(value, "value")?;
+            status_unavailable(inst, "fmi2GetStringStatus", s)
+        })
+    }
+}

@@ -1,0 +1,93 @@
+//! What an fmi2Component points to.
+
+use std::ffi::CString;
+
+use super::logger::Logger;
+use super::state::ModelState;
+use super::types::{fmi2CallbackFunctions, fmi2Status};
+use super::{Interface, Model};
+
+pub struct Instance<M> {
+    pub model: M,
+    pub interface: Interface,
+    pub state: ModelState,
+    pub logger: Logger,
+    /// Own copy: the host may free its struct after fmi2Instantiate returns.
+    /// Kept for stepFinished, which an asynchronous fmi2DoStep would need.
+    pub callbacks: fmi2CallbackFunctions,
+    pub time: f64,
+    pub start_time: f64,
+    /// Stored for completeness; nothing enforces it yet.
+    pub stop_time: Option<f64>,
+    pub tolerance: Option<f64>,
+    /// Answer to fmi2GetStatus(fmi2DoStepStatus).
+    pub last_do_step_status: fmi2Status,
+    /// fmi2GetString hands out pointers that must outlive the call.
+    pub string_buffer: Vec<CString>,
+}
+
+impl<M: Model> Instance<M> {
+    pub fn new(
+        model: M,
+        interface: Interface,
+        logger: Logger,
+        callbacks: fmi2CallbackFunctions,
+    ) -> Self {
+        Instance {
+            model,
+            interface,
+            state: ModelState::Instantiated,
+            logger,
+            callbacks,
+            time: 0.0,
+            start_time: 0.0,
+            stop_time: None,
+            tolerance: None,
+            last_do_step_status: fmi2Status::fmi2OK,
+            string_buffer: Vec::new(),
+        }
+    }
+
+    /// Back to the values fmi2Instantiate leaves; logging settings are the host's and stay.
+    pub fn reset_experiment(&mut self) {
+        self.state = ModelState::Instantiated;
+        self.time = 0.0;
+        self.start_time = 0.0;
+        self.stop_time = None;
+        self.tolerance = None;
+        self.last_do_step_status = fmi2Status::fmi2OK;
+        self.string_buffer.clear();
+    }
+
+    pub fn snapshot(&self) -> Snapshot<M> {
+        Snapshot {
+            model: self.model.clone(),
+            state: self.state,
+            time: self.time,
+            start_time: self.start_time,
+            stop_time: self.stop_time,
+            last_do_step_status: self.last_do_step_status,
+        }
+    }
+
+    pub fn restore(&mut self, s: &Snapshot<M>) {
+        // clone_from lets models reuse their buffers on repeated rollbacks.
+        self.model.clone_from(&s.model);
+        self.state = s.state;
+        self.time = s.time;
+        self.start_time = s.start_time;
+        self.stop_time = s.stop_time;
+        self.last_do_step_status = s.last_do_step_status;
+    }
+}
+
+/// What an fmi2FMUstate points to: everything that evolves during a simulation,
+/// but not the host's callbacks or logging settings.
+pub struct Snapshot<M> {
+    pub model: M,
+    pub state: ModelState,
+    pub time: f64,
+    pub start_time: f64,
+    pub stop_time: Option<f64>,
+    pub last_do_step_status: fmi2Status,
+}

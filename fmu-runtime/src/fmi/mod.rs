@@ -1,0 +1,112 @@
+//! Generic FMI 2.0 C-ABI layer.
+//!
+//! Knows the FMI standard (calling sequence, argument checks, logging, FMU states)
+//! and nothing of physics: a model plugs in by implementing [`Model`], and
+//! `export_fmi2!(path::To::Model)` at the crate root emits the 44 `fmi2*` symbols.
+//!
+//! Files: `types` (C types of the headers), `logger` (host logger callback),
+//! `state` (state machine tables), `access` (which variables may be set when),
+//! `resource` (fmuResourceLocation URI), `instance` (the fmi2Component),
+//! `api` (generic implementations), `export` (the macro).
+
+pub mod access;
+pub mod api;
+mod export;
+pub mod instance;
+pub mod logger;
+pub mod resource;
+pub mod state;
+pub mod types;
+
+#[cfg(test)]
+mod tests;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Causality {
+    Parameter,
+    CalculatedParameter,
+    Input,
+    Output,
+    Local,
+    Independent,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variability {
+    Constant,
+    Fixed,
+    Tunable,
+    Discrete,
+    Continuous,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Initial {
+    Exact,
+    Approx,
+    Calculated,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VarType {
+    Real,
+    Integer,
+    Boolean,
+    String,
+}
+
+/// Attributes of a variable as in modelDescription.xml. `initial: None` means the
+/// attribute is absent and the standard's default applies (see `access::effective_initial`).
+#[derive(Clone, Copy, Debug)]
+pub struct VarInfo {
+    pub var_type: VarType,
+    pub causality: Causality,
+    pub variability: Variability,
+    pub initial: Option<Initial>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interface {
+    ModelExchange,
+    CoSimulation,
+}
+
+/// The physics side. The layer has already checked the calling sequence, null
+/// pointers, array lengths, value references and their types before calling a method,
+/// so implementations only deal with valid requests.
+///
+/// Any `Err` (and any panic) puts the instance into the FMI Error state: the host may
+/// then only read values for diagnostics, restore an FMU state, reset or free it.
+pub trait Model: Sized + Clone {
+    /// Load the model from the FMU's resources folder (None: host gave no resource location).
+    fn instantiate(
+        resources: Option<&std::path::Path>,
+        interface: Interface,
+    ) -> Result<Self, String>;
+    /// GUID the model was built with; the layer compares it with the host's fmuGUID and refuses a mismatch.
+    fn guid(&self) -> &str;
+    /// Called on every get/set of every value reference: keep it a table lookup.
+    fn var_info(&self, vr: u32) -> Option<VarInfo>;
+    fn get_real(&mut self, vr: u32) -> Result<f64, String>;
+    fn set_real(&mut self, vr: u32, value: f64) -> Result<(), String>;
+    fn get_integer(&mut self, vr: u32) -> Result<i32, String>;
+    fn set_integer(&mut self, vr: u32, value: i32) -> Result<(), String>;
+    fn get_boolean(&mut self, vr: u32) -> Result<bool, String>;
+    fn set_boolean(&mut self, vr: u32, value: bool) -> Result<(), String>;
+    fn get_string(&mut self, vr: u32) -> Result<String, String>; // may always Err for models without strings
+    fn set_string(&mut self, vr: u32, value: &str) -> Result<(), String>;
+    fn n_states(&self) -> usize;
+    fn n_event_indicators(&self) -> usize;
+    fn set_time(&mut self, t: f64);
+    fn get_continuous_states(&self, x: &mut [f64]);
+    fn set_continuous_states(&mut self, x: &[f64]);
+    fn get_derivatives(&mut self, dx: &mut [f64]) -> Result<(), String>;
+    fn get_nominals(&self, nominals: &mut [f64]);
+    fn get_event_indicators(&mut self, z: &mut [f64]) -> Result<(), String>;
+    fn enter_initialization(&mut self, start_time: f64) -> Result<(), String>;
+    fn exit_initialization(&mut self) -> Result<(), String>;
+    /// Co-Simulation: advance from t to t + h exactly.
+    fn do_step(&mut self, t: f64, h: f64) -> Result<(), String>;
+    /// Back to the state right after instantiate (parameters at start values).
+    fn reset(&mut self) -> Result<(), String>;
+}

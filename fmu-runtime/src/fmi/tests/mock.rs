@@ -1,0 +1,191 @@
+//! One-mass spring x'' = -k x - d x' + u, the mock model for the layer's tests.
+//! Extra variables exercise the layer: a panic trigger, a failure trigger, strings.
+
+use std::path::Path;
+
+use crate::fmi::{Causality as C, Initial as I, Interface, Model, VarInfo, VarType as T, Variability as V};
+
+pub const GUID: &str = "{8c4e810f-3df3-4a00-8276-176fa3c9f000}";
+
+pub const X: u32 = 0;
+pub const V_: u32 = 1;
+pub const K: u32 = 2;
+pub const U: u32 = 3;
+pub const A: u32 = 4;
+pub const D: u32 = 5;
+pub const STEPS: u32 = 6;
+pub const CRASH: u32 = 7;
+pub const LABEL: u32 = 8;
+pub const FAIL: u32 = 9;
+pub const RESOURCES: u32 = 10;
+
+const VARS: [VarInfo; 11] = [
+    VarInfo { var_type: T::Real, causality: C::Output, variability: V::Continuous, initial: Some(I::Exact) },
+    VarInfo { var_type: T::Real, causality: C::Local, variability: V::Continuous, initial: Some(I::Exact) },
+    VarInfo { var_type: T::Real, causality: C::Parameter, variability: V::Fixed, initial: Some(I::Exact) },
+    VarInfo { var_type: T::Real, causality: C::Input, variability: V::Continuous, initial: None },
+    VarInfo { var_type: T::Real, causality: C::Local, variability: V::Continuous, initial: Some(I::Calculated) },
+    VarInfo { var_type: T::Real, causality: C::Parameter, variability: V::Tunable, initial: None },
+    VarInfo { var_type: T::Integer, causality: C::Output, variability: V::Discrete, initial: Some(I::Calculated) },
+    VarInfo { var_type: T::Boolean, causality: C::Input, variability: V::Discrete, initial: None },
+    VarInfo { var_type: T::String, causality: C::Parameter, variability: V::Fixed, initial: Some(I::Exact) },
+    VarInfo { var_type: T::Boolean, causality: C::Input, variability: V::Discrete, initial: None },
+    VarInfo { var_type: T::String, causality: C::CalculatedParameter, variability: V::Fixed, initial: None },
+];
+
+#[derive(Clone, Debug)]
+pub struct Spring {
+    resources: String,
+    time: f64,
+    x: f64,
+    v: f64,
+    k: f64,
+    d: f64,
+    u: f64,
+    steps: i32,
+    crash: bool,
+    fail: bool,
+    label: String,
+}
+
+impl Spring {
+    fn accel(&self, x: f64, v: f64) -> f64 {
+        if self.crash {
+            panic!("crash requested at t = {}", self.time);
+        }
+        -self.k * x - self.d * v + self.u
+    }
+
+    fn start(resources: String) -> Spring {
+        Spring {
+            resources,
+            time: 0.0,
+            x: 1.0,
+            v: 0.0,
+            k: 1.0,
+            d: 0.0,
+            u: 0.0,
+            steps: 0,
+            crash: false,
+            fail: false,
+            label: "spring".into(),
+        }
+    }
+}
+
+impl Model for Spring {
+    fn instantiate(resources: Option<&Path>, _interface: Interface) -> Result<Self, String> {
+        let resources = resources.map_or("none".to_string(), |p| p.display().to_string());
+        if resources.contains("refuse") {
+            return Err(format!("cannot load {resources}"));
+        }
+        Ok(Spring::start(resources))
+    }
+    fn guid(&self) -> &str {
+        GUID
+    }
+    fn var_info(&self, vr: u32) -> Option<VarInfo> {
+        VARS.get(vr as usize).copied()
+    }
+    fn get_real(&mut self, vr: u32) -> Result<f64, String> {
+        Ok(match vr {
+            X => self.x,
+            V_ => self.v,
+            K => self.k,
+            U => self.u,
+            A => self.accel(self.x, self.v),
+            D => self.d,
+            _ => unreachable!("the layer checks value references"),
+        })
+    }
+    fn set_real(&mut self, vr: u32, value: f64) -> Result<(), String> {
+        match vr {
+            X => self.x = value,
+            V_ => self.v = value,
+            K if value <= 0.0 => return Err(format!("k must be > 0, got {value}")),
+            K => self.k = value,
+            U => self.u = value,
+            D => self.d = value,
+            _ => unreachable!("the layer checks settability"),
+        }
+        Ok(())
+    }
+    fn get_integer(&mut self, _vr: u32) -> Result<i32, String> {
+        Ok(self.steps)
+    }
+    fn set_integer(&mut self, _vr: u32, _value: i32) -> Result<(), String> {
+        Err("no settable integers".into())
+    }
+    fn get_boolean(&mut self, vr: u32) -> Result<bool, String> {
+        Ok(if vr == CRASH { self.crash } else { self.fail })
+    }
+    fn set_boolean(&mut self, vr: u32, value: bool) -> Result<(), String> {
+        if vr == CRASH { self.crash = value } else { self.fail = value }
+        Ok(())
+    }
+    fn get_string(&mut self, vr: u32) -> Result<String, String> {
+        Ok(if vr == LABEL { self.label.clone() } else { self.resources.clone() })
+    }
+    fn set_string(&mut self, _vr: u32, value: &str) -> Result<(), String> {
+        self.label = value.to_owned();
+        Ok(())
+    }
+    fn n_states(&self) -> usize {
+        2
+    }
+    fn n_event_indicators(&self) -> usize {
+        1
+    }
+    fn set_time(&mut self, t: f64) {
+        self.time = t;
+    }
+    fn get_continuous_states(&self, x: &mut [f64]) {
+        x.copy_from_slice(&[self.x, self.v]);
+    }
+    fn set_continuous_states(&mut self, x: &[f64]) {
+        (self.x, self.v) = (x[0], x[1]);
+    }
+    fn get_derivatives(&mut self, dx: &mut [f64]) -> Result<(), String> {
+        dx.copy_from_slice(&[self.v, self.accel(self.x, self.v)]);
+        Ok(())
+    }
+    fn get_nominals(&self, nominals: &mut [f64]) {
+        nominals.fill(1.0);
+    }
+    fn get_event_indicators(&mut self, z: &mut [f64]) -> Result<(), String> {
+        z[0] = self.x;
+        Ok(())
+    }
+    fn enter_initialization(&mut self, start_time: f64) -> Result<(), String> {
+        self.time = start_time;
+        Ok(())
+    }
+    fn exit_initialization(&mut self) -> Result<(), String> {
+        Ok(())
+    }
+    fn do_step(&mut self, t: f64, h: f64) -> Result<(), String> {
+        if self.fail {
+            return Err(format!("solver failed at 50% of the step #r{X}# t = {t}"));
+        }
+        // Classical RK4 with sub-steps of at most 1 ms.
+        let n = (h / 1e-3).ceil().max(1.0) as usize;
+        let dt = h / n as f64;
+        for _ in 0..n {
+            let f = |x: f64, v: f64| (v, self.accel(x, v));
+            let (x, v) = (self.x, self.v);
+            let k1 = f(x, v);
+            let k2 = f(x + dt / 2.0 * k1.0, v + dt / 2.0 * k1.1);
+            let k3 = f(x + dt / 2.0 * k2.0, v + dt / 2.0 * k2.1);
+            let k4 = f(x + dt * k3.0, v + dt * k3.1);
+            self.x += dt / 6.0 * (k1.0 + 2.0 * k2.0 + 2.0 * k3.0 + k4.0);
+            self.v += dt / 6.0 * (k1.1 + 2.0 * k2.1 + 2.0 * k3.1 + k4.1);
+        }
+        self.time = t + h;
+        self.steps += 1;
+        Ok(())
+    }
+    fn reset(&mut self) -> Result<(), String> {
+        *self = Spring::start(std::mem::take(&mut self.resources));
+        Ok(())
+    }
+}

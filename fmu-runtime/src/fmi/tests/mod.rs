@@ -1,0 +1,567 @@
+//! Drives the generic FMI entry points (what the exported C symbols forward to) the way an importer would, over a mock model.
+
+mod mock;
+
+use std::cell::RefCell;
+use std::ffi::{CStr, CString, c_char, c_void};
+use std::ptr::{null, null_mut};
+
+use crate::fmi::types::fmi2Status::*;
+use crate::fmi::types::*;
+use mock::*;
+use crate::fmi::api;
+
+#[derive(Debug, Clone)]
+struct Entry {
+    status: fmi2Status,
+    category: String,
+    text: String,
+}
+
+#[derive(Default)]
+struct Log(RefCell<Vec<Entry>>);
+
+impl Log {
+    fn contains(&self, needle: &str) -> bool {
+        self.0.borrow().iter().any(|e| e.text.contains(needle))
+    }
+    fn last(&self) -> String {
+        self.0.borrow().last().map(|e| e.text.clone()).unwrap_or_default()
+    }
+    fn count(&self, category: &str) -> usize {
+        self.0.borrow().iter().filter(|e| e.category == category).count()
+    }
+    fn clear(&self) {
+        self.0.borrow_mut().clear();
+    }
+}
+
+/// Stable Rust cannot define a C-variadic function, so the test logger takes the one
+/// vararg the layer passes (the text for its "%s" format) as a fixed parameter and is
+/// transmuted to the variadic type. This relies on the calling convention passing
+/// variadic and fixed integer/pointer arguments identically, true for x86_64 SysV
+/// and Windows x64 and AArch64 Linux, but not for Apple arm64.
+unsafe extern "C" fn record(
+    env: *mut c_void,
+    name: *const c_char,
+    status: fmi2Status,
+    category: *const c_char,
+    message: *const c_char,
+    arg: *const c_char,
+) {
+    unsafe {
+        let log = &*(env as *const Log);
+        assert_eq!(CStr::from_ptr(message).to_str().unwrap(), "%s");
+        assert!(!name.is_null());
+        log.0.borrow_mut().push(Entry {
+            status,
+            category: CStr::from_ptr(category).to_str().unwrap().to_owned(),
+            text: CStr::from_ptr(arg).to_str().unwrap().to_owned(),
+        });
+    }
+}
+
+fn callbacks(log: &Log) -> fmi2CallbackFunctions {
+    type Fixed = unsafe extern "C" fn(*mut c_void, *const c_char, fmi2Status, *const c_char, *const c_char, *const c_char);
+    let logger: fmi2CallbackLogger = unsafe { std::mem::transmute(record as Fixed) };
+    fmi2CallbackFunctions {
+        logger: Some(logger),
+        allocateMemory: None,
+        freeMemory: None,
+        stepFinished: None,
+        componentEnvironment: log as *const Log as *mut c_void,
+    }
+}
+
+fn instantiate_with(log: &Log, kind: fmi2Type, guid: &str, uri: Option<&str>, logging_on: bool) -> fmi2Component {
+    // Temporaries freed right after the call: the layer must have copied them.
+    let name = CString::new("spring #1").unwrap();
+    let guid = CString::new(guid).unwrap();
+    let uri = uri.map(|u| CString::new(u).unwrap());
+    let cb = Box::new(callbacks(log));
+    unsafe {
+        api::fmi2Instantiate::<Spring>(
+            name.as_ptr(),
+            kind,
+            guid.as_ptr(),
+            uri.as_ref().map_or(null(), |u| u.as_ptr()),
+            &*cb,
+            fmi2False,
+            logging_on as fmi2Boolean,
+        )
+    }
+}
+
+fn instantiate(log: &Log, kind: fmi2Type) -> fmi2Component {
+    let c = instantiate_with(log, kind, GUID, Some("file:///tmp/spring/resources"), false);
+    assert!(!c.is_null(), "{}", log.last());
+    c
+}
+
+fn get_real(c: fmi2Component, vr: u32) -> f64 {
+    let mut v = f64::NAN;
+    assert_eq!(unsafe { api::fmi2GetReal::<Spring>(c, &vr, 1, &mut v) }, fmi2OK);
+    v
+}
+
+fn set_real(c: fmi2Component, vr: u32, v: f64) -> fmi2Status {
+    unsafe { api::fmi2SetReal::<Spring>(c, &vr, 1, &v) }
+}
+
+fn set_bool(c: fmi2Component, vr: u32, v: bool) -> fmi2Status {
+    let v = v as fmi2Boolean;
+    unsafe { api::fmi2SetBoolean::<Spring>(c, &vr, 1, &v) }
+}
+
+fn get_string(c: fmi2Component, vr: u32) -> String {
+    let mut s: fmi2String = null();
+    assert_eq!(unsafe { api::fmi2GetString::<Spring>(c, &vr, 1, &mut s) }, fmi2OK);
+    unsafe { CStr::from_ptr(s) }.to_str().unwrap().to_owned()
+}
+
+fn initialize(c: fmi2Component, start: f64) {
+    unsafe {
+        assert_eq!(api::fmi2SetupExperiment::<Spring>(c, fmi2False, 0.0, start, fmi2False, 0.0), fmi2OK);
+        assert_eq!(api::fmi2EnterInitializationMode::<Spring>(c), fmi2OK);
+        assert_eq!(api::fmi2ExitInitializationMode::<Spring>(c), fmi2OK);
+    }
+}
+
+/// Steps from `t` to `t_end` with step `h`; returns the final time.
+fn run_cs(c: fmi2Component, mut t: f64, t_end: f64, h: f64) -> f64 {
+    while t < t_end - h / 2.0 {
+        assert_eq!(unsafe { api::fmi2DoStep::<Spring>(c, t, h, fmi2True) }, fmi2OK);
+        t += h;
+    }
+    t
+}
+
+#[test]
+fn version_and_platform() {
+    unsafe {
+        assert_eq!(CStr::from_ptr(api::fmi2GetVersion()).to_str().unwrap(), "2.0");
+        assert_eq!(CStr::from_ptr(api::fmi2GetTypesPlatform()).to_str().unwrap(), "default");
+    }
+}
+
+#[test]
+fn instantiate_checks_guid_and_type() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2CoSimulation);
+    unsafe { api::fmi2FreeInstance::<Spring>(c) };
+
+    let c = instantiate_with(&log, fmi2CoSimulation, "{wrong}", None, false);
+    assert!(c.is_null());
+    assert!(log.contains(&format!("GUID mismatch: expected {GUID} got {{wrong}}")), "{}", log.last());
+    assert_eq!(log.0.borrow().last().unwrap().status, fmi2Error);
+    assert_eq!(log.0.borrow().last().unwrap().category, "logStatusError");
+
+    assert!(instantiate_with(&log, 7, GUID, None, false).is_null());
+    assert!(log.contains("invalid fmuType 7"));
+
+    // Model refusal is reported too.
+    assert!(instantiate_with(&log, fmi2CoSimulation, GUID, Some("file:///refuse"), false).is_null());
+    assert!(log.contains("cannot load /refuse"));
+
+    // No callbacks at all: still works, just silent.
+    let name = c"silent";
+    let guid = CString::new(GUID).unwrap();
+    let c = unsafe { api::fmi2Instantiate::<Spring>(name.as_ptr(), fmi2ModelExchange, guid.as_ptr(), null(), null(), 0, 1) };
+    assert!(!c.is_null());
+    assert_eq!(unsafe { api::fmi2DoStep::<Spring>(c, 0.0, 1.0, 0) }, fmi2Error);
+    unsafe { api::fmi2FreeInstance::<Spring>(c) };
+
+    // Missing instance name.
+    let cb = callbacks(&log);
+    let c = unsafe { api::fmi2Instantiate::<Spring>(null(), fmi2ModelExchange, guid.as_ptr(), null(), &cb, 0, 0) };
+    assert!(c.is_null());
+    assert!(log.contains("missing instance name"));
+}
+
+#[test]
+fn instantiate_resource_uri_variants() {
+    let log = Log::default();
+    for uri in [
+        "file:/tmp/my%20fmu/resources",
+        "file://localhost/tmp/my%20fmu/resources/",
+        "file:///tmp/my%20fmu/resources",
+        "file:////tmp/my%20fmu/resources/",
+    ] {
+        let c = instantiate_with(&log, fmi2CoSimulation, GUID, Some(uri), false);
+        assert!(!c.is_null(), "{uri}: {}", log.last());
+        unsafe { api::fmi2EnterInitializationMode::<Spring>(c) };
+        assert_eq!(get_string(c, RESOURCES), "/tmp/my fmu/resources", "{uri}");
+        unsafe { api::fmi2FreeInstance::<Spring>(c) };
+    }
+    let c = instantiate_with(&log, fmi2CoSimulation, GUID, None, false);
+    unsafe { api::fmi2EnterInitializationMode::<Spring>(c) };
+    assert_eq!(get_string(c, RESOURCES), "none");
+    unsafe { api::fmi2FreeInstance::<Spring>(c) };
+
+    for uri in ["http://example.com/resources", "file://server/share", ""] {
+        assert!(instantiate_with(&log, fmi2CoSimulation, GUID, Some(uri), false).is_null(), "{uri}");
+        assert!(log.last().contains("fmuResourceLocation"), "{}", log.last());
+    }
+}
+
+#[test]
+fn state_machine_errors() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2CoSimulation);
+    unsafe {
+        assert_eq!(api::fmi2DoStep::<Spring>(c, 0.0, 0.1, 0), fmi2Error);
+        assert_eq!(log.last(), "fmi2DoStep called in state Instantiated; allowed in: StepComplete");
+        let mut x = 0.0;
+        assert_eq!(api::fmi2GetReal::<Spring>(c, &X, 1, &mut x), fmi2Error);
+        assert!(log.last().starts_with("fmi2GetReal called in state Instantiated"));
+        // ME function on a CS instance.
+        assert_eq!(api::fmi2SetTime::<Spring>(c, 1.0), fmi2Error);
+        assert!(log.last().contains("ModelExchange function"), "{}", log.last());
+
+        // Before initialization: parameters and states with start values may be set.
+        assert_eq!(set_real(c, K, 4.0), fmi2OK);
+        assert_eq!(set_real(c, X, 2.0), fmi2OK);
+        assert_eq!(set_real(c, A, 2.0), fmi2Error);
+        assert!(log.last().contains("value reference 4"), "{}", log.last());
+        initialize(c, 0.0);
+
+        assert_eq!(set_real(c, K, 5.0), fmi2Error);
+        assert!(log.last().contains("value reference 2") && log.last().contains("Fixed"), "{}", log.last());
+        assert_eq!(set_real(c, X, 1.0), fmi2Error);
+        assert!(log.last().contains("causality Output"), "{}", log.last());
+        // Tunable parameter and input are fine.
+        assert_eq!(set_real(c, D, 0.1), fmi2OK);
+        assert_eq!(set_real(c, U, 0.5), fmi2OK);
+
+        let vr = 99;
+        assert_eq!(api::fmi2GetReal::<Spring>(c, &vr, 1, &mut x), fmi2Error);
+        assert_eq!(log.last(), "fmi2GetReal: unknown value reference 99");
+        assert_eq!(set_real(c, CRASH, 1.0), fmi2Error);
+        assert_eq!(log.last(), "fmi2SetReal: value reference 7 is a Boolean variable, not Real");
+
+        // Null pointers.
+        assert_eq!(api::fmi2GetReal::<Spring>(c, &X, 1, null_mut()), fmi2Error);
+        assert_eq!(log.last(), "fmi2GetReal: argument value[] must not be NULL");
+        assert_eq!(api::fmi2GetReal::<Spring>(c, null(), 1, &mut x), fmi2Error);
+        assert_eq!(api::fmi2GetReal::<Spring>(c, null(), 0, null_mut()), fmi2OK);
+        assert_eq!(api::fmi2GetReal::<Spring>(null_mut(), &X, 1, &mut x), fmi2Error);
+        assert_eq!(api::fmi2GetStatus::<Spring>(c, fmi2DoStepStatus, null_mut()), fmi2Error);
+
+        // DoStep argument checks.
+        assert_eq!(api::fmi2DoStep::<Spring>(c, 0.5, 0.1, 0), fmi2Error);
+        assert!(log.last().contains("currentCommunicationPoint = 0.5"), "{}", log.last());
+        assert_eq!(api::fmi2DoStep::<Spring>(c, 0.0, 0.0, 0), fmi2Error);
+        assert_eq!(api::fmi2DoStep::<Spring>(c, 0.0, f64::NAN, 0), fmi2Error);
+        assert_eq!(api::fmi2DoStep::<Spring>(c, f64::NAN, 0.1, 0), fmi2Error);
+        assert_eq!(api::fmi2CancelStep::<Spring>(c), fmi2Error);
+
+        // Usage errors leave the instance usable.
+        assert_eq!(api::fmi2DoStep::<Spring>(c, 0.0, 0.1, 0), fmi2OK);
+        assert_eq!(api::fmi2EnterInitializationMode::<Spring>(c), fmi2Error);
+        assert_eq!(api::fmi2Terminate::<Spring>(c), fmi2OK);
+        assert_eq!(api::fmi2DoStep::<Spring>(c, 0.1, 0.1, 0), fmi2Error);
+        assert_eq!(api::fmi2GetReal::<Spring>(c, &X, 1, &mut x), fmi2OK);
+        api::fmi2FreeInstance::<Spring>(c);
+    }
+    for e in log.0.borrow().iter() {
+        assert_eq!(e.status, fmi2Error);
+        assert_eq!(e.category, "logStatusError");
+    }
+}
+
+#[test]
+fn co_simulation_run() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2CoSimulation);
+    assert_eq!(set_real(c, K, 4.0), fmi2OK);
+    initialize(c, 1.0);
+    // 0.1 does not sum exactly; the host's t and ours differ in the last bits.
+    let t = run_cs(c, 1.0, 2.0, 0.1);
+    let x = get_real(c, X);
+    assert!((x - (2.0f64).cos()).abs() < 1e-9, "x = {x}");
+    unsafe {
+        let mut n = 0;
+        assert_eq!(api::fmi2GetInteger::<Spring>(c, &STEPS, 1, &mut n), fmi2OK);
+        assert_eq!(n, 10);
+        let mut time = 0.0;
+        assert_eq!(api::fmi2GetRealStatus::<Spring>(c, fmi2LastSuccessfulTime, &mut time), fmi2OK);
+        assert!((time - t).abs() < 1e-12);
+        let mut status = fmi2Fatal;
+        assert_eq!(api::fmi2GetStatus::<Spring>(c, fmi2DoStepStatus, &mut status), fmi2OK);
+        assert_eq!(status, fmi2OK);
+        let mut b = fmi2True;
+        assert_eq!(api::fmi2GetBooleanStatus::<Spring>(c, fmi2Terminated, &mut b), fmi2OK);
+        assert_eq!(b, fmi2False);
+        let mut i = 0;
+        assert_eq!(api::fmi2GetIntegerStatus::<Spring>(c, fmi2DoStepStatus, &mut i), fmi2Discard);
+        let mut s = null();
+        assert_eq!(api::fmi2GetStringStatus::<Spring>(c, fmi2PendingStatus, &mut s), fmi2Discard);
+        assert_eq!(api::fmi2GetRealStatus::<Spring>(c, fmi2DoStepStatus, &mut time), fmi2Discard);
+
+        // Unsupported capabilities say so.
+        let mut size = 0;
+        assert_eq!(api::fmi2SerializedFMUstateSize::<Spring>(c, null_mut(), &mut size), fmi2Error);
+        assert!(log.last().contains("not supported by this FMU (capability flag canSerializeFMUstate=false)"));
+        let order = 1;
+        let mut v = 0.0;
+        assert_eq!(api::fmi2GetRealOutputDerivatives::<Spring>(c, &X, 1, &order, &mut v), fmi2Error);
+        assert_eq!(api::fmi2SetRealInputDerivatives::<Spring>(c, &U, 1, &order, &v), fmi2Error);
+        assert_eq!(api::fmi2GetDirectionalDerivative::<Spring>(c, &X, 1, &U, 1, &v, &mut size as *mut _ as *mut f64), fmi2Error);
+
+        assert_eq!(api::fmi2Terminate::<Spring>(c), fmi2OK);
+        // Reset and run again from scratch, with the default k = 1.
+        assert_eq!(api::fmi2Reset::<Spring>(c), fmi2OK);
+        initialize(c, 0.0);
+        run_cs(c, 0.0, 1.0, 0.25);
+        assert!((get_real(c, X) - 1.0f64.cos()).abs() < 1e-9);
+        api::fmi2FreeInstance::<Spring>(c);
+    }
+}
+
+/// The host integrates with classical RK4 through the ME functions.
+#[test]
+fn model_exchange_run() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2ModelExchange);
+    unsafe {
+        let mut nominal = [0.0; 2];
+        assert_eq!(api::fmi2GetNominalsOfContinuousStates::<Spring>(c, nominal.as_mut_ptr(), 2), fmi2OK);
+        assert_eq!(nominal, [1.0, 1.0]);
+        assert_eq!(set_real(c, K, 4.0), fmi2OK);
+        initialize(c, 0.0);
+        let mut info = fmi2EventInfo { newDiscreteStatesNeeded: 7, ..Default::default() };
+        assert_eq!(api::fmi2NewDiscreteStates::<Spring>(c, &mut info), fmi2OK);
+        assert_eq!(info, fmi2EventInfo::default());
+        assert_eq!(api::fmi2EnterContinuousTimeMode::<Spring>(c), fmi2OK);
+
+        let mut x = [0.0; 2];
+        assert_eq!(api::fmi2GetContinuousStates::<Spring>(c, x.as_mut_ptr(), 2), fmi2OK);
+        assert_eq!(x, [1.0, 0.0]);
+        let deriv = |t: f64, x: &[f64; 2]| -> [f64; 2] {
+            let mut dx = [0.0; 2];
+            assert_eq!(api::fmi2SetTime::<Spring>(c, t), fmi2OK);
+            assert_eq!(api::fmi2SetContinuousStates::<Spring>(c, x.as_ptr(), 2), fmi2OK);
+            assert_eq!(api::fmi2GetDerivatives::<Spring>(c, dx.as_mut_ptr(), 2), fmi2OK);
+            dx
+        };
+        let h = 0.001;
+        let mut t = 0.0;
+        for _ in 0..1000 {
+            let k1 = deriv(t, &x);
+            let k2 = deriv(t + h / 2.0, &[x[0] + h / 2.0 * k1[0], x[1] + h / 2.0 * k1[1]]);
+            let k3 = deriv(t + h / 2.0, &[x[0] + h / 2.0 * k2[0], x[1] + h / 2.0 * k2[1]]);
+            let k4 = deriv(t + h, &[x[0] + h * k3[0], x[1] + h * k3[1]]);
+            for i in 0..2 {
+                x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+            }
+            t += h;
+            assert_eq!(api::fmi2SetTime::<Spring>(c, t), fmi2OK);
+            assert_eq!(api::fmi2SetContinuousStates::<Spring>(c, x.as_ptr(), 2), fmi2OK);
+            let (mut enter, mut term) = (fmi2True, fmi2True);
+            assert_eq!(api::fmi2CompletedIntegratorStep::<Spring>(c, fmi2True, &mut enter, &mut term), fmi2OK);
+            assert_eq!((enter, term), (fmi2False, fmi2False));
+        }
+        assert!((get_real(c, X) - 2.0f64.cos()).abs() < 1e-9);
+        let mut z = [0.0];
+        assert_eq!(api::fmi2GetEventIndicators::<Spring>(c, z.as_mut_ptr(), 1), fmi2OK);
+        assert_eq!(z[0], x[0]);
+
+        // Size and state checks.
+        assert_eq!(api::fmi2GetEventIndicators::<Spring>(c, z.as_mut_ptr(), 2), fmi2Error);
+        assert_eq!(log.last(), "fmi2GetEventIndicators: ni = 2 but the model has 1");
+        assert_eq!(api::fmi2SetContinuousStates::<Spring>(c, x.as_ptr(), 1), fmi2Error);
+        assert_eq!(api::fmi2SetContinuousStates::<Spring>(c, null(), 2), fmi2Error);
+        assert_eq!(api::fmi2NewDiscreteStates::<Spring>(c, &mut info), fmi2Error);
+        assert!(log.last().starts_with("fmi2NewDiscreteStates called in state ContinuousTimeMode"));
+        // Discrete inputs only change at events.
+        assert_eq!(set_bool(c, FAIL, true), fmi2Error);
+        assert_eq!(api::fmi2EnterEventMode::<Spring>(c), fmi2OK);
+        assert_eq!(set_bool(c, FAIL, false), fmi2OK);
+        assert_eq!(api::fmi2DoStep::<Spring>(c, t, 0.1, 0), fmi2Error);
+        assert_eq!(api::fmi2Terminate::<Spring>(c), fmi2OK);
+        api::fmi2FreeInstance::<Spring>(c);
+    }
+}
+
+#[test]
+fn panic_in_model_is_contained() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2CoSimulation);
+    initialize(c, 0.0);
+    run_cs(c, 0.0, 0.5, 0.1);
+    assert_eq!(set_bool(c, CRASH, true), fmi2OK);
+    unsafe {
+        assert_eq!(api::fmi2DoStep::<Spring>(c, 0.5, 0.1, 0), fmi2Error);
+        assert!(log.last().starts_with("fmi2DoStep: panic in the model: crash requested"), "{}", log.last());
+        let mut status = fmi2OK;
+        // Error state: only diagnostics, state restore, reset, free.
+        assert_eq!(api::fmi2GetStatus::<Spring>(c, fmi2DoStepStatus, &mut status), fmi2Error);
+        assert_eq!(api::fmi2DoStep::<Spring>(c, 0.5, 0.1, 0), fmi2Error);
+        assert!(log.last().starts_with("fmi2DoStep called in state Error"));
+        let mut b = 0;
+        assert_eq!(api::fmi2GetBoolean::<Spring>(c, &CRASH, 1, &mut b), fmi2OK);
+        assert_eq!(b, fmi2True);
+        assert_eq!(api::fmi2Reset::<Spring>(c), fmi2OK);
+        initialize(c, 0.0);
+        run_cs(c, 0.0, 1.0, 0.1);
+        assert!((get_real(c, X) - 1.0f64.cos()).abs() < 1e-9);
+        api::fmi2FreeInstance::<Spring>(c);
+    }
+
+    // The same through a Model Exchange call.
+    let c = instantiate(&log, fmi2ModelExchange);
+    initialize(c, 0.0);
+    assert_eq!(set_bool(c, CRASH, true), fmi2OK);
+    let mut dx = [0.0; 2];
+    unsafe {
+        assert_eq!(api::fmi2GetDerivatives::<Spring>(c, dx.as_mut_ptr(), 2), fmi2Error);
+        assert!(log.last().starts_with("fmi2GetDerivatives: panic in the model"));
+        api::fmi2FreeInstance::<Spring>(c);
+    }
+}
+
+#[test]
+fn model_error_enters_error_state_and_message_is_escaped() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2CoSimulation);
+    initialize(c, 0.0);
+    assert_eq!(set_bool(c, FAIL, true), fmi2OK);
+    unsafe {
+        assert_eq!(api::fmi2DoStep::<Spring>(c, 0.0, 0.1, 0), fmi2Error);
+        // '%' arrives untouched (it is the "%s" argument), '#' doubled for the importer.
+        assert_eq!(log.last(), "fmi2DoStep: solver failed at 50% of the step ##r0## t = 0");
+        assert_eq!(api::fmi2DoStep::<Spring>(c, 0.0, 0.1, 0), fmi2Error);
+        assert!(log.last().contains("state Error"));
+        // Rejected value from the model: also Error.
+        assert_eq!(api::fmi2Reset::<Spring>(c), fmi2OK);
+        assert_eq!(set_real(c, K, -1.0), fmi2Error);
+        assert_eq!(log.last(), "fmi2SetReal: value reference 2: k must be > 0, got -1");
+        assert_eq!(api::fmi2EnterInitializationMode::<Spring>(c), fmi2Error);
+        api::fmi2FreeInstance::<Spring>(c);
+    }
+}
+
+#[test]
+fn fmu_state_round_trip() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2CoSimulation);
+    initialize(c, 0.0);
+    run_cs(c, 0.0, 0.5, 0.1);
+    let x_half = get_real(c, X);
+    let mut state: fmi2FMUstate = null_mut();
+    unsafe {
+        assert_eq!(api::fmi2GetFMUstate::<Spring>(c, &mut state), fmi2OK);
+        assert!(!state.is_null());
+        run_cs(c, 0.5, 1.0, 0.1);
+        let x_end = get_real(c, X);
+
+        assert_eq!(api::fmi2SetFMUstate::<Spring>(c, state), fmi2OK);
+        assert_eq!(get_real(c, X), x_half);
+        let mut time = 0.0;
+        assert_eq!(api::fmi2GetRealStatus::<Spring>(c, fmi2LastSuccessfulTime, &mut time), fmi2OK);
+        assert!((time - 0.5).abs() < 1e-12);
+        run_cs(c, 0.5, 1.0, 0.1);
+        assert_eq!(get_real(c, X), x_end);
+
+        // Reusing the handle overwrites it in place.
+        let old = state;
+        assert_eq!(api::fmi2GetFMUstate::<Spring>(c, &mut state), fmi2OK);
+        assert_eq!(state, old);
+
+        // Recovery from the Error state by restoring.
+        assert_eq!(set_bool(c, FAIL, true), fmi2OK);
+        let t = 0.1 * 10.0;
+        assert_eq!(api::fmi2DoStep::<Spring>(c, t, 0.1, 0), fmi2Error);
+        assert_eq!(api::fmi2SetFMUstate::<Spring>(c, state), fmi2OK);
+        assert_eq!(api::fmi2DoStep::<Spring>(c, t, 0.1, 0), fmi2OK);
+
+        assert_eq!(api::fmi2FreeFMUstate::<Spring>(c, &mut state), fmi2OK);
+        assert!(state.is_null());
+        assert_eq!(api::fmi2FreeFMUstate::<Spring>(c, &mut state), fmi2OK);
+        assert_eq!(api::fmi2SetFMUstate::<Spring>(c, null_mut()), fmi2Error);
+        api::fmi2FreeInstance::<Spring>(c);
+    }
+}
+
+#[test]
+fn debug_logging_categories() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2CoSimulation);
+    initialize(c, 0.0);
+    assert_eq!(log.count("logAll"), 0);
+    unsafe {
+        let cats = [c"logAll".as_ptr()];
+        assert_eq!(api::fmi2SetDebugLogging::<Spring>(c, fmi2True, 1, cats.as_ptr()), fmi2OK);
+        run_cs(c, 0.0, 0.2, 0.1);
+        assert_eq!(log.count("logAll"), 2);
+        assert!(log.contains("fmi2DoStep: t = 0.1, h = 0.1"));
+        // Discard of an unavailable status kind goes to logStatusWarning, still off.
+        let mut i = 0;
+        assert_eq!(api::fmi2GetIntegerStatus::<Spring>(c, fmi2DoStepStatus, &mut i), fmi2Discard);
+        assert_eq!(log.count("logStatusWarning"), 0);
+        assert_eq!(api::fmi2SetDebugLogging::<Spring>(c, fmi2True, 0, null()), fmi2OK);
+        assert_eq!(api::fmi2GetIntegerStatus::<Spring>(c, fmi2DoStepStatus, &mut i), fmi2Discard);
+        assert_eq!(log.count("logStatusWarning"), 1);
+        assert_eq!(api::fmi2SetDebugLogging::<Spring>(c, fmi2False, 0, null()), fmi2OK);
+        log.clear();
+        run_cs(c, 0.2, 0.3, 0.1);
+        assert_eq!(log.count("logAll"), 0);
+
+        let bad = [c"logEvents".as_ptr()];
+        assert_eq!(api::fmi2SetDebugLogging::<Spring>(c, fmi2True, 1, bad.as_ptr()), fmi2Error);
+        assert_eq!(log.last(), "fmi2SetDebugLogging: unknown log category \"logEvents\"");
+        assert_eq!(api::fmi2SetDebugLogging::<Spring>(c, fmi2True, 1, null()), fmi2Error);
+        api::fmi2FreeInstance::<Spring>(c);
+    }
+    // loggingOn at instantiation enables tracing from the start.
+    let log = Log::default();
+    let c = instantiate_with(&log, fmi2CoSimulation, GUID, None, true);
+    assert!(log.contains("fmi2Instantiate"));
+    unsafe { api::fmi2FreeInstance::<Spring>(c) };
+}
+
+#[test]
+fn strings() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2CoSimulation);
+    unsafe {
+        let v = [c"mass #2".as_ptr()];
+        assert_eq!(api::fmi2SetString::<Spring>(c, &LABEL, 1, v.as_ptr()), fmi2OK);
+        let nul = [null()];
+        assert_eq!(api::fmi2SetString::<Spring>(c, &LABEL, 1, nul.as_ptr()), fmi2Error);
+        assert_eq!(api::fmi2SetString::<Spring>(c, &RESOURCES, 1, v.as_ptr()), fmi2Error);
+        initialize(c, 0.0);
+        let vrs = [LABEL, RESOURCES];
+        let mut out = [null(); 2];
+        assert_eq!(api::fmi2GetString::<Spring>(c, vrs.as_ptr(), 2, out.as_mut_ptr()), fmi2OK);
+        assert_eq!(CStr::from_ptr(out[0]).to_str().unwrap(), "mass #2");
+        assert_eq!(CStr::from_ptr(out[1]).to_str().unwrap(), "/tmp/spring/resources");
+        assert_eq!(api::fmi2SetString::<Spring>(c, &LABEL, 1, v.as_ptr()), fmi2Error);
+        api::fmi2FreeInstance::<Spring>(c);
+    }
+}
+
+#[test]
+fn many_instances_are_independent() {
+    let (log_a, log_b) = (Log::default(), Log::default());
+    let a = instantiate(&log_a, fmi2CoSimulation);
+    let b = instantiate(&log_b, fmi2CoSimulation);
+    assert_eq!(set_real(b, K, 4.0), fmi2OK);
+    initialize(a, 0.0);
+    initialize(b, 0.0);
+    for i in 0..10 {
+        let t = i as f64 * 0.1;
+        assert_eq!(unsafe { api::fmi2DoStep::<Spring>(a, t, 0.1, 0) }, fmi2OK);
+        assert_eq!(unsafe { api::fmi2DoStep::<Spring>(b, t, 0.1, 0) }, fmi2OK);
+    }
+    assert!((get_real(a, X) - 1.0f64.cos()).abs() < 1e-9);
+    assert!((get_real(b, X) - 2.0f64.cos()).abs() < 1e-9);
+    assert_eq!(unsafe { api::fmi2DoStep::<Spring>(a, 0.0, 0.1, 0) }, fmi2Error);
+    assert!(log_a.contains("currentCommunicationPoint"));
+    assert!(log_b.0.borrow().is_empty());
+    unsafe {
+        api::fmi2FreeInstance::<Spring>(a);
+        api::fmi2FreeInstance::<Spring>(b);
+        api::fmi2FreeInstance::<Spring>(null_mut());
+    }
+}

@@ -1,0 +1,211 @@
+//! The body as an FMI model: maps value references onto the mechanics layer and the FMI calls
+//! (initialise, step, derivatives) onto its equations. Knows FMI's model trait, not C.
+
+use crate::body::FlexibleBody;
+use crate::fmi::{Interface, Model, VarInfo};
+use crate::format::RESOURCE_FILE;
+use crate::interface::{FlangeOutput, Quantity, VariableTable};
+use crate::reduced::ReducedBody;
+use std::sync::Arc;
+
+#[derive(Debug, Clone)]
+pub struct BodyFmu {
+    table: Arc<VariableTable>,
+    body: FlexibleBody,
+    static_start: bool,
+}
+
+impl BodyFmu {
+    pub fn from_reduced(reduced: ReducedBody) -> Self {
+        let table = Arc::new(VariableTable::new(&reduced));
+        Self { table, body: FlexibleBody::new(Arc::new(reduced)), static_start: false }
+    }
+
+    pub fn body(&self) -> &FlexibleBody {
+        &self.body
+    }
+
+    fn quantity(&self, vr: u32) -> Result<Quantity, String> {
+        self.table.get(vr).map(|v| v.quantity).ok_or_else(|| format!("unknown value reference {vr}"))
+    }
+}
+
+impl Model for BodyFmu {
+    fn instantiate(resources: Option<&std::path::Path>, _interface: Interface) -> Result<Self, String> {
+        let dir = resources.ok_or("no resource location given: the reduced body lives in the FMU's resources folder")?;
+        let path = dir.join(RESOURCE_FILE);
+        let bytes = std::fs::read(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+        let reduced = ReducedBody::from_bytes(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+        Ok(Self::from_reduced(reduced))
+    }
+
+    fn guid(&self) -> &str {
+        &self.body.reduced().guid
+    }
+
+    fn var_info(&self, vr: u32) -> Option<VarInfo> {
+        self.table.get(vr).map(|v| VarInfo {
+            var_type: v.var_type,
+            causality: v.causality,
+            variability: v.variability,
+            initial: v.initial,
+        })
+    }
+
+    fn get_real(&mut self, vr: u32) -> Result<f64, String> {
+        use Quantity as Q;
+        let quantity = self.quantity(vr)?;
+        let b = &mut self.body;
+        Ok(match quantity {
+            Q::MountPosition(i) => b.mount().r[i],
+            Q::MountRotation(i, j) => b.mount().rot[3 * i + j],
+            Q::MountVelocity(i) => b.mount().v[i],
+            Q::MountAngularVelocity(i) => b.mount().w[i],
+            Q::MountAcceleration(i) => b.mount().a[i],
+            Q::MountAngularAcceleration(i) => b.mount().z[i],
+            Q::MountForce(i) => b.mount_reaction()?.0[i],
+            Q::MountTorque(i) => b.mount_reaction()?.1[i],
+            Q::FlangeForce(k, i) => b.loads()[k].f[i],
+            Q::FlangeTorque(k, i) => b.loads()[k].t[i],
+            Q::Flange(k, o) => {
+                let m = b.flange_motion(k)?;
+                match o {
+                    FlangeOutput::Position(i) => m.r[i],
+                    FlangeOutput::Rotation(i, j) => m.rot[3 * i + j],
+                    FlangeOutput::Velocity(i) => m.v[i],
+                    FlangeOutput::AngularVelocity(i) => m.w[i],
+                    FlangeOutput::Acceleration(i) => m.a[i],
+                    FlangeOutput::AngularAcceleration(i) => m.z[i],
+                    FlangeOutput::Displacement(i) => m.u[i],
+                    FlangeOutput::RotationVector(i) => m.phi[i],
+                }
+            }
+            Q::Gravity(i) => b.parameters().g[i],
+            Q::RayleighAlpha => b.parameters().alpha,
+            Q::RayleighBeta => b.parameters().beta,
+            Q::ModalCoordinate(j) => b.q()[j],
+            Q::ModalVelocity(j) => b.qd()[j],
+            Q::ModalAcceleration(j) => b.qdd()?[j],
+            Q::StaticStart => return Err(format!("value reference {vr} (static_start) is a Boolean")),
+        })
+    }
+
+    fn set_real(&mut self, vr: u32, value: f64) -> Result<(), String> {
+        use Quantity as Q;
+        let name = || self.table.get(vr).map(|v| v.name.clone()).unwrap_or_default();
+        if !value.is_finite() {
+            return Err(format!("{} = {value} is not a finite number", name()));
+        }
+        let q = self.quantity(vr)?;
+        let b = &mut self.body;
+        match q {
+            Q::MountPosition(i) => b.mount_mut().r[i] = value,
+            Q::MountRotation(i, j) => b.mount_mut().rot[3 * i + j] = value,
+            Q::MountVelocity(i) => b.mount_mut().v[i] = value,
+            Q::MountAngularVelocity(i) => b.mount_mut().w[i] = value,
+            Q::MountAcceleration(i) => b.mount_mut().a[i] = value,
+            Q::MountAngularAcceleration(i) => b.mount_mut().z[i] = value,
+            Q::FlangeForce(k, i) => b.load_mut(k).f[i] = value,
+            Q::FlangeTorque(k, i) => b.load_mut(k).t[i] = value,
+            Q::Gravity(i) => b.parameters_mut().g[i] = value,
+            Q::RayleighAlpha | Q::RayleighBeta if value < 0.0 => {
+                return Err(format!("{} = {value} must not be negative", name()));
+            }
+            Q::RayleighAlpha => b.parameters_mut().alpha = value,
+            Q::RayleighBeta => b.parameters_mut().beta = value,
+            Q::ModalCoordinate(j) => b.q_mut()[j] = value,
+            Q::ModalVelocity(j) => b.qd_mut()[j] = value,
+            _ => return Err(format!("{} cannot be set", name())),
+        }
+        Ok(())
+    }
+
+    fn get_integer(&mut self, vr: u32) -> Result<i32, String> {
+        Err(format!("value reference {vr} is not an Integer: this FMU has no Integer variables"))
+    }
+    fn set_integer(&mut self, vr: u32, _value: i32) -> Result<(), String> {
+        Err(format!("value reference {vr} is not an Integer: this FMU has no Integer variables"))
+    }
+
+    fn get_boolean(&mut self, vr: u32) -> Result<bool, String> {
+        match self.quantity(vr)? {
+            Quantity::StaticStart => Ok(self.static_start),
+            _ => Err(format!("value reference {vr} is not a Boolean")),
+        }
+    }
+    fn set_boolean(&mut self, vr: u32, value: bool) -> Result<(), String> {
+        match self.quantity(vr)? {
+            Quantity::StaticStart => {
+                self.static_start = value;
+                Ok(())
+            }
+            _ => Err(format!("value reference {vr} is not a Boolean")),
+        }
+    }
+
+    fn get_string(&mut self, vr: u32) -> Result<String, String> {
+        Err(format!("value reference {vr} is not a String: this FMU has no String variables"))
+    }
+    fn set_string(&mut self, vr: u32, _value: &str) -> Result<(), String> {
+        Err(format!("value reference {vr} is not a String: this FMU has no String variables"))
+    }
+
+    fn n_states(&self) -> usize {
+        2 * self.body.n_modes()
+    }
+    fn n_event_indicators(&self) -> usize {
+        0
+    }
+    fn set_time(&mut self, _t: f64) {
+        // autonomous: time enters only through the inputs
+    }
+
+    fn get_continuous_states(&self, x: &mut [f64]) {
+        let n = self.body.n_modes();
+        x[..n].copy_from_slice(self.body.q());
+        x[n..].copy_from_slice(self.body.qd());
+    }
+
+    fn set_continuous_states(&mut self, x: &[f64]) {
+        let n = self.body.n_modes();
+        self.body.set_state(&x[..n], &x[n..]);
+    }
+
+    fn get_derivatives(&mut self, dx: &mut [f64]) -> Result<(), String> {
+        let n = self.body.n_modes();
+        let (dq, dqd) = dx.split_at_mut(n);
+        self.body.derivatives(dq, dqd)
+    }
+
+    fn get_nominals(&self, nominals: &mut [f64]) {
+        // q scales like sqrt(m) * deflection: 1 is as good a guess as any for solver tolerances
+        nominals.fill(1.0);
+    }
+
+    fn get_event_indicators(&mut self, _z: &mut [f64]) -> Result<(), String> {
+        Ok(())
+    }
+
+    fn enter_initialization(&mut self, _start_time: f64) -> Result<(), String> {
+        Ok(())
+    }
+
+    fn exit_initialization(&mut self) -> Result<(), String> {
+        if self.static_start {
+            self.body.settle_static()?;
+        }
+        // surface bad inputs (a non-rotation base.R) at initialisation, not at the first step
+        self.body.qdd().map(|_| ())
+    }
+
+    fn do_step(&mut self, _t: f64, h: f64) -> Result<(), String> {
+        self.body.step(h)
+    }
+
+    fn reset(&mut self) -> Result<(), String> {
+        let reduced = self.body.reduced().clone();
+        *self = Self::from_reduced(reduced);
+        Ok(())
+    }
+}
+

@@ -1,0 +1,406 @@
+//! The FMU's variables and what each one means for the body: the one table from which the builder
+//! writes modelDescription.xml and through which the runtime answers fmi2Get/Set. Names follow
+//! DESIGN.md: flange `tip` has inputs `tip.f[i]`, `tip.t[i]`, outputs `tip.r[i]`, `tip.R[i,j]`, ...
+
+use crate::fmi::{Causality, Initial, VarType, Variability};
+use crate::reduced::ReducedBody;
+
+/// Per-flange output quantities.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FlangeOutput {
+    Position(usize),
+    Rotation(usize, usize),
+    Velocity(usize),
+    AngularVelocity(usize),
+    Acceleration(usize),
+    AngularAcceleration(usize),
+    Displacement(usize),
+    RotationVector(usize),
+}
+
+/// What a variable stands for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Quantity {
+    MountPosition(usize),
+    MountRotation(usize, usize),
+    MountVelocity(usize),
+    MountAngularVelocity(usize),
+    MountAcceleration(usize),
+    MountAngularAcceleration(usize),
+    MountForce(usize),
+    MountTorque(usize),
+    FlangeForce(usize, usize),
+    FlangeTorque(usize, usize),
+    Flange(usize, FlangeOutput),
+    Gravity(usize),
+    RayleighAlpha,
+    RayleighBeta,
+    StaticStart,
+    ModalCoordinate(usize),
+    ModalVelocity(usize),
+    ModalAcceleration(usize),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Start {
+    Real(f64),
+    Boolean(bool),
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Variable {
+    pub vr: u32,
+    pub name: String,
+    pub description: String,
+    pub var_type: VarType,
+    pub causality: Causality,
+    pub variability: Variability,
+    /// Written to the XML only where it differs from the FMI default for the causality.
+    pub initial: Option<Initial>,
+    pub start: Option<Start>,
+    pub unit: Option<&'static str>,
+    pub quantity: Quantity,
+    /// For a state derivative: the value reference of its state.
+    pub derivative_of: Option<u32>,
+}
+
+/// Units used by the variables, with their SI base-unit exponents (kg, m, s, rad) for the XML.
+pub const UNITS: &[(&str, [i32; 4])] = &[
+    ("m", [0, 1, 0, 0]),
+    ("m/s", [0, 1, -1, 0]),
+    ("m/s2", [0, 1, -2, 0]),
+    ("rad", [0, 0, 0, 1]),
+    ("rad/s", [0, 0, -1, 1]),
+    ("rad/s2", [0, 0, -2, 1]),
+    ("N", [1, 1, -2, 0]),
+    ("N.m", [1, 2, -2, 0]),
+    ("1/s", [0, 0, -1, 0]),
+    ("s", [0, 0, 1, 0]),
+];
+
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// The variable table of a body, value references 1.. in table order.
+#[derive(Debug, Clone)]
+pub struct VariableTable {
+    pub variables: Vec<Variable>,
+}
+
+struct Builder {
+    variables: Vec<Variable>,
+}
+
+impl Builder {
+    #[allow(clippy::too_many_arguments)]
+    fn push(
+        &mut self,
+        name: String,
+        description: String,
+        causality: Causality,
+        variability: Variability,
+        initial: Option<Initial>,
+        start: Option<Start>,
+        unit: Option<&'static str>,
+        quantity: Quantity,
+    ) -> u32 {
+        let vr = self.variables.len() as u32 + 1;
+        let var_type = match start {
+            Some(Start::Boolean(_)) => VarType::Boolean,
+            _ => VarType::Real,
+        };
+        self.variables.push(Variable {
+            vr,
+            name,
+            description,
+            var_type,
+            causality,
+            variability,
+            initial,
+            start,
+            unit,
+            quantity,
+            derivative_of: None,
+        });
+        vr
+    }
+
+    fn input3(&mut self, prefix: &str, what: &str, unit: &'static str, q: impl Fn(usize) -> Quantity) {
+        for i in 0..3 {
+            self.push(
+                format!("{prefix}[{}]", i + 1),
+                format!("{what}, {} component, world frame", AXES[i]),
+                Causality::Input,
+                Variability::Continuous,
+                None,
+                Some(Start::Real(0.0)),
+                Some(unit),
+                q(i),
+            );
+        }
+    }
+
+    fn output3(&mut self, prefix: &str, what: &str, frame: &str, unit: &'static str, q: impl Fn(usize) -> Quantity) {
+        for i in 0..3 {
+            self.push(
+                format!("{prefix}[{}]", i + 1),
+                format!("{what}, {} component, {frame}", AXES[i]),
+                Causality::Output,
+                Variability::Continuous,
+                None,
+                None,
+                Some(unit),
+                q(i),
+            );
+        }
+    }
+
+    fn matrix(&mut self, prefix: &str, what: &str, causality: Causality, q: impl Fn(usize, usize) -> Quantity) {
+        for i in 0..3 {
+            for j in 0..3 {
+                let start = (causality == Causality::Input).then_some(Start::Real(if i == j { 1.0 } else { 0.0 }));
+                self.push(
+                    format!("{prefix}[{},{}]", i + 1, j + 1),
+                    format!("{what}, row {} column {} (columns: frame axes in world)", i + 1, j + 1),
+                    causality,
+                    Variability::Continuous,
+                    None,
+                    start,
+                    Some("1"),
+                    q(i, j),
+                );
+            }
+        }
+    }
+}
+
+impl VariableTable {
+    pub fn new(body: &ReducedBody) -> Self {
+        let mut b = Builder { variables: Vec::new() };
+        let m = body.mount.as_str();
+        b.input3(&format!("{m}.r"), "Mount position", "m", Quantity::MountPosition);
+        b.matrix(&format!("{m}.R"), "Mount orientation", Causality::Input, Quantity::MountRotation);
+        b.input3(&format!("{m}.v"), "Mount velocity", "m/s", Quantity::MountVelocity);
+        b.input3(&format!("{m}.w"), "Mount angular velocity", "rad/s", Quantity::MountAngularVelocity);
+        b.input3(&format!("{m}.a"), "Mount acceleration", "m/s2", Quantity::MountAcceleration);
+        b.input3(&format!("{m}.z"), "Mount angular acceleration", "rad/s2", Quantity::MountAngularAcceleration);
+        b.output3(&format!("{m}.f"), "Force the mount applies to the body", "world frame", "N", Quantity::MountForce);
+        b.output3(
+            &format!("{m}.t"),
+            "Torque the mount applies to the body about the mount point",
+            "world frame",
+            "N.m",
+            Quantity::MountTorque,
+        );
+        for (k, flange) in body.flanges.iter().enumerate() {
+            let n = flange.name.as_str();
+            b.input3(&format!("{n}.f"), "Force applied to the flange", "N", |i| Quantity::FlangeForce(k, i));
+            b.input3(&format!("{n}.t"), "Torque applied to the flange about its reference point", "N.m", |i| {
+                Quantity::FlangeTorque(k, i)
+            });
+            let out = |o: FlangeOutput| Quantity::Flange(k, o);
+            b.output3(&format!("{n}.r"), "Flange position", "world frame", "m", |i| out(FlangeOutput::Position(i)));
+            b.matrix(&format!("{n}.R"), "Flange orientation", Causality::Output, |i, j| {
+                out(FlangeOutput::Rotation(i, j))
+            });
+            b.output3(&format!("{n}.v"), "Flange velocity", "world frame", "m/s", |i| out(FlangeOutput::Velocity(i)));
+            b.output3(&format!("{n}.w"), "Flange angular velocity", "world frame", "rad/s", |i| {
+                out(FlangeOutput::AngularVelocity(i))
+            });
+            b.output3(&format!("{n}.a"), "Flange acceleration", "world frame", "m/s2", |i| {
+                out(FlangeOutput::Acceleration(i))
+            });
+            b.output3(&format!("{n}.z"), "Flange angular acceleration", "world frame", "rad/s2", |i| {
+                out(FlangeOutput::AngularAcceleration(i))
+            });
+            b.output3(&format!("{n}.u"), "Flange displacement relative to the mount", "body frame", "m", |i| {
+                out(FlangeOutput::Displacement(i))
+            });
+            b.output3(&format!("{n}.phi"), "Flange rotation relative to the mount (rotation vector)", "body frame", "rad", |i| {
+                out(FlangeOutput::RotationVector(i))
+            });
+        }
+        for i in 0..3 {
+            b.push(
+                format!("g[{}]", i + 1),
+                format!("Gravitational acceleration, {} component, world frame", AXES[i]),
+                Causality::Parameter,
+                Variability::Fixed,
+                None,
+                Some(Start::Real(0.0)),
+                Some("m/s2"),
+                Quantity::Gravity(i),
+            );
+        }
+        b.push(
+            "damping.alpha".into(),
+            "Rayleigh damping: mass-proportional coefficient (D = alpha M + beta K)".into(),
+            Causality::Parameter,
+            Variability::Fixed,
+            None,
+            Some(Start::Real(body.alpha)),
+            Some("1/s"),
+            Quantity::RayleighAlpha,
+        );
+        b.push(
+            "damping.beta".into(),
+            "Rayleigh damping: stiffness-proportional coefficient".into(),
+            Causality::Parameter,
+            Variability::Fixed,
+            None,
+            Some(Start::Real(body.beta)),
+            Some("s"),
+            Quantity::RayleighBeta,
+        );
+        b.push(
+            "static_start".into(),
+            "Start in static equilibrium under the initial inputs (q' = 0, q = K^-1 p) instead of at the start values of q, qd".into(),
+            Causality::Parameter,
+            Variability::Fixed,
+            None,
+            Some(Start::Boolean(false)),
+            None,
+            Quantity::StaticStart,
+        );
+        let n = body.n_modes();
+        let mut q_vr = Vec::with_capacity(n);
+        for j in 0..n {
+            q_vr.push(b.push(
+                format!("q[{}]", j + 1),
+                format!("Modal coordinate {} ({:.4} Hz)", j + 1, body.omega[j] / (2.0 * std::f64::consts::PI)),
+                Causality::Local,
+                Variability::Continuous,
+                Some(Initial::Approx),
+                Some(Start::Real(0.0)),
+                None,
+                Quantity::ModalCoordinate(j),
+            ));
+        }
+        let mut qd_vr = Vec::with_capacity(n);
+        for j in 0..n {
+            let vr = b.push(
+                format!("qd[{}]", j + 1),
+                format!("Modal velocity {}", j + 1),
+                Causality::Local,
+                Variability::Continuous,
+                Some(Initial::Approx),
+                Some(Start::Real(0.0)),
+                Some("1/s"),
+                Quantity::ModalVelocity(j),
+            );
+            b.variables[vr as usize - 1].derivative_of = Some(q_vr[j]);
+            qd_vr.push(vr);
+        }
+        for j in 0..n {
+            let vr = b.push(
+                format!("der(qd[{}])", j + 1),
+                format!("Modal acceleration {}", j + 1),
+                Causality::Local,
+                Variability::Continuous,
+                None,
+                None,
+                None,
+                Quantity::ModalAcceleration(j),
+            );
+            b.variables[vr as usize - 1].derivative_of = Some(qd_vr[j]);
+        }
+        // modal velocities are 1/s; modal coordinates carry sqrt(kg) m, left unitless in the XML
+        Self { variables: b.variables }
+    }
+
+    pub fn get(&self, vr: u32) -> Option<&Variable> {
+        (vr as usize).checked_sub(1).and_then(|i| self.variables.get(i))
+    }
+
+    /// State value references in state order: q[1..n] then qd[1..n].
+    pub fn states(&self) -> Vec<u32> {
+        let mut s: Vec<u32> = self
+            .variables
+            .iter()
+            .filter(|v| matches!(v.quantity, Quantity::ModalCoordinate(_)))
+            .map(|v| v.vr)
+            .collect();
+        s.extend(self.variables.iter().filter(|v| matches!(v.quantity, Quantity::ModalVelocity(_))).map(|v| v.vr));
+        s
+    }
+
+    /// Derivative value references in state order: qd[1..n] (= der(q)) then der(qd[1..n]).
+    pub fn derivatives(&self) -> Vec<u32> {
+        let mut d: Vec<u32> = self
+            .variables
+            .iter()
+            .filter(|v| matches!(v.quantity, Quantity::ModalVelocity(_)))
+            .map(|v| v.vr)
+            .collect();
+        d.extend(self.variables.iter().filter(|v| matches!(v.quantity, Quantity::ModalAcceleration(_))).map(|v| v.vr));
+        d
+    }
+
+    fn select(&self, f: impl Fn(&Quantity) -> bool) -> Vec<u32> {
+        self.variables.iter().filter(|v| f(&v.quantity)).map(|v| v.vr).collect()
+    }
+
+    /// Inputs and states a variable depends on (for ModelStructure), ascending.
+    pub fn dependencies(&self, var: &Variable) -> Vec<u32> {
+        use Quantity as Q;
+        let mount_r = |q: &Q| matches!(q, Q::MountPosition(_));
+        let mount_rot = |q: &Q| matches!(q, Q::MountRotation(..));
+        let mount_v = |q: &Q| matches!(q, Q::MountVelocity(_));
+        let mount_w = |q: &Q| matches!(q, Q::MountAngularVelocity(_));
+        let mount_a = |q: &Q| matches!(q, Q::MountAcceleration(_));
+        let mount_z = |q: &Q| matches!(q, Q::MountAngularAcceleration(_));
+        let loads = |q: &Q| matches!(q, Q::FlangeForce(..) | Q::FlangeTorque(..));
+        let q_all = |q: &Q| matches!(q, Q::ModalCoordinate(_));
+        let qd_all = |q: &Q| matches!(q, Q::ModalVelocity(_));
+        // q'' = p(a, R, loads) - d q' - w^2 q
+        let accel = |q: &Q| mount_a(q) || mount_rot(q) || loads(q) || q_all(q) || qd_all(q);
+        let mut deps = match var.quantity {
+            Q::Flange(_, o) => match o {
+                FlangeOutput::Position(_) => self.select(|q| mount_r(q) || mount_rot(q) || q_all(q)),
+                FlangeOutput::Rotation(..) => self.select(|q| mount_rot(q) || q_all(q)),
+                FlangeOutput::Displacement(_) | FlangeOutput::RotationVector(_) => self.select(q_all),
+                FlangeOutput::Velocity(_) => {
+                    self.select(|q| mount_v(q) || mount_w(q) || mount_rot(q) || q_all(q) || qd_all(q))
+                }
+                FlangeOutput::AngularVelocity(_) => self.select(|q| mount_w(q) || mount_rot(q) || qd_all(q)),
+                FlangeOutput::Acceleration(_) | FlangeOutput::AngularAcceleration(_) => {
+                    self.select(|q| accel(q) || mount_w(q) || mount_z(q))
+                }
+            },
+            Q::MountForce(_) | Q::MountTorque(_) => self.select(accel),
+            Q::ModalVelocity(j) => self.select(|q| *q == Q::ModalVelocity(j)),
+            Q::ModalAcceleration(j) => self.select(|q| {
+                mount_a(q) || mount_rot(q) || loads(q) || *q == Q::ModalCoordinate(j) || *q == Q::ModalVelocity(j)
+            }),
+            _ => Vec::new(),
+        };
+        deps.sort_unstable();
+        deps
+    }
+
+    /// Inputs a variable depends on during initialisation (InitialUnknowns): the states are
+    /// unknowns then, so a dependence on q stands for what q depends on - with `static_start`,
+    /// the loads that set the static equilibrium; q' starts at rest or its start value.
+    pub fn initial_dependencies(&self, var: &Variable) -> Vec<u32> {
+        use Quantity as Q;
+        let static_loads = |q: &Q| {
+            matches!(q, Q::MountAcceleration(_) | Q::MountRotation(..) | Q::FlangeForce(..) | Q::FlangeTorque(..))
+        };
+        let direct = match var.quantity {
+            Q::ModalCoordinate(_) => return self.select(static_loads),
+            Q::ModalVelocity(_) => return Vec::new(),
+            _ => self.dependencies(var),
+        };
+        let mut deps = Vec::new();
+        for vr in direct {
+            let Some(v) = self.get(vr) else { continue };
+            match v.quantity {
+                Q::ModalCoordinate(_) => deps.extend(self.select(static_loads)),
+                Q::ModalVelocity(_) => {}
+                _ => deps.push(vr),
+            }
+        }
+        deps.sort_unstable();
+        deps.dedup();
+        deps
+    }
+}
