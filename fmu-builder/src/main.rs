@@ -1,1 +1,45 @@
-fn main(){}
+//! fmu-builder: read an input file, build the FMU, print a summary. All work is in the library.
+
+use clap::Parser;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(version, about = "Turn a finite-element model of an elastic part into an FMI 2.0 FMU (Model Exchange + Co-Simulation)")]
+struct Args {
+    /// Input file (JSON, see schemas/fmu-builder-input.schema.json)
+    input: PathBuf,
+    /// Output FMU
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Also write the accuracy report (JSON) here
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// Print nothing but errors
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    match fmu_builder::package::build(&args.input, &args.output) {
+        Ok(built) => {
+            if let Some(path) = &args.report {
+                let json = serde_json::to_string_pretty(&built.report).unwrap_or_default();
+                if let Err(e) = std::fs::write(path, json) {
+                    eprintln!("error: {}: {e}", path.display());
+                    return ExitCode::FAILURE;
+                }
+            }
+            if !args.quiet {
+                print!("{}", fmu_builder::summary::text(&built.report));
+                println!("wrote {}", args.output.display());
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -7,7 +7,7 @@
 use crate::assembly::Assembled;
 use crate::eigen;
 use crate::error::{BuildError, Result};
-use crate::sparse::{SpdSolver, block, mul_new};
+use crate::sparse::{SpdSolver, block, mul_compensated, mul_new};
 use faer::{Mat, Side};
 
 #[derive(Debug, Clone, Copy)]
@@ -47,7 +47,7 @@ pub fn craig_bampton(model: &Assembled, modes: ModeCount) -> Result<Basis> {
         let identity = Mat::<f64>::identity(nb, nb);
         let rhs = mul_new(&k_ib, identity.as_ref());
         psi.copy_from(&rhs);
-        solver.solve_in_place(psi.as_mut());
+        solver.solve_refined(psi.as_mut());
         for j in 0..nb {
             for i in 0..ni {
                 psi[(i, j)] = -psi[(i, j)];
@@ -67,7 +67,7 @@ pub fn craig_bampton(model: &Assembled, modes: ModeCount) -> Result<Basis> {
     for j in 0..nb {
         v[(ni + j, nm + j)] = 1.0;
     }
-    let phi_and_omega = orthonormalise(model, &v)?;
+    let phi_and_omega = orthonormalise(model, &v, nb)?;
     Ok(Basis {
         phi: phi_and_omega.0,
         omega: phi_and_omega.1,
@@ -78,13 +78,22 @@ pub fn craig_bampton(model: &Assembled, modes: ModeCount) -> Result<Basis> {
 
 /// Solve the reduced eigenproblem (V^T K V) x = lambda (V^T M V) x and return V X (M-orthonormal)
 /// with omega = sqrt(lambda).
-pub fn orthonormalise(model: &Assembled, v: &Mat<f64>) -> Result<(Mat<f64>, Vec<f64>)> {
+/// The last `n_static` columns of `v` are static shapes (constraint or attachment modes).
+pub fn orthonormalise(model: &Assembled, v: &Mat<f64>, n_static: usize) -> Result<(Mat<f64>, Vec<f64>)> {
     let nc = model.dofs.n_clamped();
     let k = block(&model.stiffness, 0..nc, 0..nc)?;
     let m = block(&model.mass, 0..nc, 0..nc)?;
-    let kr = v.transpose() * mul_new(&k, v.as_ref());
-    let mr = v.transpose() * mul_new(&m, v.as_ref());
+    // The static shapes (last `n_static` columns) need compensated products: their V^T K V is a
+    // small Schur complement of large terms. Normal modes do not, and are the bulk of the work.
     let r = v.ncols();
+    let first_static = r - n_static;
+    let mut kv = mul_new(&k, v.as_ref());
+    let mut mv = mul_new(&m, v.as_ref());
+    let statics = v.subcols(first_static, n_static);
+    kv.as_mut().subcols_mut(first_static, n_static).copy_from(&mul_compensated(None, 1.0, &k, statics));
+    mv.as_mut().subcols_mut(first_static, n_static).copy_from(&mul_compensated(None, 1.0, &m, statics));
+    let kr = v.transpose() * &kv;
+    let mr = v.transpose() * &mv;
     let sym = |a: &Mat<f64>| Mat::<f64>::from_fn(r, r, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
     let (kr, mr) = (sym(&kr), sym(&mr));
     let llt = mr.llt(Side::Lower).map_err(|e| {

@@ -1,0 +1,250 @@
+//! The .fmu zip archive: modelDescription.xml at the root, `binaries/linux64/<id>.so` (no `lib`
+//! prefix, executable), `resources/...`, `documentation/...`; deflate, forward slashes.
+//!
+//! The archive is written to a temporary file next to the target and renamed into place only
+//! when complete, so a failed build never leaves a half FMU where an importer would pick it up.
+
+use std::collections::HashSet;
+use std::fs::{self, File, OpenOptions};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use zip::write::SimpleFileOptions;
+use zip::{CompressionMethod, ZipWriter};
+
+use super::{FmuError, is_model_identifier};
+
+pub struct FmuArchive<'a> {
+    pub model_description: String,
+    pub model_identifier: &'a str,
+    /// The runtime cdylib for x86_64 Linux.
+    pub binary_linux64: &'a [u8],
+    /// Paths relative to `resources/`, e.g. `reduced_body.bin`.
+    pub resources: Vec<(String, Vec<u8>)>,
+    /// Paths relative to `documentation/`; the caller provides `index.html`.
+    pub documentation: Vec<(String, Vec<u8>)>,
+}
+
+/// Writes the FMU at `path`, replacing an existing file only once the new one is complete.
+pub fn write_fmu(path: &Path, a: &FmuArchive) -> Result<(), FmuError> {
+    let fail = |message: String| FmuError::Archive { path: path.to_owned(), message };
+    let entries = entries(a).map_err(&fail)?;
+
+    let file_name = path
+        .file_name()
+        .ok_or_else(|| fail("is not a file path".into()))?
+        .to_string_lossy()
+        .into_owned();
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
+        _ => PathBuf::from("."),
+    };
+    let (file, tmp) = create_temp(&dir, &file_name).map_err(|e| fail(format!("cannot create a file in {}: {e}", dir.display())))?;
+    let guard = RemoveOnDrop(Some(tmp.clone()));
+
+    write_zip(file, &entries).map_err(&fail)?;
+    fs::rename(&tmp, path).map_err(|e| fail(format!("cannot move {} into place: {e}", tmp.display())))?;
+    guard.disarm();
+    Ok(())
+}
+
+/// One archive entry: full name inside the zip, content, unix mode.
+struct Entry<'a> {
+    name: String,
+    data: &'a [u8],
+    mode: u32,
+}
+
+fn entries<'a>(a: &'a FmuArchive) -> Result<Vec<Entry<'a>>, String> {
+    if !is_model_identifier(a.model_identifier) {
+        return Err(format!("model identifier '{}' is not a valid C identifier", a.model_identifier));
+    }
+    if a.binary_linux64.is_empty() {
+        return Err("the linux64 binary is empty".into());
+    }
+    let mut list = vec![
+        Entry { name: "modelDescription.xml".into(), data: a.model_description.as_bytes(), mode: 0o644 },
+        // Importers dlopen this file: it must be executable once extracted.
+        Entry { name: format!("binaries/linux64/{}.so", a.model_identifier), data: a.binary_linux64, mode: 0o755 },
+    ];
+    for (folder, files) in [("resources", &a.resources), ("documentation", &a.documentation)] {
+        for (name, data) in files {
+            check_relative(name).map_err(|m| format!("{folder} entry '{name}': {m}"))?;
+            list.push(Entry { name: format!("{folder}/{name}"), data, mode: 0o644 });
+        }
+    }
+    let mut seen = HashSet::new();
+    for e in &list {
+        if !seen.insert(e.name.as_str()) {
+            return Err(format!("the archive would contain '{}' twice", e.name));
+        }
+    }
+    Ok(list)
+}
+
+/// A path below a folder of the archive: forward slashes only, no empty, `.` or `..`
+/// components (zip-slip on extraction), no absolute path.
+fn check_relative(name: &str) -> Result<(), &'static str> {
+    if name.contains('\\') {
+        return Err("use forward slashes");
+    }
+    if name.contains('\0') {
+        return Err("contains a NUL character");
+    }
+    if name.split('/').any(|c| c.is_empty() || c == "." || c == "..") {
+        return Err("must be a relative path without empty, '.' or '..' components");
+    }
+    Ok(())
+}
+
+fn create_temp(dir: &Path, file_name: &str) -> std::io::Result<(File, PathBuf)> {
+    let pid = std::process::id();
+    let mut last = None;
+    // create_new: never clobber a file someone else (a concurrent build) is writing
+    for attempt in 0..100 {
+        let tmp = dir.join(format!(".{file_name}.{pid}.{attempt}.tmp"));
+        match OpenOptions::new().write(true).create_new(true).open(&tmp) {
+            Ok(f) => return Ok((f, tmp)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => last = Some(e),
+            Err(e) => return Err(e),
+        }
+    }
+    Err(last.unwrap_or_else(|| std::io::Error::other("no free temporary file name")))
+}
+
+fn write_zip(file: File, entries: &[Entry]) -> Result<(), String> {
+    let mut zip = ZipWriter::new(BufWriter::new(file));
+    let base = SimpleFileOptions::default().compression_method(CompressionMethod::Deflated);
+    // Explicit directory entries: some importers extract entry by entry without creating parents.
+    let mut dirs: Vec<&str> = Vec::new();
+    for e in entries {
+        let mut end = 0;
+        while let Some(i) = e.name[end..].find('/') {
+            end += i + 1;
+            let d = &e.name[..end];
+            if !dirs.contains(&d) {
+                dirs.push(d);
+                zip.add_directory(d, base.unix_permissions(0o755)).map_err(|e| format!("adding {d}: {e}"))?;
+            }
+        }
+        let options = base.unix_permissions(e.mode).large_file(e.data.len() as u64 >= u32::MAX as u64);
+        zip.start_file(e.name.as_str(), options).map_err(|err| format!("adding {}: {err}", e.name))?;
+        zip.write_all(e.data).map_err(|err| format!("writing {}: {err}", e.name))?;
+    }
+    let buffered = zip.finish().map_err(|e| format!("finishing the archive: {e}"))?;
+    let file = buffered.into_inner().map_err(|e| format!("flushing the archive: {}", e.error()))?;
+    file.sync_all().map_err(|e| format!("syncing the archive: {e}"))
+}
+
+/// Deletes the temporary file on every early return; disarmed after the rename.
+struct RemoveOnDrop(Option<PathBuf>);
+
+impl RemoveOnDrop {
+    fn disarm(mut self) {
+        self.0 = None;
+    }
+}
+
+impl Drop for RemoveOnDrop {
+    fn drop(&mut self) {
+        if let Some(p) = self.0.take() {
+            let _ = fs::remove_file(p);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Read;
+
+    fn scratch(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("fmu-archive-test-{}-{name}", std::process::id()));
+        let _ = fs::remove_dir_all(&d);
+        fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    fn archive<'a>(binary: &'a [u8]) -> FmuArchive<'a> {
+        FmuArchive {
+            model_description: "<fmiModelDescription/>".into(),
+            model_identifier: "Beam",
+            binary_linux64: binary,
+            resources: vec![("reduced_body.bin".into(), vec![1, 2, 3])],
+            documentation: vec![("index.html".into(), b"<html></html>".to_vec())],
+        }
+    }
+
+    #[test]
+    fn layout_modes_and_compression() {
+        let dir = scratch("layout");
+        let path = dir.join("Beam.fmu");
+        let binary = vec![0x7f; 5000];
+        write_fmu(&path, &archive(&binary)).unwrap();
+        let mut zip = zip::ZipArchive::new(File::open(&path).unwrap()).unwrap();
+        let mut files: Vec<String> = zip.file_names().filter(|n| !n.ends_with('/')).map(String::from).collect();
+        files.sort();
+        assert_eq!(
+            files,
+            ["binaries/linux64/Beam.so", "documentation/index.html", "modelDescription.xml", "resources/reduced_body.bin"]
+        );
+        assert!(zip.file_names().any(|n| n == "resources/"));
+        {
+            let mut so = zip.by_name("binaries/linux64/Beam.so").unwrap();
+            assert_eq!(so.unix_mode().unwrap() & 0o777, 0o755);
+            assert_eq!(so.compression(), CompressionMethod::Deflated);
+            let mut data = Vec::new();
+            so.read_to_end(&mut data).unwrap();
+            assert_eq!(data, binary);
+        }
+        let mut md = String::new();
+        zip.by_name("modelDescription.xml").unwrap().read_to_string(&mut md).unwrap();
+        assert_eq!(md, "<fmiModelDescription/>");
+        // nothing but the FMU is left in the directory
+        assert_eq!(fs::read_dir(&dir).unwrap().count(), 1);
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_failed_build_leaves_no_file() {
+        let dir = scratch("fail");
+        let path = dir.join("Beam.fmu");
+        let binary = [1u8];
+        let bad_entries = [
+            ("resources", "../evil"),
+            ("resources", "/abs"),
+            ("resources", "a\\b"),
+            ("documentation", "a//b"),
+            ("documentation", ""),
+        ];
+        for (folder, name) in bad_entries {
+            let mut a = archive(&binary);
+            let list = if folder == "resources" { &mut a.resources } else { &mut a.documentation };
+            list.push((name.into(), vec![0]));
+            let e = write_fmu(&path, &a).unwrap_err();
+            assert!(e.to_string().contains(folder), "{e}");
+        }
+        let mut a = archive(&binary);
+        a.resources.push(("reduced_body.bin".into(), vec![]));
+        assert!(write_fmu(&path, &a).unwrap_err().to_string().contains("twice"));
+        let mut a = archive(&binary);
+        a.model_identifier = "lib-Beam";
+        assert!(write_fmu(&path, &a).is_err());
+        assert!(write_fmu(&path, &archive(&[])).is_err());
+        assert_eq!(fs::read_dir(&dir).unwrap().count(), 0);
+        // an unwritable target directory is an error, not a panic
+        assert!(write_fmu(&dir.join("missing/Beam.fmu"), &archive(&binary)).is_err());
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn replaces_an_existing_fmu() {
+        let dir = scratch("replace");
+        let path = dir.join("Beam.fmu");
+        fs::write(&path, b"old").unwrap();
+        write_fmu(&path, &archive(&[1, 2])).unwrap();
+        assert!(zip::ZipArchive::new(File::open(&path).unwrap()).is_ok());
+        assert_eq!(fs::read_dir(&dir).unwrap().count(), 1);
+        let _ = fs::remove_dir_all(&dir);
+    }
+}

@@ -1,0 +1,80 @@
+//! The FMU of a reduced body: modelDescription.xml, binary, resources and documentation.
+
+use crate::documentation;
+use crate::error::{BuildError, Result};
+use crate::fmu;
+use crate::pipeline::{Built, reduce_spec};
+use crate::spec::Spec;
+use fmu_runtime::format::RESOURCE_FILE;
+use fmu_runtime::interface::VariableTable;
+use std::path::Path;
+
+/// The runtime cdylib, built by build.rs: the FMU's binaries/linux64/<id>.so.
+pub const RUNTIME_SO: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/fmu_runtime.so"));
+
+/// The FMU of a reduced body.
+pub fn write_fmu(built: &Built, output: &Path) -> Result<()> {
+    let id = fmu::model_identifier(&built.spec.name);
+    let table = VariableTable::new(&built.reduced);
+    let slowest = built.reduced.omega.first().copied().unwrap_or(1.0);
+    let period = 2.0 * std::f64::consts::PI / slowest;
+    let info = fmu::ModelInfo {
+        model_name: built.spec.name.clone(),
+        model_identifier: id.clone(),
+        description: built.spec.description.clone().unwrap_or_else(|| {
+            format!("Reduced flexible body '{}' ({} modal coordinates)", built.spec.name, built.reduced.n_modes())
+        }),
+        guid: built.reduced.guid.clone(),
+        generation_tool: format!("fmu-builder {}", env!("CARGO_PKG_VERSION")),
+        generation_date_time: now_utc(),
+        default_experiment: fmu::DefaultExperiment {
+            start: 0.0,
+            stop: (10.0 * period).max(1e-3),
+            step: 1e-3,
+            tolerance: 1e-6,
+        },
+    };
+    let xml = fmu::model_description_xml(&info, &table);
+    let report_json = serde_json::to_vec_pretty(&built.report)
+        .map_err(|e| BuildError::Numerical(format!("serialising the report: {e}")))?;
+    let archive = fmu::FmuArchive {
+        model_description: xml,
+        model_identifier: &id,
+        binary_linux64: RUNTIME_SO,
+        resources: vec![(RESOURCE_FILE.to_string(), built.reduced.to_bytes())],
+        documentation: vec![
+            ("index.html".to_string(), documentation::index_html(&built.report).into_bytes()),
+            ("report.json".to_string(), report_json),
+        ],
+    };
+    fmu::write_fmu(output, &archive).map_err(|e| BuildError::io(output, e))
+}
+
+/// Read `input`, reduce, write the FMU to `output`.
+pub fn build(input: &Path, output: &Path) -> Result<Built> {
+    let spec = Spec::from_file(input)?;
+    let built = reduce_spec(spec, input)?;
+    write_fmu(&built, output)?;
+    Ok(built)
+}
+
+/// xs:dateTime of now, UTC, without a date crate.
+fn now_utc() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs() as i64)
+        .unwrap_or(0);
+    let days = secs.div_euclid(86_400);
+    let rem = secs.rem_euclid(86_400);
+    // civil-from-days (Howard Hinnant)
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + if m <= 2 { 1 } else { 0 };
+    format!("{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z", rem / 3600, (rem / 60) % 60, rem % 60)
+}

@@ -1,0 +1,103 @@
+//! What the reduction costs in accuracy, measured against the full FE model on the same mesh:
+//! eigenfrequencies of the mounted body (full vs reduced) and the static compliance of the force
+//! flanges (full sparse solve vs reduced model). Written into the FMU's documentation as JSON.
+
+use crate::assembly::Assembled;
+use crate::eigen;
+use crate::error::Result;
+use crate::reduce::{Basis, EIGEN_TOL};
+use crate::sparse::{SpdSolver, block};
+use faer::Mat;
+use serde::Serialize;
+
+#[derive(Debug, Clone, Serialize)]
+pub struct FlangeReport {
+    pub name: String,
+    pub role: String,
+    pub reference_point: [f64; 3],
+    pub slave_nodes: usize,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Accuracy {
+    /// Eigenfrequencies of the mounted body [Hz], reduced and full, lowest first.
+    pub reduced_hz: Vec<f64>,
+    pub full_hz: Vec<f64>,
+    pub relative_error: Vec<f64>,
+    /// Force flanges in the order of the compliance rows (6 per flange: u_x..z, phi_x..z).
+    pub compliance_flanges: Vec<String>,
+    /// Static compliance [m/N, rad/(N m), ...] of the force flanges, full model, row-major.
+    pub compliance_full: Vec<Vec<f64>>,
+    pub compliance_reduced: Vec<Vec<f64>>,
+    /// max |C_red - C_full| / max |C_full|
+    pub compliance_max_relative_error: f64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Report {
+    pub model_name: String,
+    pub guid: String,
+    pub element: String,
+    pub nodes: usize,
+    pub elements: usize,
+    pub dofs_constrained: usize,
+    pub mass: f64,
+    pub volume: f64,
+    /// Centre of mass in the body frame (origin at the mount's reference point) [m].
+    pub center_of_mass: [f64; 3],
+    pub inertia_about_origin: [f64; 9],
+    pub method: String,
+    pub fixed_interface_modes: usize,
+    pub constraint_modes: usize,
+    pub order: usize,
+    pub flanges: Vec<FlangeReport>,
+    pub accuracy: Accuracy,
+}
+
+/// Full-vs-reduced comparison. `n_full` eigenfrequencies of the full clamped model are computed.
+pub fn accuracy(model: &Assembled, basis: &Basis, force_flanges: &[(String, usize)], n_full: usize) -> Result<Accuracy> {
+    let nc = model.dofs.n_clamped();
+    let k = block(&model.stiffness, 0..nc, 0..nc)?;
+    let m = block(&model.mass, 0..nc, 0..nc)?;
+    let solver = SpdSolver::new(&k, "the stiffness of the mounted body")?;
+    let full = eigen::lowest(&solver, &m, n_full, EIGEN_TOL)?;
+    let two_pi = 2.0 * std::f64::consts::PI;
+    let full_hz: Vec<f64> = full.values.iter().map(|l| l.sqrt() / two_pi).collect();
+    let reduced_hz: Vec<f64> = basis.omega.iter().map(|w| w / two_pi).collect();
+    let relative_error = reduced_hz.iter().zip(&full_hz).map(|(r, f)| (r - f) / f).collect();
+
+    // static compliance: B^T K^-1 B with B the unit loads at the force flanges' master DoFs
+    let nb = 6 * force_flanges.len();
+    let mut x = Mat::<f64>::zeros(nc, nb);
+    for (f, (_, first)) in force_flanges.iter().enumerate() {
+        for i in 0..6 {
+            x[(first + i, 6 * f + i)] = 1.0;
+        }
+    }
+    solver.solve_refined(x.as_mut());
+    let rows: Vec<usize> = force_flanges.iter().flat_map(|(_, first)| (0..6).map(move |i| first + i)).collect();
+    let compliance_full: Vec<Vec<f64>> = rows.iter().map(|&r| (0..nb).map(|c| x[(r, c)]).collect()).collect();
+    let compliance_reduced: Vec<Vec<f64>> = rows
+        .iter()
+        .map(|&r| {
+            rows.iter()
+                .map(|&c| (0..basis.omega.len()).map(|j| basis.phi[(r, j)] * basis.phi[(c, j)] / basis.omega[j].powi(2)).sum())
+                .collect()
+        })
+        .collect();
+    let scale = compliance_full.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+    let diff = compliance_full
+        .iter()
+        .flatten()
+        .zip(compliance_reduced.iter().flatten())
+        .fold(0.0f64, |a, (f, r)| a.max((f - r).abs()));
+    Ok(Accuracy {
+        reduced_hz,
+        full_hz,
+        relative_error,
+        compliance_flanges: force_flanges.iter().map(|(n, _)| n.clone()).collect(),
+        compliance_full,
+        compliance_reduced,
+        compliance_max_relative_error: if scale > 0.0 { diff / scale } else { 0.0 },
+    })
+}

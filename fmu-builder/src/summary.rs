@@ -1,0 +1,31 @@
+//! The short terminal summary printed after a build.
+
+use crate::report::Report;
+use std::fmt::Write;
+
+pub fn text(r: &Report) -> String {
+    let mut s = String::new();
+    let c = r.center_of_mass;
+    let _ = writeln!(s, "{}: {} mesh, {} nodes, {} elements, {} constrained DoFs", r.model_name, r.element, r.nodes, r.elements, r.dofs_constrained);
+    let _ = writeln!(s, "  mass {:.6e} kg, centre of mass ({:.6}, {:.6}, {:.6}) m from the mount", r.mass, c[0], c[1], c[2]);
+    for f in &r.flanges {
+        let p = f.reference_point;
+        let _ = writeln!(s, "  flange {:<12} {:<6} at ({:.6}, {:.6}, {:.6}) m, {} slave nodes", f.name, f.role, p[0], p[1], p[2], f.slave_nodes);
+    }
+    let _ = writeln!(
+        s,
+        "  {}: {} fixed-interface modes + {} constraint modes = order {}",
+        r.method, r.fixed_interface_modes, r.constraint_modes, r.order
+    );
+    let a = &r.accuracy;
+    let shown = a.reduced_hz.len().min(8);
+    let freqs: Vec<String> = a.reduced_hz[..shown].iter().map(|f| format!("{f:.4}")).collect();
+    let _ = writeln!(s, "  lowest frequencies [Hz]: {}{}", freqs.join(", "), if a.reduced_hz.len() > shown { ", ..." } else { "" });
+    let n_band = a.relative_error.len();
+    if n_band > 0 {
+        let worst = a.relative_error.iter().take(r.fixed_interface_modes.max(1)).fold(0.0f64, |m, e| m.max(e.abs()));
+        let _ = writeln!(s, "  vs full FE: frequency error up to {:.2e} over the lowest {} modes; static compliance error {:.2e}",
+            worst, r.fixed_interface_modes.max(1).min(n_band), a.compliance_max_relative_error);
+    }
+    s
+}
