@@ -90,7 +90,9 @@ fn lanczos(
         for i in 0..n {
             w[(i, 0)] = mv[(i, j)];
         }
-        k.solve_in_place(w.as_mut());
+        // one refinement step: slender parts have cond(K) ~ 1e12, and a plain solve would cost
+        // the lowest Ritz values their sixth digit
+        k.solve_refined_steps(w.as_mut(), 1);
         // full re-orthogonalisation in the M inner product, twice (Kahan-Parlett "twice is enough")
         for pass in 0..2 {
             for i in 0..=j {

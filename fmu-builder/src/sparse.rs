@@ -41,9 +41,13 @@ pub fn mul_new(a: &Sparse, x: MatRef<'_, f64>) -> Mat<f64> {
 /// shapes into reactions that are 1e-6 of the terms summed; plain sums would lose those digits.
 pub fn mul_compensated(c: Option<MatRef<'_, f64>>, sign: f64, a: &Sparse, x: MatRef<'_, f64>) -> Mat<f64> {
     let (n, k) = (a.nrows(), x.ncols());
+    let col_ptr = a.symbolic().col_ptr();
+    let row_idx = a.symbolic().row_idx();
+    let val = a.val();
     let mut out = Mat::<f64>::zeros(n, k);
     let mut hi = vec![0.0; n];
     let mut lo = vec![0.0; n];
+    let mut xc = vec![0.0; a.ncols()];
     for col in 0..k {
         match c {
             Some(c) => {
@@ -54,19 +58,24 @@ pub fn mul_compensated(c: Option<MatRef<'_, f64>>, sign: f64, a: &Sparse, x: Mat
             None => hi.fill(0.0),
         }
         lo.fill(0.0);
+        for (j, xj) in xc.iter_mut().enumerate() {
+            *xj = sign * x[(j, col)];
+        }
         for j in 0..a.ncols() {
-            let xj = sign * x[(j, col)];
+            let xj = xc[j];
             if xj == 0.0 {
                 continue;
             }
-            for (&i, &aij) in a.row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
-                let p = aij * xj;
-                let e = aij.mul_add(xj, -p);
-                let s = hi[i] + p;
+            for p in col_ptr[j]..col_ptr[j + 1] {
+                let i = row_idx[p];
+                let aij = val[p];
+                let prod = aij * xj;
+                let err = aij.mul_add(xj, -prod);
+                let s = hi[i] + prod;
                 let bp = s - hi[i];
-                let t = (hi[i] - (s - bp)) + (p - bp);
+                let t = (hi[i] - (s - bp)) + (prod - bp);
                 hi[i] = s;
-                lo[i] += t + e;
+                lo[i] += t + err;
             }
         }
         for i in 0..n {
@@ -104,10 +113,14 @@ impl SpdSolver {
     /// Solve with iterative refinement on residuals computed in double-double: static shapes of
     /// slender parts lose digits to the stiffness's condition number (~1e10), and the flange
     /// compliance must be exact to round-off; an extended-precision residual restores them.
-    pub fn solve_refined(&self, mut rhs: MatMut<'_, f64>) {
+    pub fn solve_refined(&self, rhs: MatMut<'_, f64>) {
+        self.solve_refined_steps(rhs, 2);
+    }
+
+    pub fn solve_refined_steps(&self, mut rhs: MatMut<'_, f64>, steps: usize) {
         let b = rhs.to_owned();
         self.llt.solve_in_place(rhs.rb_mut());
-        for _ in 0..2 {
+        for _ in 0..steps {
             let mut r = mul_compensated(Some(b.as_ref()), -1.0, &self.matrix, rhs.rb());
             self.llt.solve_in_place(r.as_mut());
             for j in 0..r.ncols() {
