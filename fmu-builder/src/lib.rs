@@ -15,6 +15,6 @@ pub mod spec;
 pub mod documentation;
 pub mod ffrf;
 pub mod pipeline;
-// pub mod package;
+pub mod package;
 pub mod report;
 pub mod summary;

@@ -34,7 +34,7 @@ pub fn write_fmu(built: &Built, output: &Path) -> Result<()> {
             tolerance: 1e-6,
         },
     };
-    let xml = fmu::model_description_xml(&info, &table);
+    let xml = fmu::model_description_xml(&info, &table).map_err(|e| BuildError::Numerical(e.to_string()))?;
     let report_json = serde_json::to_vec_pretty(&built.report)
         .map_err(|e| BuildError::Numerical(format!("serialising the report: {e}")))?;
     let archive = fmu::FmuArchive {
@@ -47,7 +47,10 @@ pub fn write_fmu(built: &Built, output: &Path) -> Result<()> {
             ("report.json".to_string(), report_json),
         ],
     };
-    fmu::write_fmu(output, &archive).map_err(|e| BuildError::io(output, e))
+    fmu::write_fmu(output, &archive).map_err(|e| match e {
+        fmu::FmuError::Archive { path, message } => BuildError::Io { path, message },
+        other => BuildError::Numerical(other.to_string()),
+    })
 }
 
 /// Read `input`, reduce, write the FMU to `output`.

@@ -34,7 +34,7 @@ pub struct ModelInfo {
     /// Must equal the GUID stored in the reduced model: the runtime refuses a mismatch.
     pub guid: String,
     pub generation_tool: String,
-    /// xs:dateTime, e.g. `2026-11-22T07:00:00Z` (see [`xs_date_time`]).
+    /// Written as `generationDateAndTime` (the FMI 2.0 attribute name); xs:dateTime, e.g. `2026-11-22T07:00:00Z` (see [`xs_date_time`]).
     pub generation_date_time: String,
     pub default_experiment: DefaultExperiment,
 }
@@ -97,7 +97,7 @@ fn check_info(info: &ModelInfo) -> Result<()> {
     }
     if !is_xs_date_time(&info.generation_date_time) {
         return err(format!(
-            "generationDateTime '{}' is not an xs:dateTime such as 2026-11-22T07:00:00Z",
+            "generationDateAndTime '{}' is not an xs:dateTime such as 2026-11-22T07:00:00Z",
             info.generation_date_time
         ));
     }
@@ -353,7 +353,7 @@ fn write_document(w: &mut W, info: &ModelInfo, plan: &Plan) -> io::Result<()> {
         ("guid", info.guid.clone()),
         ("description", info.description.clone()),
         ("generationTool", info.generation_tool.clone()),
-        ("generationDateTime", info.generation_date_time.clone()),
+        ("generationDateAndTime", info.generation_date_time.clone()),
         ("variableNamingConvention", "structured".to_string()),
         ("numberOfEventIndicators", "0".to_string()),
     ];
@@ -513,7 +513,7 @@ mod tests {
     use quick_xml::Reader;
 
     /// Same shape as fmu-runtime's `two_mode_body` (a test helper there, not exported).
-    pub(crate) fn two_mode_body() -> ReducedBody {
+    fn two_mode_body() -> ReducedBody {
         ReducedBody {
             guid: "{test}".into(),
             model_name: "Test".into(),
@@ -534,7 +534,7 @@ mod tests {
         }
     }
 
-    pub(crate) fn info() -> ModelInfo {
+    fn info() -> ModelInfo {
         ModelInfo {
             model_name: "Test".into(),
             model_identifier: "Test".into(),
@@ -580,12 +580,12 @@ mod tests {
                 Event::Eof => break,
                 _ => continue,
             };
-            let name = String::from_utf8(e.name().as_ref().to_vec()).unwrap();
+            let name = e.name().as_ref().to_string();
             let attrs = e
                 .attributes()
                 .map(|a| {
                     let a = a.unwrap();
-                    (String::from_utf8(a.key.as_ref().to_vec()).unwrap(), a.unescape_value().unwrap().into_owned())
+                    (a.key.as_ref().to_string(), a.normalized_value(quick_xml::XmlVersion::Implicit1_0).unwrap().into_owned())
                 })
                 .collect();
             stack.push(name);
@@ -637,6 +637,7 @@ mod tests {
         let root = &doc[0];
         assert_eq!(root.attr("fmiVersion"), Some("2.0"));
         assert_eq!(root.attr("variableNamingConvention"), Some("structured"));
+        assert_eq!(root.attr("generationDateAndTime"), Some("2026-11-22T07:00:00Z"));
         assert_eq!(root.attr("description"), Some("Reduced flexible body <test> & co"));
         let cs = doc.iter().find(|e| e.name() == "CoSimulation").unwrap();
         assert_eq!(cs.attr("canHandleVariableCommunicationStepSize"), Some("true"));
@@ -762,7 +763,7 @@ mod tests {
 
         let table = VariableTable::new(&two_mode_body());
         for (f, what) in [
-            ((|i: &mut ModelInfo| i.generation_date_time = "22.11.2026".into()) as fn(&mut ModelInfo), "generationDateTime"),
+            ((|i: &mut ModelInfo| i.generation_date_time = "22.11.2026".into()) as fn(&mut ModelInfo), "generationDateAndTime"),
             (|i| i.model_identifier = "my model".into(), "modelIdentifier"),
             (|i| i.guid.clear(), "guid"),
             (|i| i.default_experiment.step = 0.0, "DefaultExperiment"),

@@ -1,0 +1,80 @@
+"""Drive an FMU through its FMI 2.0 C API with FMPy's low-level classes: set inputs and
+parameters by name, read outputs, states and derivatives. Used to get static solutions and
+linearisations out of an FMU by FMI calls alone."""
+
+import ctypes
+import shutil
+
+import numpy as np
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Model, FMU2Slave
+
+
+class Fmu:
+    def __init__(self, filename, kind="ModelExchange"):
+        self.md = read_model_description(filename)
+        self.dir = extract(filename)
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.var = {v.name: v for v in self.md.modelVariables}
+        cls = FMU2Model if kind == "ModelExchange" else FMU2Slave
+        iface = self.md.modelExchange if kind == "ModelExchange" else self.md.coSimulation
+        self.kind = kind
+        self.fmu = cls(guid=self.md.guid, unzipDirectory=self.dir,
+                       modelIdentifier=iface.modelIdentifier, instanceName="test")
+        self.fmu.instantiate()
+        self.nx = len(self.md.derivatives)
+
+    def set(self, **values):
+        for name, value in values.items():
+            self.set_named(name, value)
+
+    def set_named(self, name, value):
+        if self.var[name].type == "Boolean":
+            self.fmu.setBoolean([self.vr[name]], [bool(value)])
+        else:
+            self.fmu.setReal([self.vr[name]], [float(value)])
+
+    def get(self, *names):
+        return np.array(self.fmu.getReal([self.vr[n] for n in names]))
+
+    def initialize(self, start_time=0.0):
+        self.fmu.setupExperiment(startTime=start_time)
+        self.fmu.enterInitializationMode()
+        self.fmu.exitInitializationMode()
+        if self.kind == "ModelExchange":
+            self.fmu.newDiscreteStates()
+            self.fmu.enterContinuousTimeMode()
+
+    def states(self):
+        x = np.zeros(self.nx)
+        self.fmu.getContinuousStates(x.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), self.nx)
+        return x
+
+    def set_states(self, x):
+        x = np.ascontiguousarray(x, dtype=float)
+        self.fmu.setContinuousStates(x.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), self.nx)
+
+    def derivatives(self):
+        dx = np.zeros(self.nx)
+        self.fmu.getDerivatives(dx.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), self.nx)
+        return dx
+
+    def jacobian(self, x0, h=1e-6):
+        """State matrix d(xdot)/dx by central differences of fmi2GetDerivatives."""
+        a = np.zeros((self.nx, self.nx))
+        for j in range(self.nx):
+            step = h * max(1.0, abs(x0[j]))
+            xp = x0.copy(); xp[j] += step
+            xm = x0.copy(); xm[j] -= step
+            self.set_states(xp); fp = self.derivatives()
+            self.set_states(xm); fm = self.derivatives()
+            a[:, j] = (fp - fm) / (2 * step)
+        self.set_states(x0)
+        return a
+
+    def close(self):
+        try:
+            self.fmu.terminate()
+        finally:
+            self.fmu.freeInstance()
+            shutil.rmtree(self.dir, ignore_errors=True)

@@ -1,0 +1,97 @@
+"""FMI robustness of the runtime: a corrupt or foreign reduced-model file, a wrong GUID and calls
+in the wrong state return errors with a logged reason, never a crash."""
+
+import shutil
+import zipfile
+
+import pytest
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
+from fmpy.fmi2 import printLogMessage  # noqa: F401 (kept for debugging)
+
+RESOURCE = "resources/reduced_body.bin"
+
+
+class Recorder:
+    def __init__(self):
+        self.messages = []
+
+        def log(env, name, status, category, message):
+            self.messages.append(message.decode(errors="replace") if message else "")
+
+        self.logger = fmi2CallbackLoggerTYPE(log)
+        self.callbacks = fmi2CallbackFunctions()
+        self.callbacks.logger = self.logger
+        self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(0)
+        self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(0)
+
+    def text(self):
+        return " | ".join(self.messages)
+
+
+def slave(directory, md, guid=None):
+    rec = Recorder()
+    fmu = FMU2Slave(guid=guid or md.guid, unzipDirectory=directory,
+                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="robust")
+    return fmu, rec
+
+
+def test_corrupt_truncated_and_foreign_resources_are_refused(beam, tmp_path):
+    md = read_model_description(str(beam[0]))
+    for name, damage in [
+        ("corrupt", lambda b: b[:100] + bytes([b[100] ^ 0x55]) + b[101:]),
+        ("truncated", lambda b: b[: len(b) // 2]),
+        ("foreign", lambda b: b"PK\x03\x04 this is not a reduced body"),
+    ]:
+        directory = extract(str(beam[0]), unzipdir=str(tmp_path / name))
+        path = f"{directory}/{RESOURCE}"
+        data = open(path, "rb").read()
+        open(path, "wb").write(damage(data))
+        fmu, rec = slave(directory, md)
+        with pytest.raises(Exception):
+            fmu.instantiate(callbacks=rec.callbacks)
+        assert "reduced" in rec.text() and RESOURCE.split("/")[1] in rec.text(), rec.text()
+        expected = {"corrupt": "CRC", "truncated": "truncated", "foreign": "not a reduced-model file"}[name]
+        assert expected in rec.text(), rec.text()
+
+
+def test_wrong_guid_is_refused(beam):
+    md = read_model_description(str(beam[0]))
+    directory = extract(str(beam[0]))
+    try:
+        fmu, rec = slave(directory, md, guid="{00000000-0000-0000-0000-000000000000}")
+        with pytest.raises(Exception):
+            fmu.instantiate(callbacks=rec.callbacks)
+        assert "GUID" in rec.text()
+    finally:
+        shutil.rmtree(directory, ignore_errors=True)
+
+
+def test_calls_in_the_wrong_state_are_errors(beam):
+    md = read_model_description(str(beam[0]))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    directory = extract(str(beam[0]))
+    try:
+        fmu, rec = slave(directory, md)
+        fmu.instantiate(callbacks=rec.callbacks)
+        with pytest.raises(Exception):
+            fmu.doStep(0.0, 0.01)  # before initialisation
+        assert "fmi2DoStep" in rec.text()
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        fmu.exitInitializationMode()
+        fmu.doStep(0.0, 0.01)
+        n = len(rec.messages)
+        with pytest.raises(Exception):
+            fmu.setReal([vr["g[3]"]], [-9.81])  # fixed parameter after initialisation
+        assert len(rec.messages) > n and "g[3]" in rec.text() or "fixed" in rec.text()
+        with pytest.raises(Exception):
+            fmu.getReal([999999])
+        assert "999999" in rec.text()
+        with pytest.raises(Exception):
+            fmu.setReal([vr["tip.u[1]"]], [1.0])  # an output
+        fmu.doStep(0.01, 0.01)  # still usable after refused calls
+        fmu.terminate()
+        fmu.freeInstance()
+    finally:
+        shutil.rmtree(directory, ignore_errors=True)
