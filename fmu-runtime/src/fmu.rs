@@ -52,6 +52,10 @@ impl Model for BodyFmu {
         })
     }
 
+    fn var_name(&self, vr: u32) -> Option<&str> {
+        self.table.get(vr).map(|v| v.name.as_str())
+    }
+
     fn get_real(&mut self, vr: u32) -> Result<f64, String> {
         use Quantity as Q;
         let quantity = self.quantity(vr)?;

@@ -146,13 +146,22 @@ fn check_len(n: usize, expected: usize, what: &str) -> Result<(), Failure> {
     }
 }
 
+/// "value reference 7 (tip.u[1])": users read names, hosts pass numbers.
+fn describe<M: Model>(model: &M, vr: u32) -> String {
+    match model.var_name(vr) {
+        Some(name) => format!("value reference {vr} ({name})"),
+        None => format!("value reference {vr}"),
+    }
+}
+
 fn var_of_type<M: Model>(model: &M, vr: u32, expected: VarType) -> Result<VarInfo, Failure> {
     let info = model
         .var_info(vr)
         .ok_or_else(|| usage(format!("unknown value reference {vr}")))?;
     if info.var_type != expected {
         return Err(usage(format!(
-            "value reference {vr} is a {:?} variable, not {expected:?}",
+            "{} is a {:?} variable, not {expected:?}",
+            describe(model, vr),
             info.var_type
         )));
     }
@@ -161,7 +170,7 @@ fn var_of_type<M: Model>(model: &M, vr: u32, expected: VarType) -> Result<VarInf
 
 fn settable<M: Model>(inst: &Instance<M>, vr: u32, expected: VarType) -> Result<(), Failure> {
     let info = var_of_type(&inst.model, vr, expected)?;
-    check_settable(&info, inst.state).map_err(|e| usage(format!("value reference {vr}: {e}")))
+    check_settable(&info, inst.state).map_err(|e| usage(format!("{}: {e}", describe(&inst.model, vr))))
 }
 
 fn model_err(vr: u32) -> impl FnOnce(String) -> Failure {

@@ -87,6 +87,10 @@ pub trait Model: Sized + Clone {
     fn guid(&self) -> &str;
     /// Called on every get/set of every value reference: keep it a table lookup.
     fn var_info(&self, vr: u32) -> Option<VarInfo>;
+    /// The variable's name, for error messages.
+    fn var_name(&self, _vr: u32) -> Option<&str> {
+        None
+    }
     fn get_real(&mut self, vr: u32) -> Result<f64, String>;
     fn set_real(&mut self, vr: u32, value: f64) -> Result<(), String>;
     fn get_integer(&mut self, vr: u32) -> Result<i32, String>;
