@@ -72,9 +72,10 @@ class Fmu:
         self.set_states(x0)
         return a
 
-    def close(self):
+    def close(self, terminate=True):
         try:
-            self.fmu.terminate()
+            if terminate:
+                self.fmu.terminate()
         finally:
             self.fmu.freeInstance()
             shutil.rmtree(self.dir, ignore_errors=True)
