@@ -5,12 +5,23 @@ import ctypes
 import shutil
 import zipfile
 
+import fmpy.fmi2
 import pytest
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
 from fmpy.logging import addLoggerProxy
 
 RESOURCE = "resources/reduced_body.bin"
+
+# FMPy's native logger proxy keeps ONE global target: keep every recorder alive and hand the
+# proxy back to FMPy's default logger after each test, or a later log call jumps into freed memory.
+_RECORDERS = []
+
+
+@pytest.fixture(autouse=True)
+def restore_default_logger():
+    yield
+    addLoggerProxy(ctypes.byref(fmpy.fmi2.defaultCallbacks))
 
 
 class Recorder:
@@ -27,6 +38,7 @@ class Recorder:
         self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(0)
         # FMPy's native proxy formats the variadic message ("%s" + text) as a C host would
         addLoggerProxy(ctypes.byref(self.callbacks))
+        _RECORDERS.append(self)
 
     def text(self):
         return " | ".join(self.messages)
