@@ -67,59 +67,53 @@ pub fn craig_bampton(model: &Assembled, modes: ModeCount) -> Result<Basis> {
     for j in 0..nb {
         v[(ni + j, nm + j)] = 1.0;
     }
-    // Reduced stiffness in closed form: fixed-interface modes are K-orthogonal to each other
-    // (diag lambda, accurate from the shift-invert solves) and to the constraint modes (K_ii psi =
-    // -K_ib). Forming phi^T K phi by products would cancel ~8 digits on slender parts (|K| phi is
-    // 1e8 times K phi for the lowest modes). The constraint block is the condensed stiffness
-    // psi^T K psi, taken with compensated products.
-    let nc_k = block(&model.stiffness, 0..nc, 0..nc)?;
-    let statics = v.subcols(nm, nb);
-    let k_statics = mul_compensated(None, 1.0, &nc_k, statics);
-    let k_bb = statics.transpose() * &k_statics;
-    let mut kr = Mat::<f64>::zeros(r, r);
-    for j in 0..nm {
-        kr[(j, j)] = normal.values[j];
-    }
-    for i in 0..nb {
-        for j in 0..nb {
-            kr[(nm + i, nm + j)] = 0.5 * (k_bb[(i, j)] + k_bb[(j, i)]);
-        }
-    }
-    let nc_m = block(&model.mass, 0..nc, 0..nc)?;
-    let mr = v.transpose() * mul_new(&nc_m, v.as_ref());
-    let phi_and_omega = orthonormalise(&kr, &mr, &v)?;
+    let (phi, omega) = orthonormalise(model, v)?;
     Ok(Basis {
-        phi: phi_and_omega.0,
-        omega: phi_and_omega.1,
+        phi,
+        omega,
         n_normal: nm,
         fixed_interface_omega: normal.values.iter().map(|l| l.sqrt()).collect(),
     })
 }
 
-/// Solve the reduced eigenproblem (V^T K V) x = lambda (V^T M V) x and return V X (M-orthonormal)
-/// with omega = sqrt(lambda).
-/// `kr`, `mr` are V^T K V and V^T M V.
-pub fn orthonormalise(kr: &Mat<f64>, mr: &Mat<f64>, v: &Mat<f64>) -> Result<(Mat<f64>, Vec<f64>)> {
-    let r = v.ncols();
-    let sym = |a: &Mat<f64>| Mat::<f64>::from_fn(r, r, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
-    let (kr, mr) = (sym(kr), sym(mr));
-    let llt = mr.llt(Side::Lower).map_err(|e| {
-        BuildError::Numerical(format!("the reduced mass is singular ({e:?}): the basis has dependent columns"))
-    })?;
-    let l = llt.L().to_owned();
-    // C = L^-1 K_r L^-T
-    let mut c = kr.clone();
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(l.as_ref(), c.as_mut(), faer::Par::Seq);
-    let mut ct = c.transpose().to_owned();
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(l.as_ref(), ct.as_mut(), faer::Par::Seq);
-    let c = sym(&ct);
+/// Rayleigh-Ritz on span(V): an M-orthonormal basis W of the span first (twice, dropping
+/// directions dependent to round-off), then the symmetric eigenproblem of W^T K W, and
+/// Phi = W Y with Phi^T M Phi = I, Phi^T K Phi = diag(omega^2).
+///
+/// Why not Cholesky of V^T M V: constraint modes of a light flange span directions of tiny
+/// mass, and L^-1 (V^T K V) L^-T amplifies the round-off of V^T K V by cond(V^T M V); for a
+/// complete basis that cost the lowest frequency its third digit. Forming W explicitly and
+/// taking K W with compensated sums keeps every Ritz value at round-off of itself.
+pub fn orthonormalise(model: &Assembled, v: Mat<f64>) -> Result<(Mat<f64>, Vec<f64>)> {
+    let nc = model.dofs.n_clamped();
+    let k = block(&model.stiffness, 0..nc, 0..nc)?;
+    let m = block(&model.mass, 0..nc, 0..nc)?;
+    let mut w = v;
+    for _pass in 0..2 {
+        let gram = w.transpose() * mul_new(&m, w.as_ref());
+        let r = gram.nrows();
+        let gram = Mat::<f64>::from_fn(r, r, |i, j| 0.5 * (gram[(i, j)] + gram[(j, i)]));
+        let evd = gram
+            .self_adjoint_eigen(Side::Lower)
+            .map_err(|e| BuildError::Numerical(format!("reduced mass eigenproblem failed: {e:?}")))?;
+        let s = evd.S();
+        let u = evd.U();
+        let largest = (0..r).map(|i| s[i]).fold(0.0f64, f64::max);
+        let keep: Vec<usize> = (0..r).filter(|&i| s[i] > 1e-13 * largest).collect();
+        if keep.is_empty() {
+            return Err(BuildError::Numerical("the reduction basis is empty or massless".into()));
+        }
+        let t = Mat::<f64>::from_fn(r, keep.len(), |i, c| u[(i, keep[c])] / s[keep[c]].sqrt());
+        w = &w * &t;
+    }
+    let kw = mul_compensated(None, 1.0, &k, w.as_ref());
+    let r = w.ncols();
+    let kr = w.transpose() * &kw;
+    let c = Mat::<f64>::from_fn(r, r, |i, j| 0.5 * (kr[(i, j)] + kr[(j, i)]));
     let evd = c
         .self_adjoint_eigen(Side::Lower)
         .map_err(|e| BuildError::Numerical(format!("reduced eigenproblem failed: {e:?}")))?;
     let s = evd.S();
-    let mut x = evd.U().to_owned();
-    // X = L^-T Y
-    faer::linalg::triangular_solve::solve_upper_triangular_in_place(l.transpose(), x.as_mut(), faer::Par::Seq);
     let mut omega = Vec::with_capacity(r);
     for i in 0..r {
         let lambda = s[i];
@@ -130,5 +124,5 @@ pub fn orthonormalise(kr: &Mat<f64>, mr: &Mat<f64>, v: &Mat<f64>) -> Result<(Mat
         }
         omega.push(lambda.sqrt());
     }
-    Ok((v * &x, omega))
+    Ok((&w * evd.U(), omega))
 }

@@ -1,0 +1,99 @@
+//! The sparse eigensolver and the Craig-Bampton reduction against dense linear algebra on a model
+//! small enough to solve densely (the reference: faer's dense Cholesky and symmetric eigensolver,
+//! independent of our Lanczos and of the reduction).
+
+use faer::{Mat, Side};
+use fmu_builder::eigen;
+use fmu_builder::pipeline::reduce_spec;
+use fmu_builder::reduce::EIGEN_TOL;
+use fmu_builder::sparse::{SpdSolver, Sparse, block};
+use fmu_builder::spec::Spec;
+use std::path::Path;
+
+fn spec(reduction: &str) -> Spec {
+    let text = format!(
+        r#"{{
+      "name": "Small",
+      "geometry": {{ "element": "hex8", "boxes": [ {{ "min": [0,0,0], "max": [0.5,0.04,0.06], "elements": [12,2,2] }} ] }},
+      "material": {{ "E": 7e10, "nu": 0.33, "rho": 2700 }},
+      "flanges": [
+        {{ "name": "base", "role": "motion", "nodes": {{ "box_face": {{ "box": 0, "face": "-x" }} }} }},
+        {{ "name": "tip", "role": "force", "nodes": {{ "box_face": {{ "box": 0, "face": "+x" }} }} }}
+      ],
+      "reduction": {reduction}
+    }}"#
+    );
+    Spec::from_str(Path::new("small.json"), &text).unwrap()
+}
+
+fn dense(a: &Sparse) -> Mat<f64> {
+    let mut d = Mat::<f64>::zeros(a.nrows(), a.ncols());
+    for j in 0..a.ncols() {
+        for (&i, &v) in a.row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
+            d[(i, j)] += v;
+        }
+    }
+    d
+}
+
+/// Eigenvalues of K x = lambda M x, ascending, densely: L^-1 K L^-T with M = L L^T.
+fn dense_eigenvalues(k: &Sparse, m: &Sparse) -> Vec<f64> {
+    let (k, m) = (dense(k), dense(m));
+    let l = m.llt(Side::Lower).unwrap().L().to_owned();
+    let mut c = k.clone();
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(l.as_ref(), c.as_mut(), faer::Par::Seq);
+    let mut ct = c.transpose().to_owned();
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(l.as_ref(), ct.as_mut(), faer::Par::Seq);
+    let sym = Mat::<f64>::from_fn(ct.nrows(), ct.ncols(), |i, j| 0.5 * (ct[(i, j)] + ct[(j, i)]));
+    let s = sym.self_adjoint_eigenvalues(Side::Lower).unwrap();
+    s
+}
+
+#[test]
+fn lanczos_matches_dense_eigenvalues() {
+    let built = reduce_spec(spec(r#"{ "modes": 4 }"#), Path::new("small.json")).unwrap();
+    let nc = built.model.dofs.n_clamped();
+    let k = block(&built.model.stiffness, 0..nc, 0..nc).unwrap();
+    let m = block(&built.model.mass, 0..nc, 0..nc).unwrap();
+    let reference = dense_eigenvalues(&k, &m);
+    let lanczos = eigen::lowest(&SpdSolver::new(&k, "K").unwrap(), &m, 15, EIGEN_TOL).unwrap();
+    for (i, (l, r)) in lanczos.values.iter().zip(&reference).enumerate() {
+        assert!((l - r).abs() <= 1e-9 * r, "mode {i}: {l} vs {r}");
+    }
+    // and the report's full-model frequencies are these
+    for (f, r) in built.report.accuracy.full_hz.iter().zip(&reference) {
+        assert!((f - r.sqrt() / (2.0 * std::f64::consts::PI)).abs() <= 1e-9 * f);
+    }
+}
+
+#[test]
+fn max_frequency_keeps_every_fixed_interface_mode_below_it() {
+    let f_max = 3000.0;
+    let built = reduce_spec(spec(&format!(r#"{{ "max_frequency": {f_max} }}"#)), Path::new("small.json")).unwrap();
+    let d = &built.model.dofs;
+    let ni = d.n_interior;
+    let k = block(&built.model.stiffness, 0..ni, 0..ni).unwrap();
+    let m = block(&built.model.mass, 0..ni, 0..ni).unwrap();
+    let omega_max = 2.0 * std::f64::consts::PI * f_max;
+    let below = dense_eigenvalues(&k, &m).iter().filter(|l| l.sqrt() < omega_max).count();
+    assert!(below > 3, "the test needs a few modes below the limit");
+    assert_eq!(built.basis.n_normal, below);
+    assert!(built.basis.fixed_interface_omega.iter().all(|w| *w < omega_max));
+}
+
+#[test]
+fn mass_properties_are_those_of_the_box() {
+    let built = reduce_spec(spec(r#"{ "modes": 2 }"#), Path::new("small.json")).unwrap();
+    let (a, b, c) = (0.5, 0.04, 0.06);
+    let m = 2700.0 * a * b * c;
+    let r = &built.report;
+    assert!((r.mass - m).abs() <= 1e-12 * m);
+    // body origin: centre of the -x face; centre of mass at (a/2, 0, 0)
+    assert!((r.center_of_mass[0] - a / 2.0).abs() < 1e-12 && r.center_of_mass[1].abs() < 1e-12);
+    // inertia about the origin: J_xx = m (b^2 + c^2)/12, J_yy = m (a^2/3 + c^2/12)
+    let j = r.inertia_about_origin;
+    assert!((j[0] - m * (b * b + c * c) / 12.0).abs() <= 1e-10 * j[0]);
+    assert!((j[4] - m * (a * a / 3.0 + c * c / 12.0)).abs() <= 1e-10 * j[4]);
+    assert!((j[8] - m * (a * a / 3.0 + b * b / 12.0)).abs() <= 1e-10 * j[8]);
+}
+
