@@ -21,11 +21,21 @@ pub fn text(r: &Report) -> String {
     let shown = a.reduced_hz.len().min(8);
     let freqs: Vec<String> = a.reduced_hz[..shown].iter().map(|f| format!("{f:.4}")).collect();
     let _ = writeln!(s, "  lowest frequencies [Hz]: {}{}", freqs.join(", "), if a.reduced_hz.len() > shown { ", ..." } else { "" });
-    let n_band = a.relative_error.len();
-    if n_band > 0 {
-        let worst = a.relative_error.iter().take(r.fixed_interface_modes.max(1)).fold(0.0f64, |m, e| m.max(e.abs()));
-        let _ = writeln!(s, "  vs full FE: frequency error up to {:.2e} over the lowest {} modes; static compliance error {:.2e}",
-            worst, r.fixed_interface_modes.max(1).min(n_band), a.compliance_max_relative_error);
+    // how far up the spectrum the reduced model is good to a given accuracy
+    let good_up_to = |tol: f64| -> Option<(usize, f64)> {
+        let n = a.relative_error.iter().take_while(|e| e.abs() <= tol).count();
+        (n > 0).then(|| (n, a.full_hz[n - 1]))
+    };
+    for tol in [1e-5, 1e-3] {
+        match good_up_to(tol) {
+            Some((n, f)) => {
+                let _ = writeln!(s, "  vs full FE: the lowest {n} frequencies (to {f:.4} Hz) within {tol:.0e}");
+            }
+            None => {
+                let _ = writeln!(s, "  vs full FE: even the lowest frequency is off by more than {tol:.0e}");
+            }
+        }
     }
+    let _ = writeln!(s, "  vs full FE: static flange compliance within {:.1e}", a.compliance_max_relative_error);
     s
 }
