@@ -314,7 +314,7 @@ impl FlexibleBody {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::reduced::tests::two_mode_body;
+    use crate::reduced::two_mode_body;
 
     #[test]
     fn gravity_reaction_holds_the_weight() {

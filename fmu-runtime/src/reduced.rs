@@ -123,31 +123,34 @@ fn to3(s: &[f64]) -> [f64; 3] {
     [s[0], s[1], s[2]]
 }
 
-#[cfg(test)]
-pub(crate) mod tests {
-    use super::*;
-
-    /// A two-mode body with one force flange, for runtime unit tests.
-    pub fn two_mode_body() -> ReducedBody {
-        ReducedBody {
-            guid: "{test}".into(),
-            model_name: "Test".into(),
-            mount: "base".into(),
-            omega: vec![10.0, 2000.0],
-            alpha: 0.5,
-            beta: 1e-4,
-            mass: 2.0,
-            first_moment: [1.0, 0.0, 0.0],
-            inertia: [0.1, 0.0, 0.0, 0.0, 0.7, 0.0, 0.0, 0.0, 0.7],
-            c_t: vec![0.0, 0.1, 0.3, 0.0, 0.0, 0.2],
-            c_r: vec![0.0, 0.0, 0.0, -0.2, 0.0, 0.0],
-            flanges: vec![FlangeShapes {
-                name: "tip".into(),
-                position: [1.0, 0.0, 0.0],
-                shapes: vec![0.0, 0.1, 0.5, 0.0, 0.0, 0.3, 0.2, 0.0, 0.0, -0.6, 0.0, 0.0],
-            }],
-        }
+/// A two-mode body with one force flange: a small, valid body for tests (here and in the
+/// builder's packaging tests).
+#[doc(hidden)]
+pub fn two_mode_body() -> ReducedBody {
+    ReducedBody {
+        guid: "{test}".into(),
+        model_name: "Test".into(),
+        mount: "base".into(),
+        omega: vec![10.0, 2000.0],
+        alpha: 0.5,
+        beta: 1e-4,
+        mass: 2.0,
+        first_moment: [1.0, 0.0, 0.0],
+        inertia: [0.1, 0.0, 0.0, 0.0, 0.7, 0.0, 0.0, 0.0, 0.7],
+        c_t: vec![0.0, 0.1, 0.3, 0.0, 0.0, 0.2],
+        c_r: vec![0.0, 0.0, 0.0, -0.2, 0.0, 0.0],
+        flanges: vec![FlangeShapes {
+            name: "tip".into(),
+            position: [1.0, 0.0, 0.0],
+            shapes: vec![0.0, 0.1, 0.5, 0.0, 0.0, 0.3, 0.2, 0.0, 0.0, -0.6, 0.0, 0.0],
+        }],
     }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::reduced::two_mode_body;
 
     #[test]
     fn round_trip_through_bytes() {

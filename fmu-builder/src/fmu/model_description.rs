@@ -509,30 +509,9 @@ fn write_model_structure(w: &mut W, plan: &Plan) -> io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use fmu_runtime::reduced::{FlangeShapes, ReducedBody};
+    use fmu_runtime::reduced::two_mode_body;
     use quick_xml::Reader;
 
-    /// Same shape as fmu-runtime's `two_mode_body` (a test helper there, not exported).
-    fn two_mode_body() -> ReducedBody {
-        ReducedBody {
-            guid: "{test}".into(),
-            model_name: "Test".into(),
-            mount: "base".into(),
-            omega: vec![10.0, 2000.0],
-            alpha: 0.5,
-            beta: 1e-4,
-            mass: 2.0,
-            first_moment: [1.0, 0.0, 0.0],
-            inertia: [0.1, 0.0, 0.0, 0.0, 0.7, 0.0, 0.0, 0.0, 0.7],
-            c_t: vec![0.0, 0.1, 0.3, 0.0, 0.0, 0.2],
-            c_r: vec![0.0, 0.0, 0.0, -0.2, 0.0, 0.0],
-            flanges: vec![FlangeShapes {
-                name: "tip".into(),
-                position: [1.0, 0.0, 0.0],
-                shapes: vec![0.0, 0.1, 0.5, 0.0, 0.0, 0.3, 0.2, 0.0, 0.0, -0.6, 0.0, 0.0],
-            }],
-        }
-    }
 
     fn info() -> ModelInfo {
         ModelInfo {
