@@ -5,6 +5,7 @@
 pub mod assembly;
 pub mod eigen;
 pub mod error;
+pub mod export;
 pub mod fe;
 pub mod fmu;
 pub mod flange;

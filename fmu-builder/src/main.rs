@@ -15,6 +15,9 @@ struct Args {
     /// Also write the accuracy report (JSON) here
     #[arg(long)]
     report: Option<PathBuf>,
+    /// Also write the meshed part with its flange node sets as an Abaqus/CalculiX deck here
+    #[arg(long)]
+    export_inp: Option<PathBuf>,
     /// Print nothing but errors
     #[arg(short, long)]
     quiet: bool,
@@ -28,6 +31,13 @@ fn main() -> ExitCode {
                 let json = serde_json::to_string_pretty(&built.report).unwrap_or_default();
                 if let Err(e) = std::fs::write(path, json) {
                     eprintln!("error: {}: {e}", path.display());
+                    return ExitCode::FAILURE;
+                }
+            }
+            if let Some(path) = &args.export_inp {
+                let b = &built;
+                if let Err(e) = fmu_builder::export::write_abaqus_deck(path, &b.mesh, &b.flanges, &b.spec.material) {
+                    eprintln!("error: {e}");
                     return ExitCode::FAILURE;
                 }
             }
