@@ -81,6 +81,10 @@ pub struct Assembled {
     pub dofs: DofMap,
     pub stiffness: SparseColMat<usize, f64>,
     pub mass: SparseColMat<usize, f64>,
+    /// Scalar consistent mass of the mesh nodes (n_nodes x n_nodes, before coupling): the mass
+    /// of a nodal field w is this matrix applied to each component. Rigid-motion invariants of
+    /// the floating frame (cross products per node) are taken with it.
+    pub nodal_mass: SparseColMat<usize, f64>,
     pub mass_properties: MassProperties,
 }
 
@@ -109,6 +113,7 @@ pub fn assemble(
     let mut coords_buf = [[0.0; 3]; MAX_NODES_PER_ELEMENT];
     let mut k_trip: Vec<Triplet<usize, usize, f64>> = Vec::new();
     let mut m_trip: Vec<Triplet<usize, usize, f64>> = Vec::new();
+    let mut nodal_trip: Vec<Triplet<usize, usize, f64>> = Vec::new();
     let mut props = MassProperties::default();
     // per element: global DoFs and the (ne x nloc) map from them to element DoFs
     let mut global: Vec<usize> = Vec::with_capacity(ne);
@@ -122,6 +127,11 @@ pub fn assemble(
         fe::element_mass(kind, coords, rho, &mut me)
             .map_err(|err| BuildError::Numerical(format!("element {e}: {err}")))?;
         accumulate_mass_properties(&mut props, &me, coords, origin, rho);
+        for a in 0..nen {
+            for b in 0..nen {
+                nodal_trip.push(Triplet::new(nodes[a], nodes[b], me[a * nen + b]));
+            }
+        }
 
         // local DoF list and transformation
         global.clear();
@@ -215,7 +225,10 @@ pub fn assemble(
         .map_err(|e| BuildError::Numerical(format!("assembling the stiffness: {e:?}")))?;
     let mass = SparseColMat::try_new_from_triplets(n, n, &m_trip)
         .map_err(|e| BuildError::Numerical(format!("assembling the mass: {e:?}")))?;
-    Ok(Assembled { dofs, stiffness, mass, mass_properties: props })
+    let nn = mesh.n_nodes();
+    let nodal_mass = SparseColMat::try_new_from_triplets(nn, nn, &nodal_trip)
+        .map_err(|e| BuildError::Numerical(format!("assembling the nodal mass: {e:?}")))?;
+    Ok(Assembled { dofs, stiffness, mass, nodal_mass, mass_properties: props })
 }
 
 fn push_block(trip: &mut Vec<Triplet<usize, usize, f64>>, global: &[usize], block: &[f64], n: usize) {

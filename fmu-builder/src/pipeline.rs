@@ -10,7 +10,12 @@ use crate::flange::{self, Flange};
 use crate::mesh::{self, BoxRegion, Mesh, MeshError};
 use crate::reduce::{self, Basis, ModeCount};
 use crate::report::{self, FlangeReport, Report};
-use crate::spec::{Element, Role, Spec};
+use crate::inertia::{self, LoadCase};
+use crate::sparse::{self, SpdSolver};
+use crate::spec::{Element, Role, SceneLoad, Spec};
+use crate::stiffening::reduced_geometric_stiffness;
+use faer::{Mat, MatRef};
+use fmu_runtime::reduced::{RotationTerms, Stiffening};
 use fmu_runtime::reduced::{FlangeShapes, ReducedBody};
 use std::hash::{Hash, Hasher};
 use std::path::Path;
@@ -66,6 +71,90 @@ fn guid_of(bytes: &[u8]) -> String {
     )
 }
 
+/// Reduced geometric stiffness of every unit prestress the scene can apply: centrifugal and
+/// angular-acceleration loads if it rotates, translational ones if it has gravity or
+/// acceleration, and unit wrenches at every force flange.
+#[allow(clippy::too_many_arguments)]
+fn stiffening_terms(
+    spec: &Spec,
+    mesh: &Mesh,
+    flanges: &[Flange],
+    model: &Assembled,
+    solver: &SpdSolver,
+    origin: [f64; 3],
+    material: Elasticity,
+    cases: &[LoadCase],
+    load_shapes: Option<&Mat<f64>>,
+    phi_mesh: MatRef<'_, f64>,
+) -> Result<Stiffening> {
+    let r = phi_mesh.ncols();
+    let reduce_shape = |u_c: MatRef<'_, f64>| -> Result<Vec<f64>> {
+        let u = inertia::expand(model, &mesh.nodes, flanges, u_c);
+        let u: Vec<f64> = (0..u.nrows()).map(|i| u[(i, 0)]).collect();
+        let k = reduced_geometric_stiffness(mesh, &material, &u, phi_mesh)?;
+        Ok((0..r * r).map(|i| k[(i / r, i % r)]).collect())
+    };
+    let shape_of = |case: LoadCase| -> Result<Vec<f64>> {
+        let col = cases.iter().position(|c| *c == case);
+        match (col, load_shapes) {
+            (Some(c), Some(shapes)) => reduce_shape(shapes.subcols(c, 1)),
+            _ => {
+                let f = inertia::inertial_load(model, &mesh.nodes, origin, case);
+                let mut u = inertia::restrict(model, &mesh.nodes, flanges, f.as_ref());
+                solver.solve_refined(u.as_mut());
+                reduce_shape(u.as_ref())
+            }
+        }
+    };
+    let mut out = Stiffening::default();
+    if spec.rotates() {
+        let mut centrifugal = vec![0.0; 9 * r * r];
+        for a in 0..3 {
+            for b in a..3 {
+                let k = shape_of(LoadCase::Centrifugal(a, b))?;
+                // K_aa for w_a^2; K_sym(ab) split evenly over (a,b) and (b,a) for a != b
+                let share = if a == b { 1.0 } else { 0.5 };
+                for (target, src) in [(3 * a + b, &k), (3 * b + a, &k)] {
+                    for i in 0..r * r {
+                        centrifugal[target * r * r + i] = share * src[i];
+                    }
+                }
+            }
+        }
+        out.centrifugal = Some(centrifugal);
+        let mut euler = Vec::with_capacity(3 * r * r);
+        for a in 0..3 {
+            euler.extend(shape_of(LoadCase::Euler(a))?);
+        }
+        out.euler = Some(euler);
+    }
+    if spec.declares(SceneLoad::Gravity) || spec.declares(SceneLoad::Acceleration) {
+        let mut translation = Vec::with_capacity(3 * r * r);
+        for a in 0..3 {
+            translation.extend(shape_of(LoadCase::Translation(a))?);
+        }
+        out.translation = Some(translation);
+    }
+    let nc = model.dofs.n_clamped();
+    for (k, f) in flanges.iter().enumerate() {
+        if f.role != Role::Force {
+            continue;
+        }
+        let first = model.dofs.flange_first[k];
+        let mut unit = Mat::<f64>::zeros(nc, 6);
+        for i in 0..6 {
+            unit[(first + i, i)] = 1.0;
+        }
+        solver.solve_refined(unit.as_mut());
+        let mut blocks = Vec::with_capacity(6 * r * r);
+        for i in 0..6 {
+            blocks.extend(reduce_shape(unit.subcols(i, 1))?);
+        }
+        out.flanges.push(blocks);
+    }
+    Ok(out)
+}
+
 /// Read, mesh, couple, assemble and reduce: everything but writing the FMU.
 pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
     let mesh = mesh_of(&spec, file)?;
@@ -79,8 +168,41 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
         (None, Some(f)) => ModeCount::Below(f),
         (None, None) => ModeCount::Count(0),
     };
-    let basis = reduce::craig_bampton(&model, modes)?;
+    let nc = model.dofs.n_clamped();
+    let k_cc = sparse::block(&model.stiffness, 0..nc, 0..nc)?;
+    let solver = SpdSolver::new(&k_cc, "the stiffness of the mounted body")?;
+
+    // the scene's inertial loads: static shapes in the basis, prestress for stiffening
+    let mut cases = Vec::new();
+    if spec.declares(SceneLoad::Gravity) || spec.declares(SceneLoad::Acceleration) {
+        cases.extend(LoadCase::translations());
+    }
+    if spec.declares(SceneLoad::Rotation) {
+        cases.extend(LoadCase::rotations());
+    }
+    let load_shapes = if cases.is_empty() {
+        None
+    } else {
+        let mut f = Mat::<f64>::zeros(3 * mesh.n_nodes(), cases.len());
+        for (c, case) in cases.iter().enumerate() {
+            f.as_mut().col_mut(c).copy_from(inertia::inertial_load(&model, &mesh.nodes, origin, *case).col(0));
+        }
+        let mut u = inertia::restrict(&model, &mesh.nodes, &flanges, f.as_ref());
+        solver.solve_refined(u.as_mut());
+        Some(u)
+    };
+    let basis = reduce::craig_bampton(&model, modes, load_shapes.as_ref())?;
     let inv = ffrf::invariants(&model, &mesh.nodes, &flanges, origin, &basis);
+    let phi_mesh = inertia::expand(&model, &mesh.nodes, &flanges, basis.phi.as_ref());
+    let rotation = spec.rotates().then(|| {
+        let r = inertia::rotation_invariants(&model, &mesh.nodes, origin, phi_mesh.as_ref());
+        RotationTerms { g: r.g, o_mat: r.o_mat, o_vec: r.o_vec }
+    });
+    let stiffening = if spec.stiffening() {
+        Some(stiffening_terms(&spec, &mesh, &flanges, &model, &solver, origin, material, &cases, load_shapes.as_ref(), phi_mesh.as_ref())?)
+    } else {
+        None
+    };
     let props = model.mass_properties;
     for a in 0..3 {
         if (inv.rigid_mass[a] - props.mass).abs() > 1e-9 * props.mass {
@@ -111,12 +233,26 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
                 shapes: inv.flange_shapes[k].clone(),
             })
             .collect(),
+        rotation,
+        stiffening,
     };
     reduced.guid = guid_of(&reduced.to_bytes());
 
     let force_dofs: Vec<(String, usize)> =
         force.iter().map(|&k| (flanges[k].name.clone(), model.dofs.flange_first[k])).collect();
-    let accuracy = report::accuracy(&model, &basis, &force_dofs, basis.omega.len())?;
+    let mut accuracy = report::accuracy(&model, &solver, &basis, &force_dofs, basis.omega.len())?;
+    if let Some(shapes) = &load_shapes {
+        let axis = ["x", "y", "z"];
+        for (c, case) in cases.iter().enumerate() {
+            accuracy.inertial_cases.push(match case {
+                LoadCase::Translation(a) => format!("translation {}", axis[*a]),
+                LoadCase::Euler(a) => format!("angular acceleration {}", axis[*a]),
+                LoadCase::Centrifugal(a, b) => format!("centrifugal {}{}", axis[*a], axis[*b]),
+            });
+            let response = force_dofs.iter().flat_map(|(_, first)| (0..6).map(move |i| shapes[(first + i, c)])).collect();
+            accuracy.inertial_flange_response_full.push(response);
+        }
+    }
     let report = Report {
         model_name: spec.name.clone(),
         guid: reduced.guid.clone(),

@@ -31,7 +31,9 @@ pub struct Basis {
 /// frequencies are compared with the full model's to 1e-5.
 pub const EIGEN_TOL: f64 = 1e-10;
 
-pub fn craig_bampton(model: &Assembled, modes: ModeCount) -> Result<Basis> {
+/// `static_shapes` (n_clamped x s): static responses to the scene's inertial loads, appended to
+/// the basis so that those loads, too, are reproduced exactly in statics.
+pub fn craig_bampton(model: &Assembled, modes: ModeCount, static_shapes: Option<&Mat<f64>>) -> Result<Basis> {
     let d = &model.dofs;
     let ni = d.n_interior;
     let nc = d.n_clamped();
@@ -60,12 +62,16 @@ pub fn craig_bampton(model: &Assembled, modes: ModeCount) -> Result<Basis> {
         ModeCount::Below(f) => eigen::below(&solver, &m_ii, 2.0 * std::f64::consts::PI * f, 0, EIGEN_TOL)?,
     };
     let nm = normal.values.len();
-    let r = nm + nb;
+    let ns = static_shapes.map_or(0, |m| m.ncols());
+    let r = nm + nb + ns;
     let mut v = Mat::<f64>::zeros(nc, r);
     v.as_mut().submatrix_mut(0, 0, ni, nm).copy_from(&normal.vectors);
     v.as_mut().submatrix_mut(0, nm, ni, nb).copy_from(&psi);
     for j in 0..nb {
         v[(ni + j, nm + j)] = 1.0;
+    }
+    if let Some(shapes) = static_shapes {
+        v.as_mut().submatrix_mut(0, nm + nb, nc, ns).copy_from(shapes);
     }
     let (phi, omega) = orthonormalise(model, v)?;
     Ok(Basis {

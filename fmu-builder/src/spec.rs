@@ -22,7 +22,40 @@ pub struct Spec {
     #[serde(default)]
     pub damping: Damping,
     pub flanges: Vec<FlangeSpec>,
+    #[serde(default)]
+    pub scene: Option<Scene>,
     pub reduction: Reduction,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum SceneLoad {
+    Gravity,
+    Acceleration,
+    Rotation,
+}
+
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    #[serde(default)]
+    pub loads: Vec<SceneLoad>,
+    #[serde(default)]
+    pub geometric_stiffening: bool,
+}
+
+impl Spec {
+    /// Whether the FMU keeps the rotating-frame terms: unless a scene says the body never rotates.
+    pub fn rotates(&self) -> bool {
+        self.scene.as_ref().is_none_or(|s| s.loads.contains(&SceneLoad::Rotation))
+    }
+    /// Whether the scene declares the load (a missing scene declares none).
+    pub fn declares(&self, load: SceneLoad) -> bool {
+        self.scene.as_ref().is_some_and(|s| s.loads.contains(&load))
+    }
+    pub fn stiffening(&self) -> bool {
+        self.scene.as_ref().is_some_and(|s| s.geometric_stiffening)
+    }
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]

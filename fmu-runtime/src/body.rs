@@ -1,12 +1,12 @@
 //! The reduced flexible body's equations, free of anything FMI: inputs (mount motion, flange
 //! loads, gravity), modal state q, q', and what the flanges see.
 //!
-//! Equations (body frame B, modal mass I, stiffness diag(w^2), Rayleigh damping):
-//!   q'' + (alpha + beta w^2) q' + w^2 q = -C_t^T a_B + sum_k Phi_k^T [A^T f_k; A^T t_k],
-//!   a_B = A^T (a_mount - g).
-//! This is the mount fixed or translating (any constant orientation A). The rotating-frame terms
-//! (Coriolis, centrifugal, Euler) are not in these equations yet; kinematic outputs already
-//! account for the mount's angular velocity and acceleration.
+//! Equations (body frame B, modal mass I, stiffness diag(w^2), Rayleigh damping; DESIGN.md):
+//!   q'' + (D + 2 sum_a W_a G_a) q' + (K + sum_a Z_a G_a + sum_ab W_a W_b O_ab + K_G) q
+//!       = -C_t^T a_B - sum_a Z_a c_a - sum_ab W_a W_b o_ab + sum_k Phi_k^T [A^T f_k; A^T t_k],
+//! with W = A^T w, Z = A^T z, a_B = A^T (a - g), and K_G the geometric stiffness of the present
+//! loads (linear in them). The coupling terms (everything off the modal diagonal) are gathered in
+//! two r x r matrices whenever the inputs change.
 
 use crate::kinematics::{self as k3, Mat3, Vec3};
 use crate::propagator::ModalPropagator;
@@ -68,6 +68,19 @@ struct Evaluation {
     mount_torque: Vec3,
 }
 
+/// Terms that couple the modes, for the present inputs: q'' = ... - C_d q' - C_k q.
+#[derive(Debug, Clone, Default)]
+struct Coupling {
+    valid: bool,
+    active: bool,
+    c_d: Vec<f64>,
+    c_k: Vec<f64>,
+    /// Body-frame angular velocity, angular acceleration and a_B of the present inputs.
+    w: Vec3,
+    z: Vec3,
+    a: Vec3,
+}
+
 #[derive(Debug, Clone)]
 pub struct FlexibleBody {
     body: Arc<ReducedBody>,
@@ -79,6 +92,9 @@ pub struct FlexibleBody {
     /// Modal load p, workspace.
     load: Vec<f64>,
     eval: Evaluation,
+    coupling: Coupling,
+    /// q' and q workspace for the coupled load
+    scratch: Vec<f64>,
     propagator: ModalPropagator,
 }
 
@@ -105,6 +121,8 @@ impl FlexibleBody {
                 mount_force: [0.0; 3],
                 mount_torque: [0.0; 3],
             },
+            coupling: Coupling { c_d: vec![0.0; n * n], c_k: vec![0.0; n * n], ..Coupling::default() },
+            scratch: vec![0.0; n],
             propagator: ModalPropagator::default(),
             body,
         }
@@ -134,14 +152,17 @@ impl FlexibleBody {
 
     pub fn mount_mut(&mut self) -> &mut MountMotion {
         self.eval.valid = false;
+        self.coupling.valid = false;
         &mut self.mount
     }
     pub fn load_mut(&mut self, flange: usize) -> &mut FlangeLoad {
         self.eval.valid = false;
+        self.coupling.valid = false;
         &mut self.loads[flange]
     }
     pub fn parameters_mut(&mut self) -> &mut Parameters {
         self.eval.valid = false;
+        self.coupling.valid = false;
         &mut self.params
     }
     pub fn set_state(&mut self, q: &[f64], qd: &[f64]) {
@@ -166,7 +187,79 @@ impl FlexibleBody {
                 self.body.mount
             ));
         }
+        if self.body.rotation.is_none() && (self.mount.w != [0.0; 3] || self.mount.z != [0.0; 3]) {
+            return Err(format!(
+                "{m}.w and {m}.z must be zero: this FMU was built for a scene without rotation \
+                 (declare \"rotation\" in the input's scene.loads to model a rotating mount)",
+                m = self.body.mount
+            ));
+        }
         Ok(())
+    }
+
+    /// Gather C_d = 2 sum W_a G_a and C_k = sum Z_a G_a + sum W_a W_b O_ab + K_G for the inputs.
+    fn prepare_coupling(&mut self) {
+        if self.coupling.valid {
+            return;
+        }
+        let n = self.q.len();
+        let nn = n * n;
+        let a = &self.mount.rot;
+        let c = &mut self.coupling;
+        c.w = k3::mul_t(a, self.mount.w);
+        c.z = k3::mul_t(a, self.mount.z);
+        c.a = k3::mul_t(a, k3::sub(self.mount.a, self.params.g));
+        c.c_d.fill(0.0);
+        c.c_k.fill(0.0);
+        let mut active = false;
+        let mut add = |target: &mut Vec<f64>, scale: f64, block: &[f64]| {
+            if scale != 0.0 {
+                active = true;
+                for (t, b) in target.iter_mut().zip(block) {
+                    *t += scale * b;
+                }
+            }
+        };
+        if let Some(rot) = &self.body.rotation {
+            for i in 0..3 {
+                add(&mut c.c_d, 2.0 * c.w[i], &rot.g[i * nn..(i + 1) * nn]);
+                add(&mut c.c_k, c.z[i], &rot.g[i * nn..(i + 1) * nn]);
+                for j in 0..3 {
+                    add(&mut c.c_k, c.w[i] * c.w[j], &rot.o_mat[(3 * i + j) * nn..(3 * i + j + 1) * nn]);
+                }
+            }
+        }
+        if let Some(st) = &self.body.stiffening {
+            if let Some(k) = &st.centrifugal {
+                for i in 0..3 {
+                    for j in 0..3 {
+                        add(&mut c.c_k, c.w[i] * c.w[j], &k[(3 * i + j) * nn..(3 * i + j + 1) * nn]);
+                    }
+                }
+            }
+            if let Some(k) = &st.euler {
+                for i in 0..3 {
+                    add(&mut c.c_k, c.z[i], &k[i * nn..(i + 1) * nn]);
+                }
+            }
+            if let Some(k) = &st.translation {
+                for i in 0..3 {
+                    add(&mut c.c_k, c.a[i], &k[i * nn..(i + 1) * nn]);
+                }
+            }
+            for (f, k) in st.flanges.iter().enumerate() {
+                if k.is_empty() {
+                    continue;
+                }
+                let load = &self.loads[f];
+                let wrench = [k3::mul_t(a, load.f), k3::mul_t(a, load.t)];
+                for i in 0..6 {
+                    add(&mut c.c_k, wrench[i / 3][i % 3], &k[i * nn..(i + 1) * nn]);
+                }
+            }
+        }
+        c.active = active;
+        c.valid = true;
     }
 
     /// p = -C_t^T a_B + sum_k Phi_k^T [A^T f_k; A^T t_k]
@@ -176,6 +269,27 @@ impl FlexibleBody {
         let n = self.q.len();
         for j in 0..n {
             self.load[j] = -(self.body.c_t[j] * a_b[0] + self.body.c_t[n + j] * a_b[1] + self.body.c_t[2 * n + j] * a_b[2]);
+        }
+        if let Some(rot) = &self.body.rotation {
+            let w = k3::mul_t(a, self.mount.w);
+            let z = k3::mul_t(a, self.mount.z);
+            for i in 0..3 {
+                if z[i] != 0.0 {
+                    let c_a = &self.body.c_r[i * n..(i + 1) * n];
+                    for j in 0..n {
+                        self.load[j] -= z[i] * c_a[j];
+                    }
+                }
+                for k in 0..3 {
+                    let ww = w[i] * w[k];
+                    if ww != 0.0 {
+                        let o = &rot.o_vec[(3 * i + k) * n..(3 * i + k + 1) * n];
+                        for j in 0..n {
+                            self.load[j] -= ww * o[j];
+                        }
+                    }
+                }
+            }
         }
         for (flange, load) in self.body.flanges.iter().zip(&self.loads) {
             let f_b = k3::mul_t(a, load.f);
@@ -198,11 +312,23 @@ impl FlexibleBody {
         }
         self.check_inputs()?;
         self.modal_load();
+        self.prepare_coupling();
         let n = self.q.len();
         let (alpha, beta) = (self.params.alpha, self.params.beta);
         for j in 0..n {
             let w2 = self.body.omega[j] * self.body.omega[j];
             self.eval.qdd[j] = self.load[j] - (alpha + beta * w2) * self.qd[j] - w2 * self.q[j];
+        }
+        if self.coupling.active {
+            let c = &self.coupling;
+            for i in 0..n {
+                let (rd, rk) = (&c.c_d[i * n..(i + 1) * n], &c.c_k[i * n..(i + 1) * n]);
+                let mut s = 0.0;
+                for j in 0..n {
+                    s += rd[j] * self.qd[j] + rk[j] * self.q[j];
+                }
+                self.eval.qdd[i] -= s;
+            }
         }
         let m = &self.mount;
         let a = &m.rot;
@@ -242,20 +368,62 @@ impl FlexibleBody {
             force = k3::add(force, load.f);
             torque_b = k3::add(torque_b, k3::add(k3::cross(k3::add(flange.position, u), f_b), k3::mul_t(a, load.t)));
         }
-        // Momentum balance of the whole body: the mount supplies what the inertia needs beyond
-        // gravity and the flange loads (second-order terms in q dropped).
-        let a_b = k3::mul_t(a, k3::sub(m.a, self.params.g));
-        let row3 = |mat: &[f64], r: usize, x: &[f64]| -> f64 {
-            mat[r * n..(r + 1) * n].iter().zip(x).map(|(s, v)| s * v).sum()
+        // Momentum balance of the whole body about the mount point, in B: the mount supplies what
+        // the inertia needs beyond gravity and the flange loads (terms of second order in q, q'
+        // dropped, except where they come for free).
+        let (w, z, a_b) = (self.coupling.w, self.coupling.z, self.coupling.a);
+        let b = &*self.body;
+        let row3 = |mat: &[f64], x: &[f64]| -> Vec3 {
+            [0, 1, 2].map(|r| mat[r * n..(r + 1) * n].iter().zip(x).map(|(s, v)| s * v).sum())
         };
         let qdd = &self.eval.qdd;
-        let ct_qdd = [row3(&self.body.c_t, 0, qdd), row3(&self.body.c_t, 1, qdd), row3(&self.body.c_t, 2, qdd)];
-        let cr_qdd = [row3(&self.body.c_r, 0, qdd), row3(&self.body.c_r, 1, qdd), row3(&self.body.c_r, 2, qdd)];
-        let ct_q = [row3(&self.body.c_t, 0, &self.q), row3(&self.body.c_t, 1, &self.q), row3(&self.body.c_t, 2, &self.q)];
-        let inertial_force_b = k3::add(k3::scale(self.body.mass, a_b), ct_qdd);
+        let ct_qdd = row3(&b.c_t, qdd);
+        let ct_qd = row3(&b.c_t, &self.qd);
+        let first_moment = k3::add(b.first_moment, row3(&b.c_t, &self.q));
+        let mut inertial_force_b = k3::add(k3::scale(b.mass, a_b), ct_qdd);
+        inertial_force_b = k3::add(inertial_force_b, k3::cross(z, first_moment));
+        inertial_force_b = k3::add(inertial_force_b, k3::cross(w, k3::cross(w, first_moment)));
+        inertial_force_b = k3::add(inertial_force_b, k3::scale(2.0, k3::cross(w, ct_qd)));
         self.eval.mount_force = k3::sub(k3::mul(a, inertial_force_b), force);
-        let first_moment = k3::add(self.body.first_moment, ct_q);
-        let inertial_torque_b = k3::add(k3::cross(first_moment, a_b), cr_qdd);
+
+        // J(q) = J0 + J1(q), J1_ab = -(o_ab + o_ba) . q;  C_r(q) v = C_r v + [(G_a q) . v]_a
+        let mut j = b.inertia;
+        let mut j_rate = [0.0; 9];
+        let mut cr_qdd = row3(&b.c_r, qdd);
+        let mut cr_qd = row3(&b.c_r, &self.qd);
+        if let Some(rot) = &b.rotation {
+            for p_ in 0..3 {
+                for q_ in 0..3 {
+                    let (o_pq, o_qp) = (&rot.o_vec[(3 * p_ + q_) * n..][..n], &rot.o_vec[(3 * q_ + p_) * n..][..n]);
+                    let mut s = 0.0;
+                    let mut sd = 0.0;
+                    for k in 0..n {
+                        s += (o_pq[k] + o_qp[k]) * self.q[k];
+                        sd += (o_pq[k] + o_qp[k]) * self.qd[k];
+                    }
+                    j[3 * p_ + q_] -= s;
+                    j_rate[3 * p_ + q_] = -sd;
+                }
+            }
+            let nn = n * n;
+            for a_ in 0..3 {
+                let g = &rot.g[a_ * nn..(a_ + 1) * nn];
+                let (mut s_dd, mut s_d) = (0.0, 0.0);
+                for r in 0..n {
+                    let gq: f64 = g[r * n..(r + 1) * n].iter().zip(&self.q).map(|(x, y)| x * y).sum();
+                    s_dd += gq * qdd[r];
+                    s_d += gq * self.qd[r];
+                }
+                cr_qdd[a_] += s_dd;
+                cr_qd[a_] += s_d;
+            }
+        }
+        let jw = k3::mul(&j, w);
+        let mut inertial_torque_b = k3::add(k3::cross(first_moment, a_b), cr_qdd);
+        inertial_torque_b = k3::add(inertial_torque_b, k3::mul(&j, z));
+        inertial_torque_b = k3::add(inertial_torque_b, k3::cross(w, jw));
+        inertial_torque_b = k3::add(inertial_torque_b, k3::mul(&j_rate, w));
+        inertial_torque_b = k3::add(inertial_torque_b, k3::cross(w, cr_qd));
         self.eval.mount_torque = k3::mul(a, k3::sub(inertial_torque_b, torque_b));
         self.eval.valid = true;
         Ok(())
@@ -285,30 +453,104 @@ impl FlexibleBody {
         Ok((self.eval.mount_force, self.eval.mount_torque))
     }
 
-    /// Put the body at rest in the static equilibrium of the present inputs: q = K^-1 p, q' = 0.
+    /// Put the body at rest in the static equilibrium of the present inputs: q' = 0 and
+    /// (K + C_k) q = p, which for a spinning body includes centrifugal softening and stiffening.
     pub fn settle_static(&mut self) -> Result<(), String> {
         self.check_inputs()?;
         self.modal_load();
-        for j in 0..self.q.len() {
-            self.q[j] = self.load[j] / (self.body.omega[j] * self.body.omega[j]);
-            self.qd[j] = 0.0;
+        self.prepare_coupling();
+        let n = self.q.len();
+        if self.coupling.active {
+            let mut a = self.coupling.c_k.clone();
+            for j in 0..n {
+                a[j * n + j] += self.body.omega[j] * self.body.omega[j];
+            }
+            let mut x = self.load.clone();
+            solve_dense(&mut a, &mut x, n).map_err(|_| {
+                "no static equilibrium: the body is unstable under the present loads (centrifugal softening beyond the elastic stiffness; enable geometric stiffening?)".to_string()
+            })?;
+            self.q.copy_from_slice(&x);
+        } else {
+            for j in 0..n {
+                self.q[j] = self.load[j] / (self.body.omega[j] * self.body.omega[j]);
+            }
         }
+        self.qd.fill(0.0);
         self.eval.valid = false;
         Ok(())
     }
 
-    /// Advance by h with the inputs held over the step (exact modal propagation).
+    /// Advance by h with the inputs held over the step: exact propagation of the modal diagonal;
+    /// the coupling terms (gyroscopic, centrifugal, stiffening) as loads held over substeps short
+    /// enough for them (h_sub * (|C_d| + |C_k|^1/2) <= 0.1), none when nothing couples.
     pub fn step(&mut self, h: f64) -> Result<(), String> {
         if !(h > 0.0 && h.is_finite()) {
             return Err(format!("step size {h} must be positive and finite"));
         }
         self.check_inputs()?;
         self.modal_load();
-        self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, h);
-        self.propagator.advance(&self.body.omega, &self.load, &mut self.q, &mut self.qd);
+        self.prepare_coupling();
+        let n = self.q.len();
+        if !self.coupling.active {
+            self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, h);
+            self.propagator.advance(&self.body.omega, &self.load, &mut self.q, &mut self.qd);
+            self.eval.valid = false;
+            return Ok(());
+        }
+        let c = &self.coupling;
+        let row_norm = |m: &[f64]| (0..n).map(|i| m[i * n..(i + 1) * n].iter().map(|v| v.abs()).sum::<f64>()).fold(0.0, f64::max);
+        let rate = row_norm(&c.c_d) + row_norm(&c.c_k).sqrt();
+        let substeps = ((h * rate / 0.1).ceil() as usize).clamp(1, 100_000);
+        let hs = h / substeps as f64;
+        self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, hs);
+        for _ in 0..substeps {
+            let c = &self.coupling;
+            for i in 0..n {
+                let (rd, rk) = (&c.c_d[i * n..(i + 1) * n], &c.c_k[i * n..(i + 1) * n]);
+                let mut s = 0.0;
+                for j in 0..n {
+                    s += rd[j] * self.qd[j] + rk[j] * self.q[j];
+                }
+                self.scratch[i] = self.load[i] - s;
+            }
+            self.propagator.advance(&self.body.omega, &self.scratch, &mut self.q, &mut self.qd);
+        }
         self.eval.valid = false;
         Ok(())
     }
+}
+
+/// Solve A x = b in place (A row-major n x n, destroyed) by Gaussian elimination with partial
+/// pivoting; Err on a singular matrix. Used at initialisation only.
+fn solve_dense(a: &mut [f64], b: &mut [f64], n: usize) -> Result<(), ()> {
+    let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for col in 0..n {
+        let piv = (col..n).max_by(|&i, &j| a[i * n + col].abs().total_cmp(&a[j * n + col].abs())).ok_or(())?;
+        if !(a[piv * n + col].abs() > 1e-14 * scale) {
+            return Err(());
+        }
+        if piv != col {
+            for k in 0..n {
+                a.swap(piv * n + k, col * n + k);
+            }
+            b.swap(piv, col);
+        }
+        let d = a[col * n + col];
+        for i in col + 1..n {
+            let f = a[i * n + col] / d;
+            if f != 0.0 {
+                for k in col..n {
+                    a[i * n + k] -= f * a[col * n + k];
+                }
+                b[i] -= f * b[col];
+            }
+        }
+    }
+    for col in (0..n).rev() {
+        let s: f64 = (col + 1..n).map(|k| a[col * n + k] * b[k]).sum();
+        b[col] = (b[col] - s) / a[col * n + col];
+    }
+    Ok(())
 }
 
 #[cfg(test)]

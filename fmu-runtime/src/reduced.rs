@@ -14,6 +14,30 @@ pub struct FlangeShapes {
     pub shapes: Vec<f64>,
 }
 
+/// Rotating-frame invariants (DESIGN.md "Large motion"), row-major:
+/// G_a = Phi^T M E_a Phi (3 x r x r, skew), O_ab = Phi^T M E_a E_b Phi (3 x 3 x r x r),
+/// o_ab = Phi^T M E_a E_b X (3 x 3 x r). (c_a = Phi^T M E_a X are the rows of C_r.)
+#[derive(Debug, Clone, PartialEq)]
+pub struct RotationTerms {
+    pub g: Vec<f64>,
+    pub o_mat: Vec<f64>,
+    pub o_vec: Vec<f64>,
+}
+
+/// Reduced geometric stiffness per unit load, row-major r x r blocks: the stiffness added by the
+/// prestress of the present loads is the sum of these scaled by the loads.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Stiffening {
+    /// Per w_a w_b (3 x 3 x r x r): sum_ab w_a w_b K_ab is the centrifugal prestress stiffness.
+    pub centrifugal: Option<Vec<f64>>,
+    /// Per angular acceleration component (3 x r x r).
+    pub euler: Option<Vec<f64>>,
+    /// Per component of a_B = A^T (a - g) (3 x r x r).
+    pub translation: Option<Vec<f64>>,
+    /// Per force flange, per body-frame wrench component f_x..t_z (6 x r x r); empty: none.
+    pub flanges: Vec<Vec<f64>>,
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReducedBody {
     pub guid: String,
@@ -36,6 +60,9 @@ pub struct ReducedBody {
     pub c_r: Vec<f64>,
     /// Force flanges (loaded or free), in the order of the FMU's variables.
     pub flanges: Vec<FlangeShapes>,
+    /// Present when the body may rotate; without it the mount must not rotate.
+    pub rotation: Option<RotationTerms>,
+    pub stiffening: Option<Stiffening>,
 }
 
 impl ReducedBody {
@@ -62,6 +89,28 @@ impl ReducedBody {
             c.put_text(&format!("flange.{i}.name"), &f.name);
             c.put_array(&format!("flange.{i}.position"), &[3], &f.position);
             c.put_array(&format!("flange.{i}.shapes"), &[6, n], &f.shapes);
+        }
+        if let Some(rot) = &self.rotation {
+            c.put_array("rotation.G", &[3, n, n], &rot.g);
+            c.put_array("rotation.O", &[3, 3, n, n], &rot.o_mat);
+            c.put_array("rotation.o", &[3, 3, n], &rot.o_vec);
+        }
+        if let Some(st) = &self.stiffening {
+            c.put_array("stiffening", &[1], &[1.0]);
+            if let Some(k) = &st.centrifugal {
+                c.put_array("stiffening.centrifugal", &[3, 3, n, n], k);
+            }
+            if let Some(k) = &st.euler {
+                c.put_array("stiffening.euler", &[3, n, n], k);
+            }
+            if let Some(k) = &st.translation {
+                c.put_array("stiffening.translation", &[3, n, n], k);
+            }
+            for (i, k) in st.flanges.iter().enumerate() {
+                if !k.is_empty() {
+                    c.put_array(&format!("stiffening.flange.{i}"), &[6, n, n], k);
+                }
+            }
         }
         c
     }
@@ -92,6 +141,32 @@ impl ReducedBody {
                 shapes: c.array(&format!("flange.{i}.shapes"), &[6, n])?.to_vec(),
             });
         }
+        let rotation = if c.contains("rotation.G") {
+            Some(RotationTerms {
+                g: c.array("rotation.G", &[3, n, n])?.to_vec(),
+                o_mat: c.array("rotation.O", &[3, 3, n, n])?.to_vec(),
+                o_vec: c.array("rotation.o", &[3, 3, n])?.to_vec(),
+            })
+        } else {
+            None
+        };
+        let optional = |name: &str, dims: &[usize]| -> Result<Option<Vec<f64>>, FormatError> {
+            if c.contains(name) { Ok(Some(c.array(name, dims)?.to_vec())) } else { Ok(None) }
+        };
+        let stiffening = if c.contains("stiffening") {
+            let mut flange_k = Vec::new();
+            for i in 0..flanges.len() {
+                flange_k.push(optional(&format!("stiffening.flange.{i}"), &[6, n, n])?.unwrap_or_default());
+            }
+            Some(Stiffening {
+                centrifugal: optional("stiffening.centrifugal", &[3, 3, n, n])?,
+                euler: optional("stiffening.euler", &[3, n, n])?,
+                translation: optional("stiffening.translation", &[3, n, n])?,
+                flanges: flange_k,
+            })
+        } else {
+            None
+        };
         let mut inertia = [0.0; 9];
         inertia.copy_from_slice(c.array("inertia", &[3, 3])?);
         Ok(Self {
@@ -107,6 +182,8 @@ impl ReducedBody {
             c_t: c.array("c_t", &[3, n])?.to_vec(),
             c_r: c.array("c_r", &[3, n])?.to_vec(),
             flanges,
+            rotation,
+            stiffening,
         })
     }
 
@@ -144,6 +221,8 @@ pub fn two_mode_body() -> ReducedBody {
             position: [1.0, 0.0, 0.0],
             shapes: vec![0.0, 0.1, 0.5, 0.0, 0.0, 0.3, 0.2, 0.0, 0.0, -0.6, 0.0, 0.0],
         }],
+        rotation: None,
+        stiffening: None,
     }
 }
 

@@ -12,6 +12,7 @@
 pub mod gauss;
 pub mod hex20;
 pub mod hex8;
+pub mod geometric;
 
 use gauss::GaussOrder;
 use std::fmt;
@@ -285,7 +286,7 @@ fn check_output(out: &[f64], expected: usize) -> Result<(), ElementError> {
 /// Strain-displacement block of one node for engineering strains in Voigt
 /// order xx, yy, zz, xy, yz, zx; `g` is the physical gradient of its shape
 /// function.
-fn strain_displacement(g: &[f64; 3]) -> [[f64; 3]; 6] {
+pub(crate) fn strain_displacement(g: &[f64; 3]) -> [[f64; 3]; 6] {
     [
         [g[0], 0.0, 0.0],
         [0.0, g[1], 0.0],
@@ -308,7 +309,7 @@ fn mirror_upper_triangle(m: &mut [f64], size: usize) {
 /// Runs `f(shape, physical_gradients, det_j * weight)` at every Gauss point of
 /// the element's rule. Only the first `nodes_per_element` entries of the
 /// slices passed to `f` are meaningful.
-fn for_each_gauss_point(
+pub(crate) fn for_each_gauss_point(
     kind: ElementKind,
     coords: &[[f64; 3]],
     mut f: impl FnMut(&[f64], &[[f64; 3]], f64),

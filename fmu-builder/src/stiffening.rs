@@ -1,0 +1,43 @@
+//! Reduced geometric stiffness of unit prestress states: K_G = Phi^T K_sigma(u_L) Phi for the
+//! static response u_L to a unit load case, accumulated element by element so the full K_sigma is
+//! never assembled. Linear in the load: the runtime scales each case by its present load.
+
+use crate::error::{BuildError, Result};
+use crate::fe::{ElementKind, Elasticity, MAX_NODES_PER_ELEMENT, geometric::element_geometric_stiffness};
+use crate::mesh::Mesh;
+use faer::{Mat, MatRef};
+
+/// Phi^T K_sigma(u) Phi (r x r, symmetric) for the mesh-level prestress displacement `u` (3N) and
+/// mesh-level basis `phi` (3N x r).
+pub fn reduced_geometric_stiffness(mesh: &Mesh, material: &Elasticity, u: &[f64], phi: MatRef<'_, f64>) -> Result<Mat<f64>> {
+    let kind: ElementKind = mesh.kind;
+    let nen = kind.nodes_per_element();
+    let r = phi.ncols();
+    let mut out = Mat::<f64>::zeros(r, r);
+    let mut coords_buf = [[0.0; 3]; MAX_NODES_PER_ELEMENT];
+    let mut ue = vec![0.0; 3 * nen];
+    let mut ks = vec![0.0; nen * nen];
+    let mut p = Mat::<f64>::zeros(nen, r);
+    for e in 0..mesh.n_elements() {
+        let nodes = mesh.element(e);
+        for (a, &n) in nodes.iter().enumerate() {
+            for i in 0..3 {
+                ue[3 * a + i] = u[3 * n + i];
+            }
+        }
+        let coords = mesh.element_coords(e, &mut coords_buf);
+        element_geometric_stiffness(kind, coords, material, &ue, &mut ks)
+            .map_err(|err| BuildError::Numerical(format!("element {e}: {err}")))?;
+        let k = Mat::<f64>::from_fn(nen, nen, |a, b| ks[a * nen + b]);
+        for i in 0..3 {
+            for (a, &n) in nodes.iter().enumerate() {
+                for j in 0..r {
+                    p[(a, j)] = phi[(3 * n + i, j)];
+                }
+            }
+            out += p.transpose() * (&k * &p);
+        }
+    }
+    let sym = Mat::<f64>::from_fn(r, r, |i, j| 0.5 * (out[(i, j)] + out[(j, i)]));
+    Ok(sym)
+}
