@@ -178,8 +178,8 @@ def cload(deck: str, flange: str, force=(0.0, 0.0, 0.0), moment=(0.0, 0.0, 0.0))
     point) on its rotation node, global axes. Zero components are left out."""
     name = flange.upper()
     ref, rot = set_node(deck, f"{name}_REF"), set_node(deck, f"{name}_ROT")
-    lines = [f"{ref}, {i + 1}, {float(v)!r}" for i, v in enumerate(force) if v != 0.0]
-    lines += [f"{rot}, {i + 1}, {float(v)!r}" for i, v in enumerate(moment) if v != 0.0]
+    lines = [f"{ref}, {i + 1}, {_fit(repr(float(v)))}" for i, v in enumerate(force) if v != 0.0]
+    lines += [f"{rot}, {i + 1}, {_fit(repr(float(v)))}" for i, v in enumerate(moment) if v != 0.0]
     if not lines:
         raise ValueError("cload without a non-zero component")
     return "*CLOAD\n" + "\n".join(lines) + "\n"
@@ -342,13 +342,16 @@ def tsquare_centrifugal_reference(tmpdir, axis=TSQUARE_AXIS, omega=TSQUARE_OMEGA
     rad/s, i.e. omega = 2 pi (1, 1, 1)) about the axis through base's reference point along
     `axis` (default (1, 1, 1)/sqrt(3)).
 
-    Returns {"left": {"u": ..., "phi": ...}, "right": {...}, "base_reaction": ...,
-    "omega": ..., "axis": ..., "point": ..., "deck": ...}: u is the displacement of the flange's
-    reference node, phi the rotation (rotation node's U), both in the global frame = the body
-    frame of the FMU (its axes are those of the undeformed part, its origin base's reference
-    point); base_reaction the force CalculiX's support exerts on the body (RF of BASE_REF).
+    Returns a dict:
+      "left", "right": {"u": displacement of the flange's reference node [m], "phi": its
+          rotation (the rotation node's U) [rad]}, global axes = the FMU's body frame (axes of
+          the undeformed part; origin at base's reference point, which does not move);
+      "base_reaction": force the clamp exerts on the body (RF of BASE_REF) [N];
+      "omega", "axis", "point": the spin; "deck": the exported deck; "fmu": path of the FMU the
+          same builder run wrote (for comparisons against it).
     Linear statics: no spin softening and no stress stiffening (relative size (omega /
-    omega_1)^2 ~ 5e-5 for this part, first clamped mode 242 Hz)."""
+    omega_1)^2 ~ 5e-5 for this part, first clamped mode 242 Hz). Results carry CalculiX's 7
+    printed digits."""
     from conftest import EXAMPLES, run_builder  # the tests' builder runner
 
     tmpdir = Path(tmpdir)
@@ -364,7 +367,7 @@ def tsquare_centrifugal_reference(tmpdir, axis=TSQUARE_AXIS, omega=TSQUARE_OMEGA
                               reactions=["BASE_REF"]))
     result = run_ccx(deck, analysis, tmpdir / "ccx")
     out = {"omega": omega, "axis": _unit(axis), "point": point, "deck": deck,
-           "base_reaction": result.forces[set_node(deck, "BASE_REF")]}
+           "fmu": tmpdir / "t-square.fmu", "base_reaction": result.forces[set_node(deck, "BASE_REF")]}
     for flange in ["left", "right"]:
         out[flange] = {"u": result.u(set_node(deck, f"{flange}_REF")),
                        "phi": result.u(set_node(deck, f"{flange}_ROT"))}
