@@ -62,7 +62,7 @@ def ccx_executable() -> str:
 _REAL = re.compile(r"(?<![\w.])[-+]?(?:\d+\.\d*|\.\d+|\d+)[eE][-+]?\d+(?![\w.])")
 
 
-def _fit(token: str) -> str:
+def fit_field(token: str) -> str:
     """`token` as a real of at most FIELD_WIDTH characters, exactly the same double if possible.
 
     Python's repr is the shortest string that reads back as the same double; only when even
@@ -89,7 +89,7 @@ def ccx_readable(deck: str) -> str:
     CalculiX 2.20 reads only the first 20 characters of a field and stops with
     "*ERROR reading *NODE". The shortest round-trip form of the same double fits in almost
     every case, so the mesh CalculiX reads is bit-for-bit the builder's."""
-    return _REAL.sub(lambda m: _fit(m.group(0)), deck)
+    return _REAL.sub(lambda m: fit_field(m.group(0)), deck)
 
 
 def _blocks(deck: str):
@@ -178,8 +178,8 @@ def cload(deck: str, flange: str, force=(0.0, 0.0, 0.0), moment=(0.0, 0.0, 0.0))
     point) on its rotation node, global axes. Zero components are left out."""
     name = flange.upper()
     ref, rot = set_node(deck, f"{name}_REF"), set_node(deck, f"{name}_ROT")
-    lines = [f"{ref}, {i + 1}, {_fit(repr(float(v)))}" for i, v in enumerate(force) if v != 0.0]
-    lines += [f"{rot}, {i + 1}, {_fit(repr(float(v)))}" for i, v in enumerate(moment) if v != 0.0]
+    lines = [f"{ref}, {i + 1}, {fit_field(repr(float(v)))}" for i, v in enumerate(force) if v != 0.0]
+    lines += [f"{rot}, {i + 1}, {fit_field(repr(float(v)))}" for i, v in enumerate(moment) if v != 0.0]
     if not lines:
         raise ValueError("cload without a non-zero component")
     return "*CLOAD\n" + "\n".join(lines) + "\n"
