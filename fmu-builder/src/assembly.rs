@@ -28,7 +28,8 @@ pub struct DofMap {
     /// Number of free-node DoFs (the interior of Craig-Bampton).
     pub n_interior: usize,
     pub n_dofs: usize,
-    pub mount: usize,
+    /// The mount flange, whose six DoFs come last and are held; None for a free-floating body.
+    pub mount: Option<usize>,
 }
 
 impl DofMap {
@@ -54,15 +55,17 @@ impl DofMap {
                 next += 6;
             }
         }
-        let mount = flanges.iter().position(|f| f.role == Role::Motion).unwrap_or(0);
-        flange_first[mount] = next;
-        next += 6;
+        let mount = flanges.iter().position(|f| f.role == Role::Motion);
+        if let Some(mount) = mount {
+            flange_first[mount] = next;
+            next += 6;
+        }
         Self { node, flange_first, n_interior, n_dofs: next, mount }
     }
 
-    /// Size of the clamped model (mount DoFs removed).
+    /// Size of the model with the mount held (all DoFs for a free-floating body).
     pub fn n_clamped(&self) -> usize {
-        self.n_dofs - 6
+        self.n_dofs - if self.mount.is_some() { 6 } else { 0 }
     }
 }
 

@@ -11,18 +11,28 @@ use crate::spec::Material;
 use std::fmt::Write as _;
 use std::path::Path;
 
+/// A real in at most 20 characters (CalculiX reads fixed 20-character fields): the shortest
+/// representation that reads back exactly, or the most digits that fit.
+fn real(x: f64) -> String {
+    let shortest = format!("{x:e}");
+    if shortest.len() <= 20 {
+        return shortest;
+    }
+    (1..=16).rev().map(|p| format!("{x:.p$e}")).find(|s| s.len() <= 20).unwrap_or(shortest)
+}
+
 pub fn abaqus_deck(mesh: &Mesh, flanges: &[Flange], material: &Material) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "** written by fmu-builder: model data of the flanged mesh (SI units)");
     let _ = writeln!(s, "*NODE, NSET=NALL");
     for (i, p) in mesh.nodes.iter().enumerate() {
-        let _ = writeln!(s, "{}, {:.17e}, {:.17e}, {:.17e}", i + 1, p[0], p[1], p[2]);
+        let _ = writeln!(s, "{}, {}, {}, {}", i + 1, real(p[0]), real(p[1]), real(p[2]));
     }
     let n = mesh.nodes.len();
     for (k, f) in flanges.iter().enumerate() {
         let p = f.reference;
         for extra in 0..2 {
-            let _ = writeln!(s, "{}, {:.17e}, {:.17e}, {:.17e}", n + 1 + 2 * k + extra, p[0], p[1], p[2]);
+            let _ = writeln!(s, "{}, {}, {}, {}", n + 1 + 2 * k + extra, real(p[0]), real(p[1]), real(p[2]));
         }
     }
     let ty = match mesh.kind {
@@ -50,9 +60,32 @@ pub fn abaqus_deck(mesh: &Mesh, flanges: &[Flange], material: &Material) -> Stri
         let _ = writeln!(s, "*NSET, NSET={name}_REF\n{}", n + 1 + 2 * k);
         let _ = writeln!(s, "*NSET, NSET={name}_ROT\n{}", n + 2 + 2 * k);
     }
-    let _ = writeln!(s, "*MATERIAL, NAME=MAT\n*ELASTIC\n{:.17e}, {:.17e}\n*DENSITY\n{:.17e}", material.e, material.nu, material.rho);
+    let _ = writeln!(
+        s,
+        "*MATERIAL, NAME=MAT\n*ELASTIC\n{}, {}\n*DENSITY\n{}",
+        real(material.e),
+        real(material.nu),
+        real(material.rho)
+    );
     let _ = writeln!(s, "*SOLID SECTION, ELSET=EALL, MATERIAL=MAT");
     s
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn reals_fit_calculix_fields_and_read_back() {
+        for x in [0.0, -5.000000000000001e-3, 0.994, 1.006, 2.1e11, 0.2804878048780488, 1.0000000000000002] {
+            let s = super::real(x);
+            assert!(s.len() <= 20, "{s}");
+            let back: f64 = s.parse().unwrap();
+            assert!((back - x).abs() <= 1e-14 * x.abs(), "{s}");
+        }
+        assert_eq!(super::real(0.994), "9.94e-1");
+        // what does not fit keeps as many digits as fit
+        let s = super::real(-1.2345678901234567e-123);
+        assert!(s.len() <= 20 && (s.parse::<f64>().unwrap() / -1.2345678901234567e-123 - 1.0).abs() < 1e-11, "{s}");
+    }
 }
 
 pub fn write_abaqus_deck(path: &Path, mesh: &Mesh, flanges: &[Flange], material: &Material) -> Result<()> {

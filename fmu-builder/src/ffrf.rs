@@ -77,7 +77,7 @@ pub fn invariants(model: &Assembled, nodes: &[[f64; 3]], flanges: &[Flange], ori
         .enumerate()
         .map(|(k, _)| {
             let mut s = vec![0.0; 6 * rb];
-            if k != d.mount {
+            if Some(k) != d.mount {
                 let first = d.flange_first[k];
                 for i in 0..6 {
                     for j in 0..rb {
