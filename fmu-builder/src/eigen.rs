@@ -33,18 +33,51 @@ fn start_vector(n: usize) -> Vec<f64> {
         .collect()
 }
 
+/// Known eigenvectors to keep out of the search (a free body's rigid-body modes), M-orthonormal,
+/// with M applied to them.
+pub struct Deflation {
+    pub vectors: Mat<f64>,
+    pub m_vectors: Mat<f64>,
+}
+
+impl Deflation {
+    /// w -= Y (M Y)^T w
+    fn project(&self, w: &mut Mat<f64>) {
+        let c = self.m_vectors.transpose() * &*w;
+        *w -= &self.vectors * &c;
+    }
+}
+
 /// The `count` lowest eigenpairs; relative residual tolerance `tol` on 1/lambda.
 pub fn lowest(k: &SpdSolver, m: &Sparse, count: usize, tol: f64) -> Result<Eigenpairs> {
+    lowest_shifted(k, m, count, tol, 0.0, None)
+}
+
+/// As `lowest`, with `k` factoring K + shift M (shift > 0 makes a free body's K definite) and the
+/// `deflate` vectors kept out: eigenvalues of K come back, the deflated ones excluded.
+pub fn lowest_shifted(
+    k: &SpdSolver,
+    m: &Sparse,
+    count: usize,
+    tol: f64,
+    shift: f64,
+    deflate: Option<&Deflation>,
+) -> Result<Eigenpairs> {
     let n = k.n();
     let count = count.min(n);
     if count == 0 {
         return Ok(Eigenpairs { values: Vec::new(), vectors: Mat::zeros(n, 0) });
     }
-    let mut dim = (2 * count + 20).max(count + 30).min(n);
+    let n_free = n - deflate.map_or(0, |d| d.vectors.ncols());
+    let count = count.min(n_free);
+    let mut dim = (2 * count + 20).max(count + 30).min(n_free);
     let mut start = start_vector(n);
     loop {
-        let (pairs, converged, next_start) = lanczos(k, m, count, dim, &start, tol)?;
-        if converged || dim == n {
+        let (mut pairs, converged, next_start) = lanczos(k, m, count, dim, &start, tol, deflate)?;
+        for v in pairs.values.iter_mut() {
+            *v -= shift;
+        }
+        if converged || dim == n_free {
             if !converged {
                 return Err(BuildError::Numerical(format!(
                     "eigensolver: {count} modes did not converge to {tol:e} even with the full space"
@@ -53,7 +86,7 @@ pub fn lowest(k: &SpdSolver, m: &Sparse, count: usize, tol: f64) -> Result<Eigen
             return Ok(pairs);
         }
         start = next_start;
-        dim = (dim + dim / 2).min(n);
+        dim = (dim + dim / 2).min(n_free);
     }
 }
 
@@ -66,6 +99,7 @@ fn lanczos(
     dim: usize,
     start: &[f64],
     tol: f64,
+    deflate: Option<&Deflation>,
 ) -> Result<(Eigenpairs, bool, Vec<f64>)> {
     let n = k.n();
     let mut v = Mat::<f64>::zeros(n, dim);
@@ -75,6 +109,9 @@ fn lanczos(
     let mut w = Mat::<f64>::zeros(n, 1);
     // v0 = start / |start|_M
     w.col_mut(0).as_mut().copy_from(faer::ColRef::from_slice(start));
+    if let Some(d) = deflate {
+        d.project(&mut w);
+    }
     let mw = mul_new(m, w.as_ref());
     let norm = dot(w.col(0).try_as_col_major().unwrap().as_slice(), mw.col(0).try_as_col_major().unwrap().as_slice()).sqrt();
     if !(norm > 0.0) {
@@ -93,6 +130,9 @@ fn lanczos(
         // one refinement step: slender parts have cond(K) ~ 1e12, and a plain solve would cost
         // the lowest Ritz values their sixth digit
         k.solve_refined_steps(w.as_mut(), 1);
+        if let Some(d) = deflate {
+            d.project(&mut w);
+        }
         // full re-orthogonalisation in the M inner product, twice (Kahan-Parlett "twice is enough")
         for pass in 0..2 {
             for i in 0..=j {
@@ -169,11 +209,24 @@ fn lanczos(
 
 /// All eigenpairs with omega below `omega_max`, at least `min_count` of them.
 pub fn below(k: &SpdSolver, m: &Sparse, omega_max: f64, min_count: usize, tol: f64) -> Result<Eigenpairs> {
+    below_shifted(k, m, omega_max, min_count, tol, 0.0, None)
+}
+
+pub fn below_shifted(
+    k: &SpdSolver,
+    m: &Sparse,
+    omega_max: f64,
+    min_count: usize,
+    tol: f64,
+    shift: f64,
+    deflate: Option<&Deflation>,
+) -> Result<Eigenpairs> {
     let mut count = min_count.max(10);
     loop {
-        let pairs = lowest(k, m, count, tol)?;
+        let pairs = lowest_shifted(k, m, count, tol, shift, deflate)?;
         let n_below = pairs.values.iter().filter(|&&l| l.sqrt() < omega_max).count();
-        if n_below < pairs.values.len() || pairs.values.len() >= k.n() {
+        let available = k.n() - deflate.map_or(0, |d| d.vectors.ncols());
+        if n_below < pairs.values.len() || pairs.values.len() >= available {
             let keep = n_below.max(min_count).min(pairs.values.len());
             let vectors = pairs.vectors.subcols(0, keep).to_owned();
             return Ok(Eigenpairs { values: pairs.values[..keep].to_vec(), vectors });

@@ -9,6 +9,7 @@ pub mod export;
 pub mod fe;
 pub mod fmu;
 pub mod flange;
+pub mod free_floating;
 pub mod inertia;
 pub mod mesh;
 pub mod reduce;

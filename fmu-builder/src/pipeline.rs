@@ -10,6 +10,7 @@ use crate::flange::{self, Flange};
 use crate::mesh::{self, BoxRegion, Mesh, MeshError};
 use crate::reduce::{self, Basis, ModeCount};
 use crate::report::{self, FlangeReport, Report};
+use crate::free_floating;
 use crate::inertia::{self, LoadCase};
 use crate::sparse::{self, SpdSolver};
 use crate::spec::{Element, Role, SceneLoad, Spec};
@@ -155,19 +156,70 @@ fn stiffening_terms(
     Ok(out)
 }
 
+/// The build's report: what was built and what its reduction costs.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn report_of(
+    spec: &Spec,
+    mesh: &Mesh,
+    flanges: &[Flange],
+    model: &Assembled,
+    basis: &Basis,
+    reduced: &ReducedBody,
+    method: &str,
+    static_shapes: usize,
+    accuracy: report::Accuracy,
+) -> Report {
+    let props = model.mass_properties;
+    Report {
+        model_name: spec.name.clone(),
+        guid: reduced.guid.clone(),
+        element: mesh.kind.name().to_string(),
+        nodes: mesh.n_nodes(),
+        elements: mesh.n_elements(),
+        dofs_constrained: model.dofs.n_dofs,
+        mass: props.mass,
+        volume: props.volume,
+        center_of_mass: props.first_moment.map(|m| m / props.mass),
+        inertia_about_origin: props.inertia,
+        method: method.into(),
+        fixed_interface_modes: basis.n_normal,
+        constraint_modes: static_shapes,
+        order: basis.omega.len(),
+        flanges: flanges
+            .iter()
+            .map(|f| FlangeReport {
+                name: f.name.clone(),
+                role: match f.role {
+                    Role::Motion => "motion".into(),
+                    Role::Force => "force".into(),
+                },
+                reference_point: f.reference,
+                slave_nodes: f.slaves.len(),
+            })
+            .collect(),
+        accuracy,
+    }
+}
+
+pub(crate) fn guid(reduced: &ReducedBody) -> String {
+    guid_of(&reduced.to_bytes())
+}
+
 /// Read, mesh, couple, assemble and reduce: everything but writing the FMU.
 pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
     let mesh = mesh_of(&spec, file)?;
     let flanges = flange::select_flanges(&spec, file, &mesh)?;
-    let mount = spec.mount_index();
-    let origin = flanges[mount].reference;
     let material = Elasticity { e: spec.material.e, nu: spec.material.nu };
-    let model = assembly::assemble(&mesh, &flanges, material, spec.material.rho, origin)?;
     let modes = match (spec.reduction.modes, spec.reduction.max_frequency) {
         (Some(n), _) => ModeCount::Count(n),
         (None, Some(f)) => ModeCount::Below(f),
         (None, None) => ModeCount::Count(0),
     };
+    let Some(mount) = spec.mount_index() else {
+        return free_floating::reduce(spec, mesh, flanges, material, modes);
+    };
+    let origin = flanges[mount].reference;
+    let model = assembly::assemble(&mesh, &flanges, material, spec.material.rho, origin)?;
     let nc = model.dofs.n_clamped();
     let k_cc = sparse::block(&model.stiffness, 0..nc, 0..nc)?;
     let solver = SpdSolver::new(&k_cc, "the stiffness of the mounted body")?;
@@ -235,6 +287,7 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
             .collect(),
         rotation,
         stiffening,
+        free_floating: false,
     };
     reduced.guid = guid_of(&reduced.to_bytes());
 
@@ -253,35 +306,7 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
             accuracy.inertial_flange_response_full.push(response);
         }
     }
-    let report = Report {
-        model_name: spec.name.clone(),
-        guid: reduced.guid.clone(),
-        element: mesh.kind.name().to_string(),
-        nodes: mesh.n_nodes(),
-        elements: mesh.n_elements(),
-        dofs_constrained: model.dofs.n_dofs,
-        mass: props.mass,
-        volume: props.volume,
-        center_of_mass: props.first_moment.map(|m| m / props.mass),
-        inertia_about_origin: props.inertia,
-        method: "Craig-Bampton".into(),
-        fixed_interface_modes: basis.n_normal,
-        constraint_modes: 6 * force.len(),
-        order: basis.omega.len(),
-        flanges: flanges
-            .iter()
-            .map(|f| FlangeReport {
-                name: f.name.clone(),
-                role: match f.role {
-                    Role::Motion => "motion".into(),
-                    Role::Force => "force".into(),
-                },
-                reference_point: f.reference,
-                slave_nodes: f.slaves.len(),
-            })
-            .collect(),
-        accuracy,
-    };
+    let report = report_of(&spec, &mesh, &flanges, &model, &basis, &reduced, "Craig-Bampton", 6 * force.len(), accuracy);
     Ok(Built { spec, mesh, flanges, model, basis, reduced, report })
 }
 

@@ -94,7 +94,21 @@ pub fn orthonormalise(model: &Assembled, v: Mat<f64>) -> Result<(Mat<f64>, Vec<f
     let nc = model.dofs.n_clamped();
     let k = block(&model.stiffness, 0..nc, 0..nc)?;
     let m = block(&model.mass, 0..nc, 0..nc)?;
+    // unit M-norm columns first: static shapes of stiff directions are 1e-9 of the modes, and the
+    // dependency test below must judge directions, not their units
     let mut w = v;
+    let norms = {
+        let mw = mul_new(&m, w.as_ref());
+        (0..w.ncols()).map(|j| (0..w.nrows()).map(|i| w[(i, j)] * mw[(i, j)]).sum::<f64>().sqrt()).collect::<Vec<_>>()
+    };
+    for (j, norm) in norms.iter().enumerate() {
+        if *norm > 0.0 {
+            let s = 1.0 / norm;
+            for i in 0..w.nrows() {
+                w[(i, j)] *= s;
+            }
+        }
+    }
     for _pass in 0..2 {
         let gram = w.transpose() * mul_new(&m, w.as_ref());
         let r = gram.nrows();
@@ -131,4 +145,71 @@ pub fn orthonormalise(model: &Assembled, v: Mat<f64>) -> Result<(Mat<f64>, Vec<f
         omega.push(lambda.sqrt());
     }
     Ok((&w * evd.U(), omega))
+}
+
+/// A free-floating body: the frame follows the body's mean motion (origin at the centre of mass,
+/// elastic shapes M-orthogonal to the six rigid-body fields: mean axes, so C_t = 0 and C_r = 0),
+/// and the basis is free-interface elastic modes plus inertia-relief attachment shapes of every
+/// force flange (the flange loads' static response, exact, with the rigid-body acceleration they
+/// cause taken out). `k_shifted` factors K + shift M; `rigid` holds the six rigid-body fields.
+pub fn free_free(
+    model: &Assembled,
+    k_shifted: &SpdSolver,
+    shift: f64,
+    rigid: &eigen::Deflation,
+    modes: ModeCount,
+) -> Result<Basis> {
+    let n = model.dofs.n_dofs;
+    let m = &model.mass;
+    let normal = match modes {
+        ModeCount::Count(c) => eigen::lowest_shifted(k_shifted, m, c, EIGEN_TOL, shift, Some(rigid))?,
+        ModeCount::Below(f) => {
+            eigen::below_shifted(k_shifted, m, 2.0 * std::f64::consts::PI * f, 0, EIGEN_TOL, shift, Some(rigid))?
+        }
+    };
+    let nm = normal.values.len();
+    let force: Vec<usize> = model
+        .dofs
+        .flange_first
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| Some(*k) != model.dofs.mount)
+        .map(|(_, f)| *f)
+        .collect();
+    let nb = 6 * force.len();
+    let mut unit = Mat::<f64>::zeros(n, nb);
+    for (f, first) in force.iter().enumerate() {
+        for i in 0..6 {
+            unit[(first + i, 6 * f + i)] = 1.0;
+        }
+    }
+    let attachments = inertia_relief_solve(k_shifted, m, shift, rigid, &unit);
+    let mut v = Mat::<f64>::zeros(n, nm + nb);
+    v.as_mut().subcols_mut(0, nm).copy_from(&normal.vectors);
+    v.as_mut().subcols_mut(nm, nb).copy_from(&attachments);
+    let (phi, omega) = orthonormalise(model, v)?;
+    Ok(Basis { phi, omega, n_normal: nm, fixed_interface_omega: normal.values.iter().map(|l| l.max(0.0).sqrt()).collect() })
+}
+
+/// Static response of a free body to loads `f` with inertia relief: the self-equilibrated part
+/// f - M Y Y^T f (Y: M-orthonormal rigid fields) solved with the singular K, the answer taken
+/// M-orthogonal to the rigid fields. Solved as u <- (K + s M)^-1 (f_eq + s M u), which converges
+/// by the factor s / (lambda_1 + s) per sweep on the elastic part.
+pub fn inertia_relief_solve(k_shifted: &SpdSolver, m: &crate::sparse::Sparse, shift: f64, rigid: &eigen::Deflation, f: &Mat<f64>) -> Mat<f64> {
+    let c = rigid.vectors.transpose() * f;
+    let f_eq = f - &rigid.m_vectors * &c;
+    let mut u = Mat::<f64>::zeros(f.nrows(), f.ncols());
+    for _ in 0..60 {
+        let mut rhs = &f_eq + mul_new(m, u.as_ref()) * faer::Scale(shift);
+        k_shifted.solve_refined(rhs.as_mut());
+        let c = rigid.m_vectors.transpose() * &rhs;
+        rhs -= &rigid.vectors * &c;
+        let change = (&rhs - &u).norm_max();
+        let size = rhs.norm_max();
+        u = rhs;
+        if change <= 1e-14 * size {
+            break;
+        }
+    }
+    u
 }

@@ -231,11 +231,14 @@ impl Spec {
         match mounts.len() {
             1 => {}
             0 => {
-                return Err(BuildError::input(
-                    path,
-                    "flanges",
-                    "no flange has role \"motion\": a mounted body needs exactly one (free-floating bodies are not supported yet)",
-                ));
+                // free-floating: the FMU integrates the rigid-body motion itself
+                if self.stiffening() {
+                    return Err(BuildError::input(
+                        path,
+                        "scene.geometric_stiffening",
+                        "geometric stiffening is supported for mounted bodies only (this body has no \"motion\" flange)",
+                    ));
+                }
             }
             _ => {
                 return Err(BuildError::input(
@@ -284,8 +287,9 @@ impl Spec {
         Ok(())
     }
 
-    pub fn mount_index(&self) -> usize {
-        self.flanges.iter().position(|f| f.role == Role::Motion).unwrap_or(0)
+    /// The mount flange; None for a free-floating body.
+    pub fn mount_index(&self) -> Option<usize> {
+        self.flanges.iter().position(|f| f.role == Role::Motion)
     }
 }
 
@@ -312,7 +316,7 @@ mod tests {
     fn good_input_parses() {
         let s = Spec::from_str(Path::new("in.json"), GOOD).unwrap();
         assert_eq!(s.geometry.element, Element::Hex20);
-        assert_eq!(s.mount_index(), 0);
+        assert_eq!(s.mount_index(), Some(0));
         assert_eq!(s.reduction.modes, Some(4));
     }
 

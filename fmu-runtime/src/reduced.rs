@@ -63,6 +63,9 @@ pub struct ReducedBody {
     /// Present when the body may rotate; without it the mount must not rotate.
     pub rotation: Option<RotationTerms>,
     pub stiffening: Option<Stiffening>,
+    /// No mount: the FMU integrates the rigid-body motion; the body frame is at the centre of
+    /// mass with mean axes (C_t = 0, C_r = 0), and `mount` is empty.
+    pub free_floating: bool,
 }
 
 impl ReducedBody {
@@ -89,6 +92,9 @@ impl ReducedBody {
             c.put_text(&format!("flange.{i}.name"), &f.name);
             c.put_array(&format!("flange.{i}.position"), &[3], &f.position);
             c.put_array(&format!("flange.{i}.shapes"), &[6, n], &f.shapes);
+        }
+        if self.free_floating {
+            c.put_array("free_floating", &[1], &[1.0]);
         }
         if let Some(rot) = &self.rotation {
             c.put_array("rotation.G", &[3, n, n], &rot.g);
@@ -184,6 +190,7 @@ impl ReducedBody {
             flanges,
             rotation,
             stiffening,
+            free_floating: c.contains("free_floating"),
         })
     }
 
@@ -223,6 +230,7 @@ pub fn two_mode_body() -> ReducedBody {
         }],
         rotation: None,
         stiffening: None,
+        free_floating: false,
     }
 }
 

@@ -1,0 +1,168 @@
+//! A free-floating body (no motion flange): the FMU integrates the rigid-body motion itself.
+//! The body frame sits at the centre of mass with mean axes (elastic shapes M-orthogonal to the
+//! rigid-body fields), the basis is free-interface elastic modes plus inertia-relief attachment
+//! shapes of the flanges, and the report compares against the full model's free-free modes and
+//! inertia-relief flange compliance.
+
+use crate::assembly::{self, Assembled, MassProperties};
+use crate::eigen::{self, Deflation};
+use crate::error::{BuildError, Result};
+use crate::fe::Elasticity;
+use crate::ffrf;
+use crate::flange::Flange;
+use crate::inertia;
+use crate::mesh::Mesh;
+use crate::pipeline::{Built, guid, report_of};
+use crate::reduce::{self, Basis, EIGEN_TOL, ModeCount};
+use crate::report::Accuracy;
+use crate::sparse::{Sparse, SpdSolver, mul_new};
+use crate::spec::{Role, Spec};
+use faer::sparse::{SparseColMat, Triplet};
+use faer::{Mat, Side};
+use fmu_runtime::reduced::{FlangeShapes, ReducedBody, RotationTerms};
+
+/// Mass properties about the centre of mass, from those about the mesh origin.
+fn about_centre_of_mass(p: MassProperties) -> ([f64; 3], MassProperties) {
+    let c = p.first_moment.map(|m| m / p.mass);
+    let c2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+    let mut inertia = p.inertia;
+    for i in 0..3 {
+        for j in 0..3 {
+            inertia[3 * i + j] -= p.mass * (if i == j { c2 } else { 0.0 } - c[i] * c[j]);
+        }
+    }
+    (c, MassProperties { mass: p.mass, first_moment: [0.0; 3], inertia, volume: p.volume })
+}
+
+/// K + s M with s well below the lowest elastic eigenvalue (1e-9 of the largest diagonal ratio):
+/// definite for a free body, and a shift that small leaves the elastic spectrum's order intact.
+fn shifted(k: &Sparse, m: &Sparse) -> Result<(Sparse, f64)> {
+    let n = k.nrows();
+    let diag = |a: &Sparse, j: usize| -> f64 {
+        a.row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)).filter(|(i, _)| **i == j).map(|(_, v)| *v).sum()
+    };
+    let ratio = (0..n).map(|j| diag(k, j) / diag(m, j).max(f64::MIN_POSITIVE)).fold(0.0f64, f64::max);
+    let s = 1e-9 * ratio;
+    let mut trip = Vec::new();
+    for (a, scale) in [(k, 1.0), (m, s)] {
+        for j in 0..n {
+            for (&i, &v) in a.row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
+                trip.push(Triplet::new(i, j, scale * v));
+            }
+        }
+    }
+    let sum = SparseColMat::try_new_from_triplets(n, n, &trip)
+        .map_err(|e| BuildError::Numerical(format!("forming K + s M: {e:?}")))?;
+    Ok((sum, s))
+}
+
+/// The six rigid-body fields about the centre of mass, M-orthonormalised.
+fn rigid_deflation(model: &Assembled, nodes: &[[f64; 3]], flanges: &[Flange], origin: [f64; 3]) -> Result<Deflation> {
+    let r = ffrf::rigid_fields(model, nodes, flanges, origin);
+    let mr = mul_new(&model.mass, r.as_ref());
+    let gram = r.transpose() * &mr;
+    let l = gram
+        .llt(Side::Lower)
+        .map_err(|e| BuildError::Numerical(format!("rigid-body mass matrix is singular: {e:?}")))?
+        .L()
+        .to_owned();
+    // Y = R L^-T
+    let mut yt = r.transpose().to_owned();
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(l.as_ref(), yt.as_mut(), faer::Par::Seq);
+    let vectors = yt.transpose().to_owned();
+    let m_vectors = mul_new(&model.mass, vectors.as_ref());
+    Ok(Deflation { vectors, m_vectors })
+}
+
+pub fn reduce(spec: Spec, mesh: Mesh, flanges: Vec<Flange>, material: Elasticity, modes: ModeCount) -> Result<Built> {
+    let mut model = assembly::assemble(&mesh, &flanges, material, spec.material.rho, [0.0; 3])?;
+    let (origin, props) = about_centre_of_mass(model.mass_properties);
+    model.mass_properties = props;
+    let (k_shifted, shift) = shifted(&model.stiffness, &model.mass)?;
+    let solver = SpdSolver::new(&k_shifted, "K + s M of the free body")?;
+    let rigid = rigid_deflation(&model, &mesh.nodes, &flanges, origin)?;
+    let basis = reduce::free_free(&model, &solver, shift, &rigid, modes)?;
+    let inv = ffrf::invariants(&model, &mesh.nodes, &flanges, origin, &basis);
+    // mean axes: the elastic shapes carry no momentum
+    let scale = props.mass.sqrt() * (1.0 + props.inertia[0].abs().sqrt());
+    let drift = inv.c_t.iter().chain(&inv.c_r).fold(0.0f64, |m, v| m.max(v.abs()));
+    if drift > 1e-8 * scale {
+        return Err(BuildError::Numerical(format!(
+            "internal check failed: the elastic basis carries rigid-body momentum ({drift:e})"
+        )));
+    }
+    let phi_mesh = inertia::expand(&model, &mesh.nodes, &flanges, basis.phi.as_ref());
+    let rot = inertia::rotation_invariants(&model, &mesh.nodes, origin, phi_mesh.as_ref());
+    let r = basis.omega.len();
+    let mut reduced = ReducedBody {
+        guid: String::new(),
+        model_name: spec.name.clone(),
+        mount: String::new(),
+        omega: basis.omega.clone(),
+        alpha: spec.damping.alpha,
+        beta: spec.damping.beta,
+        mass: props.mass,
+        first_moment: [0.0; 3],
+        inertia: props.inertia,
+        c_t: vec![0.0; 3 * r],
+        c_r: vec![0.0; 3 * r],
+        flanges: flanges
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| f.role == Role::Force)
+            .map(|(k, f)| FlangeShapes {
+                name: f.name.clone(),
+                position: [0, 1, 2].map(|a| f.reference[a] - origin[a]),
+                shapes: inv.flange_shapes[k].clone(),
+            })
+            .collect(),
+        rotation: Some(RotationTerms { g: rot.g, o_mat: rot.o_mat, o_vec: rot.o_vec }),
+        stiffening: None,
+        free_floating: true,
+    };
+    reduced.guid = guid(&reduced);
+    let accuracy = accuracy(&model, &solver, shift, &rigid, &basis)?;
+    let nf = reduced.flanges.len();
+    let report = report_of(&spec, &mesh, &flanges, &model, &basis, &reduced, "free-interface modes + inertia-relief attachment shapes", 6 * nf, accuracy);
+    Ok(Built { spec, mesh, flanges, model, basis, reduced, report })
+}
+
+/// Free-free elastic frequencies and inertia-relief flange compliance, full vs reduced.
+fn accuracy(model: &Assembled, solver: &SpdSolver, shift: f64, rigid: &Deflation, basis: &Basis) -> Result<Accuracy> {
+    let full = eigen::lowest_shifted(solver, &model.mass, basis.omega.len(), EIGEN_TOL, shift, Some(rigid))?;
+    let two_pi = 2.0 * std::f64::consts::PI;
+    let full_hz: Vec<f64> = full.values.iter().map(|l| l.max(0.0).sqrt() / two_pi).collect();
+    let reduced_hz: Vec<f64> = basis.omega.iter().map(|w| w / two_pi).collect();
+    let relative_error = reduced_hz.iter().zip(&full_hz).map(|(r, f)| (r - f) / f).collect();
+    let d = &model.dofs;
+    let force: Vec<usize> = (0..d.flange_first.len()).map(|k| d.flange_first[k]).collect();
+    let rows: Vec<usize> = force.iter().flat_map(|first| (0..6).map(move |i| first + i)).collect();
+    let mut unit = Mat::<f64>::zeros(d.n_dofs, rows.len());
+    for (c, &r) in rows.iter().enumerate() {
+        unit[(r, c)] = 1.0;
+    }
+    let x = reduce::inertia_relief_solve(solver, &model.mass, shift, rigid, &unit);
+    // the flexibility seen at the flanges: B^T u with the rigid part of the load removed
+    let compliance_full: Vec<Vec<f64>> = rows.iter().map(|&r| (0..rows.len()).map(|c| x[(r, c)]).collect()).collect();
+    let compliance_reduced: Vec<Vec<f64>> = rows
+        .iter()
+        .map(|&r| {
+            rows.iter()
+                .map(|&c| (0..basis.omega.len()).map(|j| basis.phi[(r, j)] * basis.phi[(c, j)] / basis.omega[j].powi(2)).sum())
+                .collect()
+        })
+        .collect();
+    let scale = compliance_full.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+    let diff = compliance_full.iter().flatten().zip(compliance_reduced.iter().flatten()).fold(0.0f64, |a, (f, r)| a.max((f - r).abs()));
+    Ok(Accuracy {
+        reduced_hz,
+        full_hz,
+        relative_error,
+        compliance_flanges: Vec::new(),
+        compliance_full,
+        compliance_reduced,
+        compliance_max_relative_error: if scale > 0.0 { diff / scale } else { 0.0 },
+        inertial_cases: Vec::new(),
+        inertial_flange_response_full: Vec::new(),
+    })
+}
