@@ -68,6 +68,40 @@ struct Evaluation {
     mount_torque: Vec3,
 }
 
+/// Rigid-body state of a free-floating body: centre-of-mass position and velocity (world), unit
+/// quaternion (w, x, y, z) of the body frame, angular velocity in the body frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrameState {
+    pub r: Vec3,
+    pub quat: [f64; 4],
+    pub v: Vec3,
+    pub w_body: Vec3,
+}
+
+impl Default for FrameState {
+    fn default() -> Self {
+        Self { r: [0.0; 3], quat: [1.0, 0.0, 0.0, 0.0], v: [0.0; 3], w_body: [0.0; 3] }
+    }
+}
+
+/// Initial pose and velocity of a free-floating body (world frame), the FMU's parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct InitialFrame {
+    pub r: Vec3,
+    /// Rotation vector of the initial orientation.
+    pub phi: Vec3,
+    pub v: Vec3,
+    pub w: Vec3,
+}
+
+/// Energy and momenta of a free-floating body (world frame; angular momentum about the origin).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Invariants {
+    pub energy: f64,
+    pub momentum: Vec3,
+    pub angular_momentum: Vec3,
+}
+
 /// Terms that couple the modes, for the present inputs: q'' = ... - C_d q' - C_k q.
 #[derive(Debug, Clone, Default)]
 struct Coupling {
@@ -93,6 +127,12 @@ pub struct FlexibleBody {
     load: Vec<f64>,
     eval: Evaluation,
     coupling: Coupling,
+    /// Free-floating bodies only: the rigid-body state, its initial value and its rates.
+    frame: Option<FrameState>,
+    pub initial_frame: InitialFrame,
+    frame_rate: FrameState,
+    /// 3 x n workspace: C_r(q) = C_r + [G_a q]^T
+    cr_q: Vec<f64>,
     /// q' and q workspace for the coupled load
     scratch: Vec<f64>,
     propagator: ModalPropagator,
@@ -122,6 +162,10 @@ impl FlexibleBody {
                 mount_torque: [0.0; 3],
             },
             coupling: Coupling { c_d: vec![0.0; n * n], c_k: vec![0.0; n * n], ..Coupling::default() },
+            frame: body.free_floating.then(FrameState::default),
+            initial_frame: InitialFrame::default(),
+            frame_rate: FrameState::default(),
+            cr_q: vec![0.0; 3 * n],
             scratch: vec![0.0; n],
             propagator: ModalPropagator::default(),
             body,
@@ -148,6 +192,28 @@ impl FlexibleBody {
     }
     pub fn parameters(&self) -> &Parameters {
         &self.params
+    }
+
+    pub fn frame(&self) -> Option<&FrameState> {
+        self.frame.as_ref()
+    }
+    pub fn frame_mut(&mut self) -> Option<&mut FrameState> {
+        self.eval.valid = false;
+        self.frame.as_mut()
+    }
+    /// Rates of the frame state (d/dt r, quaternion, v, body angular velocity).
+    pub fn frame_rate(&mut self) -> Result<FrameState, String> {
+        self.evaluate()?;
+        Ok(self.frame_rate)
+    }
+    /// Put a free-floating body at its initial pose and velocity.
+    pub fn start_frame(&mut self) {
+        if let Some(f) = self.frame.as_mut() {
+            let i = self.initial_frame;
+            let rot = k3::rotation_of(i.phi);
+            *f = FrameState { r: i.r, quat: k3::quaternion_of(&rot), v: i.v, w_body: k3::mul_t(&rot, i.w) };
+            self.eval.valid = false;
+        }
     }
 
     pub fn mount_mut(&mut self) -> &mut MountMotion {
@@ -310,16 +376,20 @@ impl FlexibleBody {
         if self.eval.valid {
             return Ok(());
         }
-        self.check_inputs()?;
-        self.modal_load();
-        self.prepare_coupling();
         let n = self.q.len();
-        let (alpha, beta) = (self.params.alpha, self.params.beta);
-        for j in 0..n {
-            let w2 = self.body.omega[j] * self.body.omega[j];
-            self.eval.qdd[j] = self.load[j] - (alpha + beta * w2) * self.qd[j] - w2 * self.q[j];
+        if self.frame.is_some() {
+            self.free_accelerations()?;
+        } else {
+            self.check_inputs()?;
+            self.modal_load();
+            self.prepare_coupling();
+            let (alpha, beta) = (self.params.alpha, self.params.beta);
+            for j in 0..n {
+                let w2 = self.body.omega[j] * self.body.omega[j];
+                self.eval.qdd[j] = self.load[j] - (alpha + beta * w2) * self.qd[j] - w2 * self.q[j];
+            }
         }
-        if self.coupling.active {
+        if self.coupling.active && self.frame.is_none() {
             let c = &self.coupling;
             for i in 0..n {
                 let (rd, rk) = (&c.c_d[i * n..(i + 1) * n], &c.c_k[i * n..(i + 1) * n]);
@@ -429,6 +499,160 @@ impl FlexibleBody {
         Ok(())
     }
 
+    /// Accelerations of a free-floating body: the frame's translational motion is the centre of
+    /// mass's (mean axes: C_t = 0), its rotation and the modes couple through J(q) and C_r(q):
+    ///   [J(q)  C_r(q)] [W']   [tau - W x h - J'(q) W                                   ]
+    ///   [C_r^T   I   ] [q''] = [p - D q' - K q - 2 sum W_a G_a q' - sum W_a W_b (O_ab q + o_ab)]
+    /// with h = J W + C_r q' (DESIGN.md invariants, exact in q to second order).
+    fn free_accelerations(&mut self) -> Result<(), String> {
+        let frame = self.frame.ok_or("not a free-floating body")?;
+        let n = self.q.len();
+        let nn = n * n;
+        let b = self.body.clone();
+        let rot_terms = b.rotation.as_ref().ok_or("a free-floating body needs its rotation invariants")?;
+        let norm = frame.quat.iter().map(|c| c * c).sum::<f64>().sqrt();
+        if !(norm > 0.5 && norm < 2.0) {
+            return Err(format!("the orientation quaternion has drifted to norm {norm}"));
+        }
+        let quat = frame.quat.map(|c| c / norm);
+        let a = k3::rotation_of_quaternion(quat);
+        let w = frame.w_body;
+        let total_force: Vec3 = self.loads.iter().fold([0.0; 3], |acc, l| k3::add(acc, l.f));
+        let accel = k3::add(k3::scale(1.0 / b.mass, total_force), self.params.g);
+        self.mount = MountMotion { r: frame.r, rot: a, v: frame.v, w: k3::mul(&a, w), a: accel, z: [0.0; 3] };
+        // modal load of the flange loads and the centrifugal o_ab terms (C_t = 0, c_a = 0 here)
+        self.modal_load();
+        let (alpha, beta) = (self.params.alpha, self.params.beta);
+        let rhs_q = &mut self.eval.qdd;
+        for j in 0..n {
+            let w2 = b.omega[j] * b.omega[j];
+            rhs_q[j] = self.load[j] - (alpha + beta * w2) * self.qd[j] - w2 * self.q[j];
+        }
+        for i in 0..3 {
+            let g = &rot_terms.g[i * nn..(i + 1) * nn];
+            if w[i] != 0.0 {
+                for r in 0..n {
+                    let s: f64 = g[r * n..(r + 1) * n].iter().zip(&self.qd).map(|(x, y)| x * y).sum();
+                    rhs_q[r] -= 2.0 * w[i] * s;
+                }
+            }
+            for k in 0..3 {
+                let ww = w[i] * w[k];
+                if ww != 0.0 {
+                    let o = &rot_terms.o_mat[(3 * i + k) * nn..(3 * i + k + 1) * nn];
+                    for r in 0..n {
+                        let s: f64 = o[r * n..(r + 1) * n].iter().zip(&self.q).map(|(x, y)| x * y).sum();
+                        rhs_q[r] -= ww * s;
+                    }
+                }
+            }
+        }
+        // C_r(q), J(q), J'(q)
+        for i in 0..3 {
+            let g = &rot_terms.g[i * nn..(i + 1) * nn];
+            for c in 0..n {
+                // (G_a q)_c
+                let s: f64 = g[c * n..(c + 1) * n].iter().zip(&self.q).map(|(x, y)| x * y).sum();
+                self.cr_q[i * n + c] = b.c_r[i * n + c] + s;
+            }
+        }
+        let mut j = b.inertia;
+        let mut j_rate = [0.0; 9];
+        for p in 0..3 {
+            for q_ in 0..3 {
+                let (o_pq, o_qp) = (&rot_terms.o_vec[(3 * p + q_) * n..][..n], &rot_terms.o_vec[(3 * q_ + p) * n..][..n]);
+                let o_mat = &rot_terms.o_mat[(3 * p + q_) * nn..(3 * p + q_ + 1) * nn];
+                let (mut lin, mut lin_rate, mut quad, mut quad_rate) = (0.0, 0.0, 0.0, 0.0);
+                for r in 0..n {
+                    lin += (o_pq[r] + o_qp[r]) * self.q[r];
+                    lin_rate += (o_pq[r] + o_qp[r]) * self.qd[r];
+                    let oq: f64 = o_mat[r * n..(r + 1) * n].iter().zip(&self.q).map(|(x, y)| x * y).sum();
+                    let oqd: f64 = o_mat[r * n..(r + 1) * n].iter().zip(&self.qd).map(|(x, y)| x * y).sum();
+                    quad += self.q[r] * oq;
+                    quad_rate += self.qd[r] * oq + self.q[r] * oqd;
+                }
+                j[3 * p + q_] -= lin + quad;
+                j_rate[3 * p + q_] = -(lin_rate + quad_rate);
+            }
+        }
+        let cr_qd: Vec3 = [0, 1, 2].map(|i| self.cr_q[i * n..(i + 1) * n].iter().zip(&self.qd).map(|(x, y)| x * y).sum());
+        let h = k3::add(k3::mul(&j, w), cr_qd);
+        // torque of the flange loads about the centre of mass, body frame
+        let mut torque = [0.0; 3];
+        for (flange, load) in b.flanges.iter().zip(&self.loads) {
+            let u: Vec3 = [0, 1, 2].map(|r| flange.shapes[r * n..(r + 1) * n].iter().zip(&self.q).map(|(x, y)| x * y).sum());
+            let f_b = k3::mul_t(&a, load.f);
+            torque = k3::add(torque, k3::add(k3::cross(k3::add(flange.position, u), f_b), k3::mul_t(&a, load.t)));
+        }
+        let rhs_w = k3::sub(k3::sub(torque, k3::cross(w, h)), k3::mul(&j_rate, w));
+        // Schur complement: (J - C_r C_r^T) W' = rhs_w - C_r rhs_q
+        let mut s = j;
+        let mut rhs = rhs_w;
+        for p in 0..3 {
+            let cp = &self.cr_q[p * n..(p + 1) * n];
+            rhs[p] -= cp.iter().zip(self.eval.qdd.iter()).map(|(x, y)| x * y).sum::<f64>();
+            for q_ in 0..3 {
+                let cq = &self.cr_q[q_ * n..(q_ + 1) * n];
+                s[3 * p + q_] -= cp.iter().zip(cq).map(|(x, y)| x * y).sum::<f64>();
+            }
+        }
+        let mut s_vec = s.to_vec();
+        let mut w_dot = rhs.to_vec();
+        solve_dense(&mut s_vec, &mut w_dot, 3).map_err(|_| "the body's inertia matrix became singular".to_string())?;
+        let w_dot = [w_dot[0], w_dot[1], w_dot[2]];
+        for r in 0..n {
+            self.eval.qdd[r] -= (0..3).map(|i| self.cr_q[i * n + r] * w_dot[i]).sum::<f64>();
+        }
+        self.mount.z = k3::mul(&a, w_dot);
+        let [q0, q1, q2, q3] = quat;
+        let half = [0.5 * w[0], 0.5 * w[1], 0.5 * w[2]];
+        // d/dt quat = 1/2 quat (x) (0, W)
+        let quat_rate = [
+            -q1 * half[0] - q2 * half[1] - q3 * half[2],
+            q0 * half[0] + q2 * half[2] - q3 * half[1],
+            q0 * half[1] + q3 * half[0] - q1 * half[2],
+            q0 * half[2] + q1 * half[1] - q2 * half[0],
+        ];
+        self.frame_rate = FrameState { r: frame.v, quat: quat_rate, v: accel, w_body: w_dot };
+        Ok(())
+    }
+
+    /// Energy and momenta of a free-floating body (gravity's potential included).
+    pub fn invariants(&mut self) -> Result<Invariants, String> {
+        self.evaluate()?;
+        let frame = self.frame.ok_or("energy and momenta are outputs of free-floating bodies")?;
+        let n = self.q.len();
+        let b = &self.body;
+        let rot_terms = b.rotation.as_ref().ok_or("missing rotation invariants")?;
+        let nn = n * n;
+        let mut j = b.inertia;
+        for p in 0..3 {
+            for q_ in 0..3 {
+                let (o_pq, o_qp) = (&rot_terms.o_vec[(3 * p + q_) * n..][..n], &rot_terms.o_vec[(3 * q_ + p) * n..][..n]);
+                let o_mat = &rot_terms.o_mat[(3 * p + q_) * nn..(3 * p + q_ + 1) * nn];
+                let mut v = 0.0;
+                for r in 0..n {
+                    v += (o_pq[r] + o_qp[r]) * self.q[r];
+                    v += self.q[r] * o_mat[r * n..(r + 1) * n].iter().zip(&self.q).map(|(x, y)| x * y).sum::<f64>();
+                }
+                j[3 * p + q_] -= v;
+            }
+        }
+        let w = frame.w_body;
+        let cr_qd: Vec3 = [0, 1, 2].map(|i| self.cr_q[i * n..(i + 1) * n].iter().zip(&self.qd).map(|(x, y)| x * y).sum());
+        let jw = k3::mul(&j, w);
+        let h = k3::add(jw, cr_qd);
+        let v2 = frame.v.iter().map(|x| x * x).sum::<f64>();
+        let mut energy = 0.5 * b.mass * v2 + 0.5 * k3::dot(w, jw) + k3::dot(w, cr_qd);
+        for r in 0..n {
+            energy += 0.5 * self.qd[r] * self.qd[r] + 0.5 * b.omega[r] * b.omega[r] * self.q[r] * self.q[r];
+        }
+        energy -= b.mass * k3::dot(self.params.g, frame.r);
+        let momentum = k3::scale(b.mass, frame.v);
+        let angular_momentum = k3::add(k3::cross(frame.r, momentum), k3::mul(&self.mount.rot, h));
+        Ok(Invariants { energy, momentum, angular_momentum })
+    }
+
     /// d/dt (q, q') into `dq`, `dqd`.
     pub fn derivatives(&mut self, dq: &mut [f64], dqd: &mut [f64]) -> Result<(), String> {
         self.evaluate()?;
@@ -456,6 +680,9 @@ impl FlexibleBody {
     /// Put the body at rest in the static equilibrium of the present inputs: q' = 0 and
     /// (K + C_k) q = p, which for a spinning body includes centrifugal softening and stiffening.
     pub fn settle_static(&mut self) -> Result<(), String> {
+        if self.frame.is_some() {
+            return Err("a free-floating body has no static equilibrium to start in".into());
+        }
         self.check_inputs()?;
         self.modal_load();
         self.prepare_coupling();
@@ -487,6 +714,9 @@ impl FlexibleBody {
         if !(h > 0.0 && h.is_finite()) {
             return Err(format!("step size {h} must be positive and finite"));
         }
+        if self.frame.is_some() {
+            return self.step_free(h);
+        }
         self.check_inputs()?;
         self.modal_load();
         self.prepare_coupling();
@@ -516,6 +746,68 @@ impl FlexibleBody {
             self.propagator.advance(&self.body.omega, &self.scratch, &mut self.q, &mut self.qd);
         }
         self.eval.valid = false;
+        Ok(())
+    }
+}
+
+impl FlexibleBody {
+    /// A free-floating body over one step, by substeps short against its rotation
+    /// (|W| h_sub <= 0.005) of a second-order (Heun) splitting: the modes propagate exactly under
+    /// the coupling load (trapezoidal in time), the rigid motion by the averaged rates, the
+    /// attitude by the exact rotation of the mean angular velocity.
+    fn step_free(&mut self, h: f64) -> Result<(), String> {
+        let n = self.q.len();
+        let spin = self.frame.map_or(0.0, |f| k3::dot(f.w_body, f.w_body).sqrt());
+        let substeps = ((h * spin / 0.005).ceil() as usize).clamp(1, 1_000_000);
+        let hs = h / substeps as f64;
+        self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, hs);
+        let mut load0 = vec![0.0; n];
+        for _ in 0..substeps {
+            let start = self.frame.ok_or("not a free-floating body")?;
+            let (q0, qd0) = (self.q.clone(), self.qd.clone());
+            // rates at the start, then at the predicted end
+            self.eval.valid = false;
+            self.evaluate()?;
+            let rate0 = self.frame_rate;
+            self.coupling_load(&mut load0);
+            self.advance_free(&start, &rate0, &rate0, &load0, hs)?;
+            self.eval.valid = false;
+            self.evaluate()?;
+            let rate1 = self.frame_rate;
+            let mut load1 = vec![0.0; n];
+            self.coupling_load(&mut load1);
+            for j in 0..n {
+                load1[j] = 0.5 * (load0[j] + load1[j]);
+            }
+            self.q.copy_from_slice(&q0);
+            self.qd.copy_from_slice(&qd0);
+            self.advance_free(&start, &rate0, &rate1, &load1, hs)?;
+        }
+        self.eval.valid = false;
+        Ok(())
+    }
+
+    /// The part of q'' beyond the modal diagonal at the last evaluation.
+    fn coupling_load(&self, out: &mut [f64]) {
+        let (alpha, beta) = (self.params.alpha, self.params.beta);
+        for j in 0..self.q.len() {
+            let w2 = self.body.omega[j] * self.body.omega[j];
+            out[j] = self.eval.qdd[j] + (alpha + beta * w2) * self.qd[j] + w2 * self.q[j];
+        }
+    }
+
+    /// From the substep's start frame: rigid motion by the mean of two rate sets, modes exactly
+    /// under `load` (q, q' must hold the start values).
+    fn advance_free(&mut self, start: &FrameState, a: &FrameState, b: &FrameState, load: &[f64], hs: f64) -> Result<(), String> {
+        self.propagator.advance(&self.body.omega, load, &mut self.q, &mut self.qd);
+        let w_dot = k3::scale(0.5, k3::add(a.w_body, b.w_body));
+        let accel = k3::scale(0.5, k3::add(a.v, b.v));
+        let f = self.frame.as_mut().ok_or("not a free-floating body")?;
+        let w_mid = k3::add(start.w_body, k3::scale(0.5 * hs, w_dot));
+        f.w_body = k3::add(start.w_body, k3::scale(hs, w_dot));
+        f.v = k3::add(start.v, k3::scale(hs, accel));
+        f.r = k3::add(start.r, k3::scale(0.5 * hs, k3::add(start.v, f.v)));
+        f.quat = k3::quaternion_multiply(start.quat, k3::quaternion_of(&k3::rotation_of(k3::scale(hs, w_mid))));
         Ok(())
     }
 }

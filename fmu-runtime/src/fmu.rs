@@ -1,7 +1,7 @@
 //! The body as an FMI model: maps value references onto the mechanics layer and the FMI calls
 //! (initialise, step, derivatives) onto its equations. Knows FMI's model trait, not C.
 
-use crate::body::FlexibleBody;
+use crate::body::{FlexibleBody, FrameState};
 use crate::fmi::{Interface, Model, VarInfo};
 use crate::format::RESOURCE_FILE;
 use crate::interface::{FlangeOutput, Quantity, VariableTable};
@@ -29,6 +29,14 @@ impl BodyFmu {
         self.table.get(vr).map(|v| v.quantity).ok_or_else(|| format!("unknown value reference {vr}"))
     }
 }
+
+fn frame(b: &FlexibleBody) -> Result<FrameState, String> {
+    b.frame().copied().ok_or_else(|| "not a free-floating body".to_string())
+}
+
+/// Number of rigid-body states of a free-floating body: position 3, quaternion 4, velocity 3,
+/// angular velocity 3.
+const FRAME_STATES: usize = 13;
 
 impl Model for BodyFmu {
     fn instantiate(resources: Option<&std::path::Path>, _interface: Interface) -> Result<Self, String> {
@@ -91,6 +99,32 @@ impl Model for BodyFmu {
             Q::ModalVelocity(j) => b.qd()[j],
             Q::ModalAcceleration(j) => b.qdd()?[j],
             Q::StaticStart => return Err(format!("value reference {vr} (static_start) is a Boolean")),
+            Q::InitialPosition(i) => b.initial_frame.r[i],
+            Q::InitialRotation(i) => b.initial_frame.phi[i],
+            Q::InitialVelocity(i) => b.initial_frame.v[i],
+            Q::InitialAngularVelocity(i) => b.initial_frame.w[i],
+            Q::FramePosition(i) => frame(b)?.r[i],
+            Q::FrameQuaternion(i) => frame(b)?.quat[i],
+            Q::FrameVelocity(i) => frame(b)?.v[i],
+            Q::FrameAngularVelocity(i) => frame(b)?.w_body[i],
+            Q::FrameQuaternionRate(i) => b.frame_rate()?.quat[i],
+            Q::FrameAcceleration(i) => b.frame_rate()?.v[i],
+            Q::FrameAngularAcceleration(i) => b.frame_rate()?.w_body[i],
+            Q::BodyRotation(i, j) => {
+                b.frame_rate()?;
+                b.mount().rot[3 * i + j]
+            }
+            Q::BodyAngularVelocity(i) => {
+                b.frame_rate()?;
+                b.mount().w[i]
+            }
+            Q::BodyAngularAcceleration(i) => {
+                b.frame_rate()?;
+                b.mount().z[i]
+            }
+            Q::BodyEnergy => b.invariants()?.energy,
+            Q::BodyMomentum(i) => b.invariants()?.momentum[i],
+            Q::BodyAngularMomentum(i) => b.invariants()?.angular_momentum[i],
         })
     }
 
@@ -119,6 +153,10 @@ impl Model for BodyFmu {
             Q::RayleighBeta => b.parameters_mut().beta = value,
             Q::ModalCoordinate(j) => b.q_mut()[j] = value,
             Q::ModalVelocity(j) => b.qd_mut()[j] = value,
+            Q::InitialPosition(i) => b.initial_frame.r[i] = value,
+            Q::InitialRotation(i) => b.initial_frame.phi[i] = value,
+            Q::InitialVelocity(i) => b.initial_frame.v[i] = value,
+            Q::InitialAngularVelocity(i) => b.initial_frame.w[i] = value,
             _ => return Err(format!("{} cannot be set", name())),
         }
         Ok(())
@@ -155,7 +193,7 @@ impl Model for BodyFmu {
     }
 
     fn n_states(&self) -> usize {
-        2 * self.body.n_modes()
+        2 * self.body.n_modes() + if self.body.frame().is_some() { FRAME_STATES } else { 0 }
     }
     fn n_event_indicators(&self) -> usize {
         0
@@ -167,18 +205,36 @@ impl Model for BodyFmu {
     fn get_continuous_states(&self, x: &mut [f64]) {
         let n = self.body.n_modes();
         x[..n].copy_from_slice(self.body.q());
-        x[n..].copy_from_slice(self.body.qd());
+        x[n..2 * n].copy_from_slice(self.body.qd());
+        if let Some(f) = self.body.frame() {
+            write_frame(&mut x[2 * n..], f);
+        }
     }
 
     fn set_continuous_states(&mut self, x: &[f64]) {
         let n = self.body.n_modes();
-        self.body.set_state(&x[..n], &x[n..]);
+        self.body.set_state(&x[..n], &x[n..2 * n]);
+        if let Some(f) = self.body.frame_mut() {
+            let y = &x[2 * n..];
+            *f = FrameState {
+                r: [y[0], y[1], y[2]],
+                quat: [y[3], y[4], y[5], y[6]],
+                v: [y[7], y[8], y[9]],
+                w_body: [y[10], y[11], y[12]],
+            };
+        }
     }
 
     fn get_derivatives(&mut self, dx: &mut [f64]) -> Result<(), String> {
         let n = self.body.n_modes();
-        let (dq, dqd) = dx.split_at_mut(n);
-        self.body.derivatives(dq, dqd)
+        let (modal, frame_part) = dx.split_at_mut(2 * n);
+        let (dq, dqd) = modal.split_at_mut(n);
+        self.body.derivatives(dq, dqd)?;
+        if self.body.frame().is_some() {
+            let rate = self.body.frame_rate()?;
+            write_frame(frame_part, &rate);
+        }
+        Ok(())
     }
 
     fn get_nominals(&self, nominals: &mut [f64]) {
@@ -191,10 +247,12 @@ impl Model for BodyFmu {
     }
 
     fn enter_initialization(&mut self, _start_time: f64) -> Result<(), String> {
+        self.body.start_frame();
         Ok(())
     }
 
     fn exit_initialization(&mut self) -> Result<(), String> {
+        self.body.start_frame();
         if self.static_start {
             self.body.settle_static()?;
         }
@@ -213,3 +271,10 @@ impl Model for BodyFmu {
     }
 }
 
+
+fn write_frame(x: &mut [f64], f: &FrameState) {
+    x[..3].copy_from_slice(&f.r);
+    x[3..7].copy_from_slice(&f.quat);
+    x[7..10].copy_from_slice(&f.v);
+    x[10..13].copy_from_slice(&f.w_body);
+}

@@ -39,6 +39,24 @@ pub enum Quantity {
     ModalCoordinate(usize),
     ModalVelocity(usize),
     ModalAcceleration(usize),
+    // free-floating bodies
+    InitialPosition(usize),
+    InitialRotation(usize),
+    InitialVelocity(usize),
+    InitialAngularVelocity(usize),
+    FramePosition(usize),
+    FrameQuaternion(usize),
+    FrameVelocity(usize),
+    FrameAngularVelocity(usize),
+    FrameQuaternionRate(usize),
+    FrameAcceleration(usize),
+    FrameAngularAcceleration(usize),
+    BodyRotation(usize, usize),
+    BodyAngularVelocity(usize),
+    BodyAngularAcceleration(usize),
+    BodyEnergy,
+    BodyMomentum(usize),
+    BodyAngularMomentum(usize),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -76,6 +94,9 @@ pub const UNITS: &[(&str, [i32; 4])] = &[
     ("N.m", [1, 2, -2, 0]),
     ("1/s", [0, 0, -1, 0]),
     ("s", [0, 0, 1, 0]),
+    ("J", [1, 2, -2, 0]),
+    ("N.s", [1, 1, -1, 0]),
+    ("J.s", [1, 2, -1, 0]),
 ];
 
 const AXES: [&str; 3] = ["x", "y", "z"];
@@ -177,6 +198,7 @@ impl VariableTable {
     pub fn new(body: &ReducedBody) -> Self {
         let mut b = Builder { variables: Vec::new() };
         let m = body.mount.as_str();
+        if !body.free_floating {
         b.input3(&format!("{m}.r"), "Mount position", "m", Quantity::MountPosition);
         b.matrix(&format!("{m}.R"), "Mount orientation", Causality::Input, Quantity::MountRotation);
         b.input3(&format!("{m}.v"), "Mount velocity", "m/s", Quantity::MountVelocity);
@@ -191,6 +213,7 @@ impl VariableTable {
             "N.m",
             Quantity::MountTorque,
         );
+        }
         for (k, flange) in body.flanges.iter().enumerate() {
             let n = flange.name.as_str();
             b.input3(&format!("{n}.f"), "Force applied to the flange", "N", |i| Quantity::FlangeForce(k, i));
@@ -251,6 +274,7 @@ impl VariableTable {
             Some("s"),
             Quantity::RayleighBeta,
         );
+        if !body.free_floating {
         b.push(
             "static_start".into(),
             "Start in static equilibrium under the initial inputs (q' = 0, q = K^-1 p) instead of at the start values of q, qd".into(),
@@ -261,6 +285,10 @@ impl VariableTable {
             None,
             Quantity::StaticStart,
         );
+        }
+        if body.free_floating {
+            Self::free_body_parameters(&mut b);
+        }
         let n = body.n_modes();
         let mut q_vr = Vec::with_capacity(n);
         for j in 0..n {
@@ -303,8 +331,93 @@ impl VariableTable {
             );
             b.variables[vr as usize - 1].derivative_of = Some(qd_vr[j]);
         }
+        if body.free_floating {
+            Self::free_body_states_and_outputs(&mut b);
+        }
         // modal velocities are 1/s; modal coordinates carry sqrt(kg) m, left unitless in the XML
         Self { variables: b.variables }
+    }
+
+    fn free_body_parameters(b: &mut Builder) {
+        let params: [(&str, &str, &'static str, fn(usize) -> Quantity); 4] = [
+            ("initial.r", "Initial position of the centre of mass", "m", Quantity::InitialPosition),
+            ("initial.phi", "Initial orientation as a rotation vector (from the axes as meshed)", "rad", Quantity::InitialRotation),
+            ("initial.v", "Initial velocity of the centre of mass", "m/s", Quantity::InitialVelocity),
+            ("initial.w", "Initial angular velocity", "rad/s", Quantity::InitialAngularVelocity),
+        ];
+        for (name, what, unit, q) in params {
+            for i in 0..3 {
+                b.push(
+                    format!("{name}[{}]", i + 1),
+                    format!("{what}, {} component, world frame", AXES[i]),
+                    Causality::Parameter,
+                    Variability::Fixed,
+                    None,
+                    Some(Start::Real(0.0)),
+                    Some(unit),
+                    q(i),
+                );
+            }
+        }
+    }
+
+    /// States (centre-of-mass position and velocity, quaternion, body-frame angular velocity),
+    /// their derivatives, and the body's outputs.
+    fn free_body_states_and_outputs(b: &mut Builder) {
+        let state = |b: &mut Builder, name: String, what: String, unit: Option<&'static str>, q: Quantity| {
+            b.push(name, what, Causality::Local, Variability::Continuous, Some(Initial::Calculated), None, unit, q)
+        };
+        let mut r_vr = [0; 3];
+        let mut v_vr = [0; 3];
+        let mut quat_vr = [0; 4];
+        let mut w_vr = [0; 3];
+        for i in 0..3 {
+            r_vr[i] = state(b, format!("frame.r[{}]", i + 1), format!("Centre-of-mass position, {}, world (state)", AXES[i]), Some("m"), Quantity::FramePosition(i));
+        }
+        for i in 0..4 {
+            quat_vr[i] = state(b, format!("frame.Q[{}]", i + 1), format!("Orientation quaternion component {} (w, x, y, z; state)", i + 1), Some("1"), Quantity::FrameQuaternion(i));
+        }
+        for i in 0..3 {
+            v_vr[i] = state(b, format!("frame.v[{}]", i + 1), format!("Centre-of-mass velocity, {}, world (state)", AXES[i]), Some("m/s"), Quantity::FrameVelocity(i));
+            b.variables[v_vr[i] as usize - 1].derivative_of = Some(r_vr[i]);
+        }
+        for i in 0..3 {
+            w_vr[i] = state(b, format!("frame.W[{}]", i + 1), format!("Angular velocity, {}, body frame (state)", AXES[i]), Some("rad/s"), Quantity::FrameAngularVelocity(i));
+        }
+        let derivative = |b: &mut Builder, name: String, what: String, unit: Option<&'static str>, q: Quantity, of: u32| {
+            let vr = b.push(name, what, Causality::Local, Variability::Continuous, None, None, unit, q);
+            b.variables[vr as usize - 1].derivative_of = Some(of);
+        };
+        for i in 0..4 {
+            derivative(b, format!("der(frame.Q[{}])", i + 1), format!("Quaternion rate {}", i + 1), Some("1/s"), Quantity::FrameQuaternionRate(i), quat_vr[i]);
+        }
+        for i in 0..3 {
+            derivative(b, format!("der(frame.v[{}])", i + 1), format!("Centre-of-mass acceleration, {}, world", AXES[i]), Some("m/s2"), Quantity::FrameAcceleration(i), v_vr[i]);
+        }
+        for i in 0..3 {
+            derivative(b, format!("der(frame.W[{}])", i + 1), format!("Angular acceleration, {}, body frame", AXES[i]), Some("rad/s2"), Quantity::FrameAngularAcceleration(i), w_vr[i]);
+        }
+        let out = |b: &mut Builder, name: String, what: String, unit: &'static str, q: Quantity| {
+            b.push(name, what, Causality::Output, Variability::Continuous, None, None, Some(unit), q);
+        };
+        for i in 0..3 {
+            for j in 0..3 {
+                out(b, format!("body.R[{},{}]", i + 1, j + 1), format!("Body orientation, row {} column {} (columns: body axes in world)", i + 1, j + 1), "1", Quantity::BodyRotation(i, j));
+            }
+        }
+        for i in 0..3 {
+            out(b, format!("body.w[{}]", i + 1), format!("Body angular velocity, {}, world frame", AXES[i]), "rad/s", Quantity::BodyAngularVelocity(i));
+        }
+        for i in 0..3 {
+            out(b, format!("body.z[{}]", i + 1), format!("Body angular acceleration, {}, world frame", AXES[i]), "rad/s2", Quantity::BodyAngularAcceleration(i));
+        }
+        out(b, "body.energy".into(), "Total energy: kinetic, elastic and gravitational".into(), "J", Quantity::BodyEnergy);
+        for i in 0..3 {
+            out(b, format!("body.p[{}]", i + 1), format!("Linear momentum, {}, world frame", AXES[i]), "N.s", Quantity::BodyMomentum(i));
+        }
+        for i in 0..3 {
+            out(b, format!("body.h[{}]", i + 1), format!("Angular momentum about the world origin, {}, world frame", AXES[i]), "J.s", Quantity::BodyAngularMomentum(i));
+        }
     }
 
     pub fn get(&self, vr: u32) -> Option<&Variable> {
@@ -320,7 +433,15 @@ impl VariableTable {
             .map(|v| v.vr)
             .collect();
         s.extend(self.variables.iter().filter(|v| matches!(v.quantity, Quantity::ModalVelocity(_))).map(|v| v.vr));
+        s.extend(self.variables.iter().filter(|v| Self::is_frame_state(&v.quantity)).map(|v| v.vr));
         s
+    }
+
+    fn is_frame_state(q: &Quantity) -> bool {
+        matches!(
+            q,
+            Quantity::FramePosition(_) | Quantity::FrameQuaternion(_) | Quantity::FrameVelocity(_) | Quantity::FrameAngularVelocity(_)
+        )
     }
 
     /// Derivative value references in state order: qd[1..n] (= der(q)) then der(qd[1..n]).
@@ -332,6 +453,11 @@ impl VariableTable {
             .map(|v| v.vr)
             .collect();
         d.extend(self.variables.iter().filter(|v| matches!(v.quantity, Quantity::ModalAcceleration(_))).map(|v| v.vr));
+        // frame: d/dt r = v (the state frame.v), then the quaternion, velocity and spin rates
+        d.extend(self.variables.iter().filter(|v| matches!(v.quantity, Quantity::FrameVelocity(_))).map(|v| v.vr));
+        d.extend(self.variables.iter().filter(|v| matches!(v.quantity, Quantity::FrameQuaternionRate(_))).map(|v| v.vr));
+        d.extend(self.variables.iter().filter(|v| matches!(v.quantity, Quantity::FrameAcceleration(_))).map(|v| v.vr));
+        d.extend(self.variables.iter().filter(|v| matches!(v.quantity, Quantity::FrameAngularAcceleration(_))).map(|v| v.vr));
         d
     }
 
@@ -353,6 +479,15 @@ impl VariableTable {
         let qd_all = |q: &Q| matches!(q, Q::ModalVelocity(_));
         // q'' = p(a, R, loads) - d q' - w^2 q
         let accel = |q: &Q| mount_a(q) || mount_rot(q) || loads(q) || q_all(q) || qd_all(q);
+        if self.variables.iter().any(|v| Self::is_frame_state(&v.quantity)) {
+            // free-floating: every output and derivative may depend on every state and load
+            let mut deps = self.select(|q| {
+                Self::is_frame_state(q)
+                    || matches!(q, Q::ModalCoordinate(_) | Q::ModalVelocity(_) | Q::FlangeForce(..) | Q::FlangeTorque(..))
+            });
+            deps.sort_unstable();
+            return deps;
+        }
         let mut deps = match var.quantity {
             Q::Flange(_, o) => match o {
                 FlangeOutput::Position(_) => self.select(|q| mount_r(q) || mount_rot(q) || q_all(q)),
@@ -366,11 +501,10 @@ impl VariableTable {
                     self.select(|q| accel(q) || mount_w(q) || mount_z(q))
                 }
             },
-            Q::MountForce(_) | Q::MountTorque(_) => self.select(accel),
+            // the rotating-frame terms couple all modes and bring in the spin
+            Q::MountForce(_) | Q::MountTorque(_) => self.select(|q| accel(q) || mount_w(q) || mount_z(q)),
             Q::ModalVelocity(j) => self.select(|q| *q == Q::ModalVelocity(j)),
-            Q::ModalAcceleration(j) => self.select(|q| {
-                mount_a(q) || mount_rot(q) || loads(q) || *q == Q::ModalCoordinate(j) || *q == Q::ModalVelocity(j)
-            }),
+            Q::ModalAcceleration(_) => self.select(|q| accel(q) || mount_w(q) || mount_z(q)),
             _ => Vec::new(),
         };
         deps.sort_unstable();
@@ -382,8 +516,19 @@ impl VariableTable {
     /// the loads that set the static equilibrium; q' starts at rest or its start value.
     pub fn initial_dependencies(&self, var: &Variable) -> Vec<u32> {
         use Quantity as Q;
+        if self.variables.iter().any(|v| Self::is_frame_state(&v.quantity)) {
+            // free-floating: states start from parameters; the rest follows the loads
+            if Self::is_frame_state(&var.quantity) || matches!(var.quantity, Q::ModalCoordinate(_) | Q::ModalVelocity(_)) {
+                return Vec::new();
+            }
+            return self.select(|q| matches!(q, Q::FlangeForce(..) | Q::FlangeTorque(..)));
+        }
         let static_loads = |q: &Q| {
-            matches!(q, Q::MountAcceleration(_) | Q::MountRotation(..) | Q::FlangeForce(..) | Q::FlangeTorque(..))
+            matches!(
+                q,
+                Q::MountAcceleration(_) | Q::MountRotation(..) | Q::MountAngularVelocity(_) | Q::MountAngularAcceleration(_)
+                    | Q::FlangeForce(..) | Q::FlangeTorque(..)
+            )
         };
         let direct = match var.quantity {
             Q::ModalCoordinate(_) => return self.select(static_loads),

@@ -79,6 +79,56 @@ pub fn rotation_of(phi: Vec3) -> Mat3 {
     ]
 }
 
+#[inline]
+pub fn dot(a: Vec3, b: Vec3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Rotation matrix of a unit quaternion (w, x, y, z).
+pub fn rotation_of_quaternion(q: [f64; 4]) -> Mat3 {
+    let [w, x, y, z] = q;
+    [
+        1.0 - 2.0 * (y * y + z * z),
+        2.0 * (x * y - w * z),
+        2.0 * (x * z + w * y),
+        2.0 * (x * y + w * z),
+        1.0 - 2.0 * (x * x + z * z),
+        2.0 * (y * z - w * x),
+        2.0 * (x * z - w * y),
+        2.0 * (y * z + w * x),
+        1.0 - 2.0 * (x * x + y * y),
+    ]
+}
+
+/// Unit quaternion (w, x, y, z, w >= 0) of a rotation matrix (Shepperd's method).
+pub fn quaternion_of(a: &Mat3) -> [f64; 4] {
+    let tr = a[0] + a[4] + a[8];
+    let q = if tr > 0.0 {
+        let s = 2.0 * (1.0 + tr).sqrt();
+        [0.25 * s, (a[7] - a[5]) / s, (a[2] - a[6]) / s, (a[3] - a[1]) / s]
+    } else if a[0] > a[4] && a[0] > a[8] {
+        let s = 2.0 * (1.0 + a[0] - a[4] - a[8]).sqrt();
+        [(a[7] - a[5]) / s, 0.25 * s, (a[1] + a[3]) / s, (a[2] + a[6]) / s]
+    } else if a[4] > a[8] {
+        let s = 2.0 * (1.0 + a[4] - a[0] - a[8]).sqrt();
+        [(a[2] - a[6]) / s, (a[1] + a[3]) / s, 0.25 * s, (a[5] + a[7]) / s]
+    } else {
+        let s = 2.0 * (1.0 + a[8] - a[0] - a[4]).sqrt();
+        [(a[3] - a[1]) / s, (a[2] + a[6]) / s, (a[5] + a[7]) / s, 0.25 * s]
+    };
+    if q[0] < 0.0 { q.map(|c| -c) } else { q }
+}
+
+/// Hamilton product a (x) b of quaternions (w, x, y, z).
+pub fn quaternion_multiply(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
+    [
+        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
+    ]
+}
+
 /// Largest entry of |A^T A - I| and whether det A > 0: how far an input is from a rotation.
 pub fn rotation_defect(a: &Mat3) -> f64 {
     let mut worst: f64 = 0.0;
@@ -105,6 +155,13 @@ mod tests {
             let back = mul(&r, phi);
             for i in 0..3 {
                 assert!((back[i] - phi[i]).abs() < 1e-14);
+            }
+        }
+        for phi in [[0.3, -0.2, 1.1], [3.0, 0.1, 0.0], [0.0, -3.1, 0.2], [0.1, 0.0, 3.1]] {
+            let r = rotation_of(phi);
+            let back = rotation_of_quaternion(quaternion_of(&r));
+            for i in 0..9 {
+                assert!((back[i] - r[i]).abs() < 1e-14, "{phi:?}");
             }
         }
         let r = rotation_of([0.0, 0.0, std::f64::consts::FRAC_PI_2]);
