@@ -43,7 +43,10 @@ CASES = [
     ("flanges sharing nodes",
      lambda s: set_path(s, ["flanges", 1, "nodes"], {"plane": {"point": [0.0, 0, 0], "normal": [1, 0, 0]}}),
      ["flanges[1].nodes", "shares"]),
-    ("no mount", lambda s: set_path(s, ["flanges", 0, "role"], "force"), ["flanges", "motion"]),
+    ("two mounts", lambda s: set_path(s, ["flanges", 1, "role"], "motion"), ["flanges[1].role", "second"]),
+    ("stiffening on a free body",
+     lambda s: (set_path(s, ["flanges", 0, "role"], "force"), s.update(scene={"geometric_stiffening": True})),
+     ["scene.geometric_stiffening", "mounted"]),
     ("unknown element", lambda s: set_path(s, ["geometry", "element"], "tet4"), ["geometry.element"]),
     ("negative damping", lambda s: set_path(s, ["damping", "alpha"], -1.0), ["damping.alpha"]),
 ]

@@ -14,7 +14,7 @@ use crate::inertia;
 use crate::mesh::Mesh;
 use crate::pipeline::{Built, guid, report_of};
 use crate::reduce::{self, Basis, EIGEN_TOL, ModeCount};
-use crate::report::Accuracy;
+use crate::report::{Accuracy, compare_compliance};
 use crate::sparse::{Sparse, SpdSolver, mul_new};
 use crate::spec::{Role, Spec};
 use faer::sparse::{SparseColMat, Triplet};
@@ -143,17 +143,7 @@ fn accuracy(model: &Assembled, solver: &SpdSolver, shift: f64, rigid: &Deflation
     }
     let x = reduce::inertia_relief_solve(solver, &model.mass, shift, rigid, &unit);
     // the flexibility seen at the flanges: B^T u with the rigid part of the load removed
-    let compliance_full: Vec<Vec<f64>> = rows.iter().map(|&r| (0..rows.len()).map(|c| x[(r, c)]).collect()).collect();
-    let compliance_reduced: Vec<Vec<f64>> = rows
-        .iter()
-        .map(|&r| {
-            rows.iter()
-                .map(|&c| (0..basis.omega.len()).map(|j| basis.phi[(r, j)] * basis.phi[(c, j)] / basis.omega[j].powi(2)).sum())
-                .collect()
-        })
-        .collect();
-    let scale = compliance_full.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
-    let diff = compliance_full.iter().flatten().zip(compliance_reduced.iter().flatten()).fold(0.0f64, |a, (f, r)| a.max((f - r).abs()));
+    let (compliance_full, compliance_reduced, compliance_max_relative_error) = compare_compliance(&rows, &x, basis);
     Ok(Accuracy {
         reduced_hz,
         full_hz,
@@ -161,7 +151,7 @@ fn accuracy(model: &Assembled, solver: &SpdSolver, shift: f64, rigid: &Deflation
         compliance_flanges: Vec::new(),
         compliance_full,
         compliance_reduced,
-        compliance_max_relative_error: if scale > 0.0 { diff / scale } else { 0.0 },
+        compliance_max_relative_error,
         inertial_cases: Vec::new(),
         inertial_flange_response_full: Vec::new(),
     })

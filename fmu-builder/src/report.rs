@@ -80,21 +80,7 @@ pub fn accuracy(model: &Assembled, solver: &SpdSolver, basis: &Basis, force_flan
     }
     solver.solve_refined(x.as_mut());
     let rows: Vec<usize> = force_flanges.iter().flat_map(|(_, first)| (0..6).map(move |i| first + i)).collect();
-    let compliance_full: Vec<Vec<f64>> = rows.iter().map(|&r| (0..nb).map(|c| x[(r, c)]).collect()).collect();
-    let compliance_reduced: Vec<Vec<f64>> = rows
-        .iter()
-        .map(|&r| {
-            rows.iter()
-                .map(|&c| (0..basis.omega.len()).map(|j| basis.phi[(r, j)] * basis.phi[(c, j)] / basis.omega[j].powi(2)).sum())
-                .collect()
-        })
-        .collect();
-    let scale = compliance_full.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
-    let diff = compliance_full
-        .iter()
-        .flatten()
-        .zip(compliance_reduced.iter().flatten())
-        .fold(0.0f64, |a, (f, r)| a.max((f - r).abs()));
+    let (compliance_full, compliance_reduced, compliance_max_relative_error) = compare_compliance(&rows, &x, basis);
     Ok(Accuracy {
         reduced_hz,
         full_hz,
@@ -102,8 +88,26 @@ pub fn accuracy(model: &Assembled, solver: &SpdSolver, basis: &Basis, force_flan
         compliance_flanges: force_flanges.iter().map(|(n, _)| n.clone()).collect(),
         compliance_full,
         compliance_reduced,
-        compliance_max_relative_error: if scale > 0.0 { diff / scale } else { 0.0 },
+        compliance_max_relative_error,
         inertial_cases: Vec::new(),
         inertial_flange_response_full: Vec::new(),
     })
+}
+
+/// Full compliance (rows of the static responses `x` at the flange DoFs `rows`) against the
+/// reduced model's Phi_b diag(1/omega^2) Phi_b^T, and their largest deviation relative to the
+/// largest full entry.
+pub fn compare_compliance(rows: &[usize], x: &Mat<f64>, basis: &Basis) -> (Vec<Vec<f64>>, Vec<Vec<f64>>, f64) {
+    let full: Vec<Vec<f64>> = rows.iter().map(|&r| (0..rows.len()).map(|c| x[(r, c)]).collect()).collect();
+    let reduced: Vec<Vec<f64>> = rows
+        .iter()
+        .map(|&r| {
+            rows.iter()
+                .map(|&c| (0..basis.omega.len()).map(|j| basis.phi[(r, j)] * basis.phi[(c, j)] / basis.omega[j].powi(2)).sum())
+                .collect()
+        })
+        .collect();
+    let scale = full.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+    let diff = full.iter().flatten().zip(reduced.iter().flatten()).fold(0.0f64, |a, (f, r)| a.max((f - r).abs()));
+    (full, reduced, if scale > 0.0 { diff / scale } else { 0.0 })
 }

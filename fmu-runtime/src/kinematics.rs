@@ -129,6 +129,34 @@ pub fn quaternion_multiply(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
     ]
 }
 
+/// The rotation nearest to a nearly orthonormal A (orthogonal polar factor, by Newton's iteration
+/// X <- (X + X^-T) / 2, quadratically convergent from near a rotation).
+pub fn nearest_rotation(a: &Mat3) -> Mat3 {
+    let mut x = *a;
+    for _ in 0..8 {
+        let det = x[0] * (x[4] * x[8] - x[5] * x[7]) - x[1] * (x[3] * x[8] - x[5] * x[6]) + x[2] * (x[3] * x[7] - x[4] * x[6]);
+        // X^-T = cof(X) / det
+        let cof = [
+            x[4] * x[8] - x[5] * x[7],
+            x[5] * x[6] - x[3] * x[8],
+            x[3] * x[7] - x[4] * x[6],
+            x[2] * x[7] - x[1] * x[8],
+            x[0] * x[8] - x[2] * x[6],
+            x[1] * x[6] - x[0] * x[7],
+            x[1] * x[5] - x[2] * x[4],
+            x[2] * x[3] - x[0] * x[5],
+            x[0] * x[4] - x[1] * x[3],
+        ];
+        let next: Mat3 = std::array::from_fn(|i| 0.5 * (x[i] + cof[i] / det));
+        let change = next.iter().zip(&x).fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+        x = next;
+        if change < 1e-16 {
+            break;
+        }
+    }
+    x
+}
+
 /// Largest entry of |A^T A - I| and whether det A > 0: how far an input is from a rotation.
 pub fn rotation_defect(a: &Mat3) -> f64 {
     let mut worst: f64 = 0.0;
@@ -146,6 +174,20 @@ pub fn rotation_defect(a: &Mat3) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn nearest_rotation_repairs_interpolated_matrices() {
+        // entrywise average of two rotations 0.1 rad apart: off orthonormal by ~1e-3
+        let (r1, r2) = (rotation_of([0.0, 0.0, 0.3]), rotation_of([0.0, 0.0, 0.4]));
+        let mean: Mat3 = std::array::from_fn(|i| 0.5 * (r1[i] + r2[i]));
+        assert!(rotation_defect(&mean) > 1e-3);
+        let fixed = nearest_rotation(&mean);
+        assert!(rotation_defect(&fixed) < 1e-15);
+        let expected = rotation_of([0.0, 0.0, 0.35]);
+        for i in 0..9 {
+            assert!((fixed[i] - expected[i]).abs() < 1e-15);
+        }
+    }
 
     #[test]
     fn rodrigues_is_orthonormal_and_rotates_about_its_axis() {
