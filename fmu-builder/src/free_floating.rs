@@ -12,7 +12,7 @@ use crate::ffrf;
 use crate::flange::Flange;
 use crate::inertia;
 use crate::mesh::Mesh;
-use crate::pipeline::{Built, guid, report_of};
+use crate::pipeline::{Built, guid, modal_damping, report_of};
 use crate::reduce::{self, Basis, EIGEN_TOL, ModeCount};
 use crate::report::{Accuracy, compare_compliance};
 use crate::sparse::{Sparse, SpdSolver, mul_new};
@@ -101,6 +101,7 @@ pub fn reduce(spec: Spec, mesh: Mesh, flanges: Vec<Flange>, material: Elasticity
         omega: basis.omega.clone(),
         alpha: spec.damping.alpha,
         beta: spec.damping.beta,
+        modal_damping: modal_damping(&spec, &basis.omega),
         mass: props.mass,
         first_moment: [0.0; 3],
         inertia: props.inertia,

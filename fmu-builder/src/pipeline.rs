@@ -201,6 +201,11 @@ pub(crate) fn report_of(
     }
 }
 
+/// 2 zeta_k omega_k per mode from the input's modal damping ratios.
+pub(crate) fn modal_damping(spec: &Spec, omega: &[f64]) -> Vec<f64> {
+    omega.iter().map(|w| 2.0 * spec.damping.modal_ratio_at(w / (2.0 * std::f64::consts::PI)) * w).collect()
+}
+
 pub(crate) fn guid(reduced: &ReducedBody) -> String {
     guid_of(&reduced.to_bytes())
 }
@@ -272,6 +277,7 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
         omega: basis.omega.clone(),
         alpha: spec.damping.alpha,
         beta: spec.damping.beta,
+        modal_damping: modal_damping(&spec, &basis.omega),
         mass: props.mass,
         first_moment: props.first_moment,
         inertia: props.inertia,

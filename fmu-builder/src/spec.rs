@@ -91,13 +91,37 @@ pub struct Material {
     pub rho: f64,
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, Default)]
+#[derive(Debug, Clone, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct Damping {
     #[serde(default)]
     pub alpha: f64,
     #[serde(default)]
     pub beta: f64,
+    #[serde(default)]
+    pub modal_ratio: Option<f64>,
+    #[serde(default)]
+    pub modal_bands: Option<Vec<DampingBand>>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DampingBand {
+    pub below: f64,
+    pub ratio: f64,
+}
+
+impl Damping {
+    /// Modal damping ratio of a mode at `hz` (added to the Rayleigh damping).
+    pub fn modal_ratio_at(&self, hz: f64) -> f64 {
+        if let Some(r) = self.modal_ratio {
+            return r;
+        }
+        self.modal_bands
+            .as_ref()
+            .and_then(|bands| bands.iter().find(|b| hz < b.below).map(|b| b.ratio))
+            .unwrap_or(0.0)
+    }
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
@@ -159,9 +183,11 @@ impl Face {
 pub enum Method {
     #[default]
     CraigBampton,
+    Modal,
+    Krylov,
 }
 
-#[derive(Debug, Clone, Copy, Deserialize)]
+#[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Reduction {
     #[serde(default)]
@@ -170,6 +196,10 @@ pub struct Reduction {
     pub modes: Option<usize>,
     #[serde(default)]
     pub max_frequency: Option<f64>,
+    #[serde(default)]
+    pub expansion_points: Option<Vec<f64>>,
+    #[serde(default)]
+    pub moments: Option<usize>,
 }
 
 /// JSON pointer `/flanges/1/nodes` -> `flanges[1].nodes`, the way users read their file.

@@ -403,7 +403,7 @@ impl FlexibleBody {
             let (alpha, beta) = (self.params.alpha, self.params.beta);
             for j in 0..n {
                 let w2 = self.body.omega[j] * self.body.omega[j];
-                self.eval.qdd[j] = self.load[j] - (alpha + beta * w2) * self.qd[j] - w2 * self.q[j];
+                self.eval.qdd[j] = self.load[j] - (alpha + beta * w2 + self.body.modal_damping[j]) * self.qd[j] - w2 * self.q[j];
             }
         }
         if self.coupling.active && self.frame.is_none() {
@@ -538,7 +538,7 @@ impl FlexibleBody {
         let rhs_q = &mut self.eval.qdd;
         for j in 0..n {
             let w2 = b.omega[j] * b.omega[j];
-            rhs_q[j] = self.load[j] - (alpha + beta * w2) * self.qd[j] - w2 * self.q[j];
+            rhs_q[j] = self.load[j] - (alpha + beta * w2 + b.modal_damping[j]) * self.qd[j] - w2 * self.q[j];
         }
         for i in 0..3 {
             let g = &rot_terms.g[i * nn..(i + 1) * nn];
@@ -734,7 +734,7 @@ impl FlexibleBody {
         self.prepare_coupling();
         let n = self.q.len();
         if !self.coupling.active {
-            self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, h);
+            self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, h);
             self.propagator.advance(&self.body.omega, &self.load, &mut self.q, &mut self.qd);
             self.eval.valid = false;
             return Ok(());
@@ -744,7 +744,7 @@ impl FlexibleBody {
         let rate = row_norm(&c.c_d) + row_norm(&c.c_k).sqrt();
         let substeps = ((h * rate / 0.1).ceil() as usize).clamp(1, 100_000);
         let hs = h / substeps as f64;
-        self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, hs);
+        self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, hs);
         for _ in 0..substeps {
             for i in 0..n {
                 self.scratch[i] = self.load[i] - self.coupling_force(i);
@@ -766,7 +766,7 @@ impl FlexibleBody {
         let spin = self.frame.map_or(0.0, |f| k3::dot(f.w_body, f.w_body).sqrt());
         let substeps = ((h * spin / 0.005).ceil() as usize).clamp(1, 1_000_000);
         let hs = h / substeps as f64;
-        self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, hs);
+        self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, hs);
         let mut load0 = vec![0.0; n];
         for _ in 0..substeps {
             let start = self.frame.ok_or("not a free-floating body")?;
@@ -798,7 +798,7 @@ impl FlexibleBody {
         let (alpha, beta) = (self.params.alpha, self.params.beta);
         for j in 0..self.q.len() {
             let w2 = self.body.omega[j] * self.body.omega[j];
-            out[j] = self.eval.qdd[j] + (alpha + beta * w2) * self.qd[j] + w2 * self.q[j];
+            out[j] = self.eval.qdd[j] + (alpha + beta * w2 + self.body.modal_damping[j]) * self.qd[j] + w2 * self.q[j];
         }
     }
 

@@ -52,16 +52,17 @@ pub struct ModalPropagator {
 }
 
 impl ModalPropagator {
-    /// Prepare for steps of size `h` with modal damping `d_k = alpha + beta w_k^2`.
-    /// Recomputes only when h or the damping changed, so a fixed-step host pays it once.
-    pub fn prepare(&mut self, omega: &[f64], alpha: f64, beta: f64, h: f64) {
+    /// Prepare for steps of size `h` with modal damping `d_k = alpha + beta w_k^2 + extra_k`
+    /// (`extra`: the body's fixed modal damping, 2 zeta_k w_k). Recomputes only when h or the
+    /// Rayleigh coefficients changed, so a fixed-step host pays it once.
+    pub fn prepare(&mut self, omega: &[f64], alpha: f64, beta: f64, extra: &[f64], h: f64) {
         let key = (h, alpha, beta);
         if self.key == Some(key) && self.transitions.len() == omega.len() {
             return;
         }
         self.transitions.clear();
         self.transitions
-            .extend(omega.iter().map(|&w| Transition::new(w, alpha + beta * w * w, h)));
+            .extend(omega.iter().zip(extra).map(|(&w, &e)| Transition::new(w, alpha + beta * w * w + e, h)));
         self.key = Some(key);
     }
 
@@ -120,7 +121,7 @@ mod tests {
         // 10 kHz modes, h = 10 ms: h w ~ 630; overdamped by beta = 1e-3 (d ~ 4e3 * w)
         let omega = [2.0 * std::f64::consts::PI * 1e4, 50.0];
         let mut p = ModalPropagator::default();
-        p.prepare(&omega, 1.0, 1e-3, 0.01);
+        p.prepare(&omega, 1.0, 1e-3, &[0.0, 0.0], 0.01);
         let (mut q, mut qd) = (vec![1e-3, 1e-3], vec![10.0, 0.0]);
         let load = [0.0, 0.0];
         for _ in 0..10000 {

@@ -49,6 +49,8 @@ pub struct ReducedBody {
     /// Rayleigh damping defaults (D = alpha M + beta K), the FMU parameters' start values.
     pub alpha: f64,
     pub beta: f64,
+    /// Fixed modal damping added per mode, 2 zeta_k omega_k [1/s] (zeros: none).
+    pub modal_damping: Vec<f64>,
     pub mass: f64,
     /// m * c: first moment of mass about the body origin, undeformed [kg m].
     pub first_moment: [f64; 3],
@@ -82,6 +84,7 @@ impl ReducedBody {
         c.put_array("omega", &[n], &self.omega);
         c.put_array("damping.alpha", &[1], &[self.alpha]);
         c.put_array("damping.beta", &[1], &[self.beta]);
+        c.put_array("damping.modal", &[n], &self.modal_damping);
         c.put_array("mass", &[1], &[self.mass]);
         c.put_array("first_moment", &[3], &self.first_moment);
         c.put_array("inertia", &[3, 3], &self.inertia);
@@ -182,6 +185,7 @@ impl ReducedBody {
             omega,
             alpha: c.scalar("damping.alpha")?,
             beta: c.scalar("damping.beta")?,
+            modal_damping: c.array("damping.modal", &[n])?.to_vec(),
             mass: c.scalar("mass")?,
             first_moment: to3(c.array("first_moment", &[3])?),
             inertia,
@@ -218,6 +222,7 @@ pub fn two_mode_body() -> ReducedBody {
         omega: vec![10.0, 2000.0],
         alpha: 0.5,
         beta: 1e-4,
+        modal_damping: vec![0.0, 0.0],
         mass: 2.0,
         first_moment: [1.0, 0.0, 0.0],
         inertia: [0.1, 0.0, 0.0, 0.0, 0.7, 0.0, 0.0, 0.0, 0.7],
