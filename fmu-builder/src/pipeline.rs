@@ -13,7 +13,7 @@ use crate::report::{self, FlangeReport, Report};
 use crate::free_floating;
 use crate::inertia::{self, LoadCase};
 use crate::sparse::{self, SpdSolver};
-use crate::spec::{Element, Role, SceneLoad, Spec};
+use crate::spec::{Element, Method, Role, SceneLoad, Spec};
 use crate::stiffening::reduced_geometric_stiffness;
 use faer::{Mat, MatRef};
 use fmu_runtime::reduced::{RotationTerms, Stiffening};
@@ -248,7 +248,19 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
         solver.solve_refined(u.as_mut());
         Some(u)
     };
-    let basis = reduce::craig_bampton(&model, modes, load_shapes.as_ref())?;
+    let (basis, method) = match spec.reduction.method {
+        Method::CraigBampton => (reduce::craig_bampton(&model, modes, load_shapes.as_ref())?, "Craig-Bampton".to_string()),
+        Method::Modal => (
+            reduce::modal(&model, &solver, modes, load_shapes.as_ref())?,
+            "modal with residual flexibility".to_string(),
+        ),
+        Method::Krylov => {
+            let points = spec.reduction.expansion_points.clone().unwrap_or_default();
+            let moments = spec.reduction.moments.unwrap_or(2);
+            let name = format!("second-order Krylov, {moments} block moments at {points:?} Hz and 0 Hz");
+            (reduce::krylov(&model, &solver, &points, moments, load_shapes.as_ref())?, name)
+        }
+    };
     let inv = ffrf::invariants(&model, &mesh.nodes, &flanges, origin, &basis);
     let phi_mesh = inertia::expand(&model, &mesh.nodes, &flanges, basis.phi.as_ref());
     let rotation = spec.rotates().then(|| {
@@ -312,7 +324,8 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
             accuracy.inertial_flange_response_full.push(response);
         }
     }
-    let report = report_of(&spec, &mesh, &flanges, &model, &basis, &reduced, "Craig-Bampton", 6 * force.len(), accuracy);
+    let statics = basis.omega.len() - basis.n_normal;
+    let report = report_of(&spec, &mesh, &flanges, &model, &basis, &reduced, &method, statics, accuracy);
     Ok(Built { spec, mesh, flanges, model, basis, reduced, report })
 }
 

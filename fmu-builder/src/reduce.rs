@@ -213,3 +213,140 @@ pub fn inertia_relief_solve(k_shifted: &SpdSolver, m: &crate::sparse::Sparse, sh
     }
     u
 }
+
+/// Unit loads at the force flanges' master DoFs (n_clamped x 6 per flange).
+pub fn flange_unit_loads(model: &Assembled) -> Mat<f64> {
+    let d = &model.dofs;
+    let nc = d.n_clamped();
+    let firsts: Vec<usize> = (0..d.flange_first.len()).filter(|&k| Some(k) != d.mount).map(|k| d.flange_first[k]).collect();
+    let mut b = Mat::<f64>::zeros(nc, 6 * firsts.len());
+    for (f, first) in firsts.iter().enumerate() {
+        for i in 0..6 {
+            b[(first + i, 6 * f + i)] = 1.0;
+        }
+    }
+    b
+}
+
+/// Modal reduction with residual flexibility (static correction): the normal modes of the
+/// mounted body (force flanges free) plus the static shapes of unit flange loads, so the static
+/// response is exact and the modes carry the dynamics.
+pub fn modal(model: &Assembled, solver: &SpdSolver, modes: ModeCount, static_shapes: Option<&Mat<f64>>) -> Result<Basis> {
+    let nc = model.dofs.n_clamped();
+    let m = block(&model.mass, 0..nc, 0..nc)?;
+    let normal = match modes {
+        ModeCount::Count(c) => eigen::lowest(solver, &m, c, EIGEN_TOL)?,
+        ModeCount::Below(f) => eigen::below(solver, &m, 2.0 * std::f64::consts::PI * f, 0, EIGEN_TOL)?,
+    };
+    let mut attachment = flange_unit_loads(model);
+    solver.solve_refined(attachment.as_mut());
+    let nm = normal.values.len();
+    let v = concat(&[&normal.vectors, &attachment, static_shapes.unwrap_or(&Mat::zeros(nc, 0))]);
+    let (phi, omega) = orthonormalise(model, v)?;
+    Ok(Basis { phi, omega, n_normal: nm, fixed_interface_omega: normal.values.iter().map(|l| l.sqrt()).collect() })
+}
+
+fn concat(parts: &[&Mat<f64>]) -> Mat<f64> {
+    let n = parts[0].nrows();
+    let total = parts.iter().map(|p| p.ncols()).sum();
+    let mut out = Mat::<f64>::zeros(n, total);
+    let mut c = 0;
+    for p in parts {
+        out.as_mut().subcols_mut(c, p.ncols()).copy_from(*p);
+        c += p.ncols();
+    }
+    out
+}
+
+/// Second-order Krylov moment matching (undamped, block, real): at each expansion point s = i w0
+/// the moments R_0 = (K - w0^2 M)^-1 B, R_j = (K - w0^2 M)^-1 M R_(j-1) of the flange transfer
+/// function, M-orthogonalised block by block against everything before (twice: Gram-Schmidt
+/// keeps orthogonality only when repeated) with deflation of directions already spanned. The
+/// static point w0 = 0 is always the first, so flange statics stay exact; imaginary points
+/// keep the basis real because the undamped K - w0^2 M is real.
+pub fn krylov(model: &Assembled, solver: &SpdSolver, points_hz: &[f64], moments: usize, static_shapes: Option<&Mat<f64>>) -> Result<Basis> {
+    let nc = model.dofs.n_clamped();
+    let k = block(&model.stiffness, 0..nc, 0..nc)?;
+    let m = block(&model.mass, 0..nc, 0..nc)?;
+    let b = flange_unit_loads(model);
+    let mut points: Vec<f64> = vec![0.0];
+    for &p in points_hz {
+        if p > 0.0 && !points.iter().any(|q| (q - p).abs() <= 1e-9 * p) {
+            points.push(p);
+        }
+    }
+    let mut basis = Mat::<f64>::zeros(nc, 0);
+    let mut m_basis = Mat::<f64>::zeros(nc, 0);
+    for &f in &points {
+        let w0 = 2.0 * std::f64::consts::PI * f;
+        let lu = if f == 0.0 {
+            None
+        } else {
+            let a = crate::sparse::add_scaled(&k, -w0 * w0, &m)?;
+            Some(crate::sparse::LuSolver::new(&a, &format!("K - w^2 M at the expansion point {f} Hz (an eigenfrequency?)"))?)
+        };
+        let apply = |x: &mut Mat<f64>| match &lu {
+            Some(lu) => lu.solve_refined(x.as_mut()),
+            None => solver.solve_refined(x.as_mut()),
+        };
+        let mut block_ = b.clone();
+        apply(&mut block_);
+        for j in 0..moments {
+            if j > 0 {
+                block_ = mul_new(&m, block_.as_ref());
+                apply(&mut block_);
+            }
+            let kept = m_orthogonal_extend(&mut basis, &mut m_basis, &block_, &m);
+            if kept == 0 {
+                break; // the Krylov space is exhausted at this point
+            }
+        }
+    }
+    if let Some(s) = static_shapes {
+        m_orthogonal_extend(&mut basis, &mut m_basis, s, &m);
+    }
+    let (phi, omega) = orthonormalise(model, basis)?;
+    Ok(Basis { phi, omega, n_normal: 0, fixed_interface_omega: Vec::new() })
+}
+
+/// Append the columns of `new` to the M-orthonormal `basis` after M-orthogonalising them against
+/// it and each other (twice), dropping those that are spanned already: a remainder below 1e-7
+/// of the column's M-norm is mostly round-off of the solves, and kept it would only add a
+/// spurious stiff direction that costs the reduced eigenproblem its conditioning. Returns how
+/// many were kept.
+fn m_orthogonal_extend(basis: &mut Mat<f64>, m_basis: &mut Mat<f64>, new: &Mat<f64>, m: &crate::sparse::Sparse) -> usize {
+    let n = new.nrows();
+    let mut kept = 0;
+    for j in 0..new.ncols() {
+        let mut v = new.col(j).to_owned().as_mat().to_owned();
+        let norm0 = m_norm(&v, m);
+        if !(norm0 > 0.0) {
+            continue;
+        }
+        for _ in 0..2 {
+            let c = m_basis.transpose() * &v;
+            v -= &*basis * &c;
+        }
+        let norm = m_norm(&v, m);
+        if norm <= 1e-7 * norm0 {
+            continue;
+        }
+        v *= faer::Scale(1.0 / norm);
+        let mv = mul_new(m, v.as_ref());
+        let mut grown = Mat::<f64>::zeros(n, basis.ncols() + 1);
+        grown.as_mut().subcols_mut(0, basis.ncols()).copy_from(&*basis);
+        grown.as_mut().col_mut(basis.ncols()).copy_from(v.col(0));
+        let mut grown_m = Mat::<f64>::zeros(n, basis.ncols() + 1);
+        grown_m.as_mut().subcols_mut(0, basis.ncols()).copy_from(&*m_basis);
+        grown_m.as_mut().col_mut(basis.ncols()).copy_from(mv.col(0));
+        *basis = grown;
+        *m_basis = grown_m;
+        kept += 1;
+    }
+    kept
+}
+
+fn m_norm(v: &Mat<f64>, m: &crate::sparse::Sparse) -> f64 {
+    let mv = mul_new(m, v.as_ref());
+    (0..v.nrows()).map(|i| v[(i, 0)] * mv[(i, 0)]).sum::<f64>().max(0.0).sqrt()
+}

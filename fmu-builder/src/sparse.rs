@@ -85,6 +85,48 @@ pub fn mul_compensated(c: Option<MatRef<'_, f64>>, sign: f64, a: &Sparse, x: Mat
     out
 }
 
+/// Sparse LU of a general (here: symmetric indefinite, K - w^2 M above the first eigenvalue)
+/// matrix, with the same double-double refinement as the Cholesky solver.
+pub struct LuSolver {
+    lu: faer::sparse::linalg::solvers::Lu<usize, f64>,
+    matrix: Sparse,
+}
+
+impl LuSolver {
+    pub fn new(a: &Sparse, what: &str) -> Result<Self> {
+        let lu = a.sp_lu().map_err(|e| BuildError::Numerical(format!("{what} is singular ({e:?})")))?;
+        Ok(Self { lu, matrix: a.clone() })
+    }
+
+    pub fn solve_refined(&self, mut rhs: MatMut<'_, f64>) {
+        let b = rhs.to_owned();
+        self.lu.solve_in_place(rhs.rb_mut());
+        for _ in 0..2 {
+            let mut r = mul_compensated(Some(b.as_ref()), -1.0, &self.matrix, rhs.rb());
+            self.lu.solve_in_place(r.as_mut());
+            for j in 0..r.ncols() {
+                for i in 0..r.nrows() {
+                    rhs[(i, j)] += r[(i, j)];
+                }
+            }
+        }
+    }
+}
+
+/// A + c B for matrices of the same size.
+pub fn add_scaled(a: &Sparse, c: f64, b: &Sparse) -> Result<Sparse> {
+    let mut trip = Vec::new();
+    for (m, scale) in [(a, 1.0), (b, c)] {
+        for j in 0..m.ncols() {
+            for (&i, &v) in m.row_idx_of_col_raw(j).iter().zip(m.val_of_col(j)) {
+                trip.push(Triplet::new(i, j, scale * v));
+            }
+        }
+    }
+    SparseColMat::try_new_from_triplets(a.nrows(), a.ncols(), &trip)
+        .map_err(|e| BuildError::Numerical(format!("adding sparse matrices: {e:?}")))
+}
+
 /// Sparse Cholesky of a symmetric positive definite matrix (fill-reducing ordering inside faer).
 pub struct SpdSolver {
     llt: Llt<usize, f64>,

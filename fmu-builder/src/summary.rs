@@ -14,7 +14,7 @@ pub fn text(r: &Report) -> String {
     }
     let _ = writeln!(
         s,
-        "  {}: {} fixed-interface modes + {} constraint modes = order {}",
+        "  {}: {} normal modes + {} static/Krylov shapes = order {}",
         r.method, r.fixed_interface_modes, r.constraint_modes, r.order
     );
     let a = &r.accuracy;
