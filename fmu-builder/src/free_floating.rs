@@ -145,5 +145,6 @@ fn accuracy(model: &Assembled, solver: &SpdSolver, shift: f64, rigid: &Deflation
         compliance_max_relative_error,
         inertial_cases: Vec::new(),
         inertial_flange_response_full: Vec::new(),
+        frequency_response: None,
     })
 }

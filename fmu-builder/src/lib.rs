@@ -10,6 +10,7 @@ pub mod fe;
 pub mod fmu;
 pub mod flange;
 pub mod free_floating;
+pub mod frf;
 pub mod inertia;
 pub mod mesh;
 pub mod reduce;

@@ -11,6 +11,7 @@ use crate::mesh::{self, BoxRegion, Mesh, MeshError};
 use crate::reduce::{self, Basis, ModeCount};
 use crate::report::{self, FlangeReport, Report};
 use crate::free_floating;
+use crate::frf;
 use crate::inertia::{self, LoadCase};
 use crate::sparse::{self, SpdSolver};
 use crate::spec::{Element, Method, Role, SceneLoad, Spec};
@@ -311,7 +312,16 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
 
     let force_dofs: Vec<(String, usize)> =
         force.iter().map(|&k| (flanges[k].name.clone(), model.dofs.flange_first[k])).collect();
-    let mut accuracy = report::accuracy(&model, &solver, &basis, &force_dofs, basis.omega.len())?;
+    let mut accuracy = report::accuracy(&model, &solver, &basis, &force_dofs, basis.omega.len().max(10))?;
+    if !force.is_empty() {
+        let band = spec.scene.as_ref().and_then(|s| s.band).unwrap_or_else(|| {
+            let full = &accuracy.full_hz;
+            [0.0, full.get(9).or(full.last()).copied().unwrap_or(1.0)]
+        });
+        let damping = frf::ComparisonDamping::new(spec.damping.alpha, spec.damping.beta);
+        accuracy.frequency_response =
+            Some(frf::compare(&model, &basis, damping, band, &accuracy.full_hz, &accuracy.compliance_full)?);
+    }
     if let Some(shapes) = &load_shapes {
         let axis = ["x", "y", "z"];
         for (c, case) in cases.iter().enumerate() {

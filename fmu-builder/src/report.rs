@@ -36,6 +36,8 @@ pub struct Accuracy {
     /// rows): what the FMU must reproduce exactly in statics.
     pub inertial_cases: Vec<String>,
     pub inertial_flange_response_full: Vec<Vec<f64>>,
+    /// Flange transfer functions full vs reduced over the band (mounted bodies with force flanges).
+    pub frequency_response: Option<crate::frf::FrequencyResponse>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -91,6 +93,7 @@ pub fn accuracy(model: &Assembled, solver: &SpdSolver, basis: &Basis, force_flan
         compliance_max_relative_error,
         inertial_cases: Vec::new(),
         inertial_flange_response_full: Vec::new(),
+        frequency_response: None,
     })
 }
 

@@ -42,6 +42,10 @@ pub struct Scene {
     pub loads: Vec<SceneLoad>,
     #[serde(default)]
     pub geometric_stiffening: bool,
+    #[serde(default)]
+    pub band: Option<[f64; 2]>,
+    #[serde(default)]
+    pub tolerance: Option<f64>,
 }
 
 impl Spec {
@@ -298,6 +302,11 @@ impl Spec {
                     return Err(BuildError::input(path, format!("flanges[{i}].nodes.plane.normal"), "the normal is the zero vector"));
                 }
                 _ => {}
+            }
+        }
+        if let Some([lo, hi]) = self.scene.as_ref().and_then(|s| s.band) {
+            if !(hi > lo) {
+                return Err(BuildError::input(path, "scene.band", format!("the band's upper limit {hi} Hz must exceed its lower limit {lo} Hz")));
             }
         }
         for (i, b) in self.geometry.boxes.iter().enumerate() {

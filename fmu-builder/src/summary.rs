@@ -37,5 +37,15 @@ pub fn text(r: &Report) -> String {
         }
     }
     let _ = writeln!(s, "  vs full FE: static flange compliance within {:.1e}", a.compliance_max_relative_error);
+    if let Some(frf) = &a.frequency_response {
+        let _ = writeln!(
+            s,
+            "  vs full FE: flange transfer functions over {:.4}..{:.4} Hz within {:.2e} ({} frequencies)",
+            frf.band_hz[0],
+            frf.band_hz[1],
+            frf.max_relative_error,
+            frf.frequencies_hz.len()
+        );
+    }
     s
 }

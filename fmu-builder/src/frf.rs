@@ -1,0 +1,204 @@
+//! Flange-to-flange frequency response of the full FE model and of the reduced model over the
+//! scene's band, and the error between them: H(w) = B^T (K (1 + i eta) + i w D - w^2 M)^-1 B with
+//! B the unit loads at the force flanges, by a complex sparse LU of the full model per sampled
+//! frequency, and in closed form for the reduced model (its matrices are diagonal).
+
+use crate::assembly::Assembled;
+use crate::error::{BuildError, Result};
+use crate::reduce::{Basis, flange_unit_loads};
+use crate::sparse::block;
+use faer::c64;
+use faer::linalg::solvers::Solve;
+use faer::sparse::{SparseColMat, Triplet};
+use faer::Mat;
+use serde::Serialize;
+
+/// The damping both models are compared with: the input's Rayleigh damping, or a 1 % structural
+/// loss factor when it has none (an undamped response is infinite at the eigenfrequencies).
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct ComparisonDamping {
+    pub alpha: f64,
+    pub beta: f64,
+    pub loss_factor: f64,
+}
+
+impl ComparisonDamping {
+    pub fn new(alpha: f64, beta: f64) -> Self {
+        if alpha == 0.0 && beta == 0.0 { Self { alpha, beta, loss_factor: 0.01 } } else { Self { alpha, beta, loss_factor: 0.0 } }
+    }
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct FrequencyResponse {
+    pub band_hz: [f64; 2],
+    pub damping: ComparisonDamping,
+    pub frequencies_hz: Vec<f64>,
+    /// Per frequency: |S (H_full - H_red) S|_F / |S H_full S|_F, S = diag(C_static)^-1/2 (unit-free).
+    pub relative_error: Vec<f64>,
+    pub max_relative_error: f64,
+    /// Per frequency, the driving-point magnitudes |H_ii| of each flange DoF (6 per flange), full
+    /// and reduced: the curves of the report's plots.
+    pub driving_point_full: Vec<Vec<f64>>,
+    pub driving_point_reduced: Vec<Vec<f64>>,
+}
+
+/// Sample frequencies: an even grid over the band plus every full-model eigenfrequency in it and
+/// its close neighbours, where responses peak and errors hide.
+pub fn grid(band: [f64; 2], eigen_hz: &[f64], points: usize) -> Vec<f64> {
+    let mut f: Vec<f64> = (0..points).map(|i| band[0] + (band[1] - band[0]) * (i as f64 + 0.5) / points as f64).collect();
+    for &e in eigen_hz {
+        for x in [0.995 * e, e, 1.005 * e] {
+            if x >= band[0] && x <= band[1] {
+                f.push(x);
+            }
+        }
+    }
+    f.sort_by(|a, b| a.total_cmp(b));
+    f.dedup_by(|a, b| (*a - *b).abs() <= 1e-9 * b.abs().max(1e-9));
+    f
+}
+
+/// The full model's flange FRF, factor by factor: K + M pattern and the symbolic LU analysed
+/// once, a numeric complex LU per frequency.
+pub struct FullResponse {
+    k: crate::sparse::Sparse,
+    m: crate::sparse::Sparse,
+    b: Mat<f64>,
+    rows: Vec<usize>,
+    /// Pattern of K + M, and where each stored entry of K and of M lands in it.
+    pattern: faer::sparse::SymbolicSparseColMat<usize>,
+    k_slot: Vec<usize>,
+    m_slot: Vec<usize>,
+    symbolic: Option<faer::sparse::linalg::solvers::SymbolicLu<usize>>,
+}
+
+impl FullResponse {
+    pub fn new(model: &Assembled) -> Result<Self> {
+        let nc = model.dofs.n_clamped();
+        let k = block(&model.stiffness, 0..nc, 0..nc)?;
+        let m = block(&model.mass, 0..nc, 0..nc)?;
+        let b = flange_unit_loads(model);
+        let rows = flange_rows(&b);
+        let mut trip = Vec::new();
+        for a in [&k, &m] {
+            for j in 0..nc {
+                for &i in a.row_idx_of_col_raw(j) {
+                    trip.push(Triplet::new(i, j, 0.0f64));
+                }
+            }
+        }
+        let union = SparseColMat::<usize, f64>::try_new_from_triplets(nc, nc, &trip)
+            .map_err(|e| BuildError::Numerical(format!("pattern of K + M: {e:?}")))?;
+        let pattern = union.symbolic().to_owned().map_err(|e| BuildError::Numerical(format!("pattern of K + M: {e:?}")))?;
+        let slots = |a: &crate::sparse::Sparse| -> Vec<usize> {
+            let mut out = Vec::with_capacity(a.val().len());
+            for j in 0..nc {
+                let start = union.symbolic().col_ptr()[j];
+                let col = union.row_idx_of_col_raw(j);
+                for &i in a.row_idx_of_col_raw(j) {
+                    out.push(start + col.binary_search(&i).unwrap_or(0));
+                }
+            }
+            out
+        };
+        let (k_slot, m_slot) = (slots(&k), slots(&m));
+        Ok(Self { k, m, b, rows, pattern, k_slot, m_slot, symbolic: None })
+    }
+
+    /// Flange FRF at `hz` (nb x nb).
+    pub fn at(&mut self, damping: ComparisonDamping, hz: f64) -> Result<Mat<c64>> {
+        let nc = self.k.nrows();
+        let w = 2.0 * std::f64::consts::PI * hz;
+        // K (1 + i eta) + i w (alpha M + beta K) - w^2 M, always with the same triplet order
+        let k_coef = c64::new(1.0, damping.loss_factor + w * damping.beta);
+        let m_coef = c64::new(-w * w, w * damping.alpha);
+        let mut values = vec![c64::new(0.0, 0.0); self.pattern.row_idx().len()];
+        for (a, coef, slots) in [(&self.k, k_coef, &self.k_slot), (&self.m, m_coef, &self.m_slot)] {
+            // stored entries, column by column, in the order `slots` was built
+            let mut e = 0;
+            for j in 0..nc {
+                for &v in a.val_of_col(j) {
+                    values[slots[e]] += coef * v;
+                    e += 1;
+                }
+            }
+        }
+        let z = SparseColMat::<usize, c64>::new(self.pattern.clone(), values);
+        if self.symbolic.is_none() {
+            self.symbolic = Some(
+                faer::sparse::linalg::solvers::SymbolicLu::try_new(z.symbolic())
+                    .map_err(|e| BuildError::Numerical(format!("symbolic LU: {e:?}")))?,
+            );
+        }
+        let symbolic = self.symbolic.clone().ok_or_else(|| BuildError::Numerical("symbolic LU missing".into()))?;
+        let lu = faer::sparse::linalg::solvers::Lu::try_new_with_symbolic(symbolic, z.as_ref())
+            .map_err(|e| BuildError::Numerical(format!("dynamic stiffness at {hz} Hz is singular: {e:?}")))?;
+        let mut x = Mat::<c64>::from_fn(nc, self.b.ncols(), |i, j| c64::new(self.b[(i, j)], 0.0));
+        lu.solve_in_place(x.as_mut());
+        let rows = &self.rows;
+        Ok(Mat::from_fn(rows.len(), rows.len(), |i, j| x[(rows[i], j)]))
+    }
+}
+
+/// Row index of each unit load in B (its flange master DoF).
+fn flange_rows(b: &Mat<f64>) -> Vec<usize> {
+    (0..b.ncols()).map(|j| (0..b.nrows()).find(|&i| b[(i, j)] != 0.0).unwrap_or(0)).collect()
+}
+
+/// Reduced-model flange FRF at `hz`: Phi_b diag(1 / (lambda (1 + i eta) + i w d - w^2)) Phi_b^T,
+/// with the same Rayleigh damping projected (diagonal: Phi is M- and K-orthogonal).
+pub fn reduced_response(model: &Assembled, basis: &Basis, damping: ComparisonDamping, hz: f64) -> Mat<c64> {
+    let b = flange_unit_loads(model);
+    let rows = flange_rows(&b);
+    let w = 2.0 * std::f64::consts::PI * hz;
+    let r = basis.omega.len();
+    let g: Vec<c64> = (0..r)
+        .map(|k| {
+            let lambda = basis.omega[k] * basis.omega[k];
+            let d = damping.alpha + damping.beta * lambda;
+            c64::new(1.0, 0.0) / c64::new(lambda - w * w, lambda * damping.loss_factor + w * d)
+        })
+        .collect();
+    Mat::from_fn(rows.len(), rows.len(), |i, j| {
+        let mut s = c64::new(0.0, 0.0);
+        for k in 0..r {
+            s += g[k] * (basis.phi[(rows[i], k)] * basis.phi[(rows[j], k)]);
+        }
+        s
+    })
+}
+
+/// Full vs reduced over the band.
+pub fn compare(model: &Assembled, basis: &Basis, damping: ComparisonDamping, band: [f64; 2], eigen_hz: &[f64], static_compliance: &[Vec<f64>]) -> Result<FrequencyResponse> {
+    let frequencies = grid(band, eigen_hz, 60);
+    let scale: Vec<f64> = (0..static_compliance.len()).map(|i| 1.0 / static_compliance[i][i].abs().sqrt().max(1e-300)).collect();
+    let mut relative_error = Vec::with_capacity(frequencies.len());
+    let mut driving_point_full = Vec::new();
+    let mut driving_point_reduced = Vec::new();
+    let mut full_model = FullResponse::new(model)?;
+    for &f in &frequencies {
+        let full = full_model.at(damping, f)?;
+        let red = reduced_response(model, basis, damping, f);
+        let (mut num, mut den) = (0.0, 0.0);
+        for i in 0..full.nrows() {
+            for j in 0..full.ncols() {
+                let s = scale[i] * scale[j];
+                num += ((full[(i, j)] - red[(i, j)]) * s).norm_sqr();
+                den += (full[(i, j)] * s).norm_sqr();
+            }
+        }
+        relative_error.push(if den > 0.0 { (num / den).sqrt() } else { 0.0 });
+        driving_point_full.push((0..full.nrows()).map(|i| full[(i, i)].norm()).collect());
+        driving_point_reduced.push((0..red.nrows()).map(|i| red[(i, i)].norm()).collect());
+    }
+    let max_relative_error = relative_error.iter().copied().fold(0.0, f64::max);
+    Ok(FrequencyResponse {
+        band_hz: band,
+        damping,
+        frequencies_hz: frequencies,
+        relative_error,
+        max_relative_error,
+        driving_point_full,
+        driving_point_reduced,
+    })
+}
