@@ -13,6 +13,7 @@ pub mod free_floating;
 pub mod frf;
 pub mod inertia;
 pub mod mesh;
+pub mod order;
 pub mod reduce;
 pub mod sparse;
 pub mod spec;

@@ -10,6 +10,8 @@ use crate::flange::{self, Flange};
 use crate::mesh::{self, BoxRegion, Mesh, MeshError};
 use crate::reduce::{self, Basis, ModeCount};
 use crate::report::{self, FlangeReport, Report};
+use crate::eigen;
+use crate::order;
 use crate::free_floating;
 use crate::frf;
 use crate::inertia::{self, LoadCase};
@@ -211,6 +213,81 @@ pub(crate) fn guid(reduced: &ReducedBody) -> String {
     guid_of(&reduced.to_bytes())
 }
 
+/// The band of the scene, or 0 to the tenth eigenfrequency of the mounted body.
+fn band_of(spec: &Spec, full_hz: &[f64]) -> [f64; 2] {
+    spec.scene.as_ref().and_then(|s| s.band).unwrap_or_else(|| [0.0, full_hz.get(9).or(full_hz.last()).copied().unwrap_or(1.0)])
+}
+
+/// The smallest dominant selection of the candidate basis meeting the scene's tolerance.
+#[allow(clippy::too_many_arguments)]
+fn choose_order(
+    spec: &Spec,
+    model: &Assembled,
+    mesh: &Mesh,
+    flanges: &[Flange],
+    solver: &SpdSolver,
+    origin: [f64; 3],
+    cases: &[LoadCase],
+    rich: Basis,
+    tol: f64,
+) -> Result<Basis> {
+    let nc = model.dofs.n_clamped();
+    let m = sparse::block(&model.mass, 0..nc, 0..nc)?;
+    let b = reduce::flange_unit_loads(model);
+    let rows: Vec<usize> = (0..b.ncols()).map(|j| (0..nc).find(|&i| b[(i, j)] != 0.0).unwrap_or(0)).collect();
+    let phi_b = Mat::<f64>::from_fn(rows.len(), rich.omega.len(), |i, k| rich.phi[(rows[i], k)]);
+    // loads in the rich model's coordinates: flange unit loads and the scene's inertial loads
+    let mut loads = phi_b.transpose().to_owned();
+    if !cases.is_empty() {
+        let mut f = Mat::<f64>::zeros(3 * mesh.n_nodes(), cases.len());
+        for (c, case) in cases.iter().enumerate() {
+            f.as_mut().col_mut(c).copy_from(inertia::inertial_load(model, &mesh.nodes, origin, *case).col(0));
+        }
+        let fc = inertia::restrict(model, &mesh.nodes, flanges, f.as_ref());
+        let p = rich.phi.transpose() * &fc;
+        let mut both = Mat::<f64>::zeros(loads.nrows(), loads.ncols() + p.ncols());
+        both.as_mut().subcols_mut(0, loads.ncols()).copy_from(&loads);
+        both.as_mut().subcols_mut(loads.ncols(), p.ncols()).copy_from(&p);
+        loads = both;
+    }
+    let damping = frf::ComparisonDamping::new(spec.damping.alpha, spec.damping.beta);
+    let full_modes = eigen::lowest(solver, &m, 10, reduce::EIGEN_TOL)?;
+    let full_hz: Vec<f64> = full_modes.values.iter().map(|l| l.sqrt() / (2.0 * std::f64::consts::PI)).collect();
+    let band = band_of(spec, &full_hz);
+    let in_band = eigen::below(solver, &m, 2.0 * std::f64::consts::PI * band[1] * 1.01, 1, reduce::EIGEN_TOL)?;
+    let eigen_hz: Vec<f64> = in_band.values.iter().map(|l| l.sqrt() / (2.0 * std::f64::consts::PI)).collect();
+    let freqs = frf::grid(band, &eigen_hz, 60);
+    let mut full = frf::FullResponse::new(model)?;
+    let responses: Vec<_> = freqs.iter().map(|&f| full.at(damping, f)).collect::<Result<_>>()?;
+    // unit-free scaling by the static compliance diagonal
+    let mut g = b.clone();
+    solver.solve_refined(g.as_mut());
+    let scale: Vec<f64> = rows.iter().enumerate().map(|(j, &r)| 1.0 / g[(r, j)].abs().sqrt().max(1e-300)).collect();
+    let ranking = order::dominance_order(&rich.omega, &phi_b, damping, &freqs);
+    let mut best = f64::INFINITY;
+    for count in 0..=ranking.len() {
+        let mut kept: Vec<usize> = ranking[..count].to_vec();
+        kept.sort_unstable();
+        let sel = order::select(&rich.omega, &kept, &loads);
+        let err = order::frf_error(&sel, &phi_b, damping, &freqs, &responses, &scale);
+        best = best.min(err);
+        if err <= tol {
+            let phi = &rich.phi * &sel.y;
+            return Ok(Basis { phi, omega: sel.omega, n_normal: sel.kept_modes, fixed_interface_omega: rich.fixed_interface_omega });
+        }
+    }
+    Err(BuildError::Input {
+        file: std::path::PathBuf::from(&spec.name),
+        field: "scene.tolerance".into(),
+        message: format!(
+            "the tolerance {tol:e} is not met over {:.4}..{:.4} Hz even with all {} modes of the candidate model (best {best:.2e}): give the reduction more modes or expansion points",
+            band[0],
+            band[1],
+            rich.omega.len()
+        ),
+    })
+}
+
 /// Read, mesh, couple, assemble and reduce: everything but writing the FMU.
 pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
     let mesh = mesh_of(&spec, file)?;
@@ -261,6 +338,12 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
             let name = format!("second-order Krylov, {moments} block moments at {points:?} Hz and 0 Hz");
             (reduce::krylov(&model, &solver, &points, moments, load_shapes.as_ref())?, name)
         }
+    };
+    let basis = match spec.scene.as_ref().and_then(|s| s.tolerance) {
+        Some(tol) if !model.dofs.flange_first.is_empty() && spec.scene.is_some() => {
+            choose_order(&spec, &model, &mesh, &flanges, &solver, origin, &cases, basis, tol)?
+        }
+        _ => basis,
     };
     let inv = ffrf::invariants(&model, &mesh.nodes, &flanges, origin, &basis);
     let phi_mesh = inertia::expand(&model, &mesh.nodes, &flanges, basis.phi.as_ref());
@@ -314,10 +397,7 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
         force.iter().map(|&k| (flanges[k].name.clone(), model.dofs.flange_first[k])).collect();
     let mut accuracy = report::accuracy(&model, &solver, &basis, &force_dofs, basis.omega.len().max(10))?;
     if !force.is_empty() {
-        let band = spec.scene.as_ref().and_then(|s| s.band).unwrap_or_else(|| {
-            let full = &accuracy.full_hz;
-            [0.0, full.get(9).or(full.last()).copied().unwrap_or(1.0)]
-        });
+        let band = band_of(&spec, &accuracy.full_hz);
         let damping = frf::ComparisonDamping::new(spec.damping.alpha, spec.damping.beta);
         accuracy.frequency_response =
             Some(frf::compare(&model, &basis, damping, band, &accuracy.full_hz, &accuracy.compliance_full)?);
