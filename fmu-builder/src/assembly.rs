@@ -224,14 +224,28 @@ pub fn assemble(
         }
     }
     let n = dofs.n_dofs;
-    let stiffness = SparseColMat::try_new_from_triplets(n, n, &k_trip)
-        .map_err(|e| BuildError::Numerical(format!("assembling the stiffness: {e:?}")))?;
-    let mass = SparseColMat::try_new_from_triplets(n, n, &m_trip)
-        .map_err(|e| BuildError::Numerical(format!("assembling the mass: {e:?}")))?;
+    let stiffness = symmetric(n, &k_trip, "stiffness")?;
+    let mass = symmetric(n, &m_trip, "mass")?;
     let nn = mesh.n_nodes();
     let nodal_mass = SparseColMat::try_new_from_triplets(nn, nn, &nodal_trip)
         .map_err(|e| BuildError::Numerical(format!("assembling the nodal mass: {e:?}")))?;
     Ok(Assembled { dofs, stiffness, mass, nodal_mass, mass_properties: props })
+}
+
+/// The matrix of the triplets made bit-exactly symmetric, (A + A^T) / 2: coupled elements'
+/// T^T K T products and summation order leave round-off asymmetry, and an exported matrix read
+/// back by another solver (mirrored from one triangle) must be the very matrix we factor.
+fn symmetric(n: usize, trip: &[Triplet<usize, usize, f64>], what: &str) -> Result<SparseColMat<usize, f64>> {
+    let a = SparseColMat::try_new_from_triplets(n, n, trip)
+        .map_err(|e| BuildError::Numerical(format!("assembling the {what}: {e:?}")))?;
+    let mut both = Vec::with_capacity(2 * a.val().len());
+    for j in 0..n {
+        for (&i, &v) in a.row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
+            both.push(Triplet::new(i, j, 0.5 * v));
+            both.push(Triplet::new(j, i, 0.5 * v));
+        }
+    }
+    SparseColMat::try_new_from_triplets(n, n, &both).map_err(|e| BuildError::Numerical(format!("assembling the {what}: {e:?}")))
 }
 
 fn push_block(trip: &mut Vec<Triplet<usize, usize, f64>>, global: &[usize], block: &[f64], n: usize) {

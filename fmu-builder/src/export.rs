@@ -91,3 +91,41 @@ mod tests {
 pub fn write_abaqus_deck(path: &Path, mesh: &Mesh, flanges: &[Flange], material: &Material) -> Result<()> {
     std::fs::write(path, abaqus_deck(mesh, flanges, material)).map_err(|e| BuildError::io(path, e))
 }
+
+/// The mounted body's matrices (mount held) in Matrix Market coordinate format, with the DoF of
+/// each flange load: K.mtx, M.mtx (symmetric, lower triangle), and flange_dofs.txt (0-based row
+/// of each unit flange load, 6 per force flange: u_x..z, theta_x..z).
+pub fn write_matrix_market(dir: &Path, model: &crate::assembly::Assembled) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| BuildError::io(dir, e))?;
+    let nc = model.dofs.n_clamped();
+    for (name, a) in [("K.mtx", &model.stiffness), ("M.mtx", &model.mass)] {
+        let b = crate::sparse::block(a, 0..nc, 0..nc)?;
+        let mut s = String::new();
+        let mut entries = Vec::new();
+        for j in 0..nc {
+            for (&i, &v) in b.row_idx_of_col_raw(j).iter().zip(b.val_of_col(j)) {
+                if i >= j {
+                    entries.push((i, j, v));
+                }
+            }
+        }
+        let _ = writeln!(s, "%%MatrixMarket matrix coordinate real symmetric\n% fmu-builder: {name} of the mounted body (mount held), SI units");
+        let _ = writeln!(s, "{nc} {nc} {}", entries.len());
+        for (i, j, v) in entries {
+            let _ = writeln!(s, "{} {} {v:e}", i + 1, j + 1);
+        }
+        let path = dir.join(name);
+        std::fs::write(&path, s).map_err(|e| BuildError::io(&path, e))?;
+    }
+    let d = &model.dofs;
+    let mut s = String::from("# 0-based DoF of each unit flange load: 6 per force flange (u_x u_y u_z theta_x theta_y theta_z)\n");
+    for (k, first) in d.flange_first.iter().enumerate() {
+        if Some(k) != d.mount {
+            for i in 0..6 {
+                let _ = writeln!(s, "{}", first + i);
+            }
+        }
+    }
+    let path = dir.join("flange_dofs.txt");
+    std::fs::write(&path, s).map_err(|e| BuildError::io(&path, e))
+}

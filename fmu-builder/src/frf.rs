@@ -6,7 +6,7 @@
 use crate::assembly::Assembled;
 use crate::error::{BuildError, Result};
 use crate::reduce::{Basis, flange_unit_loads};
-use crate::sparse::block;
+use crate::sparse::{block, mul_compensated};
 use faer::c64;
 use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, Triplet};
@@ -40,6 +40,9 @@ pub struct FrequencyResponse {
     /// and reduced: the curves of the report's plots.
     pub driving_point_full: Vec<Vec<f64>>,
     pub driving_point_reduced: Vec<Vec<f64>>,
+    /// The full model's complete flange FRF at every sampled frequency, row-major nb x nb, as
+    /// [re, im] pairs: for independent checks (e.g. a SciPy solve on the exported matrices).
+    pub full_matrices: Vec<Vec<[f64; 2]>>,
 }
 
 /// Sample frequencies: an even grid over the band plus every full-model eigenfrequency in it and
@@ -69,6 +72,9 @@ pub struct FullResponse {
     pattern: faer::sparse::SymbolicSparseColMat<usize>,
     k_slot: Vec<usize>,
     m_slot: Vec<usize>,
+    /// Symmetric equilibration 1/sqrt|K_ii|: flange rotation DoFs (N m/rad) and translations
+    /// (N/m) differ by orders of magnitude, and the unscaled LU pays that in digits.
+    scale: Vec<f64>,
     symbolic: Option<faer::sparse::linalg::solvers::SymbolicLu<usize>>,
 }
 
@@ -102,7 +108,13 @@ impl FullResponse {
             out
         };
         let (k_slot, m_slot) = (slots(&k), slots(&m));
-        Ok(Self { k, m, b, rows, pattern, k_slot, m_slot, symbolic: None })
+        let scale = (0..nc)
+            .map(|j| {
+                let d: f64 = k.row_idx_of_col_raw(j).iter().zip(k.val_of_col(j)).filter(|(i, _)| **i == j).map(|(_, v)| *v).sum();
+                1.0 / d.abs().sqrt().max(1e-300)
+            })
+            .collect();
+        Ok(Self { k, m, b, rows, pattern, k_slot, m_slot, scale, symbolic: None })
     }
 
     /// Flange FRF at `hz` (nb x nb).
@@ -117,8 +129,8 @@ impl FullResponse {
             // stored entries, column by column, in the order `slots` was built
             let mut e = 0;
             for j in 0..nc {
-                for &v in a.val_of_col(j) {
-                    values[slots[e]] += coef * v;
+                for (&i, &v) in a.row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
+                    values[slots[e]] += coef * (v * self.scale[i] * self.scale[j]);
                     e += 1;
                 }
             }
@@ -133,8 +145,40 @@ impl FullResponse {
         let symbolic = self.symbolic.clone().ok_or_else(|| BuildError::Numerical("symbolic LU missing".into()))?;
         let lu = faer::sparse::linalg::solvers::Lu::try_new_with_symbolic(symbolic, z.as_ref())
             .map_err(|e| BuildError::Numerical(format!("dynamic stiffness at {hz} Hz is singular: {e:?}")))?;
-        let mut x = Mat::<c64>::from_fn(nc, self.b.ncols(), |i, j| c64::new(self.b[(i, j)], 0.0));
+        // Z = S^-1 Zs S^-1: x = S Zs^-1 S b
+        let sc = &self.scale;
+        let mut x = Mat::<c64>::from_fn(nc, self.b.ncols(), |i, j| c64::new(self.b[(i, j)] * sc[i], 0.0));
         lu.solve_in_place(x.as_mut());
+        for j in 0..x.ncols() {
+            for i in 0..nc {
+                x[(i, j)] *= sc[i];
+            }
+        }
+        // refinement on residuals with compensated K x and M x (the low-frequency dynamic
+        // stiffness is as ill-conditioned as K): b - (k_coef K + m_coef M) x
+        for _ in 0..2 {
+            let re = Mat::<f64>::from_fn(nc, x.ncols(), |i, j| x[(i, j)].re);
+            let im = Mat::<f64>::from_fn(nc, x.ncols(), |i, j| x[(i, j)].im);
+            let (kr, ki) = (mul_compensated(None, 1.0, &self.k, re.as_ref()), mul_compensated(None, 1.0, &self.k, im.as_ref()));
+            let (mr, mi) = (mul_compensated(None, 1.0, &self.m, re.as_ref()), mul_compensated(None, 1.0, &self.m, im.as_ref()));
+            let mut r = Mat::<c64>::from_fn(nc, x.ncols(), |i, j| {
+                let kx = c64::new(kr[(i, j)], ki[(i, j)]);
+                let mx = c64::new(mr[(i, j)], mi[(i, j)]);
+                c64::new(self.b[(i, j)], 0.0) - (k_coef * kx + m_coef * mx)
+            });
+            for j in 0..r.ncols() {
+                for i in 0..nc {
+                    r[(i, j)] *= sc[i];
+                }
+            }
+            lu.solve_in_place(r.as_mut());
+            for j in 0..r.ncols() {
+                for i in 0..nc {
+                    r[(i, j)] *= sc[i];
+                }
+            }
+            x += &r;
+        }
         let rows = &self.rows;
         Ok(Mat::from_fn(rows.len(), rows.len(), |i, j| x[(rows[i], j)]))
     }
@@ -175,6 +219,7 @@ pub fn compare(model: &Assembled, basis: &Basis, damping: ComparisonDamping, ban
     let mut relative_error = Vec::with_capacity(frequencies.len());
     let mut driving_point_full = Vec::new();
     let mut driving_point_reduced = Vec::new();
+    let mut full_matrices = Vec::new();
     let mut full_model = FullResponse::new(model)?;
     for &f in &frequencies {
         let full = full_model.at(damping, f)?;
@@ -190,6 +235,10 @@ pub fn compare(model: &Assembled, basis: &Basis, damping: ComparisonDamping, ban
         relative_error.push(if den > 0.0 { (num / den).sqrt() } else { 0.0 });
         driving_point_full.push((0..full.nrows()).map(|i| full[(i, i)].norm()).collect());
         driving_point_reduced.push((0..red.nrows()).map(|i| red[(i, i)].norm()).collect());
+        full_matrices.push((0..full.nrows() * full.ncols()).map(|e| {
+            let z = full[(e / full.ncols(), e % full.ncols())];
+            [z.re, z.im]
+        }).collect());
     }
     let max_relative_error = relative_error.iter().copied().fold(0.0, f64::max);
     Ok(FrequencyResponse {
@@ -200,5 +249,6 @@ pub fn compare(model: &Assembled, basis: &Basis, damping: ComparisonDamping, ban
         max_relative_error,
         driving_point_full,
         driving_point_reduced,
+        full_matrices,
     })
 }

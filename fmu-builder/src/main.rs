@@ -18,6 +18,9 @@ struct Args {
     /// Also write the meshed part with its flange node sets as an Abaqus/CalculiX deck here
     #[arg(long)]
     export_inp: Option<PathBuf>,
+    /// Also write the mounted body's K and M (Matrix Market) and the flange load DoFs into this folder
+    #[arg(long)]
+    export_matrices: Option<PathBuf>,
     /// Print nothing but errors
     #[arg(short, long)]
     quiet: bool,
@@ -37,6 +40,12 @@ fn main() -> ExitCode {
             if let Some(path) = &args.export_inp {
                 let b = &built;
                 if let Err(e) = fmu_builder::export::write_abaqus_deck(path, &b.mesh, &b.flanges, &b.spec.material) {
+                    eprintln!("error: {e}");
+                    return ExitCode::FAILURE;
+                }
+            }
+            if let Some(dir) = &args.export_matrices {
+                if let Err(e) = fmu_builder::export::write_matrix_market(dir, &built.model) {
                     eprintln!("error: {e}");
                     return ExitCode::FAILURE;
                 }
