@@ -24,3 +24,4 @@ pub mod pipeline;
 pub mod package;
 pub mod report;
 pub mod summary;
+pub mod sweep;

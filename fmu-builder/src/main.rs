@@ -10,8 +10,12 @@ struct Args {
     /// Input file (JSON, see schemas/fmu-builder-input.schema.json)
     input: PathBuf,
     /// Output FMU
-    #[arg(short, long)]
-    output: PathBuf,
+    #[arg(short, long, required_unless_present = "sweep")]
+    output: Option<PathBuf>,
+    /// Instead of building, reduce the body by every method at growing orders and print error in
+    /// band vs cost per step vs build time
+    #[arg(long)]
+    sweep: bool,
     /// Also write the accuracy report (JSON) here
     #[arg(long)]
     report: Option<PathBuf>,
@@ -28,7 +32,30 @@ struct Args {
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    match fmu_builder::package::build(&args.input, &args.output) {
+    if args.sweep {
+        let spec = match fmu_builder::spec::Spec::from_file(&args.input) {
+            Ok(s) => s,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::FAILURE;
+            }
+        };
+        return match fmu_builder::sweep::sweep(&spec, &args.input) {
+            Ok(rows) => {
+                print!("{}", fmu_builder::sweep::table(&rows, spec.scene.as_ref().and_then(|s| s.band)));
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::FAILURE
+            }
+        };
+    }
+    let Some(output) = args.output.clone() else {
+        eprintln!("error: --output is required");
+        return ExitCode::FAILURE;
+    };
+    match fmu_builder::package::build(&args.input, &output) {
         Ok(built) => {
             if let Some(path) = &args.report {
                 let json = serde_json::to_string_pretty(&built.report).unwrap_or_default();
@@ -52,7 +79,7 @@ fn main() -> ExitCode {
             }
             if !args.quiet {
                 print!("{}", fmu_builder::summary::text(&built.report));
-                println!("wrote {}", args.output.display());
+                println!("wrote {}", output.display());
             }
             ExitCode::SUCCESS
         }

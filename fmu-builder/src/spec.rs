@@ -35,7 +35,7 @@ pub enum SceneLoad {
     Rotation,
 }
 
-#[derive(Debug, Clone, Deserialize, Default)]
+#[derive(Debug, Clone, Deserialize, Default, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
     #[serde(default)]
