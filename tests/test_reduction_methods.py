@@ -185,3 +185,52 @@ def test_chosen_order_meets_the_tolerance_when_checked_independently(tmp_path):
     assert report["order"] < 18
     assert worst <= tol
     assert worst == pytest.approx(frf["max_relative_error"], rel=1e-3)
+
+
+def damping_ratios(path):
+    """Damping ratio and frequency of every mode from the FMU's state matrix (FMI calls only)."""
+    fmu = Fmu(path, "ModelExchange")
+    try:
+        fmu.initialize()
+        a = fmu.jacobian(fmu.states(), h=1e-3)
+    finally:
+        fmu.close()
+    values = np.linalg.eigvals(a)
+    values = values[values.imag > 0]
+    return sorted((abs(v) / (2 * np.pi), -v.real / abs(v)) for v in values)
+
+
+def test_modal_damping_one_ratio_and_by_band(tmp_path):
+    """Modal damping instead of Rayleigh: every mode of the FMU's state matrix shows the ratio
+    asked for (definition of the modal damping ratio: zeta = -Re(s)/|s|; 1e-9)."""
+    spec = with_reduction({"method": "craig_bampton", "modes": 6}, {"loads": []})
+    spec["damping"] = {"modal_ratio": 0.02}
+    path, _, _ = build(tmp_path, spec, "modal_one")
+    for f, zeta in damping_ratios(path):
+        assert zeta == pytest.approx(0.02, rel=1e-9, abs=0), f
+    spec["damping"] = {"modal_bands": [{"below": 100, "ratio": 0.01}, {"below": 1000, "ratio": 0.1}]}
+    path, _, _ = build(tmp_path, spec, "modal_bands")
+    seen = set()
+    for f, zeta in damping_ratios(path):
+        expected = 0.01 if f < 100 else 0.1 if f < 1000 else 0.0
+        # modal damping of undamped frequency f_n: |s| = f_n exactly
+        assert zeta == pytest.approx(expected, rel=1e-9, abs=1e-12), f
+        seen.add(expected)
+    assert seen == {0.01, 0.1, 0.0}
+
+
+def test_a_scene_without_rotation_has_no_rotation_terms(tmp_path):
+    """Model only what the scene needs: without rotation in the scene the FMU carries no
+    rotating-frame invariants (smaller resource, cheaper step: see `fmu-builder --sweep`), and a
+    rotating mount is refused with a message instead of being simulated wrongly."""
+    plain, _, _ = build(tmp_path, with_reduction({"method": "craig_bampton", "modes": 6}, {"loads": []}), "plain")
+    rotating, _, _ = build(tmp_path, with_reduction({"method": "craig_bampton", "modes": 6}, {"loads": ["rotation"]}), "rot")
+    size = lambda p: zipfile.ZipFile(p).getinfo("resources/reduced_body.bin").file_size
+    assert size(plain) < size(rotating)
+    fmu = Fmu(plain, "CoSimulation")
+    try:
+        fmu.set(**{"base.w[3]": 1.0})
+        with pytest.raises(Exception):
+            fmu.initialize()
+    finally:
+        fmu.close(terminate=False)
