@@ -234,3 +234,36 @@ def test_a_scene_without_rotation_has_no_rotation_terms(tmp_path):
             fmu.initialize()
     finally:
         fmu.close(terminate=False)
+
+
+def test_sweep_prints_error_cost_and_build_time(tmp_path):
+    """`fmu-builder --sweep`: every method at growing orders, error in band, cost per step and
+    build time side by side, and an SVG plot of error against cost (timings are printed, not
+    asserted: speed belongs to benchmarks)."""
+    path = tmp_path / "sweep.json"
+    path.write_text(json.dumps(with_reduction({"method": "krylov", "expansion_points": [300], "moments": 2})))
+    svg = tmp_path / "sweep.svg"
+    proc = run_builder([path, "--sweep", "--sweep-svg", svg])
+    print("\n" + proc.stdout)
+    rows = [line.split("|")[1:-1] for line in proc.stdout.splitlines() if line.startswith("| ") and "method" not in line]
+    methods = {r[0].strip() for r in rows}
+    assert {"craig_bampton", "modal", "krylov"} <= methods
+    krylov = [float(r[3]) for r in rows if r[0].strip() == "krylov"]
+    assert krylov[-1] < krylov[0]
+    assert any("rotation declared" in r[1] and r[5].strip() != "-" for r in rows)
+    import xml.etree.ElementTree as ET
+    assert ET.parse(svg).getroot().tag.endswith("svg")
+
+
+def test_only_connected_flanges_are_modelled(tmp_path):
+    """A flange the scene does not connect is left out: no variables, no static shapes, and its
+    surface stays free (a rigid tie there would stiffen the part)."""
+    spec = json.loads((EXAMPLES / "t-square.json").read_text())
+    spec["scene"]["connected"] = ["left"]
+    path, report, _ = build(tmp_path, spec, "left_only")
+    from fmpy import read_model_description
+    names = {v.name for v in read_model_description(str(path)).modelVariables}
+    assert "left.u[1]" in names and not any(n.startswith("right.") for n in names)
+    assert [f["name"] for f in report["flanges"]] == ["base", "left"]
+    full = json.loads(zipfile.ZipFile(run_builder([EXAMPLES / "t-square.json", "-o", tmp_path / "all.fmu"]) and tmp_path / "all.fmu").read("documentation/report.json"))
+    assert report["order"] < full["order"]

@@ -16,6 +16,9 @@ struct Args {
     /// band vs cost per step vs build time
     #[arg(long)]
     sweep: bool,
+    /// With --sweep: also write the error-vs-cost plot (SVG) here
+    #[arg(long, requires = "sweep")]
+    sweep_svg: Option<PathBuf>,
     /// Also write the accuracy report (JSON) here
     #[arg(long)]
     report: Option<PathBuf>,
@@ -43,6 +46,12 @@ fn main() -> ExitCode {
         return match fmu_builder::sweep::sweep(&spec, &args.input) {
             Ok(rows) => {
                 print!("{}", fmu_builder::sweep::table(&rows, spec.scene.as_ref().and_then(|s| s.band)));
+                if let Some(path) = &args.sweep_svg {
+                    if let Err(e) = std::fs::write(path, fmu_builder::sweep::plot(&rows)) {
+                        eprintln!("error: {}: {e}", path.display());
+                        return ExitCode::FAILURE;
+                    }
+                }
                 ExitCode::SUCCESS
             }
             Err(e) => {

@@ -46,6 +46,8 @@ pub struct Scene {
     pub band: Option<[f64; 2]>,
     #[serde(default)]
     pub tolerance: Option<f64>,
+    #[serde(default)]
+    pub connected: Option<Vec<String>>,
 }
 
 impl Spec {
@@ -253,9 +255,10 @@ impl Spec {
                 format!("{message}{more}; see schemas/fmu-builder-input.schema.json"),
             ));
         }
-        let spec: Spec = serde_json::from_value(value)
+        let mut spec: Spec = serde_json::from_value(value)
             .map_err(|e| BuildError::input(path, "", format!("does not match the input format: {e}")))?;
         spec.check(path)?;
+        spec.keep_connected(path)?;
         Ok(spec)
     }
 
@@ -323,6 +326,30 @@ impl Spec {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// Drop the force flanges the scene does not connect: the FMU models only what the scene uses.
+    fn keep_connected(&mut self, path: &Path) -> Result<()> {
+        let Some(connected) = self.scene.as_ref().and_then(|s| s.connected.clone()) else {
+            return Ok(());
+        };
+        for (i, name) in connected.iter().enumerate() {
+            match self.flanges.iter().find(|f| &f.name == name) {
+                None => {
+                    return Err(BuildError::input(
+                        path,
+                        format!("scene.connected[{i}]"),
+                        format!("no flange is named \"{name}\" (flanges: {})", self.flanges.iter().map(|f| f.name.as_str()).collect::<Vec<_>>().join(", ")),
+                    ));
+                }
+                Some(f) if f.role == Role::Motion => {
+                    return Err(BuildError::input(path, format!("scene.connected[{i}]"), format!("\"{name}\" is the mount; list force flanges only")));
+                }
+                _ => {}
+            }
+        }
+        self.flanges.retain(|f| f.role == Role::Motion || connected.contains(&f.name));
         Ok(())
     }
 

@@ -139,3 +139,26 @@ pub fn table(rows: &[SweepRow], band: Option<[f64; 2]>) -> String {
     }
     s
 }
+
+/// Error in band against cost per step, one line per method (log-log), as a standalone SVG.
+pub fn plot(rows: &[SweepRow]) -> String {
+    use crate::documentation::{PALETTE, PlotSpec, Series, Stroke, line_plot};
+    let mut spec = PlotSpec::new("Speed against error", "cost per step [ns] (fixed mount, h = 1 ms)", "flange FRF error in band", true);
+    spec.log_x = true;
+    let mut series = Vec::new();
+    for (i, method) in ["craig_bampton", "modal", "krylov"].iter().enumerate() {
+        let pts: Vec<&SweepRow> = rows.iter().filter(|r| r.method == *method && !r.setting.ends_with("declared")).collect();
+        if pts.is_empty() {
+            continue;
+        }
+        series.push(Series {
+            label: Some(method.replace('_', "-")),
+            x: pts.iter().map(|r| r.step_ns).collect(),
+            y: pts.iter().map(|r| r.frf_error).collect(),
+            color: PALETTE[i % PALETTE.len()].to_string(),
+            stroke: Stroke::Line,
+        });
+    }
+    let svg = line_plot(&spec, &series, &[]);
+    format!("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n{svg}\n")
+}
