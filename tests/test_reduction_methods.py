@@ -267,3 +267,16 @@ def test_only_connected_flanges_are_modelled(tmp_path):
     assert [f["name"] for f in report["flanges"]] == ["base", "left"]
     full = json.loads(zipfile.ZipFile(run_builder([EXAMPLES / "t-square.json", "-o", tmp_path / "all.fmu"]) and tmp_path / "all.fmu").read("documentation/report.json"))
     assert report["order"] < full["order"]
+
+
+def test_krylov_at_a_real_expansion_point(tmp_path):
+    """Moment matching at a real point s = sigma (K + sigma^2 M, definite): static flange loads
+    stay exact (the s = 0 block is always in) and the band converges with the moments."""
+    errors = []
+    for moments in (1, 3):
+        red = {"method": "krylov", "real_expansion_points": [1000.0], "moments": moments}
+        _, report, _ = build(tmp_path, with_reduction(red), f"real{moments}")
+        assert report["accuracy"]["compliance_max_relative_error"] < 1e-8
+        errors.append(report["accuracy"]["frequency_response"]["max_relative_error"])
+    print(f"\nreal point 1000 1/s: FRF error {errors[0]:.2e} (1 moment) -> {errors[1]:.2e} (3 moments)")
+    assert errors[1] < 1e-6 < errors[0]

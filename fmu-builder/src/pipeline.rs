@@ -335,8 +335,9 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
         Method::Krylov => {
             let points = spec.reduction.expansion_points.clone().unwrap_or_default();
             let moments = spec.reduction.moments.unwrap_or(2);
-            let name = format!("second-order Krylov, {moments} block moments at {points:?} Hz and 0 Hz");
-            (reduce::krylov(&model, &solver, &points, moments, load_shapes.as_ref())?, name)
+            let real = spec.reduction.real_expansion_points.clone().unwrap_or_default();
+            let name = format!("second-order Krylov, {moments} block moments at s = 0, 2 pi i {points:?} Hz, {real:?} 1/s");
+            (reduce::krylov(&model, &solver, &points, &real, moments, load_shapes.as_ref())?, name)
         }
     };
     let basis = match spec.scene.as_ref().and_then(|s| s.tolerance) {

@@ -264,26 +264,44 @@ fn concat(parts: &[&Mat<f64>]) -> Mat<f64> {
 /// keeps orthogonality only when repeated) with deflation of directions already spanned. The
 /// static point w0 = 0 is always the first, so flange statics stay exact; imaginary points
 /// keep the basis real because the undamped K - w0^2 M is real.
-pub fn krylov(model: &Assembled, solver: &SpdSolver, points_hz: &[f64], moments: usize, static_shapes: Option<&Mat<f64>>) -> Result<Basis> {
+pub fn krylov(
+    model: &Assembled,
+    solver: &SpdSolver,
+    points_hz: &[f64],
+    real_points: &[f64],
+    moments: usize,
+    static_shapes: Option<&Mat<f64>>,
+) -> Result<Basis> {
     let nc = model.dofs.n_clamped();
     let k = block(&model.stiffness, 0..nc, 0..nc)?;
     let m = block(&model.mass, 0..nc, 0..nc)?;
     let b = flange_unit_loads(model);
-    let mut points: Vec<f64> = vec![0.0];
+    // (K + s^2 M) at s = i 2 pi f is K - (2 pi f)^2 M; at real s = sigma, K + sigma^2 M
+    let mut shifts: Vec<f64> = vec![0.0];
     for &p in points_hz {
-        if p > 0.0 && !points.iter().any(|q| (q - p).abs() <= 1e-9 * p) {
-            points.push(p);
+        let w = 2.0 * std::f64::consts::PI * p;
+        if p > 0.0 && !shifts.contains(&(-w * w)) {
+            shifts.push(-w * w);
+        }
+    }
+    for &sigma in real_points {
+        if sigma > 0.0 && !shifts.contains(&(sigma * sigma)) {
+            shifts.push(sigma * sigma);
         }
     }
     let mut basis = Mat::<f64>::zeros(nc, 0);
     let mut m_basis = Mat::<f64>::zeros(nc, 0);
-    for &f in &points {
-        let w0 = 2.0 * std::f64::consts::PI * f;
-        let lu = if f == 0.0 {
+    for &shift in &shifts {
+        let lu = if shift == 0.0 {
             None
         } else {
-            let a = crate::sparse::add_scaled(&k, -w0 * w0, &m)?;
-            Some(crate::sparse::LuSolver::new(&a, &format!("K - w^2 M at the expansion point {f} Hz (an eigenfrequency?)"))?)
+            let a = crate::sparse::add_scaled(&k, shift, &m)?;
+            let what = if shift < 0.0 {
+                format!("K - w^2 M at the expansion point {} Hz (an eigenfrequency?)", (-shift).sqrt() / (2.0 * std::f64::consts::PI))
+            } else {
+                format!("K + s^2 M at the real expansion point s = {}", shift.sqrt())
+            };
+            Some(crate::sparse::LuSolver::new(&a, &what)?)
         };
         let apply = |x: &mut Mat<f64>| match &lu {
             Some(lu) => lu.solve_refined(x.as_mut()),

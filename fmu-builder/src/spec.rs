@@ -206,6 +206,8 @@ pub struct Reduction {
     pub expansion_points: Option<Vec<f64>>,
     #[serde(default)]
     pub moments: Option<usize>,
+    #[serde(default)]
+    pub real_expansion_points: Option<Vec<f64>>,
 }
 
 /// JSON pointer `/flanges/1/nodes` -> `flanges[1].nodes`, the way users read their file.

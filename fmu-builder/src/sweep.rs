@@ -81,7 +81,14 @@ pub fn sweep(spec: &Spec, file: &Path) -> Result<Vec<SweepRow>> {
         runs.push((
             "krylov",
             format!("{k} moments at {points:?} Hz"),
-            Reduction { method: Method::Krylov, modes: None, max_frequency: None, expansion_points: Some(points.clone()), moments: Some(k) },
+            Reduction {
+                method: Method::Krylov,
+                modes: None,
+                max_frequency: None,
+                expansion_points: Some(points.clone()),
+                moments: Some(k),
+                real_expansion_points: spec.reduction.real_expansion_points.clone(),
+            },
         ));
     }
     // the same body with rotation declared in the scene: what modelling rotation costs per step
@@ -119,7 +126,14 @@ pub fn sweep(spec: &Spec, file: &Path) -> Result<Vec<SweepRow>> {
 }
 
 fn cb(modes: usize) -> Reduction {
-    Reduction { method: Method::CraigBampton, modes: Some(modes), max_frequency: None, expansion_points: None, moments: None }
+    Reduction {
+        method: Method::CraigBampton,
+        modes: Some(modes),
+        max_frequency: None,
+        expansion_points: None,
+        moments: None,
+        real_expansion_points: None,
+    }
 }
 
 /// The table as printed and put in the README.
