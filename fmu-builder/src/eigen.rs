@@ -16,10 +16,6 @@ pub struct Eigenpairs {
     pub vectors: Mat<f64>,
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
 /// Deterministic start vector with all components non-zero (no symmetry can hide a mode from it).
 fn start_vector(n: usize) -> Vec<f64> {
     let mut s: u64 = 0x9E37_79B9_7F4A_7C15;
@@ -113,7 +109,7 @@ fn lanczos(
         d.project(&mut w);
     }
     let mw = mul_new(m, w.as_ref());
-    let norm = dot(w.col(0).try_as_col_major().unwrap().as_slice(), mw.col(0).try_as_col_major().unwrap().as_slice()).sqrt();
+    let norm = (0..n).map(|i| w[(i, 0)] * mw[(i, 0)]).sum::<f64>().sqrt();
     if !(norm > 0.0) {
         return Err(BuildError::Numerical("eigensolver: the mass matrix vanishes on the start vector".into()));
     }
