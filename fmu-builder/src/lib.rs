@@ -11,6 +11,7 @@ pub mod fmu;
 pub mod flange;
 pub mod free_floating;
 pub mod frf;
+pub mod import;
 pub mod inertia;
 pub mod mesh;
 pub mod order;
