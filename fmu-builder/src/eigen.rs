@@ -129,19 +129,13 @@ fn lanczos(
         if let Some(d) = deflate {
             d.project(&mut w);
         }
-        // full re-orthogonalisation in the M inner product, twice (Kahan-Parlett "twice is enough")
-        for pass in 0..2 {
-            for i in 0..=j {
-                let c: f64 = (0..n).map(|r| mv[(r, i)] * w[(r, 0)]).sum();
-                if pass == 0 && i == j {
-                    alpha[j] = c;
-                } else if i == j {
-                    alpha[j] += c;
-                }
-                for r in 0..n {
-                    w[(r, 0)] -= c * v[(r, i)];
-                }
-            }
+        // full re-orthogonalisation in the M inner product, block classical Gram-Schmidt done
+        // twice (Kahan-Parlett "twice is enough"); the j-th coefficient is the Lanczos alpha
+        alpha[j] = 0.0;
+        for _pass in 0..2 {
+            let c = mv.subcols(0, j + 1).transpose() * &w;
+            alpha[j] += c[(j, 0)];
+            w -= v.subcols(0, j + 1) * &c;
         }
         let mw = mul_new(m, w.as_ref());
         let b = (0..n).map(|r| w[(r, 0)] * mw[(r, 0)]).sum::<f64>().max(0.0).sqrt();
@@ -191,13 +185,10 @@ fn lanczos(
             converged = false;
         }
         values.push(1.0 / theta);
+        let x = v.subcols(0, steps) * u.col(idx).as_mat();
         for r in 0..n {
-            let mut x = 0.0;
-            for j in 0..steps {
-                x += v[(r, j)] * u[(j, idx)];
-            }
-            vectors[(r, c)] = x;
-            restart[r] += x;
+            vectors[(r, c)] = x[(r, 0)];
+            restart[r] += x[(r, 0)];
         }
     }
     Ok((Eigenpairs { values, vectors }, converged, restart))
