@@ -72,6 +72,18 @@ class Fmu:
         self.set_states(x0)
         return a
 
+    def output_map(self, x0, names):
+        """d(outputs)/d(states) by unit steps of each state from x0 (the flange outputs u, phi are
+        linear in the modal states, so the difference is exact)."""
+        base = self.get(*names)
+        c = np.zeros((len(names), self.nx))
+        for j in range(self.nx):
+            x = x0.copy(); x[j] += 1.0
+            self.set_states(x)
+            c[:, j] = self.get(*names) - base
+        self.set_states(x0)
+        return c
+
     def close(self, terminate=True):
         try:
             if terminate:

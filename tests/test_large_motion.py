@@ -78,14 +78,7 @@ def flapwise_frequency(path, spin):
         fmu.initialize()
         x0 = fmu.states()
         a = fmu.jacobian(x0, h=1e-6)
-        tip = ["tip.u[1]", "tip.u[2]", "tip.u[3]"]
-        base = fmu.get(*tip)
-        c = np.zeros((3, fmu.nx))
-        for j in range(fmu.nx):
-            x = x0.copy(); x[j] += 1.0
-            fmu.set_states(x)
-            c[:, j] = fmu.get(*tip) - base
-        fmu.set_states(x0)
+        c = fmu.output_map(x0, ["tip.u[1]", "tip.u[2]", "tip.u[3]"])
     finally:
         fmu.close()
     values, vectors = np.linalg.eig(a)

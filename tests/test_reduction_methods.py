@@ -155,11 +155,7 @@ def fmi_frf(path, freqs_hz):
             fmu.set(**{name: 1.0}); dp = fmu.derivatives()
             fmu.set(**{name: 0.0}); d0 = fmu.derivatives()
             b[:, j] = dp - d0
-        c = np.zeros((6, fmu.nx))
-        for j in range(fmu.nx):
-            x = x0.copy(); x[j] = 1.0
-            fmu.set_states(x); c[:, j] = fmu.get(*outputs)
-        fmu.set_states(x0)
+        c = fmu.output_map(x0, outputs)
     finally:
         fmu.close()
     return [c @ np.linalg.solve(2j * np.pi * f * np.eye(fmu.nx) - a, b) for f in freqs_hz]
