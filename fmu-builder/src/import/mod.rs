@@ -11,6 +11,7 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 pub mod inp;
+pub mod matrices;
 pub mod msh;
 
 pub use inp::{parse_inp, read_inp};
