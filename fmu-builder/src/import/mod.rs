@@ -10,6 +10,8 @@ use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+#[cfg(test)]
+mod bracket_example;
 pub mod inp;
 pub mod matrices;
 pub mod msh;
