@@ -30,10 +30,10 @@ td,th{{border:1px solid #bbb;padding:0.2em 0.6em;text-align:right}}th{{backgroun
     let c = r.center_of_mass;
     let _ = write!(
         h,
-        "<h2>Rigid body</h2>\n<table><tr><th>mass [kg]</th><td>{:.6e}</td></tr><tr><th>volume [m^3]</th><td>{:.6e}</td></tr>\
+        "<h2>Rigid body</h2>\n<table><tr><th>mass [kg]</th><td>{:.6e}</td></tr><tr><th>volume [m^3]</th><td>{}</td></tr>\
 <tr><th>centre of mass [m] (body frame)</th><td>{:.6e}, {:.6e}, {:.6e}</td></tr></table>\n\
 <p>Body frame: origin at the mount flange's reference point, axes of the undeformed part.</p>\n",
-        r.mass, r.volume, c[0], c[1], c[2]
+        r.mass, r.volume.map_or("(matrix input)".to_string(), |v| format!("{v:.6e}")), c[0], c[1], c[2]
     );
     h.push_str("<h2>Flanges</h2>\n<table><tr><th>name</th><th>role</th><th>reference point [m]</th><th>slave nodes</th></tr>\n");
     for f in &r.flanges {

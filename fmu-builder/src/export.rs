@@ -6,8 +6,7 @@
 use crate::error::{BuildError, Result};
 use crate::fe::ElementKind;
 use crate::flange::Flange;
-use crate::mesh::Mesh;
-use crate::spec::Material;
+use crate::part::Part;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -21,7 +20,8 @@ fn real(x: f64) -> String {
     (1..=16).rev().map(|p| format!("{x:.p$e}")).find(|s| s.len() <= 20).unwrap_or(shortest)
 }
 
-pub fn abaqus_deck(mesh: &Mesh, flanges: &[Flange], material: &Material) -> String {
+pub fn abaqus_deck(part: &Part, flanges: &[Flange]) -> String {
+    let mesh = &part.mesh;
     let mut s = String::new();
     let _ = writeln!(s, "** written by fmu-builder: model data of the flanged mesh (SI units)");
     let _ = writeln!(s, "*NODE, NSET=NALL");
@@ -35,21 +35,33 @@ pub fn abaqus_deck(mesh: &Mesh, flanges: &[Flange], material: &Material) -> Stri
             let _ = writeln!(s, "{}, {}, {}, {}", n + 1 + 2 * k + extra, real(p[0]), real(p[1]), real(p[2]));
         }
     }
-    let ty = match mesh.kind {
-        ElementKind::Hex8 => "C3D8",
-        ElementKind::Hex20 => "C3D20",
-    };
-    let _ = writeln!(s, "*ELEMENT, TYPE={ty}, ELSET=EALL");
+    // one *ELEMENT block per (kind, material): CalculiX wants one type per block, and the
+    // material's element set is the union of its blocks
+    let mut groups: Vec<(ElementKind, usize)> = Vec::new();
     for e in 0..mesh.n_elements() {
-        let nodes: Vec<String> = mesh.element(e).iter().map(|i| (i + 1).to_string()).collect();
-        // at most 16 entries on a data line: continue the rest on the next line
-        let (first, rest) = nodes.split_at(nodes.len().min(15));
-        let _ = write!(s, "{}, {}", e + 1, first.join(", "));
-        if !rest.is_empty() {
-            let _ = write!(s, ",\n{}", rest.join(", "));
+        let key = (mesh.kind(e), mesh.material[e]);
+        if !groups.contains(&key) {
+            groups.push(key);
         }
-        s.push('\n');
     }
+    for &(kind, material) in &groups {
+        let _ = writeln!(s, "*ELEMENT, TYPE={}, ELSET=M{}", kind.calculix_name(), material + 1);
+        for e in (0..mesh.n_elements()).filter(|&e| (mesh.kind(e), mesh.material[e]) == (kind, material)) {
+            let nodes: Vec<String> = mesh.element(e).iter().map(|i| (i + 1).to_string()).collect();
+            // at most 16 entries on a data line: continue the rest on the next line
+            let (first, rest) = nodes.split_at(nodes.len().min(15));
+            let _ = write!(s, "{}, {}", e + 1, first.join(", "));
+            if !rest.is_empty() {
+                let _ = write!(s, ",\n{}", rest.join(", "));
+            }
+            s.push('\n');
+        }
+    }
+    let _ = writeln!(s, "*ELSET, ELSET=EALL");
+    let mut used: Vec<usize> = groups.iter().map(|g| g.1).collect();
+    used.sort_unstable();
+    used.dedup();
+    let _ = writeln!(s, "{}", used.iter().map(|m| format!("M{}", m + 1)).collect::<Vec<_>>().join(", "));
     for (k, f) in flanges.iter().enumerate() {
         let name = f.name.to_uppercase();
         let _ = writeln!(s, "*NSET, NSET={name}");
@@ -60,14 +72,18 @@ pub fn abaqus_deck(mesh: &Mesh, flanges: &[Flange], material: &Material) -> Stri
         let _ = writeln!(s, "*NSET, NSET={name}_REF\n{}", n + 1 + 2 * k);
         let _ = writeln!(s, "*NSET, NSET={name}_ROT\n{}", n + 2 + 2 * k);
     }
-    let _ = writeln!(
-        s,
-        "*MATERIAL, NAME=MAT\n*ELASTIC\n{}, {}\n*DENSITY\n{}",
-        real(material.e),
-        real(material.nu),
-        real(material.rho)
-    );
-    let _ = writeln!(s, "*SOLID SECTION, ELSET=EALL, MATERIAL=MAT");
+    for m in used {
+        let mat = &part.materials[m];
+        let _ = writeln!(
+            s,
+            "*MATERIAL, NAME=MAT{}\n*ELASTIC\n{}, {}\n*DENSITY\n{}",
+            m + 1,
+            real(mat.elasticity.e),
+            real(mat.elasticity.nu),
+            real(mat.rho)
+        );
+        let _ = writeln!(s, "*SOLID SECTION, ELSET=M{}, MATERIAL=MAT{}", m + 1, m + 1);
+    }
     s
 }
 
@@ -88,8 +104,59 @@ mod tests {
     }
 }
 
-pub fn write_abaqus_deck(path: &Path, mesh: &Mesh, flanges: &[Flange], material: &Material) -> Result<()> {
-    std::fs::write(path, abaqus_deck(mesh, flanges, material)).map_err(|e| BuildError::io(path, e))
+pub fn write_abaqus_deck(path: &Path, part: &Part, flanges: &[Flange]) -> Result<()> {
+    if !part.has_elements() {
+        return Err(BuildError::io(path, "--export-inp needs a part with elements (this one is given by its matrices)"));
+    }
+    std::fs::write(path, abaqus_deck(part, flanges)).map_err(|e| BuildError::io(path, e))
+}
+
+fn matrix_market(a: &faer::sparse::SparseColMat<usize, f64>, what: &str) -> String {
+    let n = a.ncols();
+    let mut entries = Vec::new();
+    for j in 0..n {
+        for (&i, &v) in a.row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
+            if i >= j {
+                entries.push((i, j, v));
+            }
+        }
+    }
+    let mut s = String::new();
+    let _ = writeln!(s, "%%MatrixMarket matrix coordinate real symmetric\n% fmu-builder: {what}, SI units");
+    let _ = writeln!(s, "{} {} {}", a.nrows(), n, entries.len());
+    for (i, j, v) in entries {
+        // shortest representation that reads back bit-exactly
+        let _ = writeln!(s, "{} {} {v:e}", i + 1, j + 1);
+    }
+    s
+}
+
+/// The part's free-free matrices as users export them from an FE code: K.mtx, M.mtx (Matrix
+/// Market, symmetric), dofs.txt (node id and direction of each row) and nodes.txt (id x y z),
+/// with node ids 1..N in the part's node order. Reading them back as `geometry.matrices` gives
+/// the very model the mesh gives.
+pub fn write_free_free_matrices(dir: &Path, part: &Part) -> Result<()> {
+    if !part.has_elements() {
+        return Err(BuildError::io(dir, "--export-free-free needs a part with elements (this one is given by its matrices)"));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| BuildError::io(dir, e))?;
+    let free = crate::assembly::uncoupled(&part.mesh, &part.materials)?;
+    let write = |name: &str, text: String| {
+        let path = dir.join(name);
+        std::fs::write(&path, text).map_err(|e| BuildError::io(&path, e))
+    };
+    write("K.mtx", matrix_market(&free.stiffness, "free-free stiffness [N/m]"))?;
+    write("M.mtx", matrix_market(&free.mass, "free-free mass [kg]"))?;
+    let mut dofs = String::from("# row of K.mtx and M.mtx: node direction\n");
+    let mut nodes = String::from("# id x y z [m]\n");
+    for (i, p) in part.mesh.nodes.iter().enumerate() {
+        for d in 1..=3 {
+            let _ = writeln!(dofs, "{} {d}", i + 1);
+        }
+        let _ = writeln!(nodes, "{} {:e} {:e} {:e}", i + 1, p[0], p[1], p[2]);
+    }
+    write("dofs.txt", dofs)?;
+    write("nodes.txt", nodes)
 }
 
 /// The mounted body's matrices (mount held) in Matrix Market coordinate format, with the DoF of
@@ -100,22 +167,8 @@ pub fn write_matrix_market(dir: &Path, model: &crate::assembly::Assembled) -> Re
     let nc = model.dofs.n_clamped();
     for (name, a) in [("K.mtx", &model.stiffness), ("M.mtx", &model.mass)] {
         let b = crate::sparse::block(a, 0..nc, 0..nc)?;
-        let mut s = String::new();
-        let mut entries = Vec::new();
-        for j in 0..nc {
-            for (&i, &v) in b.row_idx_of_col_raw(j).iter().zip(b.val_of_col(j)) {
-                if i >= j {
-                    entries.push((i, j, v));
-                }
-            }
-        }
-        let _ = writeln!(s, "%%MatrixMarket matrix coordinate real symmetric\n% fmu-builder: {name} of the mounted body (mount held), SI units");
-        let _ = writeln!(s, "{nc} {nc} {}", entries.len());
-        for (i, j, v) in entries {
-            let _ = writeln!(s, "{} {} {v:e}", i + 1, j + 1);
-        }
         let path = dir.join(name);
-        std::fs::write(&path, s).map_err(|e| BuildError::io(&path, e))?;
+        std::fs::write(&path, matrix_market(&b, &format!("{name} of the mounted body (mount held)"))).map_err(|e| BuildError::io(&path, e))?;
     }
     let d = &model.dofs;
     let mut s = String::from("# 0-based DoF of each unit flange load: 6 per force flange (u_x u_y u_z theta_x theta_y theta_z)\n");

@@ -4,6 +4,7 @@
 
 use crate::error::{BuildError, Result};
 use crate::mesh::Mesh;
+use crate::part::Part;
 use crate::spec::{NodeSelector, Role, Spec};
 use std::path::Path;
 
@@ -17,8 +18,7 @@ pub struct Flange {
     pub slaves: Vec<usize>,
 }
 
-/// Bounding-box diagonal of the mesh: the length scale for geometric tolerances.
-pub fn model_size(mesh: &Mesh) -> f64 {
+fn bounds(mesh: &Mesh) -> ([f64; 3], [f64; 3]) {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
     for p in &mesh.nodes {
@@ -27,12 +27,60 @@ pub fn model_size(mesh: &Mesh) -> f64 {
             hi[a] = hi[a].max(p[a]);
         }
     }
+    (lo, hi)
+}
+
+/// Bounding-box diagonal of the mesh: the length scale for geometric tolerances.
+pub fn model_size(mesh: &Mesh) -> f64 {
+    let (lo, hi) = bounds(mesh);
     (0..3).map(|a| (hi[a] - lo[a]).powi(2)).sum::<f64>().sqrt()
 }
 
-fn select(spec: &Spec, selector: &NodeSelector, mesh: &Mesh, size: f64) -> Vec<usize> {
+fn unit(v: [f64; 3]) -> [f64; 3] {
+    let len = v.iter().map(|c| c * c).sum::<f64>().sqrt();
+    v.map(|c| c / len)
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+/// The slave nodes a selector names; Err(message) when a named node set does not exist.
+fn select(spec: &Spec, selector: &NodeSelector, part: &Part, size: f64) -> std::result::Result<Vec<usize>, String> {
+    let mesh = &part.mesh;
     let tol_default = 1e-6 * size;
-    match selector {
+    let within = |keep: &dyn Fn([f64; 3]) -> bool| (0..mesh.nodes.len()).filter(|&i| keep(mesh.nodes[i])).collect::<Vec<_>>();
+    Ok(match selector {
+        NodeSelector::NodeSet(name) => match part.node_set(name) {
+            Some(nodes) => nodes.to_vec(),
+            None => {
+                let known: Vec<&str> = part.node_sets.keys().map(|k| k.as_str()).collect();
+                return Err(format!(
+                    "there is no node set \"{name}\" ({})",
+                    if known.is_empty() { "the part has no node sets".to_string() } else { format!("node sets: {}", known.join(", ")) }
+                ));
+            }
+        },
+        NodeSelector::Box { min, max } => {
+            within(&|p| (0..3).all(|a| p[a] >= min[a] - tol_default && p[a] <= max[a] + tol_default))
+        }
+        NodeSelector::Sphere { center, radius } => {
+            within(&|p| dot(sub(p, *center), sub(p, *center)).sqrt() <= radius + tol_default)
+        }
+        NodeSelector::Cylinder { point, axis, radius, length } => {
+            let n = unit(*axis);
+            within(&|p| {
+                let d = sub(p, *point);
+                let along = dot(d, n);
+                let radial = sub(d, n.map(|c| c * along));
+                dot(radial, radial).sqrt() <= radius + tol_default
+                    && length.is_none_or(|l| along.abs() <= 0.5 * l + tol_default)
+            })
+        }
         NodeSelector::BoxFace { box_index, face } => {
             let b = &spec.geometry.boxes[*box_index];
             let (axis, upper) = face.axis_side();
@@ -58,7 +106,7 @@ fn select(spec: &Spec, selector: &NodeSelector, mesh: &Mesh, size: f64) -> Vec<u
                 })
                 .collect()
         }
-    }
+    })
 }
 
 /// Ratio of the second to the first principal extent of a point set: ~0 for collinear points.
@@ -80,18 +128,25 @@ fn planarity(points: &[[f64; 3]]) -> f64 {
     if ev[0] <= 0.0 { 0.0 } else { (ev[1].max(0.0) / ev[0]).sqrt() }
 }
 
-pub fn select_flanges(spec: &Spec, file: &Path, mesh: &Mesh) -> Result<Vec<Flange>> {
+pub fn select_flanges(spec: &Spec, file: &Path, part: &Part) -> Result<Vec<Flange>> {
+    let mesh = &part.mesh;
     let size = model_size(mesh);
     let mut owner: Vec<Option<usize>> = vec![None; mesh.nodes.len()];
     let mut flanges = Vec::with_capacity(spec.flanges.len());
     for (k, fs) in spec.flanges.iter().enumerate() {
         let field = format!("flanges[{k}].nodes");
-        let slaves = select(spec, &fs.nodes, mesh, size);
+        let slaves = select(spec, &fs.nodes, part, size).map_err(|m| BuildError::input(file, format!("{field}.node_set"), m))?;
         if slaves.is_empty() {
             return Err(BuildError::input(
                 file,
                 field,
-                format!("flange \"{}\" selects no node of the mesh (check the face or plane and its tolerance)", fs.name),
+                format!(
+                    "flange \"{}\" selects no node of the part (check the set, face, plane, box, sphere or cylinder and its size; \
+                     the part spans {:?} to {:?})",
+                    fs.name,
+                    bounds(mesh).0,
+                    bounds(mesh).1
+                ),
             ));
         }
         let points: Vec<[f64; 3]> = slaves.iter().map(|&i| mesh.nodes[i]).collect();

@@ -4,14 +4,13 @@
 //! shapes of the flanges, and the report compares against the full model's free-free modes and
 //! inertia-relief flange compliance.
 
-use crate::assembly::{self, Assembled, MassProperties};
+use crate::assembly::{self, Assembled, MassProperties, Uncoupled};
 use crate::eigen::{self, Deflation};
 use crate::error::{BuildError, Result};
-use crate::fe::Elasticity;
 use crate::ffrf;
 use crate::flange::Flange;
 use crate::inertia;
-use crate::mesh::Mesh;
+use crate::part::Part;
 use crate::pipeline::{Built, guid, modal_damping, report_of};
 use crate::reduce::{self, Basis, EIGEN_TOL, ModeCount};
 use crate::report::{Accuracy, compare_compliance};
@@ -64,8 +63,10 @@ fn rigid_deflation(model: &Assembled, nodes: &[[f64; 3]], flanges: &[Flange], or
     Ok(Deflation { vectors, m_vectors })
 }
 
-pub fn reduce(spec: Spec, mesh: Mesh, flanges: Vec<Flange>, material: Elasticity, modes: ModeCount) -> Result<Built> {
-    let mut model = assembly::assemble(&mesh, &flanges, material, spec.material.rho, [0.0; 3])?;
+pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, modes: ModeCount) -> Result<Built> {
+    let mesh = &part.mesh;
+    let mut model = assembly::rigid_coupling(&free, &mesh.nodes, &flanges, [0.0; 3])?;
+    drop(free);
     let (origin, props) = about_centre_of_mass(model.mass_properties);
     model.mass_properties = props;
     let (k_shifted, shift) = shifted(&model.stiffness, &model.mass)?;
@@ -91,7 +92,7 @@ pub fn reduce(spec: Spec, mesh: Mesh, flanges: Vec<Flange>, material: Elasticity
         omega: basis.omega.clone(),
         alpha: spec.damping.alpha,
         beta: spec.damping.beta,
-        modal_damping: modal_damping(&spec, &basis.omega),
+        modal_damping: crate::pipeline::with_user_damping(modal_damping(&spec, &basis.omega), &model, &basis)?,
         mass: props.mass,
         first_moment: [0.0; 3],
         inertia: props.inertia,
@@ -114,8 +115,8 @@ pub fn reduce(spec: Spec, mesh: Mesh, flanges: Vec<Flange>, material: Elasticity
     reduced.guid = guid(&reduced);
     let accuracy = accuracy(&model, &solver, shift, &rigid, &basis)?;
     let statics = basis.omega.len() - basis.n_normal;
-    let report = report_of(&spec, &mesh, &flanges, &model, &basis, &reduced, "free-interface modes + inertia-relief attachment shapes", statics, accuracy);
-    Ok(Built { spec, mesh, flanges, model, basis, reduced, report })
+    let report = report_of(&spec, &part, &flanges, &model, &basis, &reduced, "free-interface modes + inertia-relief attachment shapes", statics, accuracy);
+    Ok(Built { spec, part, flanges, model, basis, reduced, report })
 }
 
 /// Free-free elastic frequencies and inertia-relief flange compliance, full vs reduced.

@@ -15,6 +15,7 @@ pub mod import;
 pub mod inertia;
 pub mod mesh;
 pub mod order;
+pub mod part;
 pub mod reduce;
 pub mod sparse;
 pub mod spec;

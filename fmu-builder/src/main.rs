@@ -28,6 +28,10 @@ struct Args {
     /// Also write the mounted body's K and M (Matrix Market) and the flange load DoFs into this folder
     #[arg(long)]
     export_matrices: Option<PathBuf>,
+    /// Also write the part's free-free K and M (Matrix Market), its DoF map and node table into
+    /// this folder: the input of `geometry.matrices`
+    #[arg(long)]
+    export_free_free: Option<PathBuf>,
     /// Print nothing but errors
     #[arg(short, long)]
     quiet: bool,
@@ -75,7 +79,13 @@ fn main() -> ExitCode {
             }
             if let Some(path) = &args.export_inp {
                 let b = &built;
-                if let Err(e) = fmu_builder::export::write_abaqus_deck(path, &b.mesh, &b.flanges, &b.spec.material) {
+                if let Err(e) = fmu_builder::export::write_abaqus_deck(path, &b.part, &b.flanges) {
+                    eprintln!("error: {e}");
+                    return ExitCode::FAILURE;
+                }
+            }
+            if let Some(dir) = &args.export_free_free {
+                if let Err(e) = fmu_builder::export::write_free_free_matrices(dir, &built.part) {
                     eprintln!("error: {e}");
                     return ExitCode::FAILURE;
                 }
@@ -88,6 +98,9 @@ fn main() -> ExitCode {
             }
             if !args.quiet {
                 print!("{}", fmu_builder::summary::text(&built.report));
+                if let Some(mib) = peak_memory_mib() {
+                    println!("peak memory {mib:.0} MiB");
+                }
                 println!("wrote {}", output.display());
             }
             ExitCode::SUCCESS
@@ -97,4 +110,13 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// Peak resident memory of this process (Linux: VmHWM of /proc/self/status), for users sizing
+/// machines for large models.
+fn peak_memory_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024.0)
 }

@@ -21,29 +21,66 @@ pub struct BoxRegion {
     pub divisions: [usize; 3],
 }
 
-/// Mesh of one element kind. `elements` is flat: `nodes_per_element` node
-/// indices per element, in C3D8/C3D20 order with positive Jacobian.
+/// A solid mesh, possibly of mixed element kinds and materials. `elements` is the flat
+/// connectivity (CalculiX node order, positive Jacobian); element `e` owns
+/// `elements[offsets[e]..offsets[e + 1]]`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Mesh {
-    pub kind: ElementKind,
     pub nodes: Vec<[f64; 3]>,
     pub elements: Vec<usize>,
+    pub offsets: Vec<usize>,
+    pub kinds: Vec<ElementKind>,
+    /// Index of each element's material in the part's material table.
+    pub material: Vec<usize>,
 }
 
 impl Mesh {
+    /// An empty mesh (no nodes, no elements).
+    pub fn empty() -> Self {
+        Self { nodes: Vec::new(), elements: Vec::new(), offsets: vec![0], kinds: Vec::new(), material: Vec::new() }
+    }
+
+    /// Nodes without elements: a part given by its matrices.
+    pub fn nodes_only(nodes: Vec<[f64; 3]>) -> Self {
+        Self { nodes, ..Self::empty() }
+    }
+
+    /// Appends an element (its node count must be the kind's).
+    pub fn push_element(&mut self, kind: ElementKind, nodes: &[usize], material: usize) {
+        debug_assert_eq!(nodes.len(), kind.nodes_per_element());
+        self.elements.extend_from_slice(nodes);
+        self.offsets.push(self.elements.len());
+        self.kinds.push(kind);
+        self.material.push(material);
+    }
+
     pub fn n_nodes(&self) -> usize {
         self.nodes.len()
     }
 
     pub fn n_elements(&self) -> usize {
-        self.elements.len() / self.kind.nodes_per_element()
+        self.kinds.len()
+    }
+
+    pub fn kind(&self, i: usize) -> ElementKind {
+        self.kinds[i]
+    }
+
+    /// The element kinds present, in first-use order (for reports).
+    pub fn kind_names(&self) -> String {
+        let mut seen: Vec<ElementKind> = Vec::new();
+        for &k in &self.kinds {
+            if !seen.contains(&k) {
+                seen.push(k);
+            }
+        }
+        seen.iter().map(|k| k.name()).collect::<Vec<_>>().join(", ")
     }
 
     /// Node indices of element `i`. Panics if `i >= n_elements()` (a caller
     /// bug, not a user-input condition).
     pub fn element(&self, i: usize) -> &[usize] {
-        let npe = self.kind.nodes_per_element();
-        &self.elements[i * npe..(i + 1) * npe]
+        &self.elements[self.offsets[i]..self.offsets[i + 1]]
     }
 
     /// Coordinates of the nodes of element `i`, written into a stack buffer
@@ -182,15 +219,12 @@ pub fn mesh_boxes(boxes: &[BoxRegion], kind: ElementKind) -> Result<Mesh, MeshEr
         }
     }
 
-    let mut mesh = Mesh {
-        kind,
-        nodes: Vec::new(),
-        elements: Vec::new(),
-    };
+    let mut mesh = Mesh::empty();
     let mut interface_nodes = NodeHash::new(tol);
     for (box_index, lattice) in lattices.iter().enumerate() {
         add_box(
             &mut mesh,
+            kind,
             box_index,
             lattice,
             &boxes[box_index],
@@ -418,6 +452,7 @@ impl NodeHash {
 
 fn add_box(
     mesh: &mut Mesh,
+    kind: ElementKind,
     box_index: usize,
     lattice: &Lattice,
     region: &BoxRegion,
@@ -431,7 +466,7 @@ fn add_box(
             m.checked_add(1).and_then(|p| acc.checked_mul(p))
         })
         .ok_or_else(too_large)?;
-    let npe = mesh.kind.nodes_per_element();
+    let npe = kind.nodes_per_element();
     let element_entries = region
         .divisions
         .iter()
@@ -484,8 +519,8 @@ fn add_box(
         }
     }
 
-    let step = lattice_step(mesh.kind);
-    let natural = mesh.kind.natural_node_coords();
+    let step = lattice_step(kind);
+    let natural = kind.natural_node_coords();
     let [dx, dy, dz] = region.divisions;
     let flat = |i: usize, j: usize, k: usize| i + (mx + 1) * (j + (my + 1) * k);
     for ez in 0..dz {
@@ -505,6 +540,9 @@ fn add_box(
                     mesh.elements
                         .push(local[flat(off(ex, c[0]), off(ey, c[1]), off(ez, c[2]))]);
                 }
+                mesh.offsets.push(mesh.elements.len());
+                mesh.kinds.push(kind);
+                mesh.material.push(0);
             }
         }
     }
@@ -536,12 +574,12 @@ mod tests {
     /// Sum of element volumes (element mass with rho = 1); fails on any
     /// element with a non-positive Jacobian.
     fn mesh_volume(mesh: &Mesh) -> f64 {
-        let n = mesh.kind.nodes_per_element();
+        let n = mesh.kind(0).nodes_per_element();
         let mut m = vec![0.0; n * n];
         let mut buf = [[0.0; 3]; MAX_NODES_PER_ELEMENT];
         (0..mesh.n_elements())
             .map(|e| {
-                element_mass(mesh.kind, mesh.element_coords(e, &mut buf), 1.0, &mut m)
+                element_mass(mesh.kind(e), mesh.element_coords(e, &mut buf), 1.0, &mut m)
                     .expect("valid element");
                 m.iter().sum::<f64>()
             })
@@ -576,7 +614,7 @@ mod tests {
         assert_eq!(hex20.n_elements(), 24);
         for mesh in [&hex8, &hex20] {
             assert_elements_well_formed(mesh);
-            assert!((mesh_volume(mesh) - 3.0).abs() < 1e-12, "{}", mesh.kind);
+            assert!((mesh_volume(mesh) - 3.0).abs() < 1e-12, "{}", mesh.kind(0));
         }
     }
 

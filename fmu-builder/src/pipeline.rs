@@ -2,12 +2,12 @@
 //! invariants -> report. Each stage's output is a plain value; this file only wires them;
 //! `package` turns the result into the FMU.
 
-use crate::assembly::{self, Assembled};
+use crate::assembly::{self, Assembled, SolidMaterial};
 use crate::error::{BuildError, Result};
-use crate::fe::{ElementKind, Elasticity};
 use crate::ffrf;
 use crate::flange::{self, Flange};
-use crate::mesh::{self, BoxRegion, Mesh, MeshError};
+use crate::mesh::Mesh;
+use crate::part::{self, Part};
 use crate::reduce::{self, Basis, ModeCount};
 use crate::report::{self, FlangeReport, Report};
 use crate::eigen;
@@ -16,7 +16,7 @@ use crate::free_floating;
 use crate::frf;
 use crate::inertia::{self, LoadCase};
 use crate::sparse::{self, SpdSolver};
-use crate::spec::{Element, Method, Role, SceneLoad, Spec};
+use crate::spec::{Method, Role, SceneLoad, Spec};
 use crate::stiffening::reduced_geometric_stiffness;
 use faer::{Mat, MatRef};
 use fmu_runtime::reduced::{RotationTerms, Stiffening};
@@ -26,36 +26,12 @@ use std::path::Path;
 
 pub struct Built {
     pub spec: Spec,
-    pub mesh: Mesh,
+    pub part: Part,
     pub flanges: Vec<Flange>,
     pub model: Assembled,
     pub basis: Basis,
     pub reduced: ReducedBody,
     pub report: Report,
-}
-
-pub fn mesh_of(spec: &Spec, file: &Path) -> Result<Mesh> {
-    let kind = match spec.geometry.element {
-        Element::Hex20 => ElementKind::Hex20,
-        Element::Hex8 => ElementKind::Hex8,
-    };
-    let boxes: Vec<BoxRegion> = spec
-        .geometry
-        .boxes
-        .iter()
-        .map(|b| BoxRegion { min: b.min, max: b.max, divisions: b.elements })
-        .collect();
-    mesh::mesh_boxes(&boxes, kind).map_err(|e| {
-        let field = match &e {
-            MeshError::DegenerateBox { box_index, .. } | MeshError::TooLarge { box_index } => {
-                format!("geometry.boxes[{box_index}]")
-            }
-            MeshError::Overlap { second, .. } => format!("geometry.boxes[{second}]"),
-            MeshError::NonConforming { node_box, .. } => format!("geometry.boxes[{node_box}]"),
-            _ => "geometry.boxes".to_string(),
-        };
-        BuildError::input(file, field, e.to_string())
-    })
 }
 
 fn guid_of(bytes: &[u8]) -> String {
@@ -86,7 +62,7 @@ fn stiffening_terms(
     model: &Assembled,
     solver: &SpdSolver,
     origin: [f64; 3],
-    material: Elasticity,
+    materials: &[SolidMaterial],
     cases: &[LoadCase],
     load_shapes: Option<&Mat<f64>>,
     phi_mesh: MatRef<'_, f64>,
@@ -95,7 +71,7 @@ fn stiffening_terms(
     let reduce_shape = |u_c: MatRef<'_, f64>| -> Result<Vec<f64>> {
         let u = inertia::expand(model, &mesh.nodes, flanges, u_c);
         let u: Vec<f64> = (0..u.nrows()).map(|i| u[(i, 0)]).collect();
-        let k = reduced_geometric_stiffness(mesh, &material, &u, phi_mesh)?;
+        let k = reduced_geometric_stiffness(mesh, materials, &u, phi_mesh)?;
         Ok((0..r * r).map(|i| k[(i / r, i % r)]).collect())
     };
     let shape_of = |case: LoadCase| -> Result<Vec<f64>> {
@@ -163,7 +139,7 @@ fn stiffening_terms(
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn report_of(
     spec: &Spec,
-    mesh: &Mesh,
+    part: &Part,
     flanges: &[Flange],
     model: &Assembled,
     basis: &Basis,
@@ -176,9 +152,11 @@ pub(crate) fn report_of(
     Report {
         model_name: spec.name.clone(),
         guid: reduced.guid.clone(),
-        element: mesh.kind.name().to_string(),
-        nodes: mesh.n_nodes(),
-        elements: mesh.n_elements(),
+        element: part.element_description(),
+        source: part.source.clone(),
+        rigid_body_residual: part.rigid_body_residual,
+        nodes: part.mesh.n_nodes(),
+        elements: part.mesh.n_elements(),
         dofs_constrained: model.dofs.n_dofs,
         mass: props.mass,
         volume: props.volume,
@@ -207,6 +185,22 @@ pub(crate) fn report_of(
 /// 2 zeta_k omega_k per mode from the input's modal damping ratios.
 pub(crate) fn modal_damping(spec: &Spec, omega: &[f64]) -> Vec<f64> {
     omega.iter().map(|w| 2.0 * spec.damping.modal_ratio_at(w / (2.0 * std::f64::consts::PI)) * w).collect()
+}
+
+/// Modal damping plus the diagonal of Phi^T D Phi for a user damping matrix D (matrix input).
+/// The off-diagonal coupling is dropped: the runtime integrates decoupled modes. Rayleigh-like
+/// D projects exactly diagonal on our K- and M-orthogonal basis.
+pub(crate) fn with_user_damping(mut modal: Vec<f64>, model: &Assembled, basis: &Basis) -> Result<Vec<f64>> {
+    let Some(d) = &model.damping else {
+        return Ok(modal);
+    };
+    let n = basis.phi.nrows();
+    let d = sparse::block(d, 0..n, 0..n)?;
+    let dphi = sparse::mul_new(&d, basis.phi.as_ref());
+    for (k, m) in modal.iter_mut().enumerate() {
+        *m += (0..n).map(|i| basis.phi[(i, k)] * dphi[(i, k)]).sum::<f64>();
+    }
+    Ok(modal)
 }
 
 pub(crate) fn guid(reduced: &ReducedBody) -> String {
@@ -290,19 +284,21 @@ fn choose_order(
 
 /// Read, mesh, couple, assemble and reduce: everything but writing the FMU.
 pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
-    let mesh = mesh_of(&spec, file)?;
-    let flanges = flange::select_flanges(&spec, file, &mesh)?;
-    let material = Elasticity { e: spec.material.e, nu: spec.material.nu };
+    let mut part = part::part_of(&spec, file)?;
+    let flanges = flange::select_flanges(&spec, file, &part)?;
+    let free = part.free_free()?;
     let modes = match (spec.reduction.modes, spec.reduction.max_frequency) {
         (Some(n), _) => ModeCount::Count(n),
         (None, Some(f)) => ModeCount::Below(f),
         (None, None) => ModeCount::Count(0),
     };
     let Some(mount) = spec.mount_index() else {
-        return free_floating::reduce(spec, mesh, flanges, material, modes);
+        return free_floating::reduce(spec, part, free, flanges, modes);
     };
     let origin = flanges[mount].reference;
-    let model = assembly::assemble(&mesh, &flanges, material, spec.material.rho, origin)?;
+    let model = assembly::rigid_coupling(&free, &part.mesh.nodes, &flanges, origin)?;
+    drop(free);
+    let mesh = &part.mesh;
     let nc = model.dofs.n_clamped();
     let k_cc = sparse::block(&model.stiffness, 0..nc, 0..nc)?;
     let solver = SpdSolver::new(&k_cc, "the stiffness of the mounted body")?;
@@ -342,7 +338,7 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
     };
     let basis = match spec.scene.as_ref().and_then(|s| s.tolerance) {
         Some(tol) if !model.dofs.flange_first.is_empty() && spec.scene.is_some() => {
-            choose_order(&spec, &model, &mesh, &flanges, &solver, origin, &cases, basis, tol)?
+            choose_order(&spec, &model, mesh, &flanges, &solver, origin, &cases, basis, tol)?
         }
         _ => basis,
     };
@@ -353,7 +349,7 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
         RotationTerms { g: r.g, o_mat: r.o_mat, o_vec: r.o_vec }
     });
     let stiffening = if spec.stiffening() {
-        Some(stiffening_terms(&spec, &mesh, &flanges, &model, &solver, origin, material, &cases, load_shapes.as_ref(), phi_mesh.as_ref())?)
+        Some(stiffening_terms(&spec, mesh, &flanges, &model, &solver, origin, &part.materials, &cases, load_shapes.as_ref(), phi_mesh.as_ref())?)
     } else {
         None
     };
@@ -374,7 +370,7 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
         omega: basis.omega.clone(),
         alpha: spec.damping.alpha,
         beta: spec.damping.beta,
-        modal_damping: modal_damping(&spec, &basis.omega),
+        modal_damping: with_user_damping(modal_damping(&spec, &basis.omega), &model, &basis)?,
         mass: props.mass,
         first_moment: props.first_moment,
         inertia: props.inertia,
@@ -418,7 +414,7 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
         }
     }
     let statics = basis.omega.len() - basis.n_normal;
-    let report = report_of(&spec, &mesh, &flanges, &model, &basis, &reduced, &method, statics, accuracy);
-    Ok(Built { spec, mesh, flanges, model, basis, reduced, report })
+    let report = report_of(&spec, &part, &flanges, &model, &basis, &reduced, &method, statics, accuracy);
+    Ok(Built { spec, part, flanges, model, basis, reduced, report })
 }
 

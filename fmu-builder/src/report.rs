@@ -45,11 +45,15 @@ pub struct Report {
     pub model_name: String,
     pub guid: String,
     pub element: String,
+    /// What the part was read from (boxes, a mesh file, matrices).
+    pub source: String,
+    /// For matrix input: |K r| / (|K| |r|) of the six rigid-body motions (tx, ty, tz, rx, ry, rz).
+    pub rigid_body_residual: Option<[f64; 6]>,
     pub nodes: usize,
     pub elements: usize,
     pub dofs_constrained: usize,
     pub mass: f64,
-    pub volume: f64,
+    pub volume: Option<f64>,
     /// Centre of mass in the body frame (origin at the mount's reference point) [m].
     pub center_of_mass: [f64; 3],
     pub inertia_about_origin: [f64; 9],

@@ -18,7 +18,11 @@ pub struct Spec {
     #[serde(default)]
     pub description: Option<String>,
     pub geometry: Geometry,
-    pub material: Material,
+    #[serde(default)]
+    pub material: Option<MaterialSpec>,
+    /// Per-material overrides keyed by the mesh file's material names.
+    #[serde(default)]
+    pub materials: std::collections::BTreeMap<String, MaterialSpec>,
     #[serde(default)]
     pub damping: Damping,
     pub flanges: Vec<FlangeSpec>,
@@ -69,6 +73,7 @@ impl Spec {
 pub enum Element {
     #[default]
     Hex20,
+    Hex20r,
     Hex8,
 }
 
@@ -77,7 +82,31 @@ pub enum Element {
 pub struct Geometry {
     #[serde(default)]
     pub element: Element,
+    /// Empty unless the part is a union of boxes.
+    #[serde(default)]
     pub boxes: Vec<BoxSpec>,
+    /// Mesh file (.inp or .msh), relative to the input file.
+    #[serde(default)]
+    pub mesh: Option<String>,
+    #[serde(default)]
+    pub matrices: Option<MatrixSpec>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MatrixSpec {
+    pub stiffness: String,
+    pub mass: String,
+    #[serde(default)]
+    pub damping: Option<String>,
+    pub dofs: String,
+    pub nodes: String,
+    #[serde(default = "yes")]
+    pub free_free: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -88,13 +117,16 @@ pub struct BoxSpec {
     pub elements: [usize; 3],
 }
 
-#[derive(Debug, Clone, Copy, Deserialize)]
+/// Material properties given in the input: each overrides what a mesh file says.
+#[derive(Debug, Clone, Copy, Deserialize, Default, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct Material {
-    #[serde(rename = "E")]
-    pub e: f64,
-    pub nu: f64,
-    pub rho: f64,
+pub struct MaterialSpec {
+    #[serde(rename = "E", default)]
+    pub e: Option<f64>,
+    #[serde(default)]
+    pub nu: Option<f64>,
+    #[serde(default)]
+    pub rho: Option<f64>,
 }
 
 #[derive(Debug, Clone, Deserialize, Default)]
@@ -152,6 +184,10 @@ pub struct FlangeSpec {
 pub enum NodeSelector {
     BoxFace { #[serde(rename = "box")] box_index: usize, face: Face },
     Plane { point: [f64; 3], normal: [f64; 3], #[serde(default)] tolerance: Option<f64> },
+    NodeSet(String),
+    Box { min: [f64; 3], max: [f64; 3] },
+    Sphere { center: [f64; 3], radius: f64 },
+    Cylinder { point: [f64; 3], axis: [f64; 3], radius: f64, #[serde(default)] length: Option<f64> },
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
@@ -303,12 +339,30 @@ impl Spec {
                         format!("box {box_index} does not exist: geometry.boxes has {} boxes (indices from 0)", self.geometry.boxes.len()),
                     ));
                 }
+                NodeSelector::BoxFace { .. } if self.geometry.boxes.is_empty() => {
+                    return Err(BuildError::input(
+                        path,
+                        format!("flanges[{i}].nodes.box_face"),
+                        "box_face selects a face of geometry.boxes, and this part has none; use node_set, plane, box, sphere or cylinder",
+                    ));
+                }
                 NodeSelector::Plane { normal, .. } if normal.iter().map(|c| c * c).sum::<f64>() == 0.0 => {
                     return Err(BuildError::input(path, format!("flanges[{i}].nodes.plane.normal"), "the normal is the zero vector"));
+                }
+                NodeSelector::Cylinder { axis, .. } if axis.iter().map(|c| c * c).sum::<f64>() == 0.0 => {
+                    return Err(BuildError::input(path, format!("flanges[{i}].nodes.cylinder.axis"), "the axis is the zero vector"));
+                }
+                NodeSelector::Box { min, max } if (0..3).any(|a| !(max[a] > min[a])) => {
+                    return Err(BuildError::input(
+                        path,
+                        format!("flanges[{i}].nodes.box"),
+                        format!("empty box: every coordinate of max {max:?} must exceed min {min:?}"),
+                    ));
                 }
                 _ => {}
             }
         }
+        self.check_part(path)?;
         if let Some([lo, hi]) = self.scene.as_ref().and_then(|s| s.band) {
             if !(hi > lo) {
                 return Err(BuildError::input(path, "scene.band", format!("the band's upper limit {hi} Hz must exceed its lower limit {lo} Hz")));
@@ -329,6 +383,52 @@ impl Spec {
             }
         }
         Ok(())
+    }
+
+    /// The part's source and its material: boxes need a complete material, matrices none.
+    fn check_part(&self, path: &Path) -> Result<()> {
+        let g = &self.geometry;
+        if g.boxes.is_empty() && g.mesh.is_none() && g.matrices.is_none() {
+            return Err(BuildError::input(path, "geometry", "give one of boxes, mesh or matrices"));
+        }
+        if !g.boxes.is_empty() {
+            let m = self.material.unwrap_or_default();
+            for (value, name) in [(m.e, "E"), (m.nu, "nu"), (m.rho, "rho")] {
+                if value.is_none() {
+                    return Err(BuildError::input(
+                        path,
+                        if self.material.is_some() { format!("material.{name}") } else { "material".into() },
+                        format!("the box mesh needs the material's {name} (E [Pa], nu, rho [kg/m^3])"),
+                    ));
+                }
+            }
+            if !self.materials.is_empty() {
+                return Err(BuildError::input(path, "materials", "named materials apply to mesh files; the box mesh has one material: use material"));
+            }
+        }
+        if g.matrices.is_some() {
+            if self.material.is_some() || !self.materials.is_empty() {
+                return Err(BuildError::input(
+                    path,
+                    if self.material.is_some() { "material" } else { "materials" },
+                    "a part given by its matrices has its material in them; remove the material",
+                ));
+            }
+            if self.stiffening() {
+                return Err(BuildError::input(
+                    path,
+                    "scene.geometric_stiffening",
+                    "geometric stiffening needs element stresses, so a mesh (geometry.boxes or geometry.mesh), not matrices",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// A file named in the input, relative to the input file's directory.
+    pub fn resolve(input: &Path, name: &str) -> std::path::PathBuf {
+        let p = Path::new(name);
+        if p.is_absolute() { p.to_path_buf() } else { input.parent().unwrap_or(Path::new(".")).join(p) }
     }
 
     /// Drop the force flanges the scene does not connect: the FMU models only what the scene uses.

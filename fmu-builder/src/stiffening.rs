@@ -3,22 +3,26 @@
 //! never assembled. Linear in the load: the runtime scales each case by its present load.
 
 use crate::error::{BuildError, Result};
-use crate::fe::{ElementKind, Elasticity, MAX_NODES_PER_ELEMENT, geometric::element_geometric_stiffness};
+use crate::assembly::SolidMaterial;
+use crate::fe::{ElementKind, MAX_NODES_PER_ELEMENT, geometric::element_geometric_stiffness};
 use crate::mesh::Mesh;
 use faer::{Mat, MatRef};
 
 /// Phi^T K_sigma(u) Phi (r x r, symmetric) for the mesh-level prestress displacement `u` (3N) and
 /// mesh-level basis `phi` (3N x r).
-pub fn reduced_geometric_stiffness(mesh: &Mesh, material: &Elasticity, u: &[f64], phi: MatRef<'_, f64>) -> Result<Mat<f64>> {
-    let kind: ElementKind = mesh.kind;
-    let nen = kind.nodes_per_element();
+pub fn reduced_geometric_stiffness(mesh: &Mesh, materials: &[SolidMaterial], u: &[f64], phi: MatRef<'_, f64>) -> Result<Mat<f64>> {
     let r = phi.ncols();
     let mut out = Mat::<f64>::zeros(r, r);
     let mut coords_buf = [[0.0; 3]; MAX_NODES_PER_ELEMENT];
-    let mut ue = vec![0.0; 3 * nen];
-    let mut ks = vec![0.0; nen * nen];
-    let mut p = Mat::<f64>::zeros(nen, r);
+    let mut ue_buf = vec![0.0; 3 * MAX_NODES_PER_ELEMENT];
+    let mut ks_buf = vec![0.0; MAX_NODES_PER_ELEMENT * MAX_NODES_PER_ELEMENT];
     for e in 0..mesh.n_elements() {
+        let kind: ElementKind = mesh.kind(e);
+        let material = &materials[mesh.material[e]].elasticity;
+        let nen = kind.nodes_per_element();
+        let ue = &mut ue_buf[..3 * nen];
+        let ks = &mut ks_buf[..nen * nen];
+        let mut p = Mat::<f64>::zeros(nen, r);
         let nodes = mesh.element(e);
         for (a, &n) in nodes.iter().enumerate() {
             for i in 0..3 {
@@ -26,7 +30,7 @@ pub fn reduced_geometric_stiffness(mesh: &Mesh, material: &Elasticity, u: &[f64]
             }
         }
         let coords = mesh.element_coords(e, &mut coords_buf);
-        element_geometric_stiffness(kind, coords, material, &ue, &mut ks)
+        element_geometric_stiffness(kind, coords, material, ue, ks)
             .map_err(|err| BuildError::Numerical(format!("element {e}: {err}")))?;
         let k = Mat::<f64>::from_fn(nen, nen, |a, b| ks[a * nen + b]);
         for i in 0..3 {

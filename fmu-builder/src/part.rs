@@ -1,0 +1,391 @@
+//! The part as the input describes it, whatever its source: boxes meshed here, a mesh file
+//! (Abaqus/CalculiX `.inp`, Gmsh `.msh`) or assembled matrices. Resolves every element's
+//! material (the input's `materials` over `material` over the mesh file) and keeps the node sets
+//! flanges may name. Everything downstream sees one `Part`.
+
+use crate::assembly::{self, SolidMaterial, Uncoupled};
+use crate::error::{BuildError, Result};
+use crate::fe::{ElementKind, Elasticity};
+use crate::import::{self, ElementType, ImportError, ImportedMesh};
+use crate::mesh::{self, BoxRegion, Mesh, MeshError};
+use crate::spec::{Element, MaterialSpec, Spec};
+use faer::sparse::{SparseColMat, Triplet};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+pub struct Part {
+    pub mesh: Mesh,
+    pub materials: Vec<SolidMaterial>,
+    /// Named node sets (mesh-file or node-file names), as dense node indices.
+    pub node_sets: BTreeMap<String, Vec<usize>>,
+    /// The user's free-free matrices, when the part is given by them.
+    pub matrices: Option<Uncoupled>,
+    /// Relative rigid-body residuals |K r| of given matrices (translation x, y, z, rotation x, y, z).
+    pub rigid_body_residual: Option<[f64; 6]>,
+    /// What the part was read from, for reports.
+    pub source: String,
+}
+
+impl From<ImportError> for BuildError {
+    fn from(e: ImportError) -> Self {
+        let field = if e.line > 0 { format!("line {}", e.line) } else { String::new() };
+        BuildError::Input { file: e.file, field, message: e.message }
+    }
+}
+
+impl Part {
+    /// Element kinds of the mesh, or "matrices".
+    pub fn element_description(&self) -> String {
+        if self.matrices.is_some() { "matrices".into() } else { self.mesh.kind_names() }
+    }
+
+    /// Case-insensitive node-set lookup.
+    pub fn node_set(&self, name: &str) -> Option<&[usize]> {
+        self.node_sets.iter().find(|(k, _)| k.eq_ignore_ascii_case(name)).map(|(_, v)| v.as_slice())
+    }
+
+    /// The free-free model: the user's matrices, or assembled from the mesh.
+    pub fn free_free(&mut self) -> Result<Uncoupled> {
+        match self.matrices.take() {
+            Some(m) => Ok(m),
+            None => assembly::uncoupled(&self.mesh, &self.materials),
+        }
+    }
+
+    /// Whether the part has elements (stresses, a deck to export).
+    pub fn has_elements(&self) -> bool {
+        self.mesh.n_elements() > 0
+    }
+}
+
+pub fn part_of(spec: &Spec, file: &Path) -> Result<Part> {
+    if let Some(name) = &spec.geometry.mesh {
+        return mesh_file_part(spec, file, &Spec::resolve(file, name));
+    }
+    if let Some(m) = &spec.geometry.matrices {
+        return matrix_part(spec, file, m);
+    }
+    box_part(spec, file)
+}
+
+fn box_part(spec: &Spec, file: &Path) -> Result<Part> {
+    let kind = match spec.geometry.element {
+        Element::Hex20 => ElementKind::Hex20,
+        Element::Hex20r => ElementKind::Hex20R,
+        Element::Hex8 => ElementKind::Hex8,
+    };
+    let boxes: Vec<BoxRegion> = spec
+        .geometry
+        .boxes
+        .iter()
+        .map(|b| BoxRegion { min: b.min, max: b.max, divisions: b.elements })
+        .collect();
+    let mesh = mesh::mesh_boxes(&boxes, kind).map_err(|e| {
+        let field = match &e {
+            MeshError::DegenerateBox { box_index, .. } | MeshError::TooLarge { box_index } => {
+                format!("geometry.boxes[{box_index}]")
+            }
+            MeshError::Overlap { second, .. } => format!("geometry.boxes[{second}]"),
+            MeshError::NonConforming { node_box, .. } => format!("geometry.boxes[{node_box}]"),
+            _ => "geometry.boxes".to_string(),
+        };
+        BuildError::input(file, field, e.to_string())
+    })?;
+    let m = spec.material.unwrap_or_default();
+    let (Some(e), Some(nu), Some(rho)) = (m.e, m.nu, m.rho) else {
+        return Err(BuildError::input(file, "material", "the box mesh needs E, nu and rho"));
+    };
+    Ok(Part {
+        mesh,
+        materials: vec![SolidMaterial { name: "material".into(), elasticity: Elasticity { e, nu }, rho }],
+        node_sets: BTreeMap::new(),
+        matrices: None,
+        rigid_body_residual: None,
+        source: format!("{} boxes", spec.geometry.boxes.len()),
+    })
+}
+
+pub fn element_kind(t: ElementType) -> ElementKind {
+    match t {
+        ElementType::C3D4 => ElementKind::Tet4,
+        ElementType::C3D10 => ElementKind::Tet10,
+        ElementType::C3D8 => ElementKind::Hex8,
+        ElementType::C3D20 => ElementKind::Hex20,
+        ElementType::C3D20R => ElementKind::Hex20R,
+    }
+}
+
+/// Nodes referenced by no element carry no stiffness (a singular model): they are dropped, and
+/// node sets follow the renumbering.
+fn compact(imported: ImportedMesh) -> (Vec<[f64; 3]>, Vec<Option<usize>>, ImportedMesh) {
+    let mut new_index = vec![None; imported.nodes.len()];
+    let mut nodes = Vec::new();
+    for conn in &imported.connectivity {
+        for &n in conn {
+            if new_index[n].is_none() {
+                new_index[n] = Some(usize::MAX);
+            }
+        }
+    }
+    for (i, slot) in new_index.iter_mut().enumerate() {
+        if slot.is_some() {
+            *slot = Some(nodes.len());
+            nodes.push(imported.nodes[i]);
+        }
+    }
+    (nodes, new_index, imported)
+}
+
+fn mesh_file_part(spec: &Spec, file: &Path, mesh_path: &Path) -> Result<Part> {
+    let imported = import::read_mesh(mesh_path)?;
+    if imported.connectivity.is_empty() {
+        return Err(BuildError::input(
+            mesh_path,
+            "",
+            format!("no solid elements (supported: {})", ElementType::supported_names()),
+        ));
+    }
+    for (name, _) in &spec.materials {
+        if imported.material(name).is_none() {
+            let known: Vec<&str> = imported.materials.iter().map(|m| m.name.as_str()).collect();
+            return Err(BuildError::input(
+                file,
+                format!("materials.{name}"),
+                format!(
+                    "{} defines no material \"{name}\" (its materials: {})",
+                    mesh_path.display(),
+                    if known.is_empty() { "none".to_string() } else { known.join(", ") }
+                ),
+            ));
+        }
+    }
+    // element -> material name of its *SOLID SECTION (the first section naming it)
+    let mut section_of: Vec<Option<&str>> = vec![None; imported.connectivity.len()];
+    for (elset, material) in &imported.sections {
+        let Some(members) = imported.element_sets.get(elset) else {
+            return Err(BuildError::input(mesh_path, "", format!("*SOLID SECTION names element set {elset}, which is not defined")));
+        };
+        if imported.material(material).is_none() {
+            return Err(BuildError::input(mesh_path, "", format!("*SOLID SECTION, ELSET={elset} names material {material}, which is not defined")));
+        }
+        for &e in members {
+            section_of[e].get_or_insert(material.as_str());
+        }
+    }
+    let mut materials: Vec<SolidMaterial> = Vec::new();
+    let mut index_of: BTreeMap<Option<String>, usize> = BTreeMap::new();
+    let mut element_material = Vec::with_capacity(section_of.len());
+    for (e, section) in section_of.iter().enumerate() {
+        let key = section.map(|s| s.to_uppercase());
+        if let Some(&i) = index_of.get(&key) {
+            element_material.push(i);
+            continue;
+        }
+        let m = resolve_material(spec, file, mesh_path, &imported, *section, imported.element_ids[e])?;
+        index_of.insert(key, materials.len());
+        element_material.push(materials.len());
+        materials.push(m);
+    }
+    let element_types = imported.element_types.clone();
+    let (nodes, new_index, imported) = compact(imported);
+    let mut mesh = Mesh::nodes_only(nodes);
+    let mut conn = Vec::with_capacity(20);
+    for (e, c) in imported.connectivity.iter().enumerate() {
+        conn.clear();
+        conn.extend(c.iter().map(|&n| new_index[n].unwrap_or(0)));
+        mesh.push_element(element_kind(element_types[e]), &conn, element_material[e]);
+    }
+    let node_sets = imported
+        .node_sets
+        .iter()
+        .map(|(name, members)| (name.clone(), members.iter().filter_map(|&n| new_index[n]).collect()))
+        .collect();
+    Ok(Part {
+        source: format!("{} ({} elements)", mesh_path.display(), mesh.n_elements()),
+        mesh,
+        materials,
+        node_sets,
+        matrices: None,
+        rigid_body_residual: None,
+    })
+}
+
+/// The material of the elements of one section (None: elements in no section): the mesh file's
+/// properties, overridden by the input's `material`, overridden by `materials[name]`.
+fn resolve_material(
+    spec: &Spec,
+    file: &Path,
+    mesh_path: &Path,
+    imported: &ImportedMesh,
+    section: Option<&str>,
+    element_id: u64,
+) -> Result<SolidMaterial> {
+    let from_file = section.and_then(|s| imported.material(s));
+    let global = spec.material.unwrap_or_default();
+    let named: MaterialSpec = section
+        .and_then(|s| spec.materials.iter().find(|(k, _)| k.eq_ignore_ascii_case(s)).map(|(_, v)| *v))
+        .unwrap_or_default();
+    let pick = |f: Option<f64>, g: Option<f64>, n: Option<f64>| n.or(g).or(f);
+    let e = pick(from_file.and_then(|m| m.e), global.e, named.e);
+    let nu = pick(from_file.and_then(|m| m.nu), global.nu, named.nu);
+    let rho = pick(from_file.and_then(|m| m.rho), global.rho, named.rho);
+    let what = match section {
+        Some(s) => format!("material {s} (*SOLID SECTION of element {element_id} in {})", mesh_path.display()),
+        None => format!("element {element_id} of {} (in no *SOLID SECTION)", mesh_path.display()),
+    };
+    let missing = |prop: &str| {
+        BuildError::input(
+            file,
+            match section {
+                Some(s) => format!("materials.{s}.{prop}"),
+                None => format!("material.{prop}"),
+            },
+            format!("{what} has no {prop}: neither the mesh file nor the input gives it"),
+        )
+    };
+    let e = e.ok_or_else(|| missing("E"))?;
+    let nu = nu.ok_or_else(|| missing("nu"))?;
+    let rho = rho.ok_or_else(|| missing("rho"))?;
+    if !(e > 0.0 && e.is_finite()) || !(nu > -1.0 && nu < 0.5) || !(rho > 0.0 && rho.is_finite()) {
+        return Err(BuildError::input(
+            mesh_path,
+            "",
+            format!("{what}: E = {e} Pa, nu = {nu}, rho = {rho} kg/m^3 is not a valid material (E > 0, -1 < nu < 0.5, rho > 0)"),
+        ));
+    }
+    Ok(SolidMaterial { name: section.unwrap_or("material").to_string(), elasticity: Elasticity { e, nu }, rho })
+}
+
+fn matrix_part(_spec: &Spec, file: &Path, m: &crate::spec::MatrixSpec) -> Result<Part> {
+    let path = |name: &str| -> PathBuf { Spec::resolve(file, name) };
+    let (k, mm, d, dofs, nodes) = (path(&m.stiffness), path(&m.mass), m.damping.as_deref().map(path), path(&m.dofs), path(&m.nodes));
+    let files = import::matrices::MatrixFiles {
+        stiffness: &k,
+        mass: &mm,
+        damping: d.as_deref(),
+        dof_map: &dofs,
+        nodes: &nodes,
+    };
+    let model = import::matrices::read_matrix_model(&files, m.free_free)?;
+    let nodal_mass = nodal_mass(&model.mass, &mm)?;
+    let mesh = Mesh::nodes_only(model.nodes);
+    Ok(Part {
+        source: format!("matrices {} and {}", k.display(), mm.display()),
+        mesh,
+        materials: Vec::new(),
+        node_sets: model.node_sets,
+        matrices: Some(Uncoupled { stiffness: model.stiffness, mass: model.mass, damping: model.damping, nodal_mass, volume: None }),
+        rigid_body_residual: Some(model.rigid_body_residual),
+    })
+}
+
+/// The scalar nodal mass m_ab of a mass matrix of the form m_ab delta_ij (every solid-element
+/// mass, consistent or lumped). The floating-frame invariants (cross products per node pair)
+/// need that form; a matrix coupling directions is refused.
+fn nodal_mass(mass: &SparseColMat<usize, f64>, file: &Path) -> Result<SparseColMat<usize, f64>> {
+    let n = mass.nrows() / 3;
+    let scale = mass.val().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let tol = 1e-10 * scale;
+    let mut blocks: std::collections::HashMap<(usize, usize), [[f64; 3]; 3]> = std::collections::HashMap::new();
+    for col in 0..mass.ncols() {
+        for (&row, &v) in mass.row_idx_of_col_raw(col).iter().zip(mass.val_of_col(col)) {
+            blocks.entry((row / 3, col / 3)).or_insert([[0.0; 3]; 3])[row % 3][col % 3] += v;
+        }
+    }
+    let dir = ["x", "y", "z"];
+    let mut trip = Vec::with_capacity(blocks.len());
+    let mut keys: Vec<_> = blocks.keys().copied().collect();
+    keys.sort_unstable();
+    for (a, b) in keys {
+        let m = blocks[&(a, b)];
+        for i in 0..3 {
+            for j in 0..3 {
+                let off = if i == j { (m[i][i] - m[0][0]).abs() } else { m[i][j].abs() };
+                if off > tol {
+                    return Err(BuildError::input(
+                        file,
+                        "",
+                        format!(
+                            "the mass matrix is not of the form m_ab delta_ij: between DoFs {}{} and {}{} (dense DoF order) \
+                             it has {:e} where {:e} is expected; only solid (translational) models are supported",
+                            a, dir[i], b, dir[j], m[i][j], if i == j { m[0][0] } else { 0.0 }
+                        ),
+                    ));
+                }
+            }
+        }
+        trip.push(Triplet::new(a, b, m[0][0]));
+    }
+    SparseColMat::try_new_from_triplets(n, n, &trip).map_err(|e| BuildError::Numerical(format!("nodal mass: {e:?}")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(text: &str) -> Spec {
+        Spec::from_str(Path::new("in.json"), text).unwrap()
+    }
+
+    const DECK: &str = "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n5,1,1,1\n99,5,5,5\n\
+        *ELEMENT, TYPE=C3D4, ELSET=A\n1,1,2,3,4\n*ELEMENT, TYPE=C3D4, ELSET=B\n2,2,3,4,5\n\
+        *NSET, NSET=FACE\n1,2,3,99\n\
+        *MATERIAL, NAME=Steel\n*ELASTIC\n2e11, 0.3\n*DENSITY\n7800\n*SOLID SECTION, ELSET=A, MATERIAL=STEEL\n";
+
+    fn part(dir: &Path, json_extra: &str) -> Result<Part> {
+        std::fs::write(dir.join("m.inp"), DECK).unwrap();
+        let text = format!(
+            r#"{{"name": "P", "geometry": {{"mesh": "m.inp"}}, {json_extra}
+              "flanges": [{{"name": "base", "role": "motion", "nodes": {{"node_set": "face"}}}}], "reduction": {{"modes": 2}}}}"#
+        );
+        let file = dir.join("in.json");
+        part_of(&spec(&text), &file)
+    }
+
+    #[test]
+    fn materials_resolve_file_then_material_then_materials() {
+        let dir = std::env::temp_dir().join(format!("fmu-part-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // element 2 is in no section: without an input material it has none
+        let e = part(&dir, "").err().unwrap().to_string();
+        assert!(e.contains("material.E") && e.contains("element 2") && e.contains("m.inp"), "{e}");
+        let p = part(&dir, r#""material": {"E": 1e9, "nu": 0.25, "rho": 1000},"#).unwrap();
+        let a = &p.materials[p.mesh.material[0]];
+        let b = &p.materials[p.mesh.material[1]];
+        // the input's material overrides the file's STEEL property by property
+        assert_eq!((a.elasticity.e, a.elasticity.nu, a.rho), (1e9, 0.25, 1000.0));
+        assert_eq!((b.elasticity.e, b.rho), (1e9, 1000.0));
+        let p = part(&dir, r#""material": {"E": 1e9, "nu": 0.25, "rho": 1000}, "materials": {"steel": {"rho": 7000}},"#).unwrap();
+        let a = &p.materials[p.mesh.material[0]];
+        assert_eq!((a.elasticity.e, a.rho), (1e9, 7000.0));
+        // what the input leaves open comes from the file
+        let p = part(&dir, r#""material": {"nu": 0.2, "E": 3e9, "rho": 10}, "materials": {"STEEL": {"nu": 0.1}},"#).unwrap();
+        let a = &p.materials[p.mesh.material[0]];
+        assert_eq!((a.elasticity.e, a.elasticity.nu), (3e9, 0.1));
+        let e = part(&dir, r#""material": {"E": 1e9, "nu": 0.25, "rho": 1000}, "materials": {"alu": {"E": 7e10}},"#)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("materials.alu") && e.contains("STEEL"), "{e}");
+        // node 99 is in no element: dropped, and dropped from its set
+        let p = part(&dir, r#""material": {"E": 1e9, "nu": 0.25, "rho": 1000},"#).unwrap();
+        assert_eq!(p.mesh.n_nodes(), 5);
+        assert_eq!(p.node_set("Face").unwrap(), &[0, 1, 2]);
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn nodal_mass_needs_the_isotropic_form() {
+        let iso = [(0, 0, 2.0), (1, 1, 2.0), (2, 2, 2.0), (0, 3, 0.5), (3, 0, 0.5), (1, 4, 0.5), (4, 1, 0.5), (2, 5, 0.5), (5, 2, 0.5), (3, 3, 1.0), (4, 4, 1.0), (5, 5, 1.0)];
+        let trip: Vec<_> = iso.iter().map(|&(i, j, v)| Triplet::new(i, j, v)).collect();
+        let m = SparseColMat::try_new_from_triplets(6, 6, &trip).unwrap();
+        let nodal = nodal_mass(&m, Path::new("M.mtx")).unwrap();
+        assert_eq!(nodal.val_of_col(0), &[2.0, 0.5]);
+        let mut coupled = trip.clone();
+        coupled.push(Triplet::new(0, 1, 0.1));
+        coupled.push(Triplet::new(1, 0, 0.1));
+        let m = SparseColMat::try_new_from_triplets(6, 6, &coupled).unwrap();
+        let e = nodal_mass(&m, Path::new("M.mtx")).err().unwrap().to_string();
+        assert!(e.contains("M.mtx") && e.contains("m_ab delta_ij"), "{e}");
+    }
+}
