@@ -4,7 +4,6 @@
 //! rotation node (set `<NAME>_ROT`) at its reference point, ready for `*RIGID BODY`.
 
 use crate::error::{BuildError, Result};
-use crate::fe::ElementKind;
 use crate::flange::Flange;
 use crate::mesh::Mesh;
 use crate::spec::Material;
@@ -35,10 +34,7 @@ pub fn abaqus_deck(mesh: &Mesh, flanges: &[Flange], material: &Material) -> Stri
             let _ = writeln!(s, "{}, {}, {}, {}", n + 1 + 2 * k + extra, real(p[0]), real(p[1]), real(p[2]));
         }
     }
-    let ty = match mesh.kind {
-        ElementKind::Hex8 => "C3D8",
-        ElementKind::Hex20 => "C3D20",
-    };
+    let ty = mesh.kind.calculix_name();
     let _ = writeln!(s, "*ELEMENT, TYPE={ty}, ELSET=EALL");
     for e in 0..mesh.n_elements() {
         let nodes: Vec<String> = mesh.element(e).iter().map(|i| (i + 1).to_string()).collect();
