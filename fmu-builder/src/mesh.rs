@@ -135,6 +135,10 @@ pub enum MeshError {
     TooLarge {
         box_index: usize,
     },
+    /// The box mesher builds hexahedra only; tetrahedral meshes are imported.
+    UnsupportedElement {
+        kind: ElementKind,
+    },
 }
 
 const AXIS_NAMES: [&str; 3] = ["x", "y", "z"];
@@ -184,6 +188,10 @@ impl fmt::Display for MeshError {
                  divisions so the grids coincide on the shared face",
                 point[0], point[1], point[2]
             ),
+            MeshError::UnsupportedElement { kind } => write!(
+                f,
+                "the box mesher cannot build {kind} elements (only hex8, hex20 and hex20r)"
+            ),
             MeshError::TooLarge { box_index } => {
                 write!(f, "box {box_index}: too many elements to mesh")
             }
@@ -199,7 +207,7 @@ pub fn mesh_boxes(boxes: &[BoxRegion], kind: ElementKind) -> Result<Mesh, MeshEr
     if boxes.is_empty() {
         return Err(MeshError::NoBoxes);
     }
-    let step = lattice_step(kind);
+    let step = lattice_step(kind).ok_or(MeshError::UnsupportedElement { kind })?;
     for (i, b) in boxes.iter().enumerate() {
         validate_box(i, b)?;
         check_size(i, b, step)?;
@@ -272,11 +280,13 @@ fn check_size(box_index: usize, b: &BoxRegion, step: usize) -> Result<(), MeshEr
     }
 }
 
-/// Lattice intervals per element edge.
-fn lattice_step(kind: ElementKind) -> usize {
+/// Lattice intervals per element edge; `None` for kinds the box mesher
+/// cannot build.
+fn lattice_step(kind: ElementKind) -> Option<usize> {
     match kind {
-        ElementKind::Hex8 => 1,
-        ElementKind::Hex20 => 2,
+        ElementKind::Hex8 => Some(1),
+        ElementKind::Hex20 | ElementKind::Hex20R => Some(2),
+        ElementKind::Tet4 | ElementKind::Tet10 => None,
     }
 }
 
@@ -519,8 +529,9 @@ fn add_box(
         }
     }
 
-    let step = lattice_step(kind);
-    let natural = kind.natural_node_coords();
+    let unsupported = MeshError::UnsupportedElement { kind };
+    let step = lattice_step(kind).ok_or(unsupported.clone())?;
+    let natural = kind.natural_node_coords().ok_or(unsupported)?;
     let [dx, dy, dz] = region.divisions;
     let flat = |i: usize, j: usize, k: usize| i + (mx + 1) * (j + (my + 1) * k);
     for ez in 0..dz {
@@ -812,6 +823,21 @@ mod tests {
             mesh_boxes(&[good, big], ElementKind::Hex8),
             Err(MeshError::TooLarge { box_index: 1 })
         ));
+    }
+
+    /// Tetrahedra come from imported meshes only; hex20r shares hex20's nodes.
+    #[test]
+    fn box_mesher_builds_hexahedra_only() {
+        let good = cube([0.0; 3], [1.0; 3], [2, 1, 1]);
+        for kind in [ElementKind::Tet4, ElementKind::Tet10] {
+            let err = mesh_boxes(&[good], kind).unwrap_err();
+            assert_eq!(err, MeshError::UnsupportedElement { kind });
+            assert!(err.to_string().contains(kind.name()), "{err}");
+        }
+        let hex20 = mesh_boxes(&[good], ElementKind::Hex20).unwrap();
+        let hex20r = mesh_boxes(&[good], ElementKind::Hex20R).unwrap();
+        assert!(hex20r.kinds.iter().all(|&k| k == ElementKind::Hex20R));
+        assert_eq!((hex20r.nodes, hex20r.elements), (hex20.nodes, hex20.elements));
     }
 
     #[test]

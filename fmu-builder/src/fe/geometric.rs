@@ -24,7 +24,9 @@ pub fn element_geometric_stiffness(
     }
     let d = mat.d_matrix();
     out.fill(0.0);
-    for_each_gauss_point(kind, coords, |_, grad, weight| {
+    // CalculiX adds the stress stiffness in its stiffness loop, with the
+    // stresses stored at those points (sti), hence the stiffness rule.
+    for_each_gauss_point(kind, kind.stiffness_rule(), coords, |_, grad, weight| {
         // engineering strain, then stress (Voigt xx, yy, zz, xy, yz, zx)
         let mut eps = [0.0; 6];
         for a in 0..n {
@@ -58,31 +60,40 @@ pub fn element_geometric_stiffness(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fe::hex20;
+    use crate::fe::{tet10, tet4};
 
     /// A bar under uniform axial stress sigma_xx = s: the geometric stiffness is the "string"
     /// stiffness s A int N_a' N_b' dx for transverse motion; a transverse rigid rotation theta
     /// about z (u_y = theta x) stores energy 1/2 s V theta^2 (s theta^2 per unit volume).
+    /// The element is an axis-aligned 2 x 0.3 x 0.2 box (hexahedra) or the corner tetrahedron of
+    /// that box (volume 1/6 of it); every rule integrates the constant integrand exactly.
     #[test]
     fn uniform_tension_stores_the_string_energy_of_a_rotation() {
-        let coords: Vec<[f64; 3]> = hex20::NATURAL_COORDS
-            .iter()
-            .map(|c| [0.5 * (c[0] as f64 + 1.0) * 2.0, 0.5 * (c[1] as f64 + 1.0) * 0.3, 0.5 * (c[2] as f64 + 1.0) * 0.2])
-            .collect();
-        let mat = Elasticity { e: 1e9, nu: 0.0 };
-        let strain = 1e-3; // u_x = strain * x: sigma_xx = E strain (nu = 0)
-        let u: Vec<f64> = coords.iter().flat_map(|p| [strain * p[0], 0.0, 0.0]).collect();
-        let mut k = vec![0.0; 400];
-        element_geometric_stiffness(ElementKind::Hex20, &coords, &mat, &u, &mut k).unwrap();
-        let theta = 0.01;
-        let uy: Vec<f64> = coords.iter().map(|p| theta * p[0]).collect();
-        let energy: f64 = (0..20).map(|a| (0..20).map(|b| uy[a] * k[a * 20 + b] * uy[b]).sum::<f64>()).sum::<f64>() * 0.5;
-        let volume = 2.0 * 0.3 * 0.2;
-        let expected = 0.5 * mat.e * strain * volume * theta * theta;
-        assert!((energy - expected).abs() < 1e-10 * expected, "{energy} vs {expected}");
-        // rigid translation stores nothing
-        let ones = vec![1.0; 20];
-        let e0: f64 = (0..20).map(|a| (0..20).map(|b| ones[a] * k[a * 20 + b] * ones[b]).sum::<f64>()).sum();
-        assert!(e0.abs() < 1e-6 * expected);
+        let size = [2.0, 0.3, 0.2];
+        for kind in ElementKind::ALL {
+            let (reference, volume): (Vec<[f64; 3]>, f64) = match kind.natural_node_coords() {
+                Some(lattice) => (
+                    lattice.iter().map(|c| c.map(|v| 0.5 * (f64::from(v) + 1.0))).collect(),
+                    size[0] * size[1] * size[2],
+                ),
+                None if kind == ElementKind::Tet4 => (tet4::NATURAL_COORDS.to_vec(), size[0] * size[1] * size[2] / 6.0),
+                None => (tet10::NATURAL_COORDS.to_vec(), size[0] * size[1] * size[2] / 6.0),
+            };
+            let coords: Vec<[f64; 3]> = reference.iter().map(|c| [c[0] * size[0], c[1] * size[1], c[2] * size[2]]).collect();
+            let n = coords.len();
+            let mat = Elasticity { e: 1e9, nu: 0.0 };
+            let strain = 1e-3; // u_x = strain * x: sigma_xx = E strain (nu = 0)
+            let u: Vec<f64> = coords.iter().flat_map(|p| [strain * p[0], 0.0, 0.0]).collect();
+            let mut k = vec![0.0; n * n];
+            element_geometric_stiffness(kind, &coords, &mat, &u, &mut k).unwrap();
+            let theta = 0.01;
+            let uy: Vec<f64> = coords.iter().map(|p| theta * p[0]).collect();
+            let energy: f64 = (0..n).map(|a| (0..n).map(|b| uy[a] * k[a * n + b] * uy[b]).sum::<f64>()).sum::<f64>() * 0.5;
+            let expected = 0.5 * mat.e * strain * volume * theta * theta;
+            assert!((energy - expected).abs() < 1e-10 * expected, "{kind}: {energy} vs {expected}");
+            // rigid translation stores nothing
+            let e0: f64 = k.iter().sum();
+            assert!(e0.abs() < 1e-6 * expected, "{kind}: {e0}");
+        }
     }
 }

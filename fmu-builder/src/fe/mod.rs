@@ -1,40 +1,81 @@
-//! Element matrices for linear isotropic elasticity on isoparametric hexahedra.
+//! Element matrices for linear isotropic elasticity on isoparametric
+//! hexahedra and tetrahedra.
 //!
-//! The formulation mirrors CalculiX so that eigenfrequencies computed from
-//! these matrices match CalculiX on the same mesh: C3D8 is the plain
-//! displacement element with full 2x2x2 Gauss integration (no incompatible
-//! modes, no reduced integration), C3D20 uses full 3x3x3 integration, and the
-//! consistent mass uses the same rule as the stiffness.
+//! The formulation mirrors CalculiX 2.20 (e_c3d.f) so that eigenfrequencies
+//! computed from these matrices match CalculiX on the same mesh. e_c3d.f
+//! integrates stiffness and consistent mass in one loop over the same points
+//! (`mint3d`, chosen from the element type when `intscheme = 0`, which is what
+//! *FREQUENCY passes, arpack.c), so every type integrates its mass with its
+//! stiffness rule, reduced or not:
+//!
+//! | kind   | CalculiX | stiffness and mass rule            |
+//! |--------|----------|------------------------------------|
+//! | hex8   | C3D8     | 2x2x2 Gauss (gauss3d2), no incompatible modes |
+//! | hex20  | C3D20    | 3x3x3 Gauss (gauss3d3)             |
+//! | hex20r | C3D20R   | 2x2x2 Gauss (gauss3d2)             |
+//! | tet4   | C3D4     | 1 point at the centroid (gauss3d4) |
+//! | tet10  | C3D10    | 4 points, degree 2 (gauss3d5)      |
+//!
+//! Consequently the scalar element mass has at most one rank per point: C3D4
+//! is rho V / 16 in every entry (rank 1 of 4), C3D10 has rank 4 of 10 and
+//! C3D20R rank 8 of 20. Singular per element, the assembled mass is regular
+//! only once enough elements share the nodes. That is CalculiX's model,
+//! reproduced on purpose (eigenfrequencies would move by percents otherwise).
+//! Stiffness and mass rules are still separate (`stiffness_rule`,
+//! `mass_rule`) because CalculiX itself switches rules with `intscheme = 1`
+//! (C3D4 to 4 points, C3D20R to 27, for initial accelerations of dynamic
+//! steps).
 //!
 //! Degrees of freedom are three translations per node, node-major:
 //! `[u0x, u0y, u0z, u1x, u1y, u1z, ...]`.
 
 pub mod gauss;
+pub mod geometric;
 pub mod hex20;
 pub mod hex8;
-pub mod geometric;
+pub mod tet10;
+pub mod tet4;
 
-use gauss::GaussOrder;
+use gauss::{GaussOrder, Rule};
 use std::fmt;
 
 /// Largest node count of any supported element; sizes the stack buffers of
 /// the integration loop so that it never allocates.
 pub const MAX_NODES_PER_ELEMENT: usize = 20;
 
-/// Supported solid element types.
+/// Supported solid element types, each equal to the CalculiX element of
+/// `calculix_name()` (node order, shape functions and integration rules).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum ElementKind {
     /// 8-node trilinear hexahedron (CalculiX C3D8).
     Hex8,
     /// 20-node quadratic serendipity hexahedron (CalculiX C3D20).
     Hex20,
+    /// 20-node serendipity hexahedron with reduced 2x2x2 integration
+    /// (CalculiX C3D20R).
+    Hex20R,
+    /// 4-node linear tetrahedron (CalculiX C3D4).
+    Tet4,
+    /// 10-node quadratic tetrahedron (CalculiX C3D10).
+    Tet10,
 }
 
 impl ElementKind {
+    /// Every kind, in declaration order.
+    pub const ALL: [ElementKind; 5] = [
+        ElementKind::Hex8,
+        ElementKind::Hex20,
+        ElementKind::Hex20R,
+        ElementKind::Tet4,
+        ElementKind::Tet10,
+    ];
+
     pub const fn nodes_per_element(self) -> usize {
         match self {
             ElementKind::Hex8 => hex8::NODE_COUNT,
-            ElementKind::Hex20 => hex20::NODE_COUNT,
+            ElementKind::Hex20 | ElementKind::Hex20R => hex20::NODE_COUNT,
+            ElementKind::Tet4 => tet4::NODE_COUNT,
+            ElementKind::Tet10 => tet10::NODE_COUNT,
         }
     }
 
@@ -42,31 +83,70 @@ impl ElementKind {
         match self {
             ElementKind::Hex8 => "hex8",
             ElementKind::Hex20 => "hex20",
+            ElementKind::Hex20R => "hex20r",
+            ElementKind::Tet4 => "tet4",
+            ElementKind::Tet10 => "tet10",
         }
     }
 
-    /// Natural coordinates (each -1, 0 or +1) of the element's nodes in
-    /// C3D8/C3D20 order. The mesher uses this table so that connectivity and
-    /// shape functions can never disagree about the node order.
-    pub const fn natural_node_coords(self) -> &'static [[i8; 3]] {
+    /// The CalculiX/Abaqus element type name.
+    pub const fn calculix_name(self) -> &'static str {
         match self {
-            ElementKind::Hex8 => &hex8::NATURAL_COORDS,
-            ElementKind::Hex20 => &hex20::NATURAL_COORDS,
+            ElementKind::Hex8 => "C3D8",
+            ElementKind::Hex20 => "C3D20",
+            ElementKind::Hex20R => "C3D20R",
+            ElementKind::Tet4 => "C3D4",
+            ElementKind::Tet10 => "C3D10",
         }
     }
 
-    /// Gauss rule used for both stiffness and mass (CalculiX full integration).
-    pub const fn gauss_order(self) -> GaussOrder {
+    /// The kind whose `calculix_name()` is `name` (case-insensitive, as
+    /// CalculiX reads keywords and parameters).
+    pub fn from_calculix_name(name: &str) -> Option<Self> {
+        let name = name.trim();
+        Self::ALL
+            .into_iter()
+            .find(|k| k.calculix_name().eq_ignore_ascii_case(name))
+    }
+
+    /// Natural coordinates (each -1, 0 or +1) of the nodes of the hexahedral
+    /// kinds in C3D8/C3D20 order; `None` for tetrahedra, whose nodes do not sit
+    /// on that lattice (see `tet4::NATURAL_COORDS`, `tet10::NATURAL_COORDS`).
+    /// The box mesher uses this table so that connectivity and shape functions
+    /// can never disagree about the node order.
+    pub const fn natural_node_coords(self) -> Option<&'static [[i8; 3]]> {
         match self {
-            ElementKind::Hex8 => GaussOrder::Two,
-            ElementKind::Hex20 => GaussOrder::Three,
+            ElementKind::Hex8 => Some(&hex8::NATURAL_COORDS),
+            ElementKind::Hex20 | ElementKind::Hex20R => Some(&hex20::NATURAL_COORDS),
+            ElementKind::Tet4 | ElementKind::Tet10 => None,
         }
+    }
+
+    /// Quadrature of the stiffness and of the geometric (stress) stiffness,
+    /// which CalculiX evaluates at the same points (e_c3d.f, `mint3d`).
+    pub const fn stiffness_rule(self) -> Rule {
+        match self {
+            ElementKind::Hex8 | ElementKind::Hex20R => Rule::Hex(GaussOrder::Two),
+            ElementKind::Hex20 => Rule::Hex(GaussOrder::Three),
+            ElementKind::Tet4 => Rule::TetOne,
+            ElementKind::Tet10 => Rule::TetFour,
+        }
+    }
+
+    /// Quadrature of the consistent mass. CalculiX accumulates the mass in the
+    /// stiffness loop, so this is the stiffness rule for every kind, including
+    /// the reduced C3D20R and the one-point C3D4 (verified entry by entry
+    /// against `*FREQUENCY, SOLVER=MATRIXSTORAGE` of ccx 2.20).
+    pub const fn mass_rule(self) -> Rule {
+        self.stiffness_rule()
     }
 
     fn shape_functions(self, xi: [f64; 3], n: &mut [f64], dn: &mut [[f64; 3]]) {
         match self {
             ElementKind::Hex8 => hex8::shape_functions(xi, n, dn),
-            ElementKind::Hex20 => hex20::shape_functions(xi, n, dn),
+            ElementKind::Hex20 | ElementKind::Hex20R => hex20::shape_functions(xi, n, dn),
+            ElementKind::Tet4 => tet4::shape_functions(xi, n, dn),
+            ElementKind::Tet10 => tet10::shape_functions(xi, n, dn),
         }
     }
 }
@@ -215,7 +295,7 @@ pub fn element_stiffness(
 
     // D * B_b for every node, reused for all node pairs at one Gauss point.
     let mut db = [[[0.0; 3]; 6]; MAX_NODES_PER_ELEMENT];
-    for_each_gauss_point(kind, coords, |_, grad, weight| {
+    for_each_gauss_point(kind, kind.stiffness_rule(), coords, |_, grad, weight| {
         for (db_b, g) in db.iter_mut().zip(grad) {
             let b = strain_displacement(g);
             for (r, row) in db_b.iter_mut().enumerate() {
@@ -261,7 +341,7 @@ pub fn element_mass(
     let n = kind.nodes_per_element();
     check_output(out, n * n)?;
     out.fill(0.0);
-    for_each_gauss_point(kind, coords, |shape, _, weight| {
+    for_each_gauss_point(kind, kind.mass_rule(), coords, |shape, _, weight| {
         for a in 0..n {
             for b in a..n {
                 out[a * n + b] += rho * shape[a] * shape[b] * weight;
@@ -306,11 +386,12 @@ fn mirror_upper_triangle(m: &mut [f64], size: usize) {
     }
 }
 
-/// Runs `f(shape, physical_gradients, det_j * weight)` at every Gauss point of
-/// the element's rule. Only the first `nodes_per_element` entries of the
-/// slices passed to `f` are meaningful.
+/// Runs `f(shape, physical_gradients, det_j * weight)` at every point of
+/// `rule`. Only the first `nodes_per_element` entries of the slices passed to
+/// `f` are meaningful.
 pub(crate) fn for_each_gauss_point(
     kind: ElementKind,
+    rule: Rule,
     coords: &[[f64; 3]],
     mut f: impl FnMut(&[f64], &[[f64; 3]], f64),
 ) -> Result<(), ElementError> {
@@ -328,7 +409,7 @@ pub(crate) fn for_each_gauss_point(
     let mut shape = [0.0; MAX_NODES_PER_ELEMENT];
     let mut dn = [[0.0; 3]; MAX_NODES_PER_ELEMENT];
     let mut grad = [[0.0; 3]; MAX_NODES_PER_ELEMENT];
-    for (gauss_point, (xi, weight)) in gauss::hex_points(kind.gauss_order()).enumerate() {
+    for (gauss_point, (xi, weight)) in rule.points().enumerate() {
         kind.shape_functions(xi, &mut shape[..n], &mut dn[..n]);
         // J[i][j] = d x_j / d xi_i.
         let mut jac = [[0.0; 3]; 3];
