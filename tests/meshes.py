@@ -105,7 +105,7 @@ class BoxMesh:
         lines = ["** structured test mesh written by tests/meshes.py", "*NODE, NSET=NALL"]
         for n in self.used:
             x = self.coords[n - 1]
-            lines.append(f"{n}, {x[0]!r}, {x[1]!r}, {x[2]!r}")
+            lines.append(f"{n}, {float(x[0])!r}, {float(x[1])!r}, {float(x[2])!r}")
         lines.append(f"*ELEMENT, TYPE={self.etype}, ELSET={elset}")
         for e, nodes in enumerate(self.elements, start=1):
             ids = [str(n) for n in nodes]
