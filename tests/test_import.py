@@ -247,7 +247,7 @@ def write(tmp_path, name, text):
 
 BAD_DECKS = [
     ("unsupported element", "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*ELEMENT, TYPE=C3D15\n1,1,2,3,4\n",
-     ["bad.inp:5", "C3D15", "C3D4, C3D10, C3D8, C3D20, C3D20R"]),
+     ["bad.inp:6", "C3D15", "C3D4, C3D10, C3D8, C3D20, C3D20R"]),
     ("missing node", "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n*ELEMENT, TYPE=C3D4\n1,1,2,3,4\n",
      ["bad.inp:6", "4"]),
     ("duplicate node", "*NODE\n1,0,0,0\n2,1,0,0\n2,0,1,0\n4,0,0,1\n*ELEMENT, TYPE=C3D4\n1,1,2,3,4\n",
@@ -386,21 +386,26 @@ def test_bracket_flange_compliance_equals_calculix(tmp_path):
     assert ok_u and ok_p
 
 
+RESPONSE = ["arm.u[1]", "arm.u[2]", "arm.u[3]", "arm.phi[1]", "arm.phi[2]", "arm.phi[3]",
+            "base.f[1]", "base.f[3]", "base.t[2]"]
+
+
 def fmu_outputs(fmu_path):
-    """What a host sees of the FMU: static flange response, and the state derivatives and
-    outputs at a disturbed state with loads applied."""
+    """What a host sees of the FMU, independent of the modal basis it happens to use: the static
+    flange response, and the co-simulated response to a suddenly applied wrench (100 steps of
+    0.1 ms from rest, outputs after every step)."""
     u, phi = static_flange(fmu_path, "arm")
-    fmu = Fmu(fmu_path, "ModelExchange")
+    fmu = Fmu(fmu_path, "CoSimulation")
     try:
         fmu.set(**{"arm.f[1]": 10.0, "arm.f[3]": -5.0, "arm.t[2]": 0.3})
         fmu.initialize()
-        x = np.linspace(-1, 1, fmu.nx) * 1e-6
-        fmu.set_states(x)
-        dx = fmu.derivatives()
-        y = fmu.get("arm.u[1]", "arm.u[2]", "arm.u[3]", "arm.phi[1]", "arm.phi[2]", "arm.phi[3]", "base.f[1]", "base.t[2]")
+        history = []
+        for k in range(100):
+            fmu.fmu.doStep(k * 1e-4, 1e-4)
+            history.append(fmu.get(*RESPONSE))
     finally:
         fmu.close()
-    return np.concatenate([u, phi]), dx, y
+    return np.concatenate([u, phi]), np.array(history)
 
 
 def test_bracket_inp_msh_and_matrices_give_the_same_fmu(tmp_path):
@@ -424,7 +429,7 @@ def test_bracket_inp_msh_and_matrices_give_the_same_fmu(tmp_path):
         hz = np.array(rep["accuracy"]["reduced_hz"])
         dev_hz = np.max(np.abs(hz / np.array(rep_msh["accuracy"]["reduced_hz"]) - 1))
         devs = [np.max(np.abs(a - b)) / np.max(np.abs(b)) for a, b in zip(fmu_outputs(fmu), ref)]
-        print(f"\n{label} vs msh: frequencies {dev_hz:.1e}, static {devs[0]:.1e}, derivatives {devs[1]:.1e}, outputs {devs[2]:.1e}")
+        print(f"\n{label} vs msh: frequencies {dev_hz:.1e}, static {devs[0]:.1e}, step response {devs[1]:.1e}")
         assert dev_hz < 1e-9 and max(devs) < 1e-9
 
 
@@ -433,7 +438,9 @@ def test_bracket_matrices_assembled_by_calculix(tmp_path):
     triangle, 14 significant digits, and the row map as node.direction); we read them as Matrix
     Market with CalculiX's own .dof map and Gmsh's .inp as node file (its node sets name the
     flanges). The FMU from CalculiX's matrices equals the FMU from our own assembly of the mesh to
-    what 14 printed digits allow: entries within 5e-15, outputs within 1e-9."""
+    what 14 printed digits allow: every entry is rounded by up to 5e-14 relative, and the flange
+    response amplifies entry perturbations by the stiffness's effective condition (~1e5 here:
+    measured 1.5e-9), so 1e-8."""
     deck = (BRACKET / "bracket.inp").read_text()
     deck += ("*MATERIAL, NAME=STEEL\n*ELASTIC\n2.1e11, 0.3\n*DENSITY\n7850.\n"
              "*SOLID SECTION, ELSET=BRACKET, MATERIAL=STEEL\n")
@@ -459,5 +466,5 @@ def test_bracket_matrices_assembled_by_calculix(tmp_path):
     hz = np.array(rep_ccx["accuracy"]["reduced_hz"]) / np.array(rep_own["accuracy"]["reduced_hz"]) - 1
     devs = [np.max(np.abs(a - b)) / np.max(np.abs(b)) for a, b in zip(fmu_outputs(fmu_ccx), fmu_outputs(fmu_own))]
     print(f"CalculiX-assembled vs ours: frequencies {np.max(np.abs(hz)):.1e}, static {devs[0]:.1e}, "
-          f"derivatives {devs[1]:.1e}, outputs {devs[2]:.1e}")
-    assert np.max(np.abs(hz)) < 1e-9 and max(devs) < 1e-9
+          f"step response {devs[1]:.1e}")
+    assert np.max(np.abs(hz)) < 1e-8 and max(devs) < 1e-8

@@ -24,6 +24,7 @@ pub struct Part {
     pub rigid_body_residual: Option<[f64; 6]>,
     /// What the part was read from, for reports.
     pub source: String,
+    pub from_matrices: bool,
 }
 
 impl From<ImportError> for BuildError {
@@ -36,7 +37,7 @@ impl From<ImportError> for BuildError {
 impl Part {
     /// Element kinds of the mesh, or "matrices".
     pub fn element_description(&self) -> String {
-        if self.matrices.is_some() { "matrices".into() } else { self.mesh.kind_names() }
+        if self.from_matrices { "matrices".into() } else { self.mesh.kind_names() }
     }
 
     /// Case-insensitive node-set lookup.
@@ -102,6 +103,7 @@ fn box_part(spec: &Spec, file: &Path) -> Result<Part> {
         matrices: None,
         rigid_body_residual: None,
         source: format!("{} boxes", spec.geometry.boxes.len()),
+        from_matrices: false,
     })
 }
 
@@ -207,6 +209,7 @@ fn mesh_file_part(spec: &Spec, file: &Path, mesh_path: &Path) -> Result<Part> {
         node_sets,
         matrices: None,
         rigid_body_residual: None,
+        from_matrices: false,
     })
 }
 
@@ -276,6 +279,7 @@ fn matrix_part(_spec: &Spec, file: &Path, m: &crate::spec::MatrixSpec) -> Result
         node_sets: model.node_sets,
         matrices: Some(Uncoupled { stiffness: model.stiffness, mass: model.mass, damping: model.damping, nodal_mass, volume: None }),
         rigid_body_residual: Some(model.rigid_body_residual),
+        from_matrices: true,
     })
 }
 

@@ -63,7 +63,8 @@
 //! # Checks
 //!
 //! Matrix sizes equal the DoF map's row count; the diagonals of K and M are
-//! positive; M is positive definite (sparse Cholesky); the rigid-body
+//! positive; M is positive semi-definite (sparse Cholesky of M + 1e-8 diag M:
+//! consistent masses integrated with reduced rules are singular); the rigid-body
 //! residual of K (see [`rigid_body_residual`]) is at most
 //! [`FREE_FREE_TOLERANCE`] for a part declared free-free.
 
@@ -109,7 +110,7 @@ pub struct MatrixModel {
     pub node_sets: BTreeMap<String, Vec<usize>>,
     /// Stiffness, `3 * nodes.len()` square, exactly symmetric.
     pub stiffness: SparseColMat<usize, f64>,
-    /// Mass, same size, exactly symmetric and positive definite.
+    /// Mass, same size, exactly symmetric and positive semi-definite.
     pub mass: SparseColMat<usize, f64>,
     /// Damping, same size, exactly symmetric.
     pub damping: Option<SparseColMat<usize, f64>>,
@@ -241,7 +242,24 @@ pub fn read_matrix_model(files: &MatrixFiles, free_free: bool) -> Result<MatrixM
         _ => None,
     };
 
-    if let Err(e) = mass.sp_cholesky(Side::Lower) {
+    // A consistent mass may be singular (CalculiX integrates C3D4, C3D10 and C3D20R masses with
+    // their stiffness rules: rank 1, 4 and 8 per element), so the check is for indefiniteness:
+    // M + 1e-8 diag(M) must factor. A singular semidefinite M passes, a negative eigenvalue
+    // beyond round-off does not.
+    let lifted = {
+        let mut t: Vec<faer::sparse::Triplet<usize, usize, f64>> = Vec::with_capacity(mass.val().len() + mass.nrows());
+        for j in 0..mass.ncols() {
+            for (&i, &v) in mass.row_idx_of_col_raw(j).iter().zip(mass.val_of_col(j)) {
+                t.push(faer::sparse::Triplet::new(i, j, v));
+                if i == j {
+                    t.push(faer::sparse::Triplet::new(i, j, 1e-8 * v));
+                }
+            }
+        }
+        SparseColMat::try_new_from_triplets(mass.nrows(), mass.ncols(), &t)
+            .map_err(|e| ImportError::new(files.mass, 0, format!("mass matrix: {e:?}")))?
+    };
+    if let Err(e) = lifted.sp_cholesky(Side::Lower) {
         let why = match e {
             faer::sparse::linalg::LltError::Numeric(_) => {
                 "its Cholesky factorisation meets a non-positive pivot".to_string()
@@ -254,8 +272,8 @@ pub fn read_matrix_model(files: &MatrixFiles, free_free: bool) -> Result<MatrixM
             files.mass,
             0,
             format!(
-                "mass matrix is not positive definite: {why}. Every DoF must carry mass; check that the \
-                 mass matrix belongs to the same model and DoF order as the stiffness and the DoF map"
+                "mass matrix is indefinite (not positive semi-definite): {why}. Check that the mass matrix \
+                 belongs to the same model and DoF order as the stiffness and the DoF map"
             ),
         ));
     }
@@ -2077,7 +2095,7 @@ mod tests {
             model(&k, &bad, &map, &nodes).unwrap_err(),
             "bad_m.mtx",
             0,
-            &["mass matrix is not positive definite"],
+            &["mass matrix is indefinite"],
         );
 
         // A plain table node file and a CalculiX-style .dof map in another row order.
