@@ -468,3 +468,122 @@ def test_bracket_matrices_assembled_by_calculix(tmp_path):
     print(f"CalculiX-assembled vs ours: frequencies {np.max(np.abs(hz)):.1e}, static {devs[0]:.1e}, "
           f"step response {devs[1]:.1e}")
     assert np.max(np.abs(hz)) < 1e-8 and max(devs) < 1e-8
+
+
+# --------------------------------------------------------------------------------------------
+# Matrices: damping, and what is refused
+
+
+@pytest.fixture(scope="module")
+def small_matrices(tmp_path_factory):
+    """The C3D10 box's free-free matrices, DoF map and node table (--export-free-free)."""
+    tmp = tmp_path_factory.mktemp("matrices")
+    deck, mesh = box_deck("C3D10")
+    (tmp / "box.inp").write_text(deck)
+    spec = spec_for("Box", {"mesh": "box.inp"}, [{"name": "base", "role": "motion", "nodes": {"node_set": "FIX"}}])
+    build(tmp, spec, "mesh", ["--export-free-free", tmp / "m"])
+    return tmp
+
+
+BOX_FLANGES = [
+    {"name": "base", "role": "motion", "nodes": {"plane": {"point": [0, 0, 0], "normal": [1, 0, -0.2]}}},
+    {"name": "tip", "role": "force", "nodes": {"plane": {"point": [0.1, 0, 0], "normal": [1, 0, -0.2]}}},
+]
+
+
+def matrix_spec(**files):
+    m = {"stiffness": "m/K.mtx", "mass": "m/M.mtx", "dofs": "m/dofs.txt", "nodes": "m/nodes.txt"}
+    m.update(files)
+    return spec_for("Box", {"matrices": m}, BOX_FLANGES)
+
+
+def tip_step_response(fmu_path):
+    fmu = Fmu(fmu_path, "CoSimulation")
+    try:
+        fmu.set(**{"tip.f[3]": 100.0})
+        fmu.initialize()
+        out = []
+        for k in range(200):
+            fmu.fmu.doStep(k * 2e-5, 2e-5)
+            out.append(fmu.get("tip.u[3]", "tip.phi[2]", "base.f[3]"))
+    finally:
+        fmu.close()
+    return np.array(out)
+
+
+def test_damping_matrix_acts_like_the_rayleigh_damping_it_equals(small_matrices, tmp_path):
+    """D = alpha M + beta K given as a matrix must damp the FMU exactly as the Rayleigh
+    parameters alpha, beta do on the same part: the projection of D on the M- and
+    K-orthogonal basis is diagonal, alpha + beta w_k^2 (linear algebra), so the step responses
+    agree to round-off (1e-9 of their peak)."""
+    import scipy.io
+    alpha, beta = 40.0, 2e-6
+    k = scipy.io.mmread(small_matrices / "m" / "K.mtx").tocsr()
+    m = scipy.io.mmread(small_matrices / "m" / "M.mtx").tocsr()
+    scipy.io.mmwrite(small_matrices / "m" / "D.mtx", (alpha * m + beta * k).tocoo(), symmetry="symmetric", precision=17)
+    with_d, _, _ = build(small_matrices, matrix_spec(damping="m/D.mtx"), "with_d")
+    rayleigh, _, _ = build(small_matrices, {**matrix_spec(), "damping": {"alpha": alpha, "beta": beta}}, "rayleigh")
+    undamped, _, _ = build(small_matrices, matrix_spec(), "undamped")
+    a, b, c = tip_step_response(with_d), tip_step_response(rayleigh), tip_step_response(undamped)
+    dev = np.max(np.abs(a - b)) / np.max(np.abs(b))
+    print(f"\nD matrix vs Rayleigh parameters: {dev:.1e} of the peak; undamped differs by "
+          f"{np.max(np.abs(c - b)) / np.max(np.abs(b)):.1e}")
+    assert dev < 1e-9
+    assert np.max(np.abs(c - b)) / np.max(np.abs(b)) > 1e-2
+
+
+def altered(src, dst, header=None, size=None, extra=()):
+    """A copy of a Matrix Market file with another header line, size line or extra entries."""
+    lines = src.read_text().splitlines()
+    body = [l for l in lines if not l.startswith("%")]
+    rows, cols, nnz = map(int, body[0].split())
+    if size is not None:
+        rows = cols = size(rows)
+    head = header or lines[0]
+    dst.write_text("\n".join([head, f"{rows} {cols} {nnz + len(extra)}", *body[1:], *extra]) + "\n")
+
+
+BAD_MATRICES = [
+    ("size mismatch", lambda d: altered(d / "m/K.mtx", d / "bad.mtx", size=lambda n: n + 3),
+     {"stiffness": "bad.mtx"}, ["bad.mtx", "rows"]),
+    ("not symmetric", lambda d: altered(d / "m/M.mtx", d / "bad.mtx", header="%%MatrixMarket matrix coordinate real general",
+                                        extra=["1 2 1e-3"]),
+     {"mass": "bad.mtx"}, ["bad.mtx", "symmetric"]),
+    ("indefinite mass", lambda d: altered(d / "m/M.mtx", d / "bad.mtx", extra=["4 1 1e3"]),
+     {"mass": "bad.mtx"}, ["bad.mtx", "indefinite"]),
+    ("supported stiffness", lambda d: altered(d / "m/K.mtx", d / "bad.mtx", extra=["1 1 1e12"]),
+     {"stiffness": "bad.mtx"}, ["bad.mtx", "free-free", "translation x"]),
+]
+
+
+@pytest.mark.parametrize("case", BAD_MATRICES, ids=[c[0] for c in BAD_MATRICES])
+def test_bad_matrices_are_refused_with_the_reason(case, small_matrices, tmp_path):
+    _, make, files, expected = case
+    make(small_matrices)
+    path = small_matrices / "bad.json"
+    path.write_text(json.dumps(matrix_spec(**files)))
+    proc = run_builder([path, "-o", tmp_path / "x.fmu"], check=False)
+    message = proc.stderr.strip()
+    print(f"\n{message}")
+    assert proc.returncode != 0 and "panicked" not in message
+    for e in expected:
+        assert e in message, f"{e!r} not in {message!r}"
+
+
+# --------------------------------------------------------------------------------------------
+# The bracket examples
+
+
+@pytest.mark.parametrize("example", ["bracket.json", "bracket-inp.json"])
+def test_bracket_examples_build_and_validate(example, tmp_path):
+    from fmpy.validation import validate_fmu
+    fmu = tmp_path / "Bracket.fmu"
+    proc = run_builder([BRACKET / example, "-o", fmu])
+    report = report_of(fmu)
+    print(f"\n{proc.stdout}")
+    assert validate_fmu(str(fmu)) == []
+    assert [f["slave_nodes"] for f in report["flanges"]] == [178, 170]
+    assert report["element"] == "tet10" and report["nodes"] == 5648
+    # Craig-Bampton: flange statics exact, the modes of the reduced model close to the full ones
+    assert report["accuracy"]["compliance_max_relative_error"] < 1e-10
+    assert max(abs(e) for e in report["accuracy"]["relative_error"][:5]) < 1e-3

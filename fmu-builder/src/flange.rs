@@ -189,3 +189,55 @@ pub fn select_flanges(spec: &Spec, file: &Path, part: &Part) -> Result<Vec<Flang
     }
     Ok(flanges)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::BTreeMap;
+
+    /// A 4 x 2 x 2 hex8 box [0, 4] x [0, 2] x [0, 2] with a node set of its x = 4 face.
+    fn part() -> (Spec, Part) {
+        let spec = Spec::from_str(
+            Path::new("in.json"),
+            r#"{"name": "P", "geometry": {"element": "hex8", "boxes": [{"min": [0,0,0], "max": [4,2,2], "elements": [4,2,2]}]},
+                "material": {"E": 1e9, "nu": 0.3, "rho": 1000}, "flanges": [], "reduction": {"modes": 2}}"#,
+        )
+        .unwrap();
+        let mut p = crate::part::part_of(&spec, Path::new("in.json")).unwrap();
+        let tip: Vec<usize> = (0..p.mesh.n_nodes()).filter(|&i| p.mesh.nodes[i][0] == 4.0).collect();
+        p.node_sets = BTreeMap::from([("TIP".to_string(), tip)]);
+        (spec, p)
+    }
+
+    fn selected(spec: &Spec, part: &Part, json: &str) -> std::result::Result<Vec<[f64; 3]>, String> {
+        let selector: NodeSelector = serde_json::from_str(json).unwrap();
+        select(spec, &selector, part, model_size(&part.mesh)).map(|s| s.iter().map(|&i| part.mesh.nodes[i]).collect())
+    }
+
+    #[test]
+    fn every_selector_picks_what_it_says() {
+        let (spec, part) = part();
+        // 3 x 3 nodes on the face x = 4, however it is named
+        for json in [
+            r#"{"node_set": "tip"}"#,
+            r#"{"plane": {"point": [4, 0, 0], "normal": [2, 0, 0]}}"#,
+            r#"{"box": {"min": [3.5, -1, -1], "max": [5, 3, 3]}}"#,
+        ] {
+            let nodes = selected(&spec, &part, json).unwrap();
+            assert_eq!(nodes.len(), 9, "{json}");
+            assert!(nodes.iter().all(|p| p[0] == 4.0), "{json}");
+        }
+        // the sphere of radius 1 around the face centre: the centre and its 4 edge neighbours
+        let nodes = selected(&spec, &part, r#"{"sphere": {"center": [4, 1, 1], "radius": 1}}"#).unwrap();
+        assert_eq!(nodes.len(), 6, "{nodes:?}"); // plus the node one step inside, at (3, 1, 1)
+        // the cylinder around the x axis through (., 1, 1), radius 1: 5 nodes per cross-section
+        let nodes = selected(&spec, &part, r#"{"cylinder": {"point": [0, 1, 1], "axis": [1, 0, 0], "radius": 1}}"#).unwrap();
+        assert_eq!(nodes.len(), 5 * 5);
+        // with a length, only the cross-sections within length/2 of the point
+        let nodes =
+            selected(&spec, &part, r#"{"cylinder": {"point": [4, 1, 1], "axis": [-1, 0, 0], "radius": 1, "length": 1}}"#).unwrap();
+        assert_eq!(nodes.len(), 5);
+        let e = selected(&spec, &part, r#"{"node_set": "ROOT"}"#).unwrap_err();
+        assert!(e.contains("ROOT") && e.contains("TIP"), "{e}");
+    }
+}
