@@ -165,29 +165,6 @@ def rigid_body(deck: str, flange: str) -> str:
     return f"*RIGID BODY, NSET={name}, REF NODE={ref}, ROT NODE={rot}\n"
 
 
-def rigid_equations(deck: str, flange: str) -> str:
-    """The flange's rigid tie as linear `*EQUATION`s, u_s = u_ref + theta_rot x (x_s - x_ref) for
-    every slave s: the linear coupling of the builder's flanges, term for term.
-
-    `*RIGID BODY` is a nonlinear MPC in CalculiX; in a `*FREQUENCY` step of a free-free part it
-    moved eigenvalues by up to 3e-6 (measured on 90..420-DoF boxes, where linear equations give
-    the same model to the printed 7 digits), so eigenvalue comparisons use these equations."""
-    name = flange.upper()
-    coords = node_coordinates(deck)
-    ref, rot = set_node(deck, f"{name}_REF"), set_node(deck, f"{name}_ROT")
-    r = coords[ref]
-    lines = ["*EQUATION"]
-    for node in node_set(deck, name):
-        d = coords[node] - r
-        for row in ([(node, 1, 1.0), (ref, 1, -1.0), (rot, 2, -d[2]), (rot, 3, d[1])],
-                    [(node, 2, 1.0), (ref, 2, -1.0), (rot, 3, -d[0]), (rot, 1, d[2])],
-                    [(node, 3, 1.0), (ref, 3, -1.0), (rot, 1, -d[1]), (rot, 2, d[0])]):
-            terms = [t for t in row if t[2] != 0.0]
-            lines.append(str(len(terms)))
-            lines.append(", ".join(f"{n}, {dof}, {fit_field(repr(float(c)))}" for n, dof, c in terms))
-    return "\n".join(lines) + "\n"
-
-
 def clamp(deck: str, flange: str) -> str:
     """`*BOUNDARY` fixing the flange's reference and rotation nodes (DoFs 1-3 each): together with
     its rigid body, the flange is clamped (model data: put it before the step)."""
