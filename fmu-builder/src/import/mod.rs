@@ -1,5 +1,5 @@
 //! Mesh importers: Abaqus/CalculiX input decks (`.inp`) and Gmsh MSH 4.1
-//! ASCII files (`.msh`).
+//! files, ASCII or binary (`.msh`).
 //!
 //! Both importers produce an [`ImportedMesh`] with dense, 0-based node and
 //! element numbering, element connectivity in the CalculiX/Abaqus node order
