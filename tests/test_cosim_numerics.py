@@ -1,0 +1,117 @@
+"""Co-simulation numerics at coarse communication steps: a body with modes up to 10 kHz stepped
+at h = 10 ms (h * omega_max ~ 6e2; the 10 kHz flange-statics shapes push it past 1e3).
+
+References: a body at rest with no load stays exactly at rest (linear homogeneous equations); a
+constant load settles on the static solution (the FMU's own static_start solve, itself checked
+against the full FE model in test_beam.py); the discrete modal energy
+E = sum_k (qd_k^2 + w_k^2 q_k^2) / 2 of a free vibration cannot grow (undamped: conserved to
+round-off by exact propagation; damped: non-increasing), which is the stability statement the
+scheme must honour at any step."""
+
+import json
+import zipfile
+
+import numpy as np
+import pytest
+
+from conftest import EXAMPLES, run_builder
+from fmu_access import Fmu
+
+H = 0.01
+STEPS = 10_000
+
+
+@pytest.fixture(scope="module")
+def stiff_beam(tmp_path_factory):
+    """examples/beam.json with every fixed-interface mode below 10 kHz (plus the constraint
+    modes, whose frequencies lie higher still)."""
+    tmp = tmp_path_factory.mktemp("stiff")
+    spec = json.loads((EXAMPLES / "beam.json").read_text())
+    spec["reduction"] = {"method": "craig_bampton", "max_frequency": 10000}
+    spec["damping"] = {"alpha": 0.0, "beta": 0.0}
+    path = tmp / "beam.json"
+    path.write_text(json.dumps(spec))
+    fmu = tmp / "StiffBeam.fmu"
+    run_builder([path, "-o", fmu])
+    report = json.loads(zipfile.ZipFile(fmu).read("documentation/report.json"))
+    omega = 2 * np.pi * np.array(report["accuracy"]["reduced_hz"])
+    return fmu, omega
+
+
+def modal_energy(fmu, omega):
+    n = len(omega)
+    q = fmu.get(*[f"q[{k + 1}]" for k in range(n)])
+    qd = fmu.get(*[f"qd[{k + 1}]" for k in range(n)])
+    return 0.5 * np.sum(qd ** 2 + (omega * q) ** 2)
+
+
+def test_modes_reach_the_stiff_regime(stiff_beam):
+    _, omega = stiff_beam
+    print(f"\n{len(omega)} modes, highest {omega.max() / (2 * np.pi):.0f} Hz: h * omega_max = {H * omega.max():.0f}")
+    assert omega.max() / (2 * np.pi) > 10_000 and H * omega.max() > 600
+
+
+def test_rest_stays_at_rest(stiff_beam):
+    fmu = Fmu(stiff_beam[0], "CoSimulation")
+    try:
+        fmu.initialize()
+        for k in range(STEPS):
+            fmu.fmu.doStep(k * H, H)
+        out = fmu.get("tip.u[1]", "tip.u[2]", "tip.u[3]", "tip.phi[1]", "tip.phi[2]", "tip.phi[3]", "base.f[3]")
+    finally:
+        fmu.close()
+    assert np.all(out == 0.0), out
+
+
+@pytest.mark.parametrize("beta", [0.0, 1e-5])
+@pytest.mark.parametrize("h", [H, 0.06])
+def test_free_vibration_energy_never_grows(stiff_beam, beta, h):
+    """Tip load released after a static start: free vibration of all modes at once, at
+    h * omega_max up to 1e4."""
+    fmu_path, omega = stiff_beam
+    fmu = Fmu(fmu_path, "CoSimulation")
+    try:
+        fmu.set(static_start=True, **{"tip.f[3]": 100.0, "tip.t[1]": 1.0, "damping.beta": beta})
+        fmu.initialize()
+        fmu.set(**{"tip.f[3]": 0.0, "tip.t[1]": 0.0})
+        energy = [modal_energy(fmu, omega)]
+        for k in range(STEPS):
+            fmu.fmu.doStep(k * h, h)
+            energy.append(modal_energy(fmu, omega))
+    finally:
+        fmu.close()
+    energy = np.array(energy)
+    growth = np.max(np.diff(energy)) / energy[0]
+    print(f"\nh {h} (h w_max {h * omega.max():.0f}), beta {beta}: E0 {energy[0]:.6e}, E_end {energy[-1]:.6e}, largest step increase {growth:.1e} of E0")
+    assert energy[0] > 0
+    if beta == 0.0:
+        # exact propagation: conserved to round-off over 10^4 steps
+        assert np.max(np.abs(energy / energy[0] - 1)) < 1e-10
+    else:
+        assert growth <= 1e-13
+        assert energy[-1] < 1e-3 * energy[0]
+
+
+def test_constant_load_settles_on_the_static_solution(stiff_beam):
+    fmu_path, _ = stiff_beam
+    names = ["tip.u[3]", "tip.phi[1]", "tip.phi[2]", "base.f[3]", "base.t[2]"]
+    loads = {"tip.f[3]": 100.0, "tip.t[1]": 1.0, "damping.alpha": 2.0, "damping.beta": 1e-5}
+    static = Fmu(fmu_path, "ModelExchange")
+    try:
+        static.set(static_start=True, **loads)
+        static.initialize()
+        reference = static.get(*names)
+    finally:
+        static.close()
+    fmu = Fmu(fmu_path, "CoSimulation")
+    try:
+        fmu.set(**loads)
+        fmu.initialize()
+        for k in range(STEPS):
+            fmu.fmu.doStep(k * H, H)
+        settled = fmu.get(*names)
+    finally:
+        fmu.close()
+    dev = np.max(np.abs(settled - reference) / np.abs(reference))
+    print(f"\nafter {STEPS * H:.0f} s at h = {H} s: {settled} vs static {reference} ({dev:.1e})")
+    assert dev < 1e-9
