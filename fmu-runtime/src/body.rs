@@ -138,6 +138,18 @@ pub struct FlexibleBody {
     /// q' and q workspace for the coupled load
     scratch: Vec<f64>,
     propagator: ModalPropagator,
+    /// First derivatives of the inputs for the next step (fmi2SetRealInputDerivatives), and
+    /// the modal load's rate they give.
+    rates: InputRates,
+    load_rate: Vec<f64>,
+}
+
+/// Time derivatives of the inputs over the next step (first-order hold); zero means held.
+#[derive(Debug, Clone, Default)]
+pub struct InputRates {
+    pub mount: MountMotion,
+    pub loads: Vec<FlangeLoad>,
+    pub any: bool,
 }
 
 /// Largest |A^T A - I| accepted for the mount orientation. Hosts interpolate rotation-matrix
@@ -172,6 +184,8 @@ impl FlexibleBody {
             cr_q: vec![0.0; 3 * n],
             scratch: vec![0.0; n],
             propagator: ModalPropagator::default(),
+            rates: InputRates { mount: MountMotion { rot: [0.0; 9], ..MountMotion::default() }, loads: vec![FlangeLoad::default(); nf], any: false },
+            load_rate: vec![0.0; n],
             body,
         }
     }
@@ -229,6 +243,19 @@ impl FlexibleBody {
         self.eval.valid = false;
         self.coupling.valid = false;
         &mut self.loads[flange]
+    }
+    /// Rates of the mount inputs over the next step (its rotation matrix's rate entry by entry).
+    pub fn mount_rate_mut(&mut self) -> &mut MountMotion {
+        self.rates.any = true;
+        &mut self.rates.mount
+    }
+    /// Rates of a flange's force and torque over the next step.
+    pub fn load_rate_mut(&mut self, flange: usize) -> &mut FlangeLoad {
+        self.rates.any = true;
+        &mut self.rates.loads[flange]
+    }
+    pub fn input_rates(&self) -> &InputRates {
+        &self.rates
     }
     pub fn parameters_mut(&mut self) -> &mut Parameters {
         self.eval.valid = false;
@@ -727,15 +754,30 @@ impl FlexibleBody {
             return Err(format!("step size {h} must be positive and finite"));
         }
         if self.frame.is_some() {
-            return self.step_free(h);
+            // free bodies hold their flange loads over the step; the inputs still end the step
+            // at their interpolated values
+            self.step_free(h)?;
+            if self.rates.any {
+                self.extrapolate_inputs(h);
+            }
+            return Ok(());
         }
         self.check_inputs()?;
         self.modal_load();
+        let ramp = self.rates.any;
+        if ramp {
+            self.modal_load_rate();
+        }
         self.prepare_coupling();
         let n = self.q.len();
         if !self.coupling.active {
             self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, h);
-            self.propagator.advance(&self.body.omega, &self.load, &mut self.q, &mut self.qd);
+            if ramp {
+                self.propagator.advance_ramp(&self.body.omega, &self.load, &self.load_rate, &mut self.q, &mut self.qd);
+                self.extrapolate_inputs(h);
+            } else {
+                self.propagator.advance(&self.body.omega, &self.load, &mut self.q, &mut self.qd);
+            }
             self.eval.valid = false;
             return Ok(());
         }
@@ -745,14 +787,101 @@ impl FlexibleBody {
         let substeps = ((h * rate / 0.1).ceil() as usize).clamp(1, 100_000);
         let hs = h / substeps as f64;
         self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, hs);
-        for _ in 0..substeps {
+        for s in 0..substeps {
+            // the inputs' ramp enters the load exactly; the coupling is held over the substep
+            let tau = s as f64 * hs;
             for i in 0..n {
-                self.scratch[i] = self.load[i] - self.coupling_force(i);
+                self.scratch[i] = self.load[i] + tau * self.load_rate[i] - self.coupling_force(i);
             }
-            self.propagator.advance(&self.body.omega, &self.scratch, &mut self.q, &mut self.qd);
+            if ramp {
+                self.propagator.advance_ramp(&self.body.omega, &self.scratch, &self.load_rate, &mut self.q, &mut self.qd);
+            } else {
+                self.propagator.advance(&self.body.omega, &self.scratch, &mut self.q, &mut self.qd);
+            }
+        }
+        if ramp {
+            self.extrapolate_inputs(h);
         }
         self.eval.valid = false;
         Ok(())
+    }
+
+    /// dp/dt of the modal load for the input rates: linear in the rates of a, z and the flange
+    /// loads, and d(w_i w_k)/dt of the centrifugal part. The mount orientation's own rate is
+    /// the rotation's business (coupling terms), not the load's.
+    fn modal_load_rate(&mut self) {
+        let a = &self.rot;
+        let r = &self.rates;
+        let n = self.q.len();
+        let a_b = k3::mul_t(a, r.mount.a);
+        for j in 0..n {
+            self.load_rate[j] = -(self.body.c_t[j] * a_b[0] + self.body.c_t[n + j] * a_b[1] + self.body.c_t[2 * n + j] * a_b[2]);
+        }
+        if let Some(rot) = &self.body.rotation {
+            let w = k3::mul_t(a, self.mount.w);
+            let dw = k3::mul_t(a, r.mount.w);
+            let dz = k3::mul_t(a, r.mount.z);
+            for i in 0..3 {
+                if dz[i] != 0.0 {
+                    let c_a = &self.body.c_r[i * n..(i + 1) * n];
+                    for j in 0..n {
+                        self.load_rate[j] -= dz[i] * c_a[j];
+                    }
+                }
+                for k in 0..3 {
+                    let dww = dw[i] * w[k] + w[i] * dw[k];
+                    if dww != 0.0 {
+                        let o = &rot.o_vec[(3 * i + k) * n..(3 * i + k + 1) * n];
+                        for j in 0..n {
+                            self.load_rate[j] -= dww * o[j];
+                        }
+                    }
+                }
+            }
+        }
+        for (flange, rate) in self.body.flanges.iter().zip(&r.loads) {
+            let f_b = k3::mul_t(a, rate.f);
+            let t_b = k3::mul_t(a, rate.t);
+            let wrench = [f_b[0], f_b[1], f_b[2], t_b[0], t_b[1], t_b[2]];
+            for (row, w) in wrench.iter().enumerate() {
+                if *w != 0.0 {
+                    let shape = &flange.shapes[row * n..(row + 1) * n];
+                    for j in 0..n {
+                        self.load_rate[j] += shape[j] * w;
+                    }
+                }
+            }
+        }
+    }
+
+    /// After a step with input rates the inputs hold their interpolated end values (what the
+    /// host's interpolation says they are at t + h); the rates are used up.
+    fn extrapolate_inputs(&mut self, h: f64) {
+        let r = &mut self.rates;
+        let m = &mut self.mount;
+        for i in 0..3 {
+            m.r[i] += h * r.mount.r[i];
+            m.v[i] += h * r.mount.v[i];
+            m.w[i] += h * r.mount.w[i];
+            m.a[i] += h * r.mount.a[i];
+            m.z[i] += h * r.mount.z[i];
+        }
+        for i in 0..9 {
+            m.rot[i] += h * r.mount.rot[i];
+        }
+        for (load, rate) in self.loads.iter_mut().zip(&r.loads) {
+            for i in 0..3 {
+                load.f[i] += h * rate.f[i];
+                load.t[i] += h * rate.t[i];
+            }
+        }
+        r.mount = MountMotion { rot: [0.0; 9], ..MountMotion::default() };
+        for rate in r.loads.iter_mut() {
+            *rate = FlangeLoad::default();
+        }
+        r.any = false;
+        self.coupling.valid = false;
+        self.eval.valid = false;
     }
 }
 

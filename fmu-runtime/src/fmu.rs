@@ -128,6 +128,28 @@ impl Model for BodyFmu {
         })
     }
 
+    fn can_interpolate_inputs(&self) -> bool {
+        true
+    }
+
+    fn set_real_input_derivative(&mut self, vr: u32, value: f64) -> Result<(), String> {
+        use Quantity as Q;
+        let quantity = self.quantity(vr)?;
+        let b = &mut self.body;
+        match quantity {
+            Q::MountPosition(i) => b.mount_rate_mut().r[i] = value,
+            Q::MountRotation(i, j) => b.mount_rate_mut().rot[3 * i + j] = value,
+            Q::MountVelocity(i) => b.mount_rate_mut().v[i] = value,
+            Q::MountAngularVelocity(i) => b.mount_rate_mut().w[i] = value,
+            Q::MountAcceleration(i) => b.mount_rate_mut().a[i] = value,
+            Q::MountAngularAcceleration(i) => b.mount_rate_mut().z[i] = value,
+            Q::FlangeForce(k, i) => b.load_rate_mut(k).f[i] = value,
+            Q::FlangeTorque(k, i) => b.load_rate_mut(k).t[i] = value,
+            _ => return Err(format!("value reference {vr} is not an input")),
+        }
+        Ok(())
+    }
+
     fn set_real(&mut self, vr: u32, value: f64) -> Result<(), String> {
         use Quantity as Q;
         let name = || self.table.get(vr).map(|v| v.name.clone()).unwrap_or_default();

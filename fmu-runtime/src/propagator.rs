@@ -49,6 +49,8 @@ impl Transition {
 pub struct ModalPropagator {
     key: Option<(f64, f64, f64)>,
     transitions: Vec<Transition>,
+    /// Modal damping d_k of the prepared step (for the particular solution of a ramp load).
+    damping: Vec<f64>,
 }
 
 impl ModalPropagator {
@@ -63,6 +65,8 @@ impl ModalPropagator {
         self.transitions.clear();
         self.transitions
             .extend(omega.iter().zip(extra).map(|(&w, &e)| Transition::new(w, alpha + beta * w * w + e, h)));
+        self.damping.clear();
+        self.damping.extend(omega.iter().zip(extra).map(|(&w, &e)| alpha + beta * w * w + e));
         self.key = Some(key);
     }
 
@@ -75,6 +79,28 @@ impl ModalPropagator {
             let v = qd[k];
             q[k] = q_static + t.p11 * dq + t.p12 * v;
             qd[k] = t.p21 * dq + t.p22 * v;
+        }
+    }
+}
+
+impl ModalPropagator {
+    /// Advance q, qd by the prepared step under the load p + r tau, tau in [0, h] (first-order
+    /// hold of interpolated inputs): exact for a linear load. The particular solution of
+    /// q'' + d q' + w^2 q = p + r tau is q_p = (p + r tau) / w^2 - d r / w^4, and the rest is the
+    /// homogeneous motion, which exp(A h) propagates.
+    pub fn advance_ramp(&self, omega: &[f64], load: &[f64], rate: &[f64], q: &mut [f64], qd: &mut [f64]) {
+        let h = self.key.map_or(0.0, |k| k.0);
+        for k in 0..self.transitions.len() {
+            let t = &self.transitions[k];
+            let w2 = omega[k] * omega[k];
+            let shift = self.damping[k] * rate[k] / (w2 * w2);
+            let q_start = load[k] / w2 - shift;
+            let q_end = (load[k] + rate[k] * h) / w2 - shift;
+            let v_p = rate[k] / w2;
+            let dq = q[k] - q_start;
+            let v = qd[k] - v_p;
+            q[k] = q_end + t.p11 * dq + t.p12 * v;
+            qd[k] = v_p + t.p21 * dq + t.p22 * v;
         }
     }
 }
@@ -113,6 +139,32 @@ mod tests {
                     assert!((e[i] - r[i]).abs() < 1e-9 * (1.0 + r[i].abs()), "w={w} d={d}: {e:?} vs {r:?}");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn a_ramp_load_is_propagated_exactly() {
+        // q'' + d q' + w^2 q = p + r t from rest, against fine RK4 of the forced equation
+        for (w, d) in [(10.0, 0.3), (10.0, 20.0), (10.0, 300.0)] {
+            let (p, r, h) = (2.0, -30.0, 0.07);
+            let mut prop = ModalPropagator::default();
+            prop.prepare(&[w], d, 0.0, &[0.0], h);
+            let (mut q, mut qd) = ([0.3], [-1.0]);
+            prop.advance_ramp(&[w], &[p], &[r], &mut q, &mut qd);
+            let f = |t: f64, x: [f64; 2]| [x[1], p + r * t - w * w * x[0] - d * x[1]];
+            let (n, mut x, mut t) = (200_000, [0.3, -1.0], 0.0);
+            let dt = h / n as f64;
+            for _ in 0..n {
+                let k1 = f(t, x);
+                let k2 = f(t + 0.5 * dt, [x[0] + 0.5 * dt * k1[0], x[1] + 0.5 * dt * k1[1]]);
+                let k3 = f(t + 0.5 * dt, [x[0] + 0.5 * dt * k2[0], x[1] + 0.5 * dt * k2[1]]);
+                let k4 = f(t + dt, [x[0] + dt * k3[0], x[1] + dt * k3[1]]);
+                x[0] += dt / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]);
+                x[1] += dt / 6.0 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]);
+                t += dt;
+            }
+            assert!((q[0] - x[0]).abs() < 1e-10 * (1.0 + x[0].abs()), "w={w} d={d}: {} vs {}", q[0], x[0]);
+            assert!((qd[0] - x[1]).abs() < 1e-9 * (1.0 + x[1].abs()), "w={w} d={d}: {} vs {}", qd[0], x[1]);
         }
     }
 

@@ -393,7 +393,7 @@ fn write_interfaces(w: &mut W, model_identifier: &str) -> io::Result<()> {
     w.create_element("ModelExchange").with_attributes(common).write_empty()?;
     let cs = [
         ("canHandleVariableCommunicationStepSize", "true"),
-        ("canInterpolateInputs", "false"),
+        ("canInterpolateInputs", "true"),
         ("maxOutputDerivativeOrder", "0"),
     ];
     w.create_element("CoSimulation").with_attributes(common.into_iter().chain(cs)).write_empty()?;

@@ -828,14 +828,36 @@ pub unsafe fn fmi2GetNominalsOfContinuousStates<M: Model>(
 /// Input interpolation would go here once models support it.
 pub unsafe fn fmi2SetRealInputDerivatives<M: Model>(
     c: fmi2Component,
-    _vr: *const fmi2ValueReference,
-    _nvr: usize,
-    _order: *const fmi2Integer,
-    _value: *const fmi2Real,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    order: *const fmi2Integer,
+    value: *const fmi2Real,
 ) -> fmi2Status {
     unsafe {
-        guarded::<M>(c, &spec::fmi2SetRealInputDerivatives, |_| {
-            not_supported("canInterpolateInputs")
+        guarded::<M>(c, &spec::fmi2SetRealInputDerivatives, |inst| {
+            if !inst.model.can_interpolate_inputs() {
+                return not_supported("canInterpolateInputs");
+            }
+            let vrs = in_slice(vr, nvr, "vr[]")?;
+            let orders = in_slice(order, nvr, "order[]")?;
+            let values = in_slice(value, nvr, "value[]")?;
+            for ((&r, &k), &v) in vrs.iter().zip(orders).zip(values) {
+                let info = var_of_type(&inst.model, r, VarType::Real)?;
+                if info.causality != super::Causality::Input {
+                    return Err(usage(format!("{}: input derivatives are for inputs only", describe(&inst.model, r))));
+                }
+                if k != 1 {
+                    return Err(usage(format!(
+                        "{}: derivative order {k} requested; this FMU interpolates inputs to first order (maxInputDerivativeOrder 1)",
+                        describe(&inst.model, r)
+                    )));
+                }
+                if !v.is_finite() {
+                    return Err(usage(format!("{}: input derivative {v} is not finite", describe(&inst.model, r))));
+                }
+                inst.model.set_real_input_derivative(r, v).map_err(model_err(r))?;
+            }
+            Ok(fmi2OK)
         })
     }
 }

@@ -109,6 +109,15 @@ pub trait Model: Sized + Clone {
     fn get_event_indicators(&mut self, z: &mut [f64]) -> Result<(), String>;
     fn enter_initialization(&mut self, start_time: f64) -> Result<(), String>;
     fn exit_initialization(&mut self) -> Result<(), String>;
+    /// Whether `set_real_input_derivative` is implemented (capability canInterpolateInputs).
+    fn can_interpolate_inputs(&self) -> bool {
+        false
+    }
+    /// Co-Simulation: the first time derivative of a Real input over the next step (the layer
+    /// has checked that `vr` is a Real input and the order is 1).
+    fn set_real_input_derivative(&mut self, _vr: u32, _value: f64) -> Result<(), String> {
+        Err("input derivatives are not supported by this model".into())
+    }
     /// Co-Simulation: advance from t to t + h exactly.
     fn do_step(&mut self, t: f64, h: f64) -> Result<(), String>;
     /// Back to the state right after instantiate (parameters at start values).
