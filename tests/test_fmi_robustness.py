@@ -105,6 +105,12 @@ def test_calls_in_the_wrong_state_are_errors(beam):
         assert "999999" in rec.text()
         with pytest.raises(Exception):
             fmu.setReal([vr["tip.u[1]"]], [1.0])  # an output
+        with pytest.raises(Exception):
+            fmu.setRealInputDerivatives([vr["tip.f[3]"]], [2], [1.0])  # second order
+        assert "order 2" in rec.messages[-1]
+        with pytest.raises(Exception):
+            fmu.setRealInputDerivatives([vr["tip.u[3]"]], [1], [1.0])  # not an input
+        assert "inputs only" in rec.messages[-1]
         fmu.doStep(0.01, 0.01)  # still usable after refused calls
         fmu.terminate()
         fmu.freeInstance()
