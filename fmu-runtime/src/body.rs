@@ -102,6 +102,16 @@ pub struct Invariants {
     pub angular_momentum: Vec3,
 }
 
+/// Workspace of a free-floating body's step: the substep's start state and its two coupling
+/// loads (empty for a mounted body).
+#[derive(Debug, Clone, Default)]
+struct FreeWork {
+    q0: Vec<f64>,
+    qd0: Vec<f64>,
+    load0: Vec<f64>,
+    load1: Vec<f64>,
+}
+
 /// Terms that couple the modes, for the present inputs: q'' = ... - C_d q' - C_k q.
 #[derive(Debug, Clone, Default)]
 struct Coupling {
@@ -137,6 +147,7 @@ pub struct FlexibleBody {
     cr_q: Vec<f64>,
     /// q' and q workspace for the coupled load
     scratch: Vec<f64>,
+    free_work: FreeWork,
     propagator: ModalPropagator,
     /// First derivatives of the inputs for the next step (fmi2SetRealInputDerivatives), and
     /// the modal load's rate they give.
@@ -183,7 +194,12 @@ impl FlexibleBody {
             frame_rate: FrameState::default(),
             cr_q: vec![0.0; 3 * n],
             scratch: vec![0.0; n],
-            propagator: ModalPropagator::default(),
+            free_work: if body.free_floating {
+                FreeWork { q0: vec![0.0; n], qd0: vec![0.0; n], load0: vec![0.0; n], load1: vec![0.0; n] }
+            } else {
+                FreeWork::default()
+            },
+            propagator: ModalPropagator::with_modes(n),
             rates: InputRates { mount: MountMotion { rot: [0.0; 9], ..MountMotion::default() }, loads: vec![FlangeLoad::default(); nf], any: false },
             load_rate: vec![0.0; n],
             body,
@@ -635,10 +651,8 @@ impl FlexibleBody {
                 s[3 * p + q_] -= cp.iter().zip(cq).map(|(x, y)| x * y).sum::<f64>();
             }
         }
-        let mut s_vec = s.to_vec();
-        let mut w_dot = rhs.to_vec();
-        solve_dense(&mut s_vec, &mut w_dot, 3).map_err(|_| "the body's inertia matrix became singular".to_string())?;
-        let w_dot = [w_dot[0], w_dot[1], w_dot[2]];
+        let mut w_dot = rhs;
+        solve_dense(&mut s, &mut w_dot, 3).map_err(|_| "the body's inertia matrix became singular".to_string())?;
         for r in 0..n {
             self.eval.qdd[r] -= (0..3).map(|i| self.cr_q[i * n + r] * w_dot[i]).sum::<f64>();
         }
@@ -891,34 +905,41 @@ impl FlexibleBody {
     /// the coupling load (trapezoidal in time), the rigid motion by the averaged rates, the
     /// attitude by the exact rotation of the mean angular velocity.
     fn step_free(&mut self, h: f64) -> Result<(), String> {
-        let n = self.q.len();
         let spin = self.frame.map_or(0.0, |f| k3::dot(f.w_body, f.w_body).sqrt());
         let substeps = ((h * spin / 0.005).ceil() as usize).clamp(1, 1_000_000);
         let hs = h / substeps as f64;
         self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, hs);
-        let mut load0 = vec![0.0; n];
+        // the preallocated workspace, taken out for the substeps (leaves an empty Vec: no allocation)
+        let mut work = std::mem::take(&mut self.free_work);
+        let result = self.free_substeps(&mut work, substeps, hs);
+        self.free_work = work;
+        self.eval.valid = false;
+        result
+    }
+
+    fn free_substeps(&mut self, w: &mut FreeWork, substeps: usize, hs: f64) -> Result<(), String> {
+        let n = self.q.len();
         for _ in 0..substeps {
             let start = self.frame.ok_or("not a free-floating body")?;
-            let (q0, qd0) = (self.q.clone(), self.qd.clone());
+            w.q0.copy_from_slice(&self.q);
+            w.qd0.copy_from_slice(&self.qd);
             // rates at the start, then at the predicted end
             self.eval.valid = false;
             self.evaluate()?;
             let rate0 = self.frame_rate;
-            self.coupling_load(&mut load0);
-            self.advance_free(&start, &rate0, &rate0, &load0, hs)?;
+            self.coupling_load(&mut w.load0);
+            self.advance_free(&start, &rate0, &rate0, &w.load0, hs)?;
             self.eval.valid = false;
             self.evaluate()?;
             let rate1 = self.frame_rate;
-            let mut load1 = vec![0.0; n];
-            self.coupling_load(&mut load1);
+            self.coupling_load(&mut w.load1);
             for j in 0..n {
-                load1[j] = 0.5 * (load0[j] + load1[j]);
+                w.load1[j] = 0.5 * (w.load0[j] + w.load1[j]);
             }
-            self.q.copy_from_slice(&q0);
-            self.qd.copy_from_slice(&qd0);
-            self.advance_free(&start, &rate0, &rate1, &load1, hs)?;
+            self.q.copy_from_slice(&w.q0);
+            self.qd.copy_from_slice(&w.qd0);
+            self.advance_free(&start, &rate0, &rate1, &w.load1, hs)?;
         }
-        self.eval.valid = false;
         Ok(())
     }
 

@@ -45,7 +45,7 @@ impl Transition {
     }
 }
 
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Default)]
 pub struct ModalPropagator {
     key: Option<(f64, f64, f64)>,
     transitions: Vec<Transition>,
@@ -53,7 +53,25 @@ pub struct ModalPropagator {
     damping: Vec<f64>,
 }
 
+/// Keeps the table's capacity (a derived Clone would keep only its length): a body restored from
+/// an FMU state taken before its first step must not allocate in that step either.
+impl Clone for ModalPropagator {
+    fn clone(&self) -> Self {
+        let mut transitions = Vec::with_capacity(self.transitions.capacity());
+        transitions.extend_from_slice(&self.transitions);
+        let mut damping = Vec::with_capacity(self.damping.capacity());
+        damping.extend_from_slice(&self.damping);
+        Self { key: self.key, transitions, damping }
+    }
+}
+
 impl ModalPropagator {
+    /// A propagator for `n` modes whose table never reallocates: `prepare` refills it in place,
+    /// so no step allocates, the first one included.
+    pub fn with_modes(n: usize) -> Self {
+        Self { key: None, transitions: Vec::with_capacity(n), damping: Vec::with_capacity(n) }
+    }
+
     /// Prepare for steps of size `h` with modal damping `d_k = alpha + beta w_k^2 + extra_k`
     /// (`extra`: the body's fixed modal damping, 2 zeta_k w_k). Recomputes only when h or the
     /// Rayleigh coefficients changed, so a fixed-step host pays it once.

@@ -1,0 +1,300 @@
+//! An FMU as a co-simulation master sees it: unzip, read modelDescription.xml, dlopen the
+//! binary and call it through the FMI 2.0 C API only. The C types come from fmu-runtime (types
+//! only: every call goes through the dlopen'ed library, checked with dladdr).
+
+use fmu_runtime::fmi::types::*;
+use std::collections::HashMap;
+use std::ffi::{CStr, CString, c_char, c_void};
+use std::path::{Path, PathBuf};
+
+type Instantiate = unsafe extern "C" fn(
+    fmi2String,
+    fmi2Type,
+    fmi2String,
+    fmi2String,
+    *const fmi2CallbackFunctions,
+    fmi2Boolean,
+    fmi2Boolean,
+) -> fmi2Component;
+type FreeInstance = unsafe extern "C" fn(fmi2Component);
+type SetupExperiment =
+    unsafe extern "C" fn(fmi2Component, fmi2Boolean, fmi2Real, fmi2Real, fmi2Boolean, fmi2Real) -> fmi2Status;
+type ComponentOnly = unsafe extern "C" fn(fmi2Component) -> fmi2Status;
+type NewDiscreteStates = unsafe extern "C" fn(fmi2Component, *mut fmi2EventInfo) -> fmi2Status;
+type DoStep = unsafe extern "C" fn(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean) -> fmi2Status;
+type SetReal = unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *const fmi2Real) -> fmi2Status;
+type GetReal = unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *mut fmi2Real) -> fmi2Status;
+type SetStates = unsafe extern "C" fn(fmi2Component, *const fmi2Real, usize) -> fmi2Status;
+type GetStates = unsafe extern "C" fn(fmi2Component, *mut fmi2Real, usize) -> fmi2Status;
+type GetFmuState = unsafe extern "C" fn(fmi2Component, *mut fmi2FMUstate) -> fmi2Status;
+type SetFmuState = unsafe extern "C" fn(fmi2Component, fmi2FMUstate) -> fmi2Status;
+type FreeFmuState = unsafe extern "C" fn(fmi2Component, *mut fmi2FMUstate) -> fmi2Status;
+
+/// The entry points a master uses, resolved from the FMU's binary.
+pub struct Api {
+    pub instantiate: Instantiate,
+    pub free_instance: FreeInstance,
+    pub setup_experiment: SetupExperiment,
+    pub enter_initialization_mode: ComponentOnly,
+    pub exit_initialization_mode: ComponentOnly,
+    pub terminate: ComponentOnly,
+    pub new_discrete_states: NewDiscreteStates,
+    pub enter_continuous_time_mode: ComponentOnly,
+    pub do_step: DoStep,
+    pub set_real: SetReal,
+    pub get_real: GetReal,
+    pub set_continuous_states: SetStates,
+    pub get_derivatives: GetStates,
+    pub get_fmu_state: GetFmuState,
+    pub set_fmu_state: SetFmuState,
+    pub free_fmu_state: FreeFmuState,
+}
+
+/// What the master needs from modelDescription.xml.
+pub struct ModelDescription {
+    pub guid: String,
+    pub model_identifier: String,
+    pub variables: HashMap<String, u32>,
+    pub n_states: usize,
+}
+
+fn attribute(tag: &str, name: &str) -> Option<String> {
+    let key = format!(" {name}=\"");
+    let start = tag.find(&key)? + key.len();
+    let end = start + tag[start..].find('"')?;
+    Some(tag[start..end].replace("&quot;", "\"").replace("&lt;", "<").replace("&gt;", ">").replace("&amp;", "&"))
+}
+
+impl ModelDescription {
+    /// Reads the attributes a master needs; the XML is ours, written by fmu-builder, so a plain
+    /// scan for the elements suffices.
+    pub fn parse(xml: &str) -> Result<Self, String> {
+        let root_start = xml.find("<fmiModelDescription").ok_or("no fmiModelDescription element")?;
+        let root = &xml[root_start..root_start + xml[root_start..].find('>').ok_or("unterminated root")?];
+        let guid = attribute(root, "guid").ok_or("no guid")?;
+        let cs_start = xml.find("<CoSimulation").ok_or("no CoSimulation element")?;
+        let cs = &xml[cs_start..cs_start + xml[cs_start..].find('>').ok_or("unterminated CoSimulation")?];
+        let model_identifier = attribute(cs, "modelIdentifier").ok_or("no modelIdentifier")?;
+        let mut variables = HashMap::new();
+        for chunk in xml.split("<ScalarVariable").skip(1) {
+            let tag = &chunk[..chunk.find('>').ok_or("unterminated ScalarVariable")?];
+            let name = attribute(tag, "name").ok_or("ScalarVariable without name")?;
+            let vr = attribute(tag, "valueReference").ok_or("ScalarVariable without valueReference")?;
+            variables.insert(name, vr.parse().map_err(|e| format!("valueReference {vr}: {e}"))?);
+        }
+        let n_states = match (xml.find("<Derivatives>"), xml.find("</Derivatives>")) {
+            (Some(a), Some(b)) => xml[a..b].matches("<Unknown").count(),
+            _ => 0,
+        };
+        Ok(Self { guid, model_identifier, variables, n_states })
+    }
+
+    pub fn vr(&self, name: &str) -> u32 {
+        *self.variables.get(name).unwrap_or_else(|| panic!("the FMU has no variable {name}"))
+    }
+
+    pub fn vrs(&self, names: &[&str]) -> Vec<u32> {
+        names.iter().map(|n| self.vr(n)).collect()
+    }
+}
+
+/// An unzipped FMU with its binary loaded.
+pub struct Fmu {
+    pub description: ModelDescription,
+    pub binary: PathBuf,
+    resource_uri: CString,
+    handle: *mut c_void,
+    pub api: Api,
+}
+
+fn dl_error() -> String {
+    // SAFETY: dlerror returns NULL or a NUL-terminated string valid until the next dl* call.
+    let e = unsafe { libc::dlerror() };
+    if e.is_null() { "unknown dl error".into() } else { unsafe { CStr::from_ptr(e) }.to_string_lossy().into_owned() }
+}
+
+impl Fmu {
+    /// Unzip `fmu` into `dir` and load binaries/linux64/<modelIdentifier>.so.
+    pub fn open(fmu: &Path, dir: &Path) -> Result<Self, String> {
+        let file = std::fs::File::open(fmu).map_err(|e| format!("{}: {e}", fmu.display()))?;
+        let mut zip = zip::ZipArchive::new(file).map_err(|e| format!("{}: {e}", fmu.display()))?;
+        zip.extract(dir).map_err(|e| format!("unzipping {}: {e}", fmu.display()))?;
+        let xml = std::fs::read_to_string(dir.join("modelDescription.xml")).map_err(|e| e.to_string())?;
+        let description = ModelDescription::parse(&xml)?;
+        let binary = dir.join("binaries/linux64").join(format!("{}.so", description.model_identifier));
+        let resources = dir.join("resources").canonicalize().map_err(|e| format!("resources: {e}"))?;
+        let resource_uri = CString::new(format!("file://{}", resources.display())).map_err(|e| e.to_string())?;
+        let c_path = CString::new(binary.canonicalize().map_err(|e| format!("{}: {e}", binary.display()))?.as_os_str().as_encoded_bytes())
+            .map_err(|e| e.to_string())?;
+        // SAFETY: a NUL-terminated path; RTLD_LOCAL keeps each FMU's fmi2* symbols to itself.
+        let handle = unsafe { libc::dlopen(c_path.as_ptr(), libc::RTLD_NOW | libc::RTLD_LOCAL) };
+        if handle.is_null() {
+            return Err(format!("dlopen {}: {}", binary.display(), dl_error()));
+        }
+        let sym = |name: &CStr| -> Result<*mut c_void, String> {
+            // SAFETY: handle from dlopen, name NUL-terminated.
+            let p = unsafe { libc::dlsym(handle, name.as_ptr()) };
+            if p.is_null() {
+                return Err(format!("{}: no symbol {}", binary.display(), name.to_string_lossy()));
+            }
+            // the call must land in the FMU's binary, not in anything this process links
+            let mut info: libc::Dl_info = unsafe { std::mem::zeroed() };
+            if unsafe { libc::dladdr(p, &mut info) } == 0 || info.dli_fname.is_null() {
+                return Err(format!("dladdr failed for {}", name.to_string_lossy()));
+            }
+            let from = unsafe { CStr::from_ptr(info.dli_fname) };
+            if from != c_path.as_c_str() {
+                return Err(format!("{} resolved to {} instead of the FMU's binary", name.to_string_lossy(), from.to_string_lossy()));
+            }
+            Ok(p)
+        };
+        // SAFETY: each symbol is the FMI 2.0 function of that name, with the standard's signature.
+        macro_rules! f {
+            ($name:literal, $ty:ty) => {
+                unsafe { std::mem::transmute::<*mut c_void, $ty>(sym($name)?) }
+            };
+        }
+        let api = Api {
+            instantiate: f!(c"fmi2Instantiate", Instantiate),
+            free_instance: f!(c"fmi2FreeInstance", FreeInstance),
+            setup_experiment: f!(c"fmi2SetupExperiment", SetupExperiment),
+            enter_initialization_mode: f!(c"fmi2EnterInitializationMode", ComponentOnly),
+            exit_initialization_mode: f!(c"fmi2ExitInitializationMode", ComponentOnly),
+            terminate: f!(c"fmi2Terminate", ComponentOnly),
+            new_discrete_states: f!(c"fmi2NewDiscreteStates", NewDiscreteStates),
+            enter_continuous_time_mode: f!(c"fmi2EnterContinuousTimeMode", ComponentOnly),
+            do_step: f!(c"fmi2DoStep", DoStep),
+            set_real: f!(c"fmi2SetReal", SetReal),
+            get_real: f!(c"fmi2GetReal", GetReal),
+            set_continuous_states: f!(c"fmi2SetContinuousStates", SetStates),
+            get_derivatives: f!(c"fmi2GetDerivatives", GetStates),
+            get_fmu_state: f!(c"fmi2GetFMUstate", GetFmuState),
+            set_fmu_state: f!(c"fmi2SetFMUstate", SetFmuState),
+            free_fmu_state: f!(c"fmi2FreeFMUstate", FreeFmuState),
+        };
+        Ok(Self { description, binary, resource_uri, handle, api })
+    }
+
+    /// fmi2Instantiate and fmi2SetupExperiment (start 0, no tolerance, no stop time).
+    pub fn instantiate(&self, kind: fmi2Type, name: &str) -> Result<Instance<'_>, String> {
+        let name = CString::new(name).map_err(|e| e.to_string())?;
+        let guid = CString::new(self.description.guid.as_str()).map_err(|e| e.to_string())?;
+        let callbacks = callbacks();
+        // SAFETY: FMI 2.0 contract; all strings live across the call, the layer copies them.
+        let c = unsafe {
+            (self.api.instantiate)(name.as_ptr(), kind, guid.as_ptr(), self.resource_uri.as_ptr(), &callbacks, fmi2False, fmi2False)
+        };
+        if c.is_null() {
+            return Err("fmi2Instantiate returned NULL".into());
+        }
+        let inst = Instance { fmu: self, c };
+        inst.check("fmi2SetupExperiment", unsafe { (self.api.setup_experiment)(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) })?;
+        Ok(inst)
+    }
+}
+
+impl Drop for Fmu {
+    fn drop(&mut self) {
+        // SAFETY: every instance borrowed self and is gone.
+        unsafe { libc::dlclose(self.handle) };
+    }
+}
+
+/// Stable Rust cannot define a C-variadic function, so the logger takes the one vararg the
+/// runtime passes (the text for its constant "%s" format) as a sixth fixed parameter and is
+/// transmuted to the variadic type: on x86-64 System V (the only platform of these FMUs) the
+/// first six integer/pointer arguments travel in the same registers either way. This is what
+/// fmu-runtime's own FMI-layer tests do.
+unsafe extern "C" fn logger(
+    _env: *mut c_void,
+    instance: *const c_char,
+    status: fmi2Status,
+    category: *const c_char,
+    message: *const c_char,
+    arg: *const c_char,
+) {
+    let text = |p: *const c_char| if p.is_null() { String::new() } else { unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned() };
+    let message = text(message);
+    let message = if message == "%s" { text(arg) } else { message };
+    eprintln!("[{}] {:?} {}: {}", text(instance), status, text(category), message);
+}
+
+fn callbacks() -> fmi2CallbackFunctions {
+    type Fixed = unsafe extern "C" fn(*mut c_void, *const c_char, fmi2Status, *const c_char, *const c_char, *const c_char);
+    // SAFETY: see `logger`.
+    let logger: fmi2CallbackLogger = unsafe { std::mem::transmute(logger as Fixed) };
+    fmi2CallbackFunctions {
+        logger: Some(logger),
+        allocateMemory: None,
+        freeMemory: None,
+        stepFinished: None,
+        componentEnvironment: std::ptr::null_mut(),
+    }
+}
+
+/// One fmi2Component; freed on drop.
+pub struct Instance<'a> {
+    pub fmu: &'a Fmu,
+    pub c: fmi2Component,
+}
+
+impl Instance<'_> {
+    pub fn check(&self, what: &str, status: fmi2Status) -> Result<(), String> {
+        if status == fmi2Status::fmi2OK { Ok(()) } else { Err(format!("{what} returned {status:?}")) }
+    }
+
+    pub fn set(&self, names: &[&str], values: &[f64]) -> Result<(), String> {
+        let vrs = self.fmu.description.vrs(names);
+        self.check("fmi2SetReal", unsafe { (self.fmu.api.set_real)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr()) })
+    }
+
+    pub fn get(&self, vrs: &[u32], values: &mut [f64]) -> Result<(), String> {
+        assert_eq!(vrs.len(), values.len());
+        self.check("fmi2GetReal", unsafe { (self.fmu.api.get_real)(self.c, vrs.as_ptr(), vrs.len(), values.as_mut_ptr()) })
+    }
+
+    pub fn initialize(&self) -> Result<(), String> {
+        self.check("fmi2EnterInitializationMode", unsafe { (self.fmu.api.enter_initialization_mode)(self.c) })?;
+        self.check("fmi2ExitInitializationMode", unsafe { (self.fmu.api.exit_initialization_mode)(self.c) })
+    }
+
+    /// Model Exchange after initialisation: event iteration, then continuous-time mode.
+    pub fn enter_continuous_time(&self) -> Result<(), String> {
+        let mut info = fmi2EventInfo::default();
+        loop {
+            self.check("fmi2NewDiscreteStates", unsafe { (self.fmu.api.new_discrete_states)(self.c, &mut info) })?;
+            if info.newDiscreteStatesNeeded == fmi2False {
+                break;
+            }
+        }
+        self.check("fmi2EnterContinuousTimeMode", unsafe { (self.fmu.api.enter_continuous_time_mode)(self.c) })
+    }
+
+    #[inline]
+    pub fn do_step(&self, t: f64, h: f64) -> fmi2Status {
+        unsafe { (self.fmu.api.do_step)(self.c, t, h, fmi2True) }
+    }
+
+    pub fn get_state(&self) -> Result<fmi2FMUstate, String> {
+        let mut s: fmi2FMUstate = std::ptr::null_mut();
+        self.check("fmi2GetFMUstate", unsafe { (self.fmu.api.get_fmu_state)(self.c, &mut s) })?;
+        Ok(s)
+    }
+
+    pub fn set_state(&self, s: fmi2FMUstate) -> Result<(), String> {
+        self.check("fmi2SetFMUstate", unsafe { (self.fmu.api.set_fmu_state)(self.c, s) })
+    }
+
+    pub fn free_state(&self, mut s: fmi2FMUstate) -> Result<(), String> {
+        self.check("fmi2FreeFMUstate", unsafe { (self.fmu.api.free_fmu_state)(self.c, &mut s) })
+    }
+}
+
+impl Drop for Instance<'_> {
+    fn drop(&mut self) {
+        unsafe {
+            (self.fmu.api.terminate)(self.c);
+            (self.fmu.api.free_instance)(self.c);
+        }
+    }
+}

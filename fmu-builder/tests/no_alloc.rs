@@ -1,0 +1,153 @@
+//! No heap allocation in a step of a body the builder reduced: the paper's steel beam with
+//! 20 Craig-Bampton modes, gravity, rotation and geometric stiffening declared (so every
+//! coupling and stiffening term of the runtime is present), stepped 1000 times with the tip
+//! force changing every step and every output read, mount fixed and spinning, plus 1000
+//! Model-Exchange derivative evaluations. Counted per thread by a counting global allocator.
+//! fmu-runtime's tests/no_alloc.rs covers the exported C functions and free-floating bodies.
+
+use fmu_builder::pipeline::reduce_spec;
+use fmu_builder::spec::Spec;
+use fmu_runtime::fmi::Model;
+use fmu_runtime::fmu::BodyFmu;
+use fmu_runtime::interface::VariableTable;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::path::Path;
+
+struct Counting;
+
+thread_local! {
+    static COUNTING: Cell<bool> = const { Cell::new(false) };
+    static COUNT: Cell<usize> = const { Cell::new(0) };
+}
+
+fn note() {
+    let _ = COUNTING.try_with(|on| {
+        if on.get() {
+            on.set(false);
+            let first = COUNT.with(|c| {
+                c.set(c.get() + 1);
+                c.get() == 1
+            });
+            if first {
+                eprintln!("first allocation at:\n{}", std::backtrace::Backtrace::force_capture());
+            }
+            on.set(true);
+        }
+    });
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        note();
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        note();
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        note();
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn assert_no_allocation<R>(what: &str, f: impl FnOnce() -> R) -> R {
+    COUNT.with(|c| c.set(0));
+    COUNTING.with(|c| c.set(true));
+    let r = f();
+    COUNTING.with(|c| c.set(false));
+    let n = COUNT.with(|c| c.get());
+    assert_eq!(n, 0, "{what}: {n} heap allocations (first one's stack on stderr)");
+    r
+}
+
+fn vr(table: &VariableTable, name: &str) -> u32 {
+    (1..).map_while(|vr| table.get(vr).map(|v| (vr, v))).find(|(_, v)| v.name == name).map(|(vr, _)| vr).unwrap_or_else(|| panic!("no variable {name}"))
+}
+
+#[test]
+fn a_built_beam_steps_without_allocating() {
+    let text = r#"{
+      "name": "Beam",
+      "geometry": { "element": "hex20", "boxes": [ { "min": [0.0, -0.005, -0.01], "max": [1.0, 0.005, 0.01], "elements": [50, 2, 2] } ] },
+      "material": { "E": 2.0e11, "nu": 0.3, "rho": 7850.0 },
+      "damping": { "alpha": 1.0, "beta": 0.001 },
+      "flanges": [
+        { "name": "base", "role": "motion", "nodes": { "box_face": { "box": 0, "face": "-x" } } },
+        { "name": "tip", "role": "force", "nodes": { "box_face": { "box": 0, "face": "+x" } } }
+      ],
+      "scene": { "loads": ["gravity", "rotation"], "geometric_stiffening": true },
+      "reduction": { "method": "craig_bampton", "modes": 20 }
+    }"#;
+    let spec = Spec::from_str(Path::new("beam.json"), text).unwrap();
+    let built = reduce_spec(spec, Path::new("beam.json")).unwrap();
+    let reduced = built.reduced;
+    let st = reduced.stiffening.as_ref().expect("stiffening terms");
+    assert!(reduced.rotation.is_some() && st.centrifugal.is_some() && st.translation.is_some() && !st.flanges[0].is_empty());
+    let table = VariableTable::new(&reduced);
+    let force: Vec<u32> = (1..=3).map(|i| vr(&table, &format!("tip.f[{i}]"))).collect();
+    let torque = vr(&table, "tip.t[1]");
+    let mut outputs = Vec::new();
+    for q in ["r", "v", "w", "a", "z", "u", "phi"] {
+        for i in 1..=3 {
+            outputs.push(vr(&table, &format!("tip.{q}[{i}]")));
+        }
+    }
+    for i in 1..=3 {
+        for j in 1..=3 {
+            outputs.push(vr(&table, &format!("tip.R[{i},{j}]")));
+        }
+        outputs.push(vr(&table, &format!("base.f[{i}]")));
+        outputs.push(vr(&table, &format!("base.t[{i}]")));
+    }
+    for spinning in [false, true] {
+        let what = if spinning { "spinning mount" } else { "fixed mount" };
+        let mut fmu = BodyFmu::from_reduced(reduced.clone());
+        fmu.set_real(vr(&table, "g[3]"), -9.81).unwrap();
+        if spinning {
+            // spinning at 10 rad/s about world z through the mount point, at the orientation Rz(0.3)
+            let (s, c) = 0.3f64.sin_cos();
+            let rot = [c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0];
+            for i in 0..3 {
+                for j in 0..3 {
+                    fmu.set_real(vr(&table, &format!("base.R[{},{}]", i + 1, j + 1)), rot[3 * i + j]).unwrap();
+                }
+            }
+            fmu.set_real(vr(&table, "base.w[3]"), 10.0).unwrap();
+        }
+        fmu.enter_initialization(0.0).unwrap();
+        fmu.exit_initialization().unwrap();
+        let mut sink = 0.0;
+        assert_no_allocation(&format!("{what}: set tip load, do_step, get outputs"), || {
+            for k in 0..1000 {
+                fmu.set_real(force[2], 10.0 * (k % 7) as f64).unwrap();
+                fmu.set_real(force[1], 1.0).unwrap();
+                fmu.set_real(torque, 0.1).unwrap();
+                fmu.do_step(k as f64 * 1e-3, 1e-3).unwrap();
+                for &r in &outputs {
+                    sink += fmu.get_real(r).unwrap();
+                }
+            }
+        });
+        let nx = fmu.n_states();
+        let mut x = vec![0.0; nx];
+        let mut dx = vec![0.0; nx];
+        assert_no_allocation(&format!("{what}: set_continuous_states, get_derivatives"), || {
+            for k in 0..1000 {
+                fmu.get_continuous_states(&mut x);
+                x[k % nx] += 1e-9;
+                fmu.set_continuous_states(&x);
+                fmu.get_derivatives(&mut dx).unwrap();
+                sink += dx[nx - 1];
+            }
+        });
+        assert!(sink.is_finite(), "{what}: {sink}");
+    }
+}
