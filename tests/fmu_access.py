@@ -11,7 +11,7 @@ from fmpy.fmi2 import FMU2Model, FMU2Slave
 
 
 class Fmu:
-    def __init__(self, filename, kind="ModelExchange"):
+    def __init__(self, filename, kind="ModelExchange", callbacks=None):
         self.md = read_model_description(filename)
         self.dir = extract(filename)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
@@ -21,7 +21,7 @@ class Fmu:
         self.kind = kind
         self.fmu = cls(guid=self.md.guid, unzipDirectory=self.dir,
                        modelIdentifier=iface.modelIdentifier, instanceName="test")
-        self.fmu.instantiate()
+        self.fmu.instantiate(callbacks=callbacks)
         self.nx = len(self.md.derivatives)
 
     def set(self, **values):

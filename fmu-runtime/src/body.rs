@@ -112,6 +112,23 @@ struct FreeWork {
     load1: Vec<f64>,
 }
 
+/// Everything of a [`FlexibleBody`] that evolves or can be set: what a saved state holds. The
+/// rest is the immutable reduced body and caches that are functions of these (recomputed on
+/// demand, so a body rebuilt from its state continues bit-identically).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BodyState {
+    pub mount: MountMotion,
+    pub loads: Vec<FlangeLoad>,
+    pub params: Parameters,
+    pub q: Vec<f64>,
+    pub qd: Vec<f64>,
+    /// Some exactly for free-floating bodies.
+    pub frame: Option<FrameState>,
+    pub initial_frame: InitialFrame,
+    /// Input derivatives set for the next step and not yet used.
+    pub rates: InputRates,
+}
+
 /// Terms that couple the modes, for the present inputs: q'' = ... - C_d q' - C_k q.
 #[derive(Debug, Clone, Default)]
 struct Coupling {
@@ -156,7 +173,7 @@ pub struct FlexibleBody {
 }
 
 /// Time derivatives of the inputs over the next step (first-order hold); zero means held.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct InputRates {
     pub mount: MountMotion,
     pub loads: Vec<FlangeLoad>,
@@ -208,6 +225,53 @@ impl FlexibleBody {
 
     pub fn reduced(&self) -> &ReducedBody {
         &self.body
+    }
+
+    pub fn state(&self) -> BodyState {
+        BodyState {
+            mount: self.mount,
+            loads: self.loads.clone(),
+            params: self.params,
+            q: self.q.clone(),
+            qd: self.qd.clone(),
+            frame: self.frame,
+            initial_frame: self.initial_frame,
+            rates: self.rates.clone(),
+        }
+    }
+
+    /// A new body of the same reduced body in `state`, its caches empty; Err if the state's
+    /// sizes do not fit this body.
+    pub fn with_state(&self, state: BodyState) -> Result<Self, String> {
+        let (n, nf) = (self.n_modes(), self.loads.len());
+        if state.q.len() != n || state.qd.len() != n {
+            return Err(format!(
+                "the state has {} and {} modal coordinates and velocities, the body {n} modes",
+                state.q.len(),
+                state.qd.len()
+            ));
+        }
+        if state.loads.len() != nf || state.rates.loads.len() != nf {
+            return Err(format!("the state has loads on {} flanges, the body {nf} force flanges", state.loads.len()));
+        }
+        if state.frame.is_some() != self.frame.is_some() {
+            let kind = |free: bool| if free { "free-floating" } else { "mounted" };
+            return Err(format!(
+                "the state is of a {} body, this body is {}",
+                kind(state.frame.is_some()),
+                kind(self.frame.is_some())
+            ));
+        }
+        let mut b = FlexibleBody::new(Arc::clone(&self.body));
+        b.mount = state.mount;
+        b.loads = state.loads;
+        b.params = state.params;
+        b.q = state.q;
+        b.qd = state.qd;
+        b.frame = state.frame;
+        b.initial_frame = state.initial_frame;
+        b.rates = state.rates;
+        Ok(b)
     }
     pub fn n_modes(&self) -> usize {
         self.q.len()

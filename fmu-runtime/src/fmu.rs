@@ -1,7 +1,8 @@
 //! The body as an FMI model: maps value references onto the mechanics layer and the FMI calls
 //! (initialise, step, derivatives) onto its equations. Knows FMI's model trait, not C.
 
-use crate::body::{FlexibleBody, FrameState};
+use crate::body::{BodyState, FlangeLoad, FlexibleBody, FrameState, InitialFrame, InputRates, MountMotion, Parameters};
+use crate::fmi::bytes::{Reader, Writer};
 use crate::fmi::{Interface, Model, VarInfo};
 use crate::format::RESOURCE_FILE;
 use crate::interface::{FlangeOutput, Quantity, VariableTable};
@@ -291,6 +292,139 @@ impl Model for BodyFmu {
         *self = Self::from_reduced(reduced);
         Ok(())
     }
+
+    fn save_state(&self, out: &mut Vec<u8>) {
+        let s = self.body.state();
+        let mut w = Writer::new(out);
+        w.u32(BODY_STATE_VERSION);
+        w.u32(s.q.len() as u32);
+        w.u32(s.loads.len() as u32);
+        w.bool(s.frame.is_some());
+        w.bool(self.static_start);
+        let m = &s.mount;
+        for v in [&m.r[..], &m.rot, &m.v, &m.w, &m.a, &m.z] {
+            w.f64s(v);
+        }
+        for l in &s.loads {
+            w.f64s(&l.f);
+            w.f64s(&l.t);
+        }
+        w.f64s(&s.params.g);
+        w.f64(s.params.alpha);
+        w.f64(s.params.beta);
+        w.f64s(&s.q);
+        w.f64s(&s.qd);
+        let i = &s.initial_frame;
+        for v in [&i.r, &i.phi, &i.v, &i.w] {
+            w.f64s(v);
+        }
+        if let Some(f) = &s.frame {
+            write_frame_state(&mut w, f);
+        }
+        let rm = &s.rates.mount;
+        w.bool(s.rates.any);
+        for v in [&rm.r[..], &rm.rot, &rm.v, &rm.w, &rm.a, &rm.z] {
+            w.f64s(v);
+        }
+        for l in &s.rates.loads {
+            w.f64s(&l.f);
+            w.f64s(&l.t);
+        }
+    }
+
+    fn load_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+        let mut r = Reader::new(bytes);
+        let version = r.u32("body state version")?;
+        if version > BODY_STATE_VERSION {
+            return Err(format!(
+                "body state version {version} was written by a newer runtime (this one reads up to {BODY_STATE_VERSION})"
+            ));
+        }
+        if version == 0 {
+            return Err("body state version 0 is invalid".into());
+        }
+        let n = r.u32("number of modes")? as usize;
+        let nf = r.u32("number of force flanges")? as usize;
+        let free = r.bool("free-floating flag")?;
+        let static_start = r.bool("static_start")?;
+        // sizes first: the bytes must describe this body before anything is read by them
+        let (n_body, nf_body, free_body) = (self.body.n_modes(), self.body.loads().len(), self.body.frame().is_some());
+        if (n, nf, free) != (n_body, nf_body, free_body) {
+            return Err(format!(
+                "the state is of a body with {n} modes, {nf} force flanges{}; this one has {n_body}, {nf_body}{}",
+                if free { ", free-floating" } else { "" },
+                if free_body { ", free-floating" } else { "" },
+            ));
+        }
+        let mount = MountMotion {
+            r: r.f64_array("mount r")?,
+            rot: r.f64_array("mount R")?,
+            v: r.f64_array("mount v")?,
+            w: r.f64_array("mount w")?,
+            a: r.f64_array("mount a")?,
+            z: r.f64_array("mount z")?,
+        };
+        let mut loads = Vec::with_capacity(nf);
+        for _ in 0..nf {
+            loads.push(FlangeLoad { f: r.f64_array("flange force")?, t: r.f64_array("flange torque")? });
+        }
+        let params = Parameters { g: r.f64_array("g")?, alpha: r.f64("damping.alpha")?, beta: r.f64("damping.beta")? };
+        let mut q = vec![0.0; n];
+        r.f64s_into(&mut q, "q")?;
+        let mut qd = vec![0.0; n];
+        r.f64s_into(&mut qd, "qd")?;
+        let initial_frame = InitialFrame {
+            r: r.f64_array("initial.r")?,
+            phi: r.f64_array("initial.phi")?,
+            v: r.f64_array("initial.v")?,
+            w: r.f64_array("initial.w")?,
+        };
+        let frame = if free { Some(read_frame_state(&mut r)?) } else { None };
+        let any = r.bool("input rates flag")?;
+        let rate_mount = MountMotion {
+            r: r.f64_array("mount r rate")?,
+            rot: r.f64_array("mount R rate")?,
+            v: r.f64_array("mount v rate")?,
+            w: r.f64_array("mount w rate")?,
+            a: r.f64_array("mount a rate")?,
+            z: r.f64_array("mount z rate")?,
+        };
+        let mut rate_loads = Vec::with_capacity(nf);
+        for _ in 0..nf {
+            rate_loads.push(FlangeLoad { f: r.f64_array("flange force rate")?, t: r.f64_array("flange torque rate")? });
+        }
+        r.finish("body state")?;
+        let rates = InputRates { mount: rate_mount, loads: rate_loads, any };
+        let state = BodyState { mount, loads, params, q, qd, frame, initial_frame, rates };
+        self.body = self.body.with_state(state)?;
+        self.static_start = static_start;
+        Ok(())
+    }
+}
+
+/// Version of the body's part of a serialized FMU state (the layer has its own).
+/// Layout, little-endian: version (u32), modes n (u32), force flanges m (u32), free-floating
+/// (u8 0/1), static_start (u8 0/1), then f64s: mount r[3] R[9] (row-major) v[3] w[3] a[3] z[3];
+/// per force flange f[3] t[3]; g[3], alpha, beta; q[n]; qd[n]; initial r[3] phi[3] v[3] w[3];
+/// free-floating only: frame r[3] quaternion[4] v[3] W[3]; then the input derivatives set for
+/// the next step: flag (u8 0/1), mount rates r[3] R[9] v[3] w[3] a[3] z[3], per force flange
+/// f[3] t[3]. Sizes are checked against the body before any array is read.
+pub const BODY_STATE_VERSION: u32 = 1;
+
+fn write_frame_state(w: &mut Writer, f: &FrameState) {
+    w.f64s(&f.r);
+    w.f64s(&f.quat);
+    w.f64s(&f.v);
+    w.f64s(&f.w_body);
+}
+
+fn read_frame_state(r: &mut Reader) -> Result<FrameState, String> {
+    Ok(FrameState {
+        r: r.f64_array("frame r")?,
+        quat: r.f64_array("frame quaternion")?,
+        v: r.f64_array("frame v")?,
+        w_body: r.f64_array("frame W")?,
+    })
 }
 
 

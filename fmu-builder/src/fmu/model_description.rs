@@ -387,7 +387,8 @@ fn write_interfaces(w: &mut W, model_identifier: &str) -> io::Result<()> {
         // the runtime allocates with Rust's allocator and accepts NULL memory callbacks
         ("canNotUseMemoryManagementFunctions", "true"),
         ("canGetAndSetFMUstate", "true"),
-        ("canSerializeFMUstate", "false"),
+        // fmi2SerializeFMUstate and friends: fmu-runtime/src/fmi/serial.rs
+        ("canSerializeFMUstate", "true"),
         ("providesDirectionalDerivative", "false"),
     ];
     w.create_element("ModelExchange").with_attributes(common).write_empty()?;
@@ -620,6 +621,13 @@ mod tests {
         assert_eq!(root.attr("description"), Some("Reduced flexible body <test> & co"));
         let cs = doc.iter().find(|e| e.name() == "CoSimulation").unwrap();
         assert_eq!(cs.attr("canHandleVariableCommunicationStepSize"), Some("true"));
+        // the runtime implements the FMU state functions, serialization included, for both
+        for interface in ["ModelExchange", "CoSimulation"] {
+            let e = doc.iter().find(|e| e.name() == interface).unwrap();
+            assert_eq!(e.attr("canGetAndSetFMUstate"), Some("true"), "{interface}");
+            assert_eq!(e.attr("canSerializeFMUstate"), Some("true"), "{interface}");
+            assert_eq!(e.attr("providesDirectionalDerivative"), Some("false"), "{interface}");
+        }
         assert_eq!(cs.attr("modelIdentifier"), Some("Test"));
         let structure: Vec<&str> = doc.iter().filter(|e| e.parent() == "ModelStructure").map(|e| e.name()).collect();
         assert_eq!(structure, ["Outputs", "Derivatives", "InitialUnknowns"]);

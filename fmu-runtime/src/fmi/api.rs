@@ -18,6 +18,7 @@ use super::access::check_settable;
 use super::instance::{Instance, Snapshot};
 use super::logger::{Category, Logger};
 use super::resource::parse_resource_location;
+use super::serial;
 use super::state::{self as spec, FnSpec, ModelState};
 use super::types::fmi2Status::{fmi2Discard, fmi2Error, fmi2Fatal, fmi2OK};
 use super::types::*;
@@ -593,10 +594,13 @@ pub unsafe fn fmi2GetFMUstate<M: Model>(
 pub unsafe fn fmi2SetFMUstate<M: Model>(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
     unsafe {
         guarded::<M>(c, &spec::fmi2SetFMUstate, |inst| {
-            let snapshot = FMUstate
-                .cast::<Snapshot<M>>()
-                .as_ref()
-                .ok_or_else(|| usage("argument FMUstate must not be NULL"))?;
+            let snapshot = snapshot_ref::<M>(FMUstate)?;
+            if snapshot.interface != inst.interface {
+                return Err(usage(format!(
+                    "the FMU state is of a {:?} instance; this instance was instantiated for {:?}",
+                    snapshot.interface, inst.interface
+                )));
+            }
             inst.restore(snapshot);
             inst.logger
                 .trace(|| format!("fmi2SetFMUstate: time {}", inst.time));
@@ -621,43 +625,77 @@ pub unsafe fn fmi2FreeFMUstate<M: Model>(
     }
 }
 
-// Serialization needs a byte encoding of M; a later issue adds it to the Model trait
-// and implements these three here (canSerializeFMUstate stays false until then).
+// Serialized FMU states (canSerializeFMUstate=true); the byte format is in `serial`.
+// DeSerialize only builds an FMU state; fmi2SetFMUstate applies it, as the standard has it.
+// Bytes that fail a check are a usage error: logged, fmi2Error, nothing built, and the
+// instance stays in its state (it can go on, restore another state, reset or be freed).
+
+unsafe fn snapshot_ref<'a, M>(FMUstate: fmi2FMUstate) -> Result<&'a Snapshot<M>, Failure> {
+    // SAFETY: a non-null fmi2FMUstate is one we returned from fmi2GetFMUstate/fmi2DeSerializeFMUstate.
+    unsafe { FMUstate.cast::<Snapshot<M>>().as_ref() }
+        .ok_or_else(|| usage("argument FMUstate must not be NULL"))
+}
 
 pub unsafe fn fmi2SerializedFMUstateSize<M: Model>(
     c: fmi2Component,
-    _FMUstate: fmi2FMUstate,
-    _size: *mut usize,
+    FMUstate: fmi2FMUstate,
+    size: *mut usize,
 ) -> fmi2Status {
     unsafe {
-        guarded::<M>(c, &spec::fmi2SerializedFMUstateSize, |_| {
-            not_supported("canSerializeFMUstate")
+        guarded::<M>(c, &spec::fmi2SerializedFMUstateSize, |_inst| {
+            let snapshot = snapshot_ref::<M>(FMUstate)?;
+            let size = out_ref(size, "size")?;
+            *size = serial::serialize(snapshot).len();
+            Ok(fmi2OK)
         })
     }
 }
 
 pub unsafe fn fmi2SerializeFMUstate<M: Model>(
     c: fmi2Component,
-    _FMUstate: fmi2FMUstate,
-    _serializedState: *mut fmi2Byte,
-    _size: usize,
+    FMUstate: fmi2FMUstate,
+    serializedState: *mut fmi2Byte,
+    size: usize,
 ) -> fmi2Status {
     unsafe {
-        guarded::<M>(c, &spec::fmi2SerializeFMUstate, |_| {
-            not_supported("canSerializeFMUstate")
+        guarded::<M>(c, &spec::fmi2SerializeFMUstate, |inst| {
+            let snapshot = snapshot_ref::<M>(FMUstate)?;
+            let bytes = serial::serialize(snapshot);
+            if size != bytes.len() {
+                return Err(usage(format!(
+                    "size = {size} but the serialized FMU state has {} bytes (the size fmi2SerializedFMUstateSize returns)",
+                    bytes.len()
+                )));
+            }
+            out_slice(serializedState.cast::<u8>(), size, "serializedState[]")?.copy_from_slice(&bytes);
+            inst.logger
+                .trace(|| format!("fmi2SerializeFMUstate: {size} bytes, time {}", snapshot.time));
+            Ok(fmi2OK)
         })
     }
 }
 
 pub unsafe fn fmi2DeSerializeFMUstate<M: Model>(
     c: fmi2Component,
-    _serializedState: *const fmi2Byte,
-    _size: usize,
-    _FMUstate: *mut fmi2FMUstate,
+    serializedState: *const fmi2Byte,
+    size: usize,
+    FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
     unsafe {
-        guarded::<M>(c, &spec::fmi2DeSerializeFMUstate, |_| {
-            not_supported("canSerializeFMUstate")
+        guarded::<M>(c, &spec::fmi2DeSerializeFMUstate, |inst| {
+            let bytes = in_slice(serializedState.cast::<u8>(), size, "serializedState[]")?;
+            let slot = out_ref(FMUstate, "FMUstate")?;
+            let snapshot = serial::deserialize(bytes, &inst.model, inst.interface).map_err(usage)?;
+            inst.logger.trace(|| {
+                format!("fmi2DeSerializeFMUstate: {size} bytes, time {}", snapshot.time)
+            });
+            if slot.is_null() {
+                *slot = Box::into_raw(Box::new(snapshot)).cast();
+            } else {
+                // As fmi2GetFMUstate: a state handed back is overwritten in place.
+                *slot.cast::<Snapshot<M>>() = snapshot;
+            }
+            Ok(fmi2OK)
         })
     }
 }

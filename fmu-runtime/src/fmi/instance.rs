@@ -62,6 +62,7 @@ impl<M: Model> Instance<M> {
     pub fn snapshot(&self) -> Snapshot<M> {
         Snapshot {
             model: self.model.clone(),
+            interface: self.interface,
             state: self.state,
             time: self.time,
             start_time: self.start_time,
@@ -85,6 +86,8 @@ impl<M: Model> Instance<M> {
 /// but not the host's callbacks or logging settings.
 pub struct Snapshot<M> {
     pub model: M,
+    /// The interface of the instance it was taken from: states do not cross interfaces.
+    pub interface: Interface,
     pub state: ModelState,
     pub time: f64,
     pub start_time: f64,

@@ -7,14 +7,17 @@
 //! Files: `types` (C types of the headers), `logger` (host logger callback),
 //! `state` (state machine tables), `access` (which variables may be set when),
 //! `resource` (fmuResourceLocation URI), `instance` (the fmi2Component),
-//! `api` (generic implementations), `export` (the macro).
+//! `serial` and `bytes` (serialized FMU states), `api` (generic implementations),
+//! `export` (the macro).
 
 pub mod access;
 pub mod api;
+pub mod bytes;
 mod export;
 pub mod instance;
 pub mod logger;
 pub mod resource;
+pub mod serial;
 pub mod state;
 pub mod types;
 
@@ -77,6 +80,7 @@ pub enum Interface {
 ///
 /// Any `Err` (and any panic) puts the instance into the FMI Error state: the host may
 /// then only read values for diagnostics, restore an FMU state, reset or free it.
+/// (`load_state` is the exception: its `Err` refuses the bytes and changes nothing.)
 pub trait Model: Sized + Clone {
     /// Load the model from the FMU's resources folder (None: host gave no resource location).
     fn instantiate(
@@ -122,4 +126,15 @@ pub trait Model: Sized + Clone {
     fn do_step(&mut self, t: f64, h: f64) -> Result<(), String>;
     /// Back to the state right after instantiate (parameters at start values).
     fn reset(&mut self) -> Result<(), String>;
+    /// fmi2SerializeFMUstate: append a portable encoding (see [`bytes`]) of everything that
+    /// evolves or can be set, enough for [`Model::load_state`] to continue bit-identically.
+    /// Leave out what instantiate loads from the resources: the layer stores the GUID with it.
+    fn save_state(&self, out: &mut Vec<u8>);
+    /// fmi2DeSerializeFMUstate: take the state `bytes` (from `save_state` of a model with the
+    /// same GUID, already checked) describe. The bytes are checksummed but may still come from
+    /// another build or be crafted: check every size and value, never panic. `self` is a
+    /// clone of the instance's model, discarded on Err, so a half-loaded state never reaches
+    /// an instance; the layer reports the Err as refused bytes (fmi2Error, the instance
+    /// stays in its state).
+    fn load_state(&mut self, bytes: &[u8]) -> Result<(), String>;
 }

@@ -41,6 +41,55 @@ const ALL_STATES: [ModelState; 11] = [
     Fatal,
 ];
 
+impl ModelState {
+    /// Stable number of the state in serialized FMU states, independent of the bit masks.
+    pub fn code(self) -> u8 {
+        match self {
+            Instantiated => 0,
+            InitializationMode => 1,
+            EventMode => 2,
+            ContinuousTimeMode => 3,
+            StepComplete => 4,
+            StepInProgress => 5,
+            StepFailed => 6,
+            StepCanceled => 7,
+            Terminated => 8,
+            Error => 9,
+            Fatal => 10,
+        }
+    }
+
+    pub fn from_code(code: u8) -> Option<ModelState> {
+        ALL_STATES.into_iter().find(|s| s.code() == code)
+    }
+
+    /// Whether fmi2GetFMUstate can have seen an instance of `interface` in this state: the
+    /// states of that interface's table, less Fatal (no FMU state functions) and
+    /// StepInProgress (never entered).
+    pub fn can_be_saved_in(self, interface: Interface) -> bool {
+        let states = match interface {
+            Interface::ModelExchange => StateMask::of(&[
+                Instantiated,
+                InitializationMode,
+                EventMode,
+                ContinuousTimeMode,
+                Terminated,
+                Error,
+            ]),
+            Interface::CoSimulation => StateMask::of(&[
+                Instantiated,
+                InitializationMode,
+                StepComplete,
+                StepFailed,
+                StepCanceled,
+                Terminated,
+                Error,
+            ]),
+        };
+        states.contains(self)
+    }
+}
+
 #[derive(Clone, Copy, PartialEq, Eq)]
 pub struct StateMask(u16);
 
@@ -302,5 +351,42 @@ mod tests {
                 .is_none()
         );
         assert!(fmi2Reset.refuse(Fatal, Interface::ModelExchange).is_some());
+    }
+
+    #[test]
+    fn state_codes_are_distinct_and_round_trip() {
+        for s in ALL_STATES {
+            assert_eq!(ModelState::from_code(s.code()), Some(s));
+        }
+        assert_eq!(ModelState::from_code(11), None);
+        assert!(StepComplete.can_be_saved_in(Interface::CoSimulation));
+        assert!(!StepComplete.can_be_saved_in(Interface::ModelExchange));
+        assert!(!ContinuousTimeMode.can_be_saved_in(Interface::CoSimulation));
+        assert!(!Fatal.can_be_saved_in(Interface::CoSimulation));
+        assert!(!StepInProgress.can_be_saved_in(Interface::CoSimulation));
+    }
+
+    /// The FMU state functions may be called in every state but Fatal (and StepInProgress,
+    /// which is never entered): tables of sections 3.2.3 and 4.2.4.
+    #[test]
+    fn fmu_state_functions_are_allowed_wherever_a_state_can_be_saved() {
+        for f in [
+            &fmi2GetFMUstate,
+            &fmi2SetFMUstate,
+            &fmi2FreeFMUstate,
+            &fmi2SerializedFMUstateSize,
+            &fmi2SerializeFMUstate,
+            &fmi2DeSerializeFMUstate,
+        ] {
+            for s in ALL_STATES {
+                for i in [Interface::ModelExchange, Interface::CoSimulation] {
+                    if s.can_be_saved_in(i) {
+                        assert!(f.refuse(s, i).is_none(), "{} in {s:?}", f.name);
+                    }
+                }
+            }
+            assert!(f.refuse(Fatal, Interface::CoSimulation).is_some());
+            assert!(f.refuse(StepInProgress, Interface::CoSimulation).is_some());
+        }
     }
 }

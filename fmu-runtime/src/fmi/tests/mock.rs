@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use crate::fmi::bytes::{Reader, Writer};
 use crate::fmi::{Causality as C, Initial as I, Interface, Model, VarInfo, VarType as T, Variability as V};
 
 pub const GUID: &str = "{8c4e810f-3df3-4a00-8276-176fa3c9f000}";
@@ -186,6 +187,33 @@ impl Model for Spring {
     }
     fn reset(&mut self) -> Result<(), String> {
         *self = Spring::start(std::mem::take(&mut self.resources));
+        Ok(())
+    }
+    /// Everything but `resources` (instantiate's), behind a version of its own.
+    fn save_state(&self, out: &mut Vec<u8>) {
+        let mut w = Writer::new(out);
+        w.u32(1);
+        for v in [self.time, self.x, self.v, self.k, self.d, self.u] {
+            w.f64(v);
+        }
+        w.u32(self.steps as u32);
+        w.bool(self.crash);
+        w.bool(self.fail);
+        w.str(&self.label);
+    }
+    fn load_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+        let mut r = Reader::new(bytes);
+        let version = r.u32("spring state version")?;
+        if version != 1 {
+            return Err(format!("spring state version {version} is not 1"));
+        }
+        let [time, x, v, k, d, u] = r.f64_array::<6>("spring reals")?;
+        let steps = r.u32("steps")? as i32;
+        let crash = r.bool("crash")?;
+        let fail = r.bool("fail")?;
+        let label = r.str("label")?.to_owned();
+        r.finish("spring state")?;
+        *self = Spring { resources: std::mem::take(&mut self.resources), time, x, v, k, d, u, steps, crash, fail, label };
         Ok(())
     }
 }

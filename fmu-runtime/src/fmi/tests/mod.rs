@@ -300,8 +300,6 @@ fn co_simulation_run() {
 
         // Unsupported capabilities say so.
         let mut size = 0;
-        assert_eq!(api::fmi2SerializedFMUstateSize::<Spring>(c, null_mut(), &mut size), fmi2Error);
-        assert!(log.last().contains("not supported by this FMU (capability flag canSerializeFMUstate=false)"));
         let order = 1;
         let mut v = 0.0;
         assert_eq!(api::fmi2GetRealOutputDerivatives::<Spring>(c, &X, 1, &order, &mut v), fmi2Error);
@@ -564,4 +562,282 @@ fn many_instances_are_independent() {
         api::fmi2FreeInstance::<Spring>(b);
         api::fmi2FreeInstance::<Spring>(null_mut());
     }
+}
+
+// ---------------------------------------------------------------------------
+// Serialized FMU states
+// ---------------------------------------------------------------------------
+
+fn get_state(c: fmi2Component) -> fmi2FMUstate {
+    let mut state: fmi2FMUstate = null_mut();
+    assert_eq!(unsafe { api::fmi2GetFMUstate::<Spring>(c, &mut state) }, fmi2OK);
+    state
+}
+
+fn free_state(c: fmi2Component, mut state: fmi2FMUstate) {
+    assert_eq!(unsafe { api::fmi2FreeFMUstate::<Spring>(c, &mut state) }, fmi2OK);
+}
+
+fn serialize(c: fmi2Component, state: fmi2FMUstate) -> Vec<u8> {
+    let mut size = 0;
+    assert_eq!(unsafe { api::fmi2SerializedFMUstateSize::<Spring>(c, state, &mut size) }, fmi2OK);
+    let mut buf = vec![0 as fmi2Byte; size];
+    assert_eq!(unsafe { api::fmi2SerializeFMUstate::<Spring>(c, state, buf.as_mut_ptr(), size) }, fmi2OK);
+    buf.into_iter().map(|b| b as u8).collect()
+}
+
+/// fmi2DeSerializeFMUstate into a new FMU state.
+fn deserialize(c: fmi2Component, bytes: &[u8]) -> Result<fmi2FMUstate, fmi2Status> {
+    let mut state: fmi2FMUstate = null_mut();
+    let status = unsafe { api::fmi2DeSerializeFMUstate::<Spring>(c, bytes.as_ptr().cast(), bytes.len(), &mut state) };
+    if status == fmi2OK {
+        assert!(!state.is_null());
+        Ok(state)
+    } else {
+        // nothing half-built is handed out
+        assert!(state.is_null());
+        Err(status)
+    }
+}
+
+/// Recompute the CRC after editing bytes, to reach the checks behind it.
+fn reseal(bytes: &mut [u8]) {
+    let end = bytes.len() - 4;
+    let crc = crc32fast::hash(&bytes[..end]);
+    bytes[end..].copy_from_slice(&crc.to_le_bytes());
+}
+
+fn model_state_of(c: fmi2Component) -> crate::fmi::state::ModelState {
+    unsafe { (*c.cast::<crate::fmi::instance::Instance<Spring>>()).state }
+}
+
+/// Steps `n` times by `h` from `t`, changing the input on the way; every x and v bit pattern.
+fn trajectory(c: fmi2Component, t: f64, h: f64, n: usize) -> Vec<u64> {
+    let mut out = Vec::new();
+    for i in 0..n {
+        assert_eq!(set_real(c, U, (i as f64 * 0.37).sin()), fmi2OK);
+        assert_eq!(unsafe { api::fmi2DoStep::<Spring>(c, t + i as f64 * h, h, fmi2False) }, fmi2OK);
+        out.push(get_real(c, X).to_bits());
+        out.push(get_real(c, V_).to_bits());
+    }
+    out
+}
+
+#[test]
+fn serialized_state_continues_bit_identically_in_a_fresh_instance() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2CoSimulation);
+    assert_eq!(set_real(c, K, 3.7), fmi2OK);
+    let label = [c"serialized #1".as_ptr()];
+    assert_eq!(unsafe { api::fmi2SetString::<Spring>(c, &LABEL, 1, label.as_ptr()) }, fmi2OK);
+    initialize(c, 0.25);
+    assert_eq!(set_real(c, D, 0.3), fmi2OK);
+    trajectory(c, 0.25, 0.1, 7);
+    let mut t = 0.0;
+    assert_eq!(unsafe { api::fmi2GetRealStatus::<Spring>(c, fmi2LastSuccessfulTime, &mut t) }, fmi2OK);
+    let state = get_state(c);
+    let bytes = serialize(c, state);
+    assert_eq!(&bytes[..8], b"FLEXSTAT");
+    let expected = trajectory(c, t, 0.1, 20);
+
+    // A fresh instance, not even initialised: deserialize, then set.
+    let fresh_log = Log::default();
+    let f = instantiate(&fresh_log, fmi2CoSimulation);
+    let restored = deserialize(f, &bytes).unwrap_or_else(|_| panic!("{}", fresh_log.last()));
+    assert_eq!(model_state_of(f), crate::fmi::state::ModelState::Instantiated, "deserialize alone applies nothing");
+    assert_eq!(unsafe { api::fmi2SetFMUstate::<Spring>(f, restored) }, fmi2OK);
+    assert_eq!(model_state_of(f), crate::fmi::state::ModelState::StepComplete);
+    let mut time = 0.0;
+    assert_eq!(unsafe { api::fmi2GetRealStatus::<Spring>(f, fmi2LastSuccessfulTime, &mut time) }, fmi2OK);
+    assert_eq!(time.to_bits(), t.to_bits());
+    assert_eq!(get_string(f, LABEL), "serialized #1");
+    assert_eq!(get_string(f, RESOURCES), "/tmp/spring/resources", "instantiate's, not the state's");
+    assert_eq!(trajectory(f, t, 0.1, 20), expected);
+    let mut n = 0;
+    assert_eq!(unsafe { api::fmi2GetInteger::<Spring>(f, &STEPS, 1, &mut n) }, fmi2OK);
+    assert_eq!(n, 27);
+    // Serializing the restored state gives the same bytes.
+    assert_eq!(serialize(f, restored), bytes);
+
+    // Deserializing into a state handed back overwrites it in place.
+    let mut reused = get_state(f);
+    let old = reused;
+    let status = unsafe { api::fmi2DeSerializeFMUstate::<Spring>(f, bytes.as_ptr().cast(), bytes.len(), &mut reused) };
+    assert_eq!(status, fmi2OK);
+    assert_eq!(reused, old);
+    assert_eq!(unsafe { api::fmi2SetFMUstate::<Spring>(f, reused) }, fmi2OK);
+    assert_eq!(trajectory(f, t, 0.1, 20), expected);
+
+    free_state(f, restored);
+    free_state(f, reused);
+    free_state(c, state);
+    unsafe {
+        api::fmi2FreeInstance::<Spring>(c);
+        api::fmi2FreeInstance::<Spring>(f);
+    }
+}
+
+#[test]
+fn serialized_state_restores_model_exchange_states_and_derivatives() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2ModelExchange);
+    assert_eq!(set_real(c, K, 2.5), fmi2OK);
+    initialize(c, 0.0);
+    unsafe {
+        assert_eq!(api::fmi2EnterContinuousTimeMode::<Spring>(c), fmi2OK);
+        assert_eq!(api::fmi2SetTime::<Spring>(c, 0.3), fmi2OK);
+        let x = [0.123456789, -0.987654321];
+        assert_eq!(api::fmi2SetContinuousStates::<Spring>(c, x.as_ptr(), 2), fmi2OK);
+    }
+    assert_eq!(set_real(c, U, 0.7), fmi2OK);
+    let state = get_state(c);
+    let bytes = serialize(c, state);
+    let derivatives = |c: fmi2Component| {
+        let (mut x, mut dx) = ([0.0; 2], [0.0; 2]);
+        unsafe {
+            assert_eq!(api::fmi2GetContinuousStates::<Spring>(c, x.as_mut_ptr(), 2), fmi2OK);
+            assert_eq!(api::fmi2GetDerivatives::<Spring>(c, dx.as_mut_ptr(), 2), fmi2OK);
+        }
+        [x, dx].concat().iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+    };
+    let expected = derivatives(c);
+
+    let f = instantiate(&log, fmi2ModelExchange);
+    let restored = deserialize(f, &bytes).unwrap();
+    assert_eq!(unsafe { api::fmi2SetFMUstate::<Spring>(f, restored) }, fmi2OK);
+    assert_eq!(model_state_of(f), crate::fmi::state::ModelState::ContinuousTimeMode);
+    assert_eq!(derivatives(f), expected);
+    free_state(f, restored);
+    free_state(c, state);
+    unsafe {
+        api::fmi2FreeInstance::<Spring>(c);
+        api::fmi2FreeInstance::<Spring>(f);
+    }
+}
+
+#[test]
+fn bad_serialized_states_are_refused_with_a_reason() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2CoSimulation);
+    initialize(c, 0.0);
+    run_cs(c, 0.0, 0.3, 0.1);
+    let state = get_state(c);
+    let bytes = serialize(c, state);
+    let refused = |bytes: &[u8], reason: &str| {
+        assert_eq!(deserialize(c, bytes), Err(fmi2Error), "accepted; expected: {reason}");
+        assert!(log.last().starts_with("fmi2DeSerializeFMUstate: "), "{}", log.last());
+        assert!(log.last().contains(reason), "{} (expected {reason})", log.last());
+    };
+
+    // Every truncation, and a byte too many.
+    for cut in 0..bytes.len() {
+        refused(&bytes[..cut], "truncated");
+    }
+    refused(&[bytes.as_slice(), &[0]].concat(), "header says");
+    // Any flipped bit is caught: in the header by its own check, behind it by the CRC.
+    for i in 0..bytes.len() {
+        for bit in [0x01, 0x80] {
+            let mut b = bytes.clone();
+            b[i] ^= bit;
+            assert_eq!(deserialize(c, &b), Err(fmi2Error), "flip at {i}");
+            if i >= 20 {
+                assert!(log.last().contains("CRC-32"), "flip at {i}: {}", log.last());
+            }
+        }
+    }
+    refused(b"PK\x03\x04 certainly not an FMU state", "not a serialized FMU state of this runtime");
+
+    let edited = |offset: usize, value: &[u8]| {
+        let mut b = bytes.clone();
+        b[offset..offset + value.len()].copy_from_slice(value);
+        reseal(&mut b);
+        b
+    };
+    refused(&edited(8, &2u32.to_le_bytes()), "written by a newer runtime (format version 2");
+    refused(&edited(8, &0u32.to_le_bytes()), "format version 0");
+    refused(&edited(12, &u64::MAX.to_le_bytes()), "impossible payload length");
+    refused(&edited(20, &[7]), "invalid interface code 7");
+    refused(&edited(21, &[99]), "invalid model state code 99");
+    refused(&edited(21, &[3]), "invalid model state code 3 for CoSimulation"); // ContinuousTimeMode
+    refused(&edited(21, &[10]), "invalid model state code 10"); // Fatal
+    refused(&edited(22, &[5]), "invalid fmi2DoStep status code 5");
+    refused(&edited(23, &[2]), "stop time defined is 2, not a boolean");
+    refused(&edited(53, b"9"), "belongs to the model with GUID {9c4e810f");
+    refused(&edited(48, &1000u32.to_le_bytes()), "truncated: GUID needs 1000 bytes");
+    let model_at = 60 + GUID.len();
+    refused(&edited(model_at - 8, &9999u64.to_le_bytes()), "model section length = 9999");
+    refused(&edited(model_at - 8, &1u64.to_le_bytes()), "unexpected bytes after the model section");
+    refused(&edited(model_at, &2u32.to_le_bytes()), "model state: spring state version 2 is not 1");
+    // crash flag (after version, 6 reals, steps) set to 2
+    refused(&edited(model_at + 4 + 48 + 4, &[2]), "model state: crash is 2, not a boolean");
+
+    // A Model Exchange state does not fit a Co-Simulation instance, nor the other way round.
+    let me = instantiate(&log, fmi2ModelExchange);
+    let me_state = get_state(me);
+    let me_bytes = serialize(me, me_state);
+    refused(&me_bytes, "is of a ModelExchange instance; this instance was instantiated for CoSimulation");
+    assert_eq!(unsafe { api::fmi2SetFMUstate::<Spring>(c, me_state) }, fmi2Error);
+    assert!(log.last().contains("ModelExchange instance"), "{}", log.last());
+
+    // Argument checks of the three functions.
+    unsafe {
+        let mut size = 0;
+        assert_eq!(api::fmi2SerializedFMUstateSize::<Spring>(c, null_mut(), &mut size), fmi2Error);
+        assert_eq!(log.last(), "fmi2SerializedFMUstateSize: argument FMUstate must not be NULL");
+        assert_eq!(api::fmi2SerializedFMUstateSize::<Spring>(c, state, null_mut()), fmi2Error);
+        let mut buf = vec![0 as fmi2Byte; bytes.len() + 1];
+        assert_eq!(api::fmi2SerializeFMUstate::<Spring>(c, state, buf.as_mut_ptr(), bytes.len() + 1), fmi2Error);
+        assert!(log.last().contains(&format!("size = {} but the serialized FMU state has {} bytes", bytes.len() + 1, bytes.len())), "{}", log.last());
+        assert!(buf.iter().all(|&b| b == 0), "nothing written on a refused call");
+        assert_eq!(api::fmi2SerializeFMUstate::<Spring>(c, state, buf.as_mut_ptr(), bytes.len() - 1), fmi2Error);
+        assert_eq!(api::fmi2SerializeFMUstate::<Spring>(c, state, null_mut(), bytes.len()), fmi2Error);
+        assert_eq!(log.last(), "fmi2SerializeFMUstate: argument serializedState[] must not be NULL");
+        assert_eq!(api::fmi2SerializeFMUstate::<Spring>(c, null_mut(), buf.as_mut_ptr(), bytes.len()), fmi2Error);
+        assert_eq!(api::fmi2DeSerializeFMUstate::<Spring>(c, null(), bytes.len(), &mut null_mut()), fmi2Error);
+        assert_eq!(api::fmi2DeSerializeFMUstate::<Spring>(c, bytes.as_ptr().cast(), bytes.len(), null_mut()), fmi2Error);
+        assert_eq!(log.last(), "fmi2DeSerializeFMUstate: argument FMUstate must not be NULL");
+
+        // A refused state leaves the handle handed in as it was.
+        let mut reused = get_state(c);
+        let before = serialize(c, reused);
+        assert_eq!(api::fmi2DeSerializeFMUstate::<Spring>(c, me_bytes.as_ptr().cast(), me_bytes.len(), &mut reused), fmi2Error);
+        assert_eq!(serialize(c, reused), before);
+        free_state(c, reused);
+    }
+
+    // Refused bytes are a usage error: the instance stays where it was and carries on.
+    assert_eq!(model_state_of(c), crate::fmi::state::ModelState::StepComplete);
+    let t = run_cs(c, 0.3, 0.6, 0.1);
+    assert!((t - 0.6).abs() < 1e-12);
+    free_state(c, state);
+    free_state(me, me_state);
+    unsafe {
+        api::fmi2FreeInstance::<Spring>(c);
+        api::fmi2FreeInstance::<Spring>(me);
+    }
+}
+
+/// After a model failure (Error state) a serialized state brings the instance back.
+#[test]
+fn serialized_state_recovers_from_the_error_state() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2CoSimulation);
+    initialize(c, 0.0);
+    run_cs(c, 0.0, 0.2, 0.1);
+    let state = get_state(c);
+    let bytes = serialize(c, state);
+    free_state(c, state);
+    assert_eq!(set_bool(c, FAIL, true), fmi2OK);
+    assert_eq!(unsafe { api::fmi2DoStep::<Spring>(c, 0.2, 0.1, 0) }, fmi2Error);
+    assert_eq!(model_state_of(c), crate::fmi::state::ModelState::Error);
+    // In Error, only the FMU state functions (and getters, reset, free) are allowed.
+    let restored = deserialize(c, &bytes).unwrap();
+    assert_eq!(unsafe { api::fmi2SetFMUstate::<Spring>(c, restored) }, fmi2OK);
+    assert_eq!(model_state_of(c), crate::fmi::state::ModelState::StepComplete);
+    let mut b = fmi2True;
+    assert_eq!(unsafe { api::fmi2GetBoolean::<Spring>(c, &FAIL, 1, &mut b) }, fmi2OK);
+    assert_eq!(b, fmi2False);
+    run_cs(c, 0.2, 0.5, 0.1);
+    free_state(c, restored);
+    unsafe { api::fmi2FreeInstance::<Spring>(c) };
 }
