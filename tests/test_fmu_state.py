@@ -202,3 +202,29 @@ def test_bad_bytes_are_refused_and_the_instance_keeps_working(cases):
         a.close()
         other.close()
         me.close()
+
+
+@pytest.mark.parametrize("name", ["beam", "t-square"])
+def test_pending_input_derivatives_travel_with_the_state(cases, name):
+    """Input derivatives set for the next step are part of the state: saved between
+    fmi2SetRealInputDerivatives and fmi2DoStep, restored in a fresh instance, the step is the same."""
+    path, inputs, start = cases[name]
+    a = Fmu(path, "CoSimulation")
+    b = Fmu(path, "CoSimulation")
+    try:
+        a.set(**start)
+        a.initialize()
+        t, _ = run_cs(a, inputs, 0.0, 5)
+        flange = [v.name for v in a.md.modelVariables if v.causality == "input" and v.name.endswith(".f[3]")][0]
+        a.fmu.setRealInputDerivatives([a.vr[flange]], [1], [250.0])
+        blob = serialize(a)
+        a.fmu.doStep(t, H)
+        expected = a.get(*recorded(a))
+        restore(b, blob)
+        b.fmu.doStep(t, H)
+        got = b.get(*recorded(b))
+        assert np.array_equal(bits([got]), bits([expected]))
+        assert b.get(flange)[0] == a.get(flange)[0] != inputs(t - H).get(flange, 0.0)  # ended interpolated
+    finally:
+        a.close()
+        b.close()
