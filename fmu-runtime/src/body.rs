@@ -64,6 +64,9 @@ struct Evaluation {
     valid: bool,
     qdd: Vec<f64>,
     flanges: Vec<FlangeMotion>,
+    /// The mount reaction is evaluated on demand: hosts that read only flange outputs skip its
+    /// n^2 terms.
+    reaction_valid: bool,
     mount_force: Vec3,
     mount_torque: Vec3,
 }
@@ -201,6 +204,7 @@ impl FlexibleBody {
                 valid: false,
                 qdd: vec![0.0; n],
                 flanges: vec![FlangeMotion::default(); nf],
+                reaction_valid: false,
                 mount_force: [0.0; 3],
                 mount_torque: [0.0; 3],
             },
@@ -520,8 +524,6 @@ impl FlexibleBody {
         }
         let m = &self.mount;
         let a = &self.rot;
-        let mut torque_b = [0.0; 3];
-        let mut force = [0.0; 3];
         for (i, flange) in self.body.flanges.iter().enumerate() {
             let row = |r: usize, x: &[f64]| -> f64 {
                 flange.shapes[r * n..(r + 1) * n].iter().zip(x).map(|(s, v)| s * v).sum()
@@ -550,6 +552,26 @@ impl FlexibleBody {
                 ),
             );
             out.z = k3::add(k3::add(m.z, k3::cross(m.w, phid_w)), k3::mul(a, phidd));
+        }
+        self.eval.reaction_valid = false;
+        self.eval.valid = true;
+        Ok(())
+    }
+
+    /// The mount reaction at the last evaluation (evaluate first).
+    fn evaluate_reaction(&mut self) {
+        if self.eval.reaction_valid {
+            return;
+        }
+        let n = self.q.len();
+        let a = &self.rot;
+        let mut torque_b = [0.0; 3];
+        let mut force = [0.0; 3];
+        for (i, flange) in self.body.flanges.iter().enumerate() {
+            let row = |r: usize, x: &[f64]| -> f64 {
+                flange.shapes[r * n..(r + 1) * n].iter().zip(x).map(|(s, v)| s * v).sum()
+            };
+            let u = [row(0, &self.q), row(1, &self.q), row(2, &self.q)];
             // loads the host applies, moved to the mount point, in B
             let load = &self.loads[i];
             let f_b = k3::mul_t(a, load.f);
@@ -613,8 +635,7 @@ impl FlexibleBody {
         inertial_torque_b = k3::add(inertial_torque_b, k3::mul(&j_rate, w));
         inertial_torque_b = k3::add(inertial_torque_b, k3::cross(w, cr_qd));
         self.eval.mount_torque = k3::mul(a, k3::sub(inertial_torque_b, torque_b));
-        self.eval.valid = true;
-        Ok(())
+        self.eval.reaction_valid = true;
     }
 
     /// Accelerations of a free-floating body: the frame's translational motion is the centre of
@@ -791,6 +812,7 @@ impl FlexibleBody {
     /// Force and torque (about the mount point) the mount applies to the body, world frame.
     pub fn mount_reaction(&mut self) -> Result<(Vec3, Vec3), String> {
         self.evaluate()?;
+        self.evaluate_reaction();
         Ok((self.eval.mount_force, self.eval.mount_torque))
     }
 
