@@ -137,15 +137,14 @@ pub fn select_flanges(spec: &Spec, file: &Path, part: &Part) -> Result<Vec<Flang
         let field = format!("flanges[{k}].nodes");
         let slaves = select(spec, &fs.nodes, part, size).map_err(|m| BuildError::input(file, format!("{field}.node_set"), m))?;
         if slaves.is_empty() {
+            let (lo, hi) = bounds(mesh);
             return Err(BuildError::input(
                 file,
                 field,
                 format!(
                     "flange \"{}\" selects no node of the part (check the set, face, plane, box, sphere or cylinder and its size; \
                      the part spans {:?} to {:?})",
-                    fs.name,
-                    bounds(mesh).0,
-                    bounds(mesh).1
+                    fs.name, lo, hi
                 ),
             ));
         }

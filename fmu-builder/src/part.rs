@@ -117,25 +117,25 @@ pub fn element_kind(t: ElementType) -> ElementKind {
     }
 }
 
-/// Nodes referenced by no element carry no stiffness (a singular model): they are dropped, and
-/// node sets follow the renumbering.
-fn compact(imported: ImportedMesh) -> (Vec<[f64; 3]>, Vec<Option<usize>>, ImportedMesh) {
-    let mut new_index = vec![None; imported.nodes.len()];
+/// Nodes referenced by no element carry no stiffness (a singular model): they are dropped.
+/// Returns the kept coordinates and each file node's new index.
+fn compact(imported: &ImportedMesh) -> (Vec<[f64; 3]>, Vec<Option<usize>>) {
+    let mut used = vec![false; imported.nodes.len()];
+    for &n in imported.connectivity.iter().flatten() {
+        used[n] = true;
+    }
     let mut nodes = Vec::new();
-    for conn in &imported.connectivity {
-        for &n in conn {
-            if new_index[n].is_none() {
-                new_index[n] = Some(usize::MAX);
-            }
-        }
-    }
-    for (i, slot) in new_index.iter_mut().enumerate() {
-        if slot.is_some() {
-            *slot = Some(nodes.len());
-            nodes.push(imported.nodes[i]);
-        }
-    }
-    (nodes, new_index, imported)
+    let new_index = used
+        .iter()
+        .zip(&imported.nodes)
+        .map(|(&u, p)| {
+            u.then(|| {
+                nodes.push(*p);
+                nodes.len() - 1
+            })
+        })
+        .collect();
+    (nodes, new_index)
 }
 
 fn mesh_file_part(spec: &Spec, file: &Path, mesh_path: &Path) -> Result<Part> {
@@ -188,14 +188,13 @@ fn mesh_file_part(spec: &Spec, file: &Path, mesh_path: &Path) -> Result<Part> {
         element_material.push(materials.len());
         materials.push(m);
     }
-    let element_types = imported.element_types.clone();
-    let (nodes, new_index, imported) = compact(imported);
+    let (nodes, new_index) = compact(&imported);
     let mut mesh = Mesh::nodes_only(nodes);
     let mut conn = Vec::with_capacity(20);
     for (e, c) in imported.connectivity.iter().enumerate() {
         conn.clear();
         conn.extend(c.iter().map(|&n| new_index[n].unwrap_or(0)));
-        mesh.push_element(element_kind(element_types[e]), &conn, element_material[e]);
+        mesh.push_element(element_kind(imported.element_types[e]), &conn, element_material[e]);
     }
     let node_sets = imported
         .node_sets
