@@ -11,31 +11,39 @@
 use crate::kinematics::{self as k3, Mat3, Vec3};
 use crate::propagator::ModalPropagator;
 use crate::reduced::ReducedBody;
+use crate::scalar::{Dual, Scalar, c};
 use std::sync::Arc;
 
 /// Prescribed motion of the mount flange, resolved in the world frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct MountMotion {
-    pub r: Vec3,
+pub struct MountMotion<T = f64> {
+    pub r: Vec3<T>,
     /// Rotation B -> world (columns: body axes in world).
-    pub rot: Mat3,
-    pub v: Vec3,
-    pub w: Vec3,
-    pub a: Vec3,
-    pub z: Vec3,
+    pub rot: Mat3<T>,
+    pub v: Vec3<T>,
+    pub w: Vec3<T>,
+    pub a: Vec3<T>,
+    pub z: Vec3<T>,
 }
 
-impl Default for MountMotion {
+impl<T: Copy> MountMotion<T> {
+    pub fn map<U>(&self, f: impl Fn(T) -> U) -> MountMotion<U> {
+        MountMotion { r: self.r.map(&f), rot: self.rot.map(&f), v: self.v.map(&f), w: self.w.map(&f), a: self.a.map(&f), z: self.z.map(&f) }
+    }
+}
+
+impl<T: Scalar> Default for MountMotion<T> {
     fn default() -> Self {
-        Self { r: [0.0; 3], rot: k3::IDENTITY, v: [0.0; 3], w: [0.0; 3], a: [0.0; 3], z: [0.0; 3] }
+        let o = [T::zero(); 3];
+        Self { r: o, rot: k3::IDENTITY.map(c), v: o, w: o, a: o, z: o }
     }
 }
 
 /// Force and torque the host applies at a force flange, world frame; torque about the flange.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct FlangeLoad {
-    pub f: Vec3,
-    pub t: Vec3,
+pub struct FlangeLoad<T = f64> {
+    pub f: Vec3<T>,
+    pub t: Vec3<T>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -47,43 +55,50 @@ pub struct Parameters {
 
 /// Motion of a force flange, world frame except `u`, `phi` (deformation in B).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct FlangeMotion {
-    pub r: Vec3,
-    pub rot: Mat3,
-    pub v: Vec3,
-    pub w: Vec3,
-    pub a: Vec3,
-    pub z: Vec3,
-    pub u: Vec3,
-    pub phi: Vec3,
+pub struct FlangeMotion<T = f64> {
+    pub r: Vec3<T>,
+    pub rot: Mat3<T>,
+    pub v: Vec3<T>,
+    pub w: Vec3<T>,
+    pub a: Vec3<T>,
+    pub z: Vec3<T>,
+    pub u: Vec3<T>,
+    pub phi: Vec3<T>,
 }
 
 /// Everything that follows from state and inputs at one instant.
 #[derive(Debug, Clone, Default)]
-struct Evaluation {
+struct Evaluation<T> {
     valid: bool,
-    qdd: Vec<f64>,
-    flanges: Vec<FlangeMotion>,
+    qdd: Vec<T>,
+    flanges: Vec<FlangeMotion<T>>,
     /// The mount reaction is evaluated on demand: hosts that read only flange outputs skip its
     /// n^2 terms.
     reaction_valid: bool,
-    mount_force: Vec3,
-    mount_torque: Vec3,
+    mount_force: Vec3<T>,
+    mount_torque: Vec3<T>,
 }
 
 /// Rigid-body state of a free-floating body: centre-of-mass position and velocity (world), unit
 /// quaternion (w, x, y, z) of the body frame, angular velocity in the body frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FrameState {
-    pub r: Vec3,
-    pub quat: [f64; 4],
-    pub v: Vec3,
-    pub w_body: Vec3,
+pub struct FrameState<T = f64> {
+    pub r: Vec3<T>,
+    pub quat: [T; 4],
+    pub v: Vec3<T>,
+    pub w_body: Vec3<T>,
 }
 
-impl Default for FrameState {
+impl<T: Copy> FrameState<T> {
+    pub fn map<U>(&self, f: impl Fn(T) -> U) -> FrameState<U> {
+        FrameState { r: self.r.map(&f), quat: self.quat.map(&f), v: self.v.map(&f), w_body: self.w_body.map(&f) }
+    }
+}
+
+impl<T: Scalar> Default for FrameState<T> {
     fn default() -> Self {
-        Self { r: [0.0; 3], quat: [1.0, 0.0, 0.0, 0.0], v: [0.0; 3], w_body: [0.0; 3] }
+        let o = [T::zero(); 3];
+        Self { r: o, quat: [c(1.0), T::zero(), T::zero(), T::zero()], v: o, w_body: o }
     }
 }
 
@@ -99,10 +114,10 @@ pub struct InitialFrame {
 
 /// Energy and momenta of a free-floating body (world frame; angular momentum about the origin).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Invariants {
-    pub energy: f64,
-    pub momentum: Vec3,
-    pub angular_momentum: Vec3,
+pub struct Invariants<T = f64> {
+    pub energy: T,
+    pub momentum: Vec3<T>,
+    pub angular_momentum: Vec3<T>,
 }
 
 /// Workspace of a free-floating body's step: the substep's start state and its two coupling
@@ -134,37 +149,40 @@ pub struct BodyState {
 
 /// Terms that couple the modes, for the present inputs: q'' = ... - C_d q' - C_k q.
 #[derive(Debug, Clone, Default)]
-struct Coupling {
+struct Coupling<T> {
     valid: bool,
     active: bool,
-    c_d: Vec<f64>,
-    c_k: Vec<f64>,
+    c_d: Vec<T>,
+    c_k: Vec<T>,
     /// Body-frame angular velocity, angular acceleration and a_B of the present inputs.
-    w: Vec3,
-    z: Vec3,
-    a: Vec3,
+    w: Vec3<T>,
+    z: Vec3<T>,
+    a: Vec3<T>,
 }
 
+/// The body's equations over the scalar `T`: `f64` for the model, [`Dual`] for the exact
+/// directional derivatives of everything it evaluates (see [`FlexibleBody::to_dual`]). Stepping
+/// is `f64` only.
 #[derive(Debug, Clone)]
-pub struct FlexibleBody {
+pub struct FlexibleBody<T = f64> {
     body: Arc<ReducedBody>,
-    mount: MountMotion,
-    loads: Vec<FlangeLoad>,
+    mount: MountMotion<T>,
+    loads: Vec<FlangeLoad<T>>,
     params: Parameters,
-    q: Vec<f64>,
-    qd: Vec<f64>,
+    q: Vec<T>,
+    qd: Vec<T>,
     /// Modal load p, workspace.
-    load: Vec<f64>,
-    eval: Evaluation,
-    coupling: Coupling,
+    load: Vec<T>,
+    eval: Evaluation<T>,
+    coupling: Coupling<T>,
     /// The mount orientation in use: the input made exactly orthonormal.
-    rot: Mat3,
+    rot: Mat3<T>,
     /// Free-floating bodies only: the rigid-body state, its initial value and its rates.
-    frame: Option<FrameState>,
+    frame: Option<FrameState<T>>,
     pub initial_frame: InitialFrame,
-    frame_rate: FrameState,
+    frame_rate: FrameState<T>,
     /// 3 x n workspace: C_r(q) = C_r + [G_a q]^T
-    cr_q: Vec<f64>,
+    cr_q: Vec<T>,
     /// q' and q workspace for the coupled load
     scratch: Vec<f64>,
     free_work: FreeWork,
@@ -227,8 +245,41 @@ impl FlexibleBody {
         }
     }
 
-    pub fn reduced(&self) -> &ReducedBody {
-        &self.body
+    /// This body in dual numbers at the present state and inputs, every derivative part zero.
+    /// Seed a direction in the `.d` parts (through `mount_mut`, `load_mut`, `q_mut`, ...) and
+    /// evaluate: every result's `.d` is then its exact directional derivative.
+    pub fn to_dual(&self) -> FlexibleBody<Dual> {
+        let n = self.n_modes();
+        let zeros = |len: usize| vec![Dual::default(); len];
+        FlexibleBody {
+            body: Arc::clone(&self.body),
+            mount: self.mount.map(Dual::from),
+            loads: self.loads.iter().map(|l| FlangeLoad { f: l.f.map(Dual::from), t: l.t.map(Dual::from) }).collect(),
+            params: self.params,
+            q: self.q.iter().map(|&x| Dual::from(x)).collect(),
+            qd: self.qd.iter().map(|&x| Dual::from(x)).collect(),
+            load: zeros(n),
+            eval: Evaluation {
+                valid: false,
+                qdd: zeros(n),
+                flanges: vec![FlangeMotion::default(); self.eval.flanges.len()],
+                reaction_valid: false,
+                mount_force: [Dual::default(); 3],
+                mount_torque: [Dual::default(); 3],
+            },
+            coupling: Coupling { c_d: zeros(n * n), c_k: zeros(n * n), ..Coupling::default() },
+            rot: k3::IDENTITY.map(Dual::from),
+            frame: self.frame.map(|f| f.map(Dual::from)),
+            initial_frame: self.initial_frame,
+            frame_rate: FrameState::default(),
+            cr_q: zeros(3 * n),
+            // stepping is f64 only
+            scratch: Vec::new(),
+            free_work: FreeWork::default(),
+            propagator: ModalPropagator::with_modes(0),
+            rates: self.rates.clone(),
+            load_rate: Vec::new(),
+        }
     }
 
     pub fn state(&self) -> BodyState {
@@ -277,37 +328,6 @@ impl FlexibleBody {
         b.rates = state.rates;
         Ok(b)
     }
-    pub fn n_modes(&self) -> usize {
-        self.q.len()
-    }
-    pub fn q(&self) -> &[f64] {
-        &self.q
-    }
-    pub fn qd(&self) -> &[f64] {
-        &self.qd
-    }
-    pub fn mount(&self) -> &MountMotion {
-        &self.mount
-    }
-    pub fn loads(&self) -> &[FlangeLoad] {
-        &self.loads
-    }
-    pub fn parameters(&self) -> &Parameters {
-        &self.params
-    }
-
-    pub fn frame(&self) -> Option<&FrameState> {
-        self.frame.as_ref()
-    }
-    pub fn frame_mut(&mut self) -> Option<&mut FrameState> {
-        self.eval.valid = false;
-        self.frame.as_mut()
-    }
-    /// Rates of the frame state (d/dt r, quaternion, v, body angular velocity).
-    pub fn frame_rate(&mut self) -> Result<FrameState, String> {
-        self.evaluate()?;
-        Ok(self.frame_rate)
-    }
     /// Put a free-floating body at its initial pose and velocity.
     pub fn start_frame(&mut self) {
         if let Some(f) = self.frame.as_mut() {
@@ -318,16 +338,6 @@ impl FlexibleBody {
         }
     }
 
-    pub fn mount_mut(&mut self) -> &mut MountMotion {
-        self.eval.valid = false;
-        self.coupling.valid = false;
-        &mut self.mount
-    }
-    pub fn load_mut(&mut self, flange: usize) -> &mut FlangeLoad {
-        self.eval.valid = false;
-        self.coupling.valid = false;
-        &mut self.loads[flange]
-    }
     /// Rates of the mount inputs over the next step (its rotation matrix's rate entry by entry).
     pub fn mount_rate_mut(&mut self) -> &mut MountMotion {
         self.rates.any = true;
@@ -341,35 +351,86 @@ impl FlexibleBody {
     pub fn input_rates(&self) -> &InputRates {
         &self.rates
     }
+}
+
+impl<T: Scalar> FlexibleBody<T> {
+    pub fn reduced(&self) -> &ReducedBody {
+        &self.body
+    }
+    pub fn n_modes(&self) -> usize {
+        self.q.len()
+    }
+    pub fn q(&self) -> &[T] {
+        &self.q
+    }
+    pub fn qd(&self) -> &[T] {
+        &self.qd
+    }
+    pub fn mount(&self) -> &MountMotion<T> {
+        &self.mount
+    }
+    pub fn loads(&self) -> &[FlangeLoad<T>] {
+        &self.loads
+    }
+    pub fn parameters(&self) -> &Parameters {
+        &self.params
+    }
+
+    pub fn frame(&self) -> Option<&FrameState<T>> {
+        self.frame.as_ref()
+    }
+    pub fn frame_mut(&mut self) -> Option<&mut FrameState<T>> {
+        self.eval.valid = false;
+        self.frame.as_mut()
+    }
+    /// Rates of the frame state (d/dt r, quaternion, v, body angular velocity).
+    pub fn frame_rate(&mut self) -> Result<FrameState<T>, String> {
+        self.evaluate()?;
+        Ok(self.frame_rate)
+    }
+
+    pub fn mount_mut(&mut self) -> &mut MountMotion<T> {
+        self.eval.valid = false;
+        self.coupling.valid = false;
+        &mut self.mount
+    }
+    pub fn load_mut(&mut self, flange: usize) -> &mut FlangeLoad<T> {
+        self.eval.valid = false;
+        self.coupling.valid = false;
+        &mut self.loads[flange]
+    }
     pub fn parameters_mut(&mut self) -> &mut Parameters {
         self.eval.valid = false;
         self.coupling.valid = false;
         &mut self.params
     }
-    pub fn set_state(&mut self, q: &[f64], qd: &[f64]) {
+    pub fn set_state(&mut self, q: &[T], qd: &[T]) {
         self.q.copy_from_slice(q);
         self.qd.copy_from_slice(qd);
         self.eval.valid = false;
     }
-    pub fn q_mut(&mut self) -> &mut [f64] {
+    pub fn q_mut(&mut self) -> &mut [T] {
         self.eval.valid = false;
         &mut self.q
     }
-    pub fn qd_mut(&mut self) -> &mut [f64] {
+    pub fn qd_mut(&mut self) -> &mut [T] {
         self.eval.valid = false;
         &mut self.qd
     }
 
     fn check_inputs(&mut self) -> Result<(), String> {
-        let defect = k3::rotation_defect(&self.mount.rot);
+        let defect = k3::rotation_defect(&self.mount.rot.map(T::value));
         if !(defect <= ROTATION_TOLERANCE) {
             return Err(format!(
                 "{}.R is not a proper rotation matrix (|R^T R - I| = {defect:.3e}, det must be +1)",
                 self.body.mount
             ));
         }
-        self.rot = if defect > 1e-14 { k3::nearest_rotation(&self.mount.rot) } else { self.mount.rot };
-        if self.body.rotation.is_none() && (self.mount.w != [0.0; 3] || self.mount.z != [0.0; 3]) {
+        // a derivative goes through the projection even at an exact rotation: a change of R
+        // off the rotations moves the body only by its rotational part
+        self.rot = if defect > 1e-14 || T::CARRIES_DERIVATIVE { k3::nearest_rotation(&self.mount.rot) } else { self.mount.rot };
+        let spinning = self.mount.w.iter().chain(&self.mount.z).any(|x| x.value() != 0.0);
+        if self.body.rotation.is_none() && spinning {
             return Err(format!(
                 "{m}.w and {m}.z must be zero: this FMU was built for a scene without rotation \
                  (declare \"rotation\" in the input's scene.loads to model a rotating mount)",
@@ -379,6 +440,10 @@ impl FlexibleBody {
         Ok(())
     }
 
+    fn gravity(&self) -> Vec3<T> {
+        self.params.g.map(c)
+    }
+
     /// Gather C_d = 2 sum W_a G_a and C_k = sum Z_a G_a + sum W_a W_b O_ab + K_G for the inputs.
     fn prepare_coupling(&mut self) {
         if self.coupling.valid {
@@ -386,25 +451,26 @@ impl FlexibleBody {
         }
         let n = self.q.len();
         let nn = n * n;
+        let g = self.gravity();
         let a = &self.mount.rot;
         let c = &mut self.coupling;
         c.w = k3::mul_t(a, self.mount.w);
         c.z = k3::mul_t(a, self.mount.z);
-        c.a = k3::mul_t(a, k3::sub(self.mount.a, self.params.g));
-        c.c_d.fill(0.0);
-        c.c_k.fill(0.0);
+        c.a = k3::mul_t(a, k3::sub(self.mount.a, g));
+        c.c_d.fill(T::zero());
+        c.c_k.fill(T::zero());
         let mut active = false;
-        let mut add = |target: &mut Vec<f64>, scale: f64, block: &[f64]| {
-            if scale != 0.0 {
+        let mut add = |target: &mut Vec<T>, scale: T, block: &[f64]| {
+            if !scale.is_zero() {
                 active = true;
                 for (t, b) in target.iter_mut().zip(block) {
-                    *t += scale * b;
+                    *t += scale * *b;
                 }
             }
         };
         if let Some(rot) = &self.body.rotation {
             for i in 0..3 {
-                add(&mut c.c_d, 2.0 * c.w[i], &rot.g[i * nn..(i + 1) * nn]);
+                add(&mut c.c_d, c.w[i] * 2.0, &rot.g[i * nn..(i + 1) * nn]);
                 add(&mut c.c_k, c.z[i], &rot.g[i * nn..(i + 1) * nn]);
                 for j in 0..3 {
                     add(&mut c.c_k, c.w[i] * c.w[j], &rot.o_mat[(3 * i + j) * nn..(3 * i + j + 1) * nn]);
@@ -445,11 +511,11 @@ impl FlexibleBody {
     }
 
     /// (C_d q' + C_k q)_i: the coupling terms' force on mode i.
-    fn coupling_force(&self, i: usize) -> f64 {
+    fn coupling_force(&self, i: usize) -> T {
         let n = self.q.len();
         let c = &self.coupling;
         let (rd, rk) = (&c.c_d[i * n..(i + 1) * n], &c.c_k[i * n..(i + 1) * n]);
-        let mut s = 0.0;
+        let mut s = T::zero();
         for j in 0..n {
             s += rd[j] * self.qd[j] + rk[j] * self.q[j];
         }
@@ -459,16 +525,17 @@ impl FlexibleBody {
     /// p = -C_t^T a_B + sum_k Phi_k^T [A^T f_k; A^T t_k]
     fn modal_load(&mut self) {
         let a = &self.rot;
-        let a_b = k3::mul_t(a, k3::sub(self.mount.a, self.params.g));
+        let a_b = k3::mul_t(a, k3::sub(self.mount.a, self.params.g.map(c)));
         let n = self.q.len();
+        let ct = &self.body.c_t;
         for j in 0..n {
-            self.load[j] = -(self.body.c_t[j] * a_b[0] + self.body.c_t[n + j] * a_b[1] + self.body.c_t[2 * n + j] * a_b[2]);
+            self.load[j] = -(a_b[0] * ct[j] + a_b[1] * ct[n + j] + a_b[2] * ct[2 * n + j]);
         }
         if let Some(rot) = &self.body.rotation {
             let w = k3::mul_t(a, self.mount.w);
             let z = k3::mul_t(a, self.mount.z);
             for i in 0..3 {
-                if z[i] != 0.0 {
+                if !z[i].is_zero() {
                     let c_a = &self.body.c_r[i * n..(i + 1) * n];
                     for j in 0..n {
                         self.load[j] -= z[i] * c_a[j];
@@ -476,7 +543,7 @@ impl FlexibleBody {
                 }
                 for k in 0..3 {
                     let ww = w[i] * w[k];
-                    if ww != 0.0 {
+                    if !ww.is_zero() {
                         let o = &rot.o_vec[(3 * i + k) * n..(3 * i + k + 1) * n];
                         for j in 0..n {
                             self.load[j] -= ww * o[j];
@@ -490,10 +557,10 @@ impl FlexibleBody {
             let t_b = k3::mul_t(a, load.t);
             let wrench = [f_b[0], f_b[1], f_b[2], t_b[0], t_b[1], t_b[2]];
             for (row, w) in wrench.iter().enumerate() {
-                if *w != 0.0 {
+                if !w.is_zero() {
                     let shape = &flange.shapes[row * n..(row + 1) * n];
                     for j in 0..n {
-                        self.load[j] += shape[j] * w;
+                        self.load[j] += *w * shape[j];
                     }
                 }
             }
@@ -514,27 +581,26 @@ impl FlexibleBody {
             let (alpha, beta) = (self.params.alpha, self.params.beta);
             for j in 0..n {
                 let w2 = self.body.omega[j] * self.body.omega[j];
-                self.eval.qdd[j] = self.load[j] - (alpha + beta * w2 + self.body.modal_damping[j]) * self.qd[j] - w2 * self.q[j];
+                self.eval.qdd[j] = self.load[j] - self.qd[j] * (alpha + beta * w2 + self.body.modal_damping[j]) - self.q[j] * w2;
             }
         }
         if self.coupling.active && self.frame.is_none() {
             for i in 0..n {
-                self.eval.qdd[i] -= self.coupling_force(i);
+                let f = self.coupling_force(i);
+                self.eval.qdd[i] -= f;
             }
         }
         let m = &self.mount;
         let a = &self.rot;
         for (i, flange) in self.body.flanges.iter().enumerate() {
-            let row = |r: usize, x: &[f64]| -> f64 {
-                flange.shapes[r * n..(r + 1) * n].iter().zip(x).map(|(s, v)| s * v).sum()
-            };
+            let row = |r: usize, x: &[T]| shape_dot(&flange.shapes[r * n..(r + 1) * n], x);
             let u = [row(0, &self.q), row(1, &self.q), row(2, &self.q)];
             let phi = [row(3, &self.q), row(4, &self.q), row(5, &self.q)];
             let ud = [row(0, &self.qd), row(1, &self.qd), row(2, &self.qd)];
             let phid = [row(3, &self.qd), row(4, &self.qd), row(5, &self.qd)];
             let udd = [row(0, &self.eval.qdd), row(1, &self.eval.qdd), row(2, &self.eval.qdd)];
             let phidd = [row(3, &self.eval.qdd), row(4, &self.eval.qdd), row(5, &self.eval.qdd)];
-            let rho = k3::mul(a, k3::add(flange.position, u));
+            let rho = k3::mul(a, k3::add(flange.position.map(c), u));
             let ud_w = k3::mul(a, ud);
             let phid_w = k3::mul(a, phid);
             let out = &mut self.eval.flanges[i];
@@ -547,7 +613,7 @@ impl FlexibleBody {
             out.a = k3::add(
                 k3::add(m.a, k3::cross(m.z, rho)),
                 k3::add(
-                    k3::add(k3::cross(m.w, k3::cross(m.w, rho)), k3::scale(2.0, k3::cross(m.w, ud_w))),
+                    k3::add(k3::cross(m.w, k3::cross(m.w, rho)), k3::scale(c(2.0), k3::cross(m.w, ud_w))),
                     k3::mul(a, udd),
                 ),
             );
@@ -565,51 +631,46 @@ impl FlexibleBody {
         }
         let n = self.q.len();
         let a = &self.rot;
-        let mut torque_b = [0.0; 3];
-        let mut force = [0.0; 3];
+        let mut torque_b = [T::zero(); 3];
+        let mut force = [T::zero(); 3];
         for (i, flange) in self.body.flanges.iter().enumerate() {
-            let row = |r: usize, x: &[f64]| -> f64 {
-                flange.shapes[r * n..(r + 1) * n].iter().zip(x).map(|(s, v)| s * v).sum()
-            };
-            let u = [row(0, &self.q), row(1, &self.q), row(2, &self.q)];
+            let u: Vec3<T> = [0, 1, 2].map(|r| shape_dot(&flange.shapes[r * n..(r + 1) * n], &self.q));
             // loads the host applies, moved to the mount point, in B
             let load = &self.loads[i];
             let f_b = k3::mul_t(a, load.f);
             force = k3::add(force, load.f);
-            torque_b = k3::add(torque_b, k3::add(k3::cross(k3::add(flange.position, u), f_b), k3::mul_t(a, load.t)));
+            torque_b = k3::add(torque_b, k3::add(k3::cross(k3::add(flange.position.map(c), u), f_b), k3::mul_t(a, load.t)));
         }
         // Momentum balance of the whole body about the mount point, in B: the mount supplies what
         // the inertia needs beyond gravity and the flange loads (terms of second order in q, q'
         // dropped, except where they come for free).
         let (w, z, a_b) = (self.coupling.w, self.coupling.z, self.coupling.a);
         let b = &*self.body;
-        let row3 = |mat: &[f64], x: &[f64]| -> Vec3 {
-            [0, 1, 2].map(|r| mat[r * n..(r + 1) * n].iter().zip(x).map(|(s, v)| s * v).sum())
-        };
+        let row3 = |mat: &[f64], x: &[T]| -> Vec3<T> { [0, 1, 2].map(|r| shape_dot(&mat[r * n..(r + 1) * n], x)) };
         let qdd = &self.eval.qdd;
         let ct_qdd = row3(&b.c_t, qdd);
         let ct_qd = row3(&b.c_t, &self.qd);
-        let first_moment = k3::add(b.first_moment, row3(&b.c_t, &self.q));
-        let mut inertial_force_b = k3::add(k3::scale(b.mass, a_b), ct_qdd);
+        let first_moment = k3::add(b.first_moment.map(c), row3(&b.c_t, &self.q));
+        let mut inertial_force_b = k3::add(k3::scale(c(b.mass), a_b), ct_qdd);
         inertial_force_b = k3::add(inertial_force_b, k3::cross(z, first_moment));
         inertial_force_b = k3::add(inertial_force_b, k3::cross(w, k3::cross(w, first_moment)));
-        inertial_force_b = k3::add(inertial_force_b, k3::scale(2.0, k3::cross(w, ct_qd)));
+        inertial_force_b = k3::add(inertial_force_b, k3::scale(c(2.0), k3::cross(w, ct_qd)));
         self.eval.mount_force = k3::sub(k3::mul(a, inertial_force_b), force);
 
         // J(q) = J0 + J1(q), J1_ab = -(o_ab + o_ba) . q;  C_r(q) v = C_r v + [(G_a q) . v]_a
-        let mut j = b.inertia;
-        let mut j_rate = [0.0; 9];
+        let mut j: Mat3<T> = b.inertia.map(c);
+        let mut j_rate = [T::zero(); 9];
         let mut cr_qdd = row3(&b.c_r, qdd);
         let mut cr_qd = row3(&b.c_r, &self.qd);
         if let Some(rot) = &b.rotation {
             for p_ in 0..3 {
                 for q_ in 0..3 {
                     let (o_pq, o_qp) = (&rot.o_vec[(3 * p_ + q_) * n..][..n], &rot.o_vec[(3 * q_ + p_) * n..][..n]);
-                    let mut s = 0.0;
-                    let mut sd = 0.0;
+                    let mut s = T::zero();
+                    let mut sd = T::zero();
                     for k in 0..n {
-                        s += (o_pq[k] + o_qp[k]) * self.q[k];
-                        sd += (o_pq[k] + o_qp[k]) * self.qd[k];
+                        s += self.q[k] * (o_pq[k] + o_qp[k]);
+                        sd += self.qd[k] * (o_pq[k] + o_qp[k]);
                     }
                     j[3 * p_ + q_] -= s;
                     j_rate[3 * p_ + q_] = -sd;
@@ -618,9 +679,9 @@ impl FlexibleBody {
             let nn = n * n;
             for a_ in 0..3 {
                 let g = &rot.g[a_ * nn..(a_ + 1) * nn];
-                let (mut s_dd, mut s_d) = (0.0, 0.0);
+                let (mut s_dd, mut s_d) = (T::zero(), T::zero());
                 for r in 0..n {
-                    let gq: f64 = g[r * n..(r + 1) * n].iter().zip(&self.q).map(|(x, y)| x * y).sum();
+                    let gq = shape_dot(&g[r * n..(r + 1) * n], &self.q);
                     s_dd += gq * qdd[r];
                     s_d += gq * self.qd[r];
                 }
@@ -649,16 +710,17 @@ impl FlexibleBody {
         let nn = n * n;
         let b = self.body.clone();
         let rot_terms = b.rotation.as_ref().ok_or("a free-floating body needs its rotation invariants")?;
-        let norm = frame.quat.iter().map(|c| c * c).sum::<f64>().sqrt();
-        if !(norm > 0.5 && norm < 2.0) {
-            return Err(format!("the orientation quaternion has drifted to norm {norm}"));
+        let [q0, q1, q2, q3] = frame.quat;
+        let norm = (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3).sqrt();
+        if !(norm.value() > 0.5 && norm.value() < 2.0) {
+            return Err(format!("the orientation quaternion has drifted to norm {}", norm.value()));
         }
-        let quat = frame.quat.map(|c| c / norm);
+        let quat = frame.quat.map(|x| x / norm);
         let a = k3::rotation_of_quaternion(quat);
         let w = frame.w_body;
-        let total_force: Vec3 = self.loads.iter().fold([0.0; 3], |acc, l| k3::add(acc, l.f));
-        let accel = k3::add(k3::scale(1.0 / b.mass, total_force), self.params.g);
-        self.mount = MountMotion { r: frame.r, rot: a, v: frame.v, w: k3::mul(&a, w), a: accel, z: [0.0; 3] };
+        let total_force: Vec3<T> = self.loads.iter().fold([T::zero(); 3], |acc, l| k3::add(acc, l.f));
+        let accel = k3::add(k3::scale(c(1.0 / b.mass), total_force), self.gravity());
+        self.mount = MountMotion { r: frame.r, rot: a, v: frame.v, w: k3::mul(&a, w), a: accel, z: [T::zero(); 3] };
         self.rot = a;
         // modal load of the flange loads and the centrifugal o_ab terms (C_t = 0, c_a = 0 here)
         self.modal_load();
@@ -666,22 +728,22 @@ impl FlexibleBody {
         let rhs_q = &mut self.eval.qdd;
         for j in 0..n {
             let w2 = b.omega[j] * b.omega[j];
-            rhs_q[j] = self.load[j] - (alpha + beta * w2 + b.modal_damping[j]) * self.qd[j] - w2 * self.q[j];
+            rhs_q[j] = self.load[j] - self.qd[j] * (alpha + beta * w2 + b.modal_damping[j]) - self.q[j] * w2;
         }
         for i in 0..3 {
             let g = &rot_terms.g[i * nn..(i + 1) * nn];
-            if w[i] != 0.0 {
+            if !w[i].is_zero() {
                 for r in 0..n {
-                    let s: f64 = g[r * n..(r + 1) * n].iter().zip(&self.qd).map(|(x, y)| x * y).sum();
-                    rhs_q[r] -= 2.0 * w[i] * s;
+                    let s = shape_dot(&g[r * n..(r + 1) * n], &self.qd);
+                    rhs_q[r] -= w[i] * 2.0 * s;
                 }
             }
             for k in 0..3 {
                 let ww = w[i] * w[k];
-                if ww != 0.0 {
+                if !ww.is_zero() {
                     let o = &rot_terms.o_mat[(3 * i + k) * nn..(3 * i + k + 1) * nn];
                     for r in 0..n {
-                        let s: f64 = o[r * n..(r + 1) * n].iter().zip(&self.q).map(|(x, y)| x * y).sum();
+                        let s = shape_dot(&o[r * n..(r + 1) * n], &self.q);
                         rhs_q[r] -= ww * s;
                     }
                 }
@@ -690,24 +752,24 @@ impl FlexibleBody {
         // C_r(q), J(q), J'(q)
         for i in 0..3 {
             let g = &rot_terms.g[i * nn..(i + 1) * nn];
-            for c in 0..n {
+            for col in 0..n {
                 // (G_a q)_c
-                let s: f64 = g[c * n..(c + 1) * n].iter().zip(&self.q).map(|(x, y)| x * y).sum();
-                self.cr_q[i * n + c] = b.c_r[i * n + c] + s;
+                let s = shape_dot(&g[col * n..(col + 1) * n], &self.q);
+                self.cr_q[i * n + col] = s + c(b.c_r[i * n + col]);
             }
         }
-        let mut j = b.inertia;
-        let mut j_rate = [0.0; 9];
+        let mut j: Mat3<T> = b.inertia.map(c);
+        let mut j_rate = [T::zero(); 9];
         for p in 0..3 {
             for q_ in 0..3 {
                 let (o_pq, o_qp) = (&rot_terms.o_vec[(3 * p + q_) * n..][..n], &rot_terms.o_vec[(3 * q_ + p) * n..][..n]);
                 let o_mat = &rot_terms.o_mat[(3 * p + q_) * nn..(3 * p + q_ + 1) * nn];
-                let (mut lin, mut lin_rate, mut quad, mut quad_rate) = (0.0, 0.0, 0.0, 0.0);
+                let (mut lin, mut lin_rate, mut quad, mut quad_rate) = (T::zero(), T::zero(), T::zero(), T::zero());
                 for r in 0..n {
-                    lin += (o_pq[r] + o_qp[r]) * self.q[r];
-                    lin_rate += (o_pq[r] + o_qp[r]) * self.qd[r];
-                    let oq: f64 = o_mat[r * n..(r + 1) * n].iter().zip(&self.q).map(|(x, y)| x * y).sum();
-                    let oqd: f64 = o_mat[r * n..(r + 1) * n].iter().zip(&self.qd).map(|(x, y)| x * y).sum();
+                    lin += self.q[r] * (o_pq[r] + o_qp[r]);
+                    lin_rate += self.qd[r] * (o_pq[r] + o_qp[r]);
+                    let oq = shape_dot(&o_mat[r * n..(r + 1) * n], &self.q);
+                    let oqd = shape_dot(&o_mat[r * n..(r + 1) * n], &self.qd);
                     quad += self.q[r] * oq;
                     quad_rate += self.qd[r] * oq + self.q[r] * oqd;
                 }
@@ -715,14 +777,14 @@ impl FlexibleBody {
                 j_rate[3 * p + q_] = -(lin_rate + quad_rate);
             }
         }
-        let cr_qd: Vec3 = [0, 1, 2].map(|i| self.cr_q[i * n..(i + 1) * n].iter().zip(&self.qd).map(|(x, y)| x * y).sum());
+        let cr_qd: Vec3<T> = [0, 1, 2].map(|i| dot(&self.cr_q[i * n..(i + 1) * n], &self.qd));
         let h = k3::add(k3::mul(&j, w), cr_qd);
         // torque of the flange loads about the centre of mass, body frame
-        let mut torque = [0.0; 3];
+        let mut torque = [T::zero(); 3];
         for (flange, load) in b.flanges.iter().zip(&self.loads) {
-            let u: Vec3 = [0, 1, 2].map(|r| flange.shapes[r * n..(r + 1) * n].iter().zip(&self.q).map(|(x, y)| x * y).sum());
+            let u: Vec3<T> = [0, 1, 2].map(|r| shape_dot(&flange.shapes[r * n..(r + 1) * n], &self.q));
             let f_b = k3::mul_t(&a, load.f);
-            torque = k3::add(torque, k3::add(k3::cross(k3::add(flange.position, u), f_b), k3::mul_t(&a, load.t)));
+            torque = k3::add(torque, k3::add(k3::cross(k3::add(flange.position.map(c), u), f_b), k3::mul_t(&a, load.t)));
         }
         let rhs_w = k3::sub(k3::sub(torque, k3::cross(w, h)), k3::mul(&j_rate, w));
         // Schur complement: (J - C_r C_r^T) W' = rhs_w - C_r rhs_q
@@ -730,23 +792,24 @@ impl FlexibleBody {
         let mut rhs = rhs_w;
         for p in 0..3 {
             let cp = &self.cr_q[p * n..(p + 1) * n];
-            rhs[p] -= cp.iter().zip(self.eval.qdd.iter()).map(|(x, y)| x * y).sum::<f64>();
+            rhs[p] -= dot(cp, &self.eval.qdd);
             for q_ in 0..3 {
                 let cq = &self.cr_q[q_ * n..(q_ + 1) * n];
-                s[3 * p + q_] -= cp.iter().zip(cq).map(|(x, y)| x * y).sum::<f64>();
+                s[3 * p + q_] -= dot(cp, cq);
             }
         }
         let mut w_dot = rhs;
         solve_dense(&mut s, &mut w_dot, 3).map_err(|_| "the body's inertia matrix became singular".to_string())?;
         for r in 0..n {
-            self.eval.qdd[r] -= (0..3).map(|i| self.cr_q[i * n + r] * w_dot[i]).sum::<f64>();
+            let f = self.cr_q[r] * w_dot[0] + self.cr_q[n + r] * w_dot[1] + self.cr_q[2 * n + r] * w_dot[2];
+            self.eval.qdd[r] -= f;
         }
         self.mount.z = k3::mul(&a, w_dot);
         let [q0, q1, q2, q3] = quat;
-        let half = [0.5 * w[0], 0.5 * w[1], 0.5 * w[2]];
+        let half = [w[0] * 0.5, w[1] * 0.5, w[2] * 0.5];
         // d/dt quat = 1/2 quat (x) (0, W)
         let quat_rate = [
-            -q1 * half[0] - q2 * half[1] - q3 * half[2],
+            -(q1 * half[0]) - q2 * half[1] - q3 * half[2],
             q0 * half[0] + q2 * half[2] - q3 * half[1],
             q0 * half[1] + q3 * half[0] - q1 * half[2],
             q0 * half[2] + q1 * half[1] - q2 * half[0],
@@ -756,61 +819,61 @@ impl FlexibleBody {
     }
 
     /// Energy and momenta of a free-floating body (gravity's potential included).
-    pub fn invariants(&mut self) -> Result<Invariants, String> {
+    pub fn invariants(&mut self) -> Result<Invariants<T>, String> {
         self.evaluate()?;
         let frame = self.frame.ok_or("energy and momenta are outputs of free-floating bodies")?;
         let n = self.q.len();
         let b = &self.body;
         let rot_terms = b.rotation.as_ref().ok_or("missing rotation invariants")?;
         let nn = n * n;
-        let mut j = b.inertia;
+        let mut j: Mat3<T> = b.inertia.map(c);
         for p in 0..3 {
             for q_ in 0..3 {
                 let (o_pq, o_qp) = (&rot_terms.o_vec[(3 * p + q_) * n..][..n], &rot_terms.o_vec[(3 * q_ + p) * n..][..n]);
                 let o_mat = &rot_terms.o_mat[(3 * p + q_) * nn..(3 * p + q_ + 1) * nn];
-                let mut v = 0.0;
+                let mut v = T::zero();
                 for r in 0..n {
-                    v += (o_pq[r] + o_qp[r]) * self.q[r];
-                    v += self.q[r] * o_mat[r * n..(r + 1) * n].iter().zip(&self.q).map(|(x, y)| x * y).sum::<f64>();
+                    v += self.q[r] * (o_pq[r] + o_qp[r]);
+                    v += self.q[r] * shape_dot(&o_mat[r * n..(r + 1) * n], &self.q);
                 }
                 j[3 * p + q_] -= v;
             }
         }
         let w = frame.w_body;
-        let cr_qd: Vec3 = [0, 1, 2].map(|i| self.cr_q[i * n..(i + 1) * n].iter().zip(&self.qd).map(|(x, y)| x * y).sum());
+        let cr_qd: Vec3<T> = [0, 1, 2].map(|i| dot(&self.cr_q[i * n..(i + 1) * n], &self.qd));
         let jw = k3::mul(&j, w);
         let h = k3::add(jw, cr_qd);
-        let v2 = frame.v.iter().map(|x| x * x).sum::<f64>();
-        let mut energy = 0.5 * b.mass * v2 + 0.5 * k3::dot(w, jw) + k3::dot(w, cr_qd);
+        let v2 = k3::dot(frame.v, frame.v);
+        let mut energy = v2 * (0.5 * b.mass) + k3::dot(w, jw) * 0.5 + k3::dot(w, cr_qd);
         for r in 0..n {
-            energy += 0.5 * self.qd[r] * self.qd[r] + 0.5 * b.omega[r] * b.omega[r] * self.q[r] * self.q[r];
+            energy += self.qd[r] * 0.5 * self.qd[r] + self.q[r] * (0.5 * b.omega[r] * b.omega[r]) * self.q[r];
         }
-        energy -= b.mass * k3::dot(self.params.g, frame.r);
-        let momentum = k3::scale(b.mass, frame.v);
+        energy -= k3::dot(self.gravity(), frame.r) * b.mass;
+        let momentum = k3::scale(c(b.mass), frame.v);
         let angular_momentum = k3::add(k3::cross(frame.r, momentum), k3::mul(&self.mount.rot, h));
         Ok(Invariants { energy, momentum, angular_momentum })
     }
 
     /// d/dt (q, q') into `dq`, `dqd`.
-    pub fn derivatives(&mut self, dq: &mut [f64], dqd: &mut [f64]) -> Result<(), String> {
+    pub fn derivatives(&mut self, dq: &mut [T], dqd: &mut [T]) -> Result<(), String> {
         self.evaluate()?;
         dq.copy_from_slice(&self.qd);
         dqd.copy_from_slice(&self.eval.qdd);
         Ok(())
     }
 
-    pub fn qdd(&mut self) -> Result<&[f64], String> {
+    pub fn qdd(&mut self) -> Result<&[T], String> {
         self.evaluate()?;
         Ok(&self.eval.qdd)
     }
 
-    pub fn flange_motion(&mut self, flange: usize) -> Result<&FlangeMotion, String> {
+    pub fn flange_motion(&mut self, flange: usize) -> Result<&FlangeMotion<T>, String> {
         self.evaluate()?;
         Ok(&self.eval.flanges[flange])
     }
 
     /// Force and torque (about the mount point) the mount applies to the body, world frame.
-    pub fn mount_reaction(&mut self) -> Result<(Vec3, Vec3), String> {
+    pub fn mount_reaction(&mut self) -> Result<(Vec3<T>, Vec3<T>), String> {
         self.evaluate()?;
         self.evaluate_reaction();
         Ok((self.eval.mount_force, self.eval.mount_torque))
@@ -829,7 +892,7 @@ impl FlexibleBody {
         if self.coupling.active {
             let mut a = self.coupling.c_k.clone();
             for j in 0..n {
-                a[j * n + j] += self.body.omega[j] * self.body.omega[j];
+                a[j * n + j] += c(self.body.omega[j] * self.body.omega[j]);
             }
             let mut x = self.load.clone();
             solve_dense(&mut a, &mut x, n).map_err(|_| {
@@ -841,11 +904,32 @@ impl FlexibleBody {
                 self.q[j] = self.load[j] / (self.body.omega[j] * self.body.omega[j]);
             }
         }
-        self.qd.fill(0.0);
+        self.qd.fill(T::zero());
         self.eval.valid = false;
         Ok(())
     }
+}
 
+/// sum_j s_j x_j of a constant row and a state vector.
+#[inline]
+fn shape_dot<T: Scalar>(s: &[f64], x: &[T]) -> T {
+    let mut sum = T::zero();
+    for (s, x) in s.iter().zip(x) {
+        sum += *x * *s;
+    }
+    sum
+}
+
+#[inline]
+fn dot<T: Scalar>(a: &[T], b: &[T]) -> T {
+    let mut sum = T::zero();
+    for (a, b) in a.iter().zip(b) {
+        sum += *a * *b;
+    }
+    sum
+}
+
+impl FlexibleBody {
     /// Advance by h with the inputs held over the step: exact propagation of the modal diagonal;
     /// the coupling terms (gyroscopic, centrifugal, stiffening) as loads held over substeps short
     /// enough for them (h_sub * (|C_d| + |C_k|^1/2) <= 0.1), none when nothing couples.
@@ -1056,11 +1140,11 @@ impl FlexibleBody {
 
 /// Solve A x = b in place (A row-major n x n, destroyed) by Gaussian elimination with partial
 /// pivoting; Err on a singular matrix. Used at initialisation only.
-fn solve_dense(a: &mut [f64], b: &mut [f64], n: usize) -> Result<(), ()> {
-    let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+fn solve_dense<T: Scalar>(a: &mut [T], b: &mut [T], n: usize) -> Result<(), ()> {
+    let scale = a.iter().fold(0.0f64, |m, v| m.max(v.value().abs()));
     for col in 0..n {
-        let piv = (col..n).max_by(|&i, &j| a[i * n + col].abs().total_cmp(&a[j * n + col].abs())).ok_or(())?;
-        if !(a[piv * n + col].abs() > 1e-14 * scale) {
+        let piv = (col..n).max_by(|&i, &j| a[i * n + col].value().abs().total_cmp(&a[j * n + col].value().abs())).ok_or(())?;
+        if !(a[piv * n + col].value().abs() > 1e-14 * scale) {
             return Err(());
         }
         if piv != col {
@@ -1072,16 +1156,21 @@ fn solve_dense(a: &mut [f64], b: &mut [f64], n: usize) -> Result<(), ()> {
         let d = a[col * n + col];
         for i in col + 1..n {
             let f = a[i * n + col] / d;
-            if f != 0.0 {
+            if !f.is_zero() {
                 for k in col..n {
-                    a[i * n + k] -= f * a[col * n + k];
+                    let v = f * a[col * n + k];
+                    a[i * n + k] -= v;
                 }
-                b[i] -= f * b[col];
+                let v = f * b[col];
+                b[i] -= v;
             }
         }
     }
     for col in (0..n).rev() {
-        let s: f64 = (col + 1..n).map(|k| a[col * n + k] * b[k]).sum();
+        let mut s = T::zero();
+        for k in col + 1..n {
+            s += a[col * n + k] * b[k];
+        }
         b[col] = (b[col] - s) / a[col * n + col];
     }
     Ok(())

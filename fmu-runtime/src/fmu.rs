@@ -7,6 +7,8 @@ use crate::fmi::{Interface, Model, VarInfo};
 use crate::format::RESOURCE_FILE;
 use crate::interface::{FlangeOutput, Quantity, VariableTable};
 use crate::reduced::ReducedBody;
+use crate::kinematics as k3;
+use crate::scalar::{Scalar, c};
 use std::sync::Arc;
 
 #[derive(Debug, Clone)]
@@ -26,12 +28,109 @@ impl BodyFmu {
         &self.body
     }
 
+    /// dv_unknown = (d unknowns / d knowns) dv_known at the present state and inputs, exact:
+    /// the body's equations in dual numbers along the direction dv_known.
+    pub fn directional_derivative(&mut self, unknowns: &[u32], knowns: &[u32], dv_known: &[f64], dv_unknown: &mut [f64]) -> Result<(), String> {
+        let mut d = self.body.to_dual();
+        for (&vr, &dv) in knowns.iter().zip(dv_known) {
+            let quantity = self.quantity(vr)?;
+            let x = input_or_state(&mut d, quantity)
+                .ok_or_else(|| format!("{} is neither an input nor a continuous state", self.name(vr)))?;
+            x.d += dv;
+        }
+        for (&vr, out) in unknowns.iter().zip(dv_unknown.iter_mut()) {
+            *out = value_of(&mut d, self.quantity(vr)?)?.d;
+        }
+        Ok(())
+    }
+
+    /// d/dt of a Real output at the present instant, along the body's own motion: the modes
+    /// and a free body's frame move at their rates; the mount moves as its inputs say it does
+    /// (r' = v, R' = w~ R, v' = a, w' = z), and a, z and the flange loads change at the rates
+    /// fmi2SetRealInputDerivatives set for the next step (zero when none are set: held).
+    pub fn output_derivative(&mut self, vr: u32) -> Result<f64, String> {
+        let quantity = self.quantity(vr)?;
+        let mut d = self.body.to_dual();
+        let qdd = self.body.qdd()?.to_vec();
+        for j in 0..qdd.len() {
+            d.q_mut()[j].d = self.body.qd()[j];
+            d.qd_mut()[j].d = qdd[j];
+        }
+        if self.body.frame().is_some() {
+            let rate = self.body.frame_rate()?;
+            let f = d.frame_mut().ok_or("not a free-floating body")?;
+            for i in 0..3 {
+                f.r[i].d = rate.r[i];
+                f.v[i].d = rate.v[i];
+                f.w_body[i].d = rate.w_body[i];
+            }
+            for i in 0..4 {
+                f.quat[i].d = rate.quat[i];
+            }
+        } else {
+            let m = *self.body.mount();
+            let rates = self.body.input_rates().clone();
+            let dm = d.mount_mut();
+            // R' = w~ R, row by row: (w x R e_j) per column j
+            for j in 0..3 {
+                let col = k3::cross(m.w, [m.rot[j], m.rot[3 + j], m.rot[6 + j]]);
+                for i in 0..3 {
+                    dm.rot[3 * i + j].d = col[i];
+                }
+            }
+            for i in 0..3 {
+                dm.r[i].d = m.v[i];
+                dm.v[i].d = m.a[i];
+                dm.w[i].d = m.z[i];
+                dm.a[i].d = rates.mount.a[i];
+                dm.z[i].d = rates.mount.z[i];
+            }
+        }
+        let rates = self.body.input_rates().clone();
+        for (k, rate) in rates.loads.iter().enumerate() {
+            let l = d.load_mut(k);
+            for i in 0..3 {
+                l.f[i].d = rate.f[i];
+                l.t[i].d = rate.t[i];
+            }
+        }
+        Ok(value_of(&mut d, quantity)?.d)
+    }
+
+    /// Whether `vr` is a continuous state of Model Exchange.
+    pub fn is_state(&self, vr: u32) -> bool {
+        use Quantity as Q;
+        self.quantity(vr).is_ok_and(|q| {
+            matches!(
+                q,
+                Q::ModalCoordinate(_) | Q::ModalVelocity(_) | Q::FramePosition(_) | Q::FrameQuaternion(_) | Q::FrameVelocity(_)
+                    | Q::FrameAngularVelocity(_)
+            )
+        })
+    }
+
+    /// Whether `vr` is the derivative of a continuous state (der(q) = qd, der(r) = v, ...).
+    pub fn is_derivative(&self, vr: u32) -> bool {
+        use Quantity as Q;
+        self.quantity(vr).is_ok_and(|q| {
+            matches!(
+                q,
+                Q::ModalVelocity(_) | Q::ModalAcceleration(_) | Q::FrameVelocity(_) | Q::FrameQuaternionRate(_)
+                    | Q::FrameAcceleration(_) | Q::FrameAngularAcceleration(_)
+            )
+        })
+    }
+
+    fn name(&self, vr: u32) -> String {
+        self.table.get(vr).map_or_else(|| format!("value reference {vr}"), |v| v.name.clone())
+    }
+
     fn quantity(&self, vr: u32) -> Result<Quantity, String> {
         self.table.get(vr).map(|v| v.quantity).ok_or_else(|| format!("unknown value reference {vr}"))
     }
 }
 
-fn frame(b: &FlexibleBody) -> Result<FrameState, String> {
+fn frame<T: Scalar>(b: &FlexibleBody<T>) -> Result<FrameState<T>, String> {
     b.frame().copied().ok_or_else(|| "not a free-floating body".to_string())
 }
 
@@ -66,67 +165,11 @@ impl Model for BodyFmu {
     }
 
     fn get_real(&mut self, vr: u32) -> Result<f64, String> {
-        use Quantity as Q;
         let quantity = self.quantity(vr)?;
-        let b = &mut self.body;
-        Ok(match quantity {
-            Q::MountPosition(i) => b.mount().r[i],
-            Q::MountRotation(i, j) => b.mount().rot[3 * i + j],
-            Q::MountVelocity(i) => b.mount().v[i],
-            Q::MountAngularVelocity(i) => b.mount().w[i],
-            Q::MountAcceleration(i) => b.mount().a[i],
-            Q::MountAngularAcceleration(i) => b.mount().z[i],
-            Q::MountForce(i) => b.mount_reaction()?.0[i],
-            Q::MountTorque(i) => b.mount_reaction()?.1[i],
-            Q::FlangeForce(k, i) => b.loads()[k].f[i],
-            Q::FlangeTorque(k, i) => b.loads()[k].t[i],
-            Q::Flange(k, o) => {
-                let m = b.flange_motion(k)?;
-                match o {
-                    FlangeOutput::Position(i) => m.r[i],
-                    FlangeOutput::Rotation(i, j) => m.rot[3 * i + j],
-                    FlangeOutput::Velocity(i) => m.v[i],
-                    FlangeOutput::AngularVelocity(i) => m.w[i],
-                    FlangeOutput::Acceleration(i) => m.a[i],
-                    FlangeOutput::AngularAcceleration(i) => m.z[i],
-                    FlangeOutput::Displacement(i) => m.u[i],
-                    FlangeOutput::RotationVector(i) => m.phi[i],
-                }
-            }
-            Q::Gravity(i) => b.parameters().g[i],
-            Q::RayleighAlpha => b.parameters().alpha,
-            Q::RayleighBeta => b.parameters().beta,
-            Q::ModalCoordinate(j) => b.q()[j],
-            Q::ModalVelocity(j) => b.qd()[j],
-            Q::ModalAcceleration(j) => b.qdd()?[j],
-            Q::StaticStart => return Err(format!("value reference {vr} (static_start) is a Boolean")),
-            Q::InitialPosition(i) => b.initial_frame.r[i],
-            Q::InitialRotation(i) => b.initial_frame.phi[i],
-            Q::InitialVelocity(i) => b.initial_frame.v[i],
-            Q::InitialAngularVelocity(i) => b.initial_frame.w[i],
-            Q::FramePosition(i) => frame(b)?.r[i],
-            Q::FrameQuaternion(i) => frame(b)?.quat[i],
-            Q::FrameVelocity(i) => frame(b)?.v[i],
-            Q::FrameAngularVelocity(i) => frame(b)?.w_body[i],
-            Q::FrameQuaternionRate(i) => b.frame_rate()?.quat[i],
-            Q::FrameAcceleration(i) => b.frame_rate()?.v[i],
-            Q::FrameAngularAcceleration(i) => b.frame_rate()?.w_body[i],
-            Q::BodyRotation(i, j) => {
-                b.frame_rate()?;
-                b.mount().rot[3 * i + j]
-            }
-            Q::BodyAngularVelocity(i) => {
-                b.frame_rate()?;
-                b.mount().w[i]
-            }
-            Q::BodyAngularAcceleration(i) => {
-                b.frame_rate()?;
-                b.mount().z[i]
-            }
-            Q::BodyEnergy => b.invariants()?.energy,
-            Q::BodyMomentum(i) => b.invariants()?.momentum[i],
-            Q::BodyAngularMomentum(i) => b.invariants()?.angular_momentum[i],
-        })
+        if quantity == Quantity::StaticStart {
+            return Err(format!("value reference {vr} (static_start) is a Boolean"));
+        }
+        value_of(&mut self.body, quantity)
     }
 
     fn can_interpolate_inputs(&self) -> bool {
@@ -400,6 +443,93 @@ impl Model for BodyFmu {
         self.static_start = static_start;
         Ok(())
     }
+}
+
+/// A Real variable's value, in f64 for fmi2GetReal or in dual numbers for its derivatives: the
+/// one place that says which variable is which result of the body.
+fn value_of<T: Scalar>(b: &mut FlexibleBody<T>, quantity: Quantity) -> Result<T, String> {
+    use Quantity as Q;
+    Ok(match quantity {
+        Q::MountPosition(i) => b.mount().r[i],
+        Q::MountRotation(i, j) => b.mount().rot[3 * i + j],
+        Q::MountVelocity(i) => b.mount().v[i],
+        Q::MountAngularVelocity(i) => b.mount().w[i],
+        Q::MountAcceleration(i) => b.mount().a[i],
+        Q::MountAngularAcceleration(i) => b.mount().z[i],
+        Q::MountForce(i) => b.mount_reaction()?.0[i],
+        Q::MountTorque(i) => b.mount_reaction()?.1[i],
+        Q::FlangeForce(k, i) => b.loads()[k].f[i],
+        Q::FlangeTorque(k, i) => b.loads()[k].t[i],
+        Q::Flange(k, o) => {
+            let m = b.flange_motion(k)?;
+            match o {
+                FlangeOutput::Position(i) => m.r[i],
+                FlangeOutput::Rotation(i, j) => m.rot[3 * i + j],
+                FlangeOutput::Velocity(i) => m.v[i],
+                FlangeOutput::AngularVelocity(i) => m.w[i],
+                FlangeOutput::Acceleration(i) => m.a[i],
+                FlangeOutput::AngularAcceleration(i) => m.z[i],
+                FlangeOutput::Displacement(i) => m.u[i],
+                FlangeOutput::RotationVector(i) => m.phi[i],
+            }
+        }
+        Q::Gravity(i) => c(b.parameters().g[i]),
+        Q::RayleighAlpha => c(b.parameters().alpha),
+        Q::RayleighBeta => c(b.parameters().beta),
+        Q::ModalCoordinate(j) => b.q()[j],
+        Q::ModalVelocity(j) => b.qd()[j],
+        Q::ModalAcceleration(j) => b.qdd()?[j],
+        Q::StaticStart => return Err("static_start is a Boolean".into()),
+        Q::InitialPosition(i) => c(b.initial_frame.r[i]),
+        Q::InitialRotation(i) => c(b.initial_frame.phi[i]),
+        Q::InitialVelocity(i) => c(b.initial_frame.v[i]),
+        Q::InitialAngularVelocity(i) => c(b.initial_frame.w[i]),
+        Q::FramePosition(i) => frame(b)?.r[i],
+        Q::FrameQuaternion(i) => frame(b)?.quat[i],
+        Q::FrameVelocity(i) => frame(b)?.v[i],
+        Q::FrameAngularVelocity(i) => frame(b)?.w_body[i],
+        Q::FrameQuaternionRate(i) => b.frame_rate()?.quat[i],
+        Q::FrameAcceleration(i) => b.frame_rate()?.v[i],
+        Q::FrameAngularAcceleration(i) => b.frame_rate()?.w_body[i],
+        Q::BodyRotation(i, j) => {
+            b.frame_rate()?;
+            b.mount().rot[3 * i + j]
+        }
+        Q::BodyAngularVelocity(i) => {
+            b.frame_rate()?;
+            b.mount().w[i]
+        }
+        Q::BodyAngularAcceleration(i) => {
+            b.frame_rate()?;
+            b.mount().z[i]
+        }
+        Q::BodyEnergy => b.invariants()?.energy,
+        Q::BodyMomentum(i) => b.invariants()?.momentum[i],
+        Q::BodyAngularMomentum(i) => b.invariants()?.angular_momentum[i],
+    })
+}
+
+/// The input or continuous state a variable is, to seed a derivative's direction (None for
+/// anything else).
+fn input_or_state<T: Scalar>(b: &mut FlexibleBody<T>, quantity: Quantity) -> Option<&mut T> {
+    use Quantity as Q;
+    Some(match quantity {
+        Q::MountPosition(i) => &mut b.mount_mut().r[i],
+        Q::MountRotation(i, j) => &mut b.mount_mut().rot[3 * i + j],
+        Q::MountVelocity(i) => &mut b.mount_mut().v[i],
+        Q::MountAngularVelocity(i) => &mut b.mount_mut().w[i],
+        Q::MountAcceleration(i) => &mut b.mount_mut().a[i],
+        Q::MountAngularAcceleration(i) => &mut b.mount_mut().z[i],
+        Q::FlangeForce(k, i) => &mut b.load_mut(k).f[i],
+        Q::FlangeTorque(k, i) => &mut b.load_mut(k).t[i],
+        Q::ModalCoordinate(j) => &mut b.q_mut()[j],
+        Q::ModalVelocity(j) => &mut b.qd_mut()[j],
+        Q::FramePosition(i) => &mut b.frame_mut()?.r[i],
+        Q::FrameQuaternion(i) => &mut b.frame_mut()?.quat[i],
+        Q::FrameVelocity(i) => &mut b.frame_mut()?.v[i],
+        Q::FrameAngularVelocity(i) => &mut b.frame_mut()?.w_body[i],
+        _ => return None,
+    })
 }
 
 /// Version of the body's part of a serialized FMU state (the layer has its own).

@@ -1,33 +1,36 @@
-//! Small 3-vector and rotation helpers for the body equations (row-major 3x3 matrices).
+//! Small 3-vector and rotation helpers for the body equations (row-major 3x3 matrices), generic
+//! over the scalar so the same formulas give values and directional derivatives.
 
-pub type Vec3 = [f64; 3];
-pub type Mat3 = [f64; 9];
+use crate::scalar::{Scalar, c};
+
+pub type Vec3<T = f64> = [T; 3];
+pub type Mat3<T = f64> = [T; 9];
 
 pub const IDENTITY: Mat3 = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
 
 #[inline]
-pub fn cross(a: Vec3, b: Vec3) -> Vec3 {
+pub fn cross<T: Scalar>(a: Vec3<T>, b: Vec3<T>) -> Vec3<T> {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
 #[inline]
-pub fn add(a: Vec3, b: Vec3) -> Vec3 {
+pub fn add<T: Scalar>(a: Vec3<T>, b: Vec3<T>) -> Vec3<T> {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
 #[inline]
-pub fn sub(a: Vec3, b: Vec3) -> Vec3 {
+pub fn sub<T: Scalar>(a: Vec3<T>, b: Vec3<T>) -> Vec3<T> {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
 #[inline]
-pub fn scale(s: f64, a: Vec3) -> Vec3 {
+pub fn scale<T: Scalar>(s: T, a: Vec3<T>) -> Vec3<T> {
     [s * a[0], s * a[1], s * a[2]]
 }
 
 /// A x
 #[inline]
-pub fn mul(a: &Mat3, x: Vec3) -> Vec3 {
+pub fn mul<T: Scalar>(a: &Mat3<T>, x: Vec3<T>) -> Vec3<T> {
     [
         a[0] * x[0] + a[1] * x[1] + a[2] * x[2],
         a[3] * x[0] + a[4] * x[1] + a[5] * x[2],
@@ -37,7 +40,7 @@ pub fn mul(a: &Mat3, x: Vec3) -> Vec3 {
 
 /// A^T x
 #[inline]
-pub fn mul_t(a: &Mat3, x: Vec3) -> Vec3 {
+pub fn mul_t<T: Scalar>(a: &Mat3<T>, x: Vec3<T>) -> Vec3<T> {
     [
         a[0] * x[0] + a[3] * x[1] + a[6] * x[2],
         a[1] * x[0] + a[4] * x[1] + a[7] * x[2],
@@ -45,58 +48,58 @@ pub fn mul_t(a: &Mat3, x: Vec3) -> Vec3 {
     ]
 }
 
-pub fn mat_mul(a: &Mat3, b: &Mat3) -> Mat3 {
-    let mut c = [0.0; 9];
-    for i in 0..3 {
-        for j in 0..3 {
-            c[3 * i + j] = (0..3).map(|k| a[3 * i + k] * b[3 * k + j]).sum();
-        }
-    }
-    c
+pub fn mat_mul<T: Scalar>(a: &Mat3<T>, b: &Mat3<T>) -> Mat3<T> {
+    std::array::from_fn(|ij| {
+        let (i, j) = (ij / 3, ij % 3);
+        a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j]
+    })
 }
 
 /// Rotation matrix of the rotation vector phi (Rodrigues): exactly orthonormal for any size, so a
 /// flange frame output is always a proper rotation even though the model is linear in phi.
-pub fn rotation_of(phi: Vec3) -> Mat3 {
+pub fn rotation_of<T: Scalar>(phi: Vec3<T>) -> Mat3<T> {
     let t2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2];
-    let (a, b) = if t2 < 1e-8 {
-        (1.0 - t2 / 6.0 + t2 * t2 / 120.0, 0.5 - t2 / 24.0 + t2 * t2 / 720.0)
+    // the series in t^2 keeps small angles (and their derivatives at zero) exact
+    let (a, b) = if t2.value() < 1e-8 {
+        (c::<T>(1.0) - t2 / 6.0 + t2 * t2 / 120.0, c::<T>(0.5) - t2 / 24.0 + t2 * t2 / 720.0)
     } else {
         let t = t2.sqrt();
-        (t.sin() / t, (1.0 - t.cos()) / t2)
+        (t.sin() / t, (c::<T>(1.0) - t.cos()) / t2)
     };
     let [x, y, z] = phi;
+    let one = c::<T>(1.0);
     [
-        1.0 - b * (y * y + z * z),
-        -a * z + b * x * y,
+        one - b * (y * y + z * z),
+        -(a * z) + b * x * y,
         a * y + b * x * z,
         a * z + b * x * y,
-        1.0 - b * (x * x + z * z),
-        -a * x + b * y * z,
-        -a * y + b * x * z,
+        one - b * (x * x + z * z),
+        -(a * x) + b * y * z,
+        -(a * y) + b * x * z,
         a * x + b * y * z,
-        1.0 - b * (x * x + y * y),
+        one - b * (x * x + y * y),
     ]
 }
 
 #[inline]
-pub fn dot(a: Vec3, b: Vec3) -> f64 {
+pub fn dot<T: Scalar>(a: Vec3<T>, b: Vec3<T>) -> T {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// Rotation matrix of a unit quaternion (w, x, y, z).
-pub fn rotation_of_quaternion(q: [f64; 4]) -> Mat3 {
+pub fn rotation_of_quaternion<T: Scalar>(q: [T; 4]) -> Mat3<T> {
     let [w, x, y, z] = q;
+    let one = c::<T>(1.0);
     [
-        1.0 - 2.0 * (y * y + z * z),
-        2.0 * (x * y - w * z),
-        2.0 * (x * z + w * y),
-        2.0 * (x * y + w * z),
-        1.0 - 2.0 * (x * x + z * z),
-        2.0 * (y * z - w * x),
-        2.0 * (x * z - w * y),
-        2.0 * (y * z + w * x),
-        1.0 - 2.0 * (x * x + y * y),
+        one - (y * y + z * z) * 2.0,
+        (x * y - w * z) * 2.0,
+        (x * z + w * y) * 2.0,
+        (x * y + w * z) * 2.0,
+        one - (x * x + z * z) * 2.0,
+        (y * z - w * x) * 2.0,
+        (x * z - w * y) * 2.0,
+        (y * z + w * x) * 2.0,
+        one - (x * x + y * y) * 2.0,
     ]
 }
 
@@ -131,7 +134,7 @@ pub fn quaternion_multiply(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
 
 /// The rotation nearest to a nearly orthonormal A (orthogonal polar factor, by Newton's iteration
 /// X <- (X + X^-T) / 2, quadratically convergent from near a rotation).
-pub fn nearest_rotation(a: &Mat3) -> Mat3 {
+pub fn nearest_rotation<T: Scalar>(a: &Mat3<T>) -> Mat3<T> {
     let mut x = *a;
     for _ in 0..8 {
         let det = x[0] * (x[4] * x[8] - x[5] * x[7]) - x[1] * (x[3] * x[8] - x[5] * x[6]) + x[2] * (x[3] * x[7] - x[4] * x[6]);
@@ -147,8 +150,10 @@ pub fn nearest_rotation(a: &Mat3) -> Mat3 {
             x[2] * x[3] - x[0] * x[5],
             x[0] * x[4] - x[1] * x[3],
         ];
-        let next: Mat3 = std::array::from_fn(|i| 0.5 * (x[i] + cof[i] / det));
-        let change = next.iter().zip(&x).fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+        let next: Mat3<T> = std::array::from_fn(|i| (x[i] + cof[i] / det) * 0.5);
+        // converged in value; a derivative converges with it (it follows the same contraction,
+        // and at a rotation one iteration removes its symmetric part exactly)
+        let change = next.iter().zip(&x).fold(0.0f64, |m, (p, q)| m.max((p.value() - q.value()).abs()));
         x = next;
         if change < 1e-16 {
             break;

@@ -8,6 +8,7 @@ pub mod format;
 pub mod kinematics;
 pub mod propagator;
 pub mod reduced;
+pub mod scalar;
 pub mod fmi;
 pub mod fmu;
 pub mod interface;
