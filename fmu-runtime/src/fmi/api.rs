@@ -22,7 +22,7 @@ use super::serial;
 use super::state::{self as spec, FnSpec, ModelState};
 use super::types::fmi2Status::{fmi2Discard, fmi2Error, fmi2Fatal, fmi2OK};
 use super::types::*;
-use super::{Interface, Model, VarInfo, VarType};
+use super::{Causality, Interface, Model, VarInfo, VarType};
 
 /// Why a call failed; decides what happens to the instance.
 pub enum Failure {
@@ -700,19 +700,108 @@ pub unsafe fn fmi2DeSerializeFMUstate<M: Model>(
     }
 }
 
-/// Partial derivatives need model support; a later issue adds a trait method for them here.
+/// Whether the C arrays `a[..n]` and `b[..m]` share memory: a host may hand the same buffer
+/// for the seed and the result, and Rust must not see it as both `&` and `&mut`.
+fn overlap<T>(a: *const T, n: usize, b: *const T, m: usize) -> bool {
+    let size = std::mem::size_of::<T>();
+    let (a, b) = (a as usize, b as usize);
+    let (a_end, b_end) = (a.saturating_add(n.saturating_mul(size)), b.saturating_add(m.saturating_mul(size)));
+    n > 0 && m > 0 && a < b_end && b < a_end
+}
+
+/// Why `vr` cannot be an unknown of a directional derivative, if it cannot.
+fn check_unknown<M: Model>(model: &M, vr: u32, interface: Interface) -> Result<(), Failure> {
+    let info = var_of_type(model, vr, VarType::Real)?;
+    let me = interface == Interface::ModelExchange;
+    if info.causality == Causality::Output || (me && model.is_state_derivative(vr)) {
+        return Ok(());
+    }
+    let expected = if me {
+        "an output or the derivative of a continuous state"
+    } else if model.is_state_derivative(vr) {
+        "an output (state derivatives are unknowns in Model Exchange only)"
+    } else {
+        "an output"
+    };
+    Err(usage(format!(
+        "unknown {} has causality {:?}; expected {expected}",
+        describe(model, vr),
+        info.causality
+    )))
+}
+
+/// Why `vr` cannot be a known of a directional derivative, if it cannot.
+fn check_known<M: Model>(model: &M, vr: u32, interface: Interface) -> Result<(), Failure> {
+    let info = var_of_type(model, vr, VarType::Real)?;
+    let me = interface == Interface::ModelExchange;
+    if info.causality == Causality::Input || (me && model.is_continuous_state(vr)) {
+        return Ok(());
+    }
+    let expected = if me {
+        "an input or a continuous state"
+    } else if model.is_continuous_state(vr) {
+        "an input (continuous states are knowns in Model Exchange only)"
+    } else {
+        "an input"
+    };
+    Err(usage(format!(
+        "known {} has causality {:?}; expected {expected}",
+        describe(model, vr),
+        info.causality
+    )))
+}
+
+/// The Jacobian of outputs (and, in Model Exchange, state derivatives) with respect to inputs
+/// (and states) times a seed: what implicit solvers, linearization and co-simulation masters
+/// with algebraic loops ask for (FMI 2.0.x section 2.1.9).
 pub unsafe fn fmi2GetDirectionalDerivative<M: Model>(
     c: fmi2Component,
-    _vUnknown_ref: *const fmi2ValueReference,
-    _nUnknown: usize,
-    _vKnown_ref: *const fmi2ValueReference,
-    _nKnown: usize,
-    _dvKnown: *const fmi2Real,
-    _dvUnknown: *mut fmi2Real,
+    vUnknown_ref: *const fmi2ValueReference,
+    nUnknown: usize,
+    vKnown_ref: *const fmi2ValueReference,
+    nKnown: usize,
+    dvKnown: *const fmi2Real,
+    dvUnknown: *mut fmi2Real,
 ) -> fmi2Status {
     unsafe {
-        guarded::<M>(c, &spec::fmi2GetDirectionalDerivative, |_| {
-            not_supported("providesDirectionalDerivative")
+        guarded::<M>(c, &spec::fmi2GetDirectionalDerivative, |inst| {
+            if !inst.model.provides_directional_derivative() {
+                return not_supported("providesDirectionalDerivative");
+            }
+            // Nothing asked, nothing to write: the knowns do not matter.
+            if nUnknown == 0 {
+                return Ok(fmi2OK);
+            }
+            let unknowns = in_slice(vUnknown_ref, nUnknown, "vUnknown_ref[]")?;
+            let knowns = in_slice(vKnown_ref, nKnown, "vKnown_ref[]")?;
+            // A seed in the result buffer is copied out before the buffer is written.
+            let seed_copy: Vec<f64>;
+            let seed = if overlap(dvKnown, nKnown, dvUnknown.cast_const(), nUnknown) {
+                seed_copy = in_slice(dvKnown, nKnown, "dvKnown[]")?.to_vec();
+                &seed_copy[..]
+            } else {
+                in_slice(dvKnown, nKnown, "dvKnown[]")?
+            };
+            let result = out_slice(dvUnknown, nUnknown, "dvUnknown[]")?;
+            for &r in unknowns {
+                check_unknown(&inst.model, r, inst.interface)?;
+            }
+            for (i, (&r, &dv)) in knowns.iter().zip(seed).enumerate() {
+                check_known(&inst.model, r, inst.interface)?;
+                if !dv.is_finite() {
+                    return Err(usage(format!(
+                        "dvKnown[{i}] = {dv} for known {} is not finite",
+                        describe(&inst.model, r)
+                    )));
+                }
+            }
+            inst.logger.trace(|| {
+                format!("fmi2GetDirectionalDerivative: {nUnknown} unknowns, {nKnown} knowns")
+            });
+            inst.model
+                .directional_derivative(unknowns, knowns, seed, result)
+                .map_err(Failure::Model)?;
+            Ok(fmi2OK)
         })
     }
 }
@@ -863,7 +952,7 @@ pub unsafe fn fmi2GetNominalsOfContinuousStates<M: Model>(
 // Co-Simulation
 // ---------------------------------------------------------------------------
 
-/// Input interpolation would go here once models support it.
+/// First input derivatives for the next step (canInterpolateInputs, maxInputDerivativeOrder 1).
 pub unsafe fn fmi2SetRealInputDerivatives<M: Model>(
     c: fmi2Component,
     vr: *const fmi2ValueReference,
@@ -881,7 +970,7 @@ pub unsafe fn fmi2SetRealInputDerivatives<M: Model>(
             let values = in_slice(value, nvr, "value[]")?;
             for ((&r, &k), &v) in vrs.iter().zip(orders).zip(values) {
                 let info = var_of_type(&inst.model, r, VarType::Real)?;
-                if info.causality != super::Causality::Input {
+                if info.causality != Causality::Input {
                     return Err(usage(format!("{}: input derivatives are for inputs only", describe(&inst.model, r))));
                 }
                 if k != 1 {
@@ -900,17 +989,50 @@ pub unsafe fn fmi2SetRealInputDerivatives<M: Model>(
     }
 }
 
-/// Output extrapolation would go here once models support it.
+/// Time derivatives of outputs at the current communication point, for a master that
+/// extrapolates them over its next step (maxOutputDerivativeOrder).
 pub unsafe fn fmi2GetRealOutputDerivatives<M: Model>(
     c: fmi2Component,
-    _vr: *const fmi2ValueReference,
-    _nvr: usize,
-    _order: *const fmi2Integer,
-    _value: *mut fmi2Real,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    order: *const fmi2Integer,
+    value: *mut fmi2Real,
 ) -> fmi2Status {
     unsafe {
-        guarded::<M>(c, &spec::fmi2GetRealOutputDerivatives, |_| {
-            not_supported("maxOutputDerivativeOrder>0")
+        guarded::<M>(c, &spec::fmi2GetRealOutputDerivatives, |inst| {
+            let max_order = inst.model.max_output_derivative_order();
+            if max_order < 1 {
+                return not_supported("maxOutputDerivativeOrder>0");
+            }
+            let vrs = in_slice(vr, nvr, "vr[]")?;
+            let orders = in_slice(order, nvr, "order[]")?;
+            let values = out_slice(value, nvr, "value[]")?;
+            // All checked before any is computed: a refused call writes nothing.
+            for (&r, &k) in vrs.iter().zip(orders) {
+                let info = var_of_type(&inst.model, r, VarType::Real)?;
+                if info.causality != Causality::Output {
+                    return Err(usage(format!(
+                        "{} has causality {:?}; output derivatives are for outputs only",
+                        describe(&inst.model, r),
+                        info.causality
+                    )));
+                }
+                if !(1..=max_order).contains(&k) {
+                    return Err(usage(format!(
+                        "{}: derivative order {k} requested; this FMU provides orders 1 to {max_order} (maxOutputDerivativeOrder {max_order})",
+                        describe(&inst.model, r)
+                    )));
+                }
+            }
+            inst.logger
+                .trace(|| format!("fmi2GetRealOutputDerivatives: {nvr} values"));
+            for ((&r, &k), v) in vrs.iter().zip(orders).zip(values) {
+                *v = inst
+                    .model
+                    .get_real_output_derivative(r, k)
+                    .map_err(model_err(r))?;
+            }
+            Ok(fmi2OK)
         })
     }
 }

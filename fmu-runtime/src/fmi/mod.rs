@@ -122,6 +122,39 @@ pub trait Model: Sized + Clone {
     fn set_real_input_derivative(&mut self, _vr: u32, _value: f64) -> Result<(), String> {
         Err("input derivatives are not supported by this model".into())
     }
+    /// Capability providesDirectionalDerivative.
+    fn provides_directional_derivative(&self) -> bool {
+        false
+    }
+    /// Whether `vr` is a continuous state / the derivative of one (Model Exchange); the layer uses
+    /// these to check which value references a directional derivative may name.
+    fn is_continuous_state(&self, _vr: u32) -> bool {
+        false
+    }
+    fn is_state_derivative(&self, _vr: u32) -> bool {
+        false
+    }
+    /// dv_unknown = (d unknowns / d knowns) dv_known at the present state and inputs, exact.
+    /// The layer has checked: all are Real; unknowns are outputs or (ME) state derivatives;
+    /// knowns are inputs or (ME) continuous states; lengths match; dv_known finite.
+    fn directional_derivative(
+        &mut self,
+        _unknowns: &[u32],
+        _knowns: &[u32],
+        _dv_known: &[f64],
+        _dv_unknown: &mut [f64],
+    ) -> Result<(), String> {
+        Err("directional derivatives are not supported by this model".into())
+    }
+    /// Capability maxOutputDerivativeOrder.
+    fn max_output_derivative_order(&self) -> i32 {
+        0
+    }
+    /// Co-Simulation: the `order`-th time derivative of Real output `vr` at the current
+    /// communication point (layer has checked: Real output, 1 <= order <= max_output_derivative_order()).
+    fn get_real_output_derivative(&mut self, _vr: u32, _order: i32) -> Result<f64, String> {
+        Err("output derivatives are not supported by this model".into())
+    }
     /// Co-Simulation: advance from t to t + h exactly.
     fn do_step(&mut self, t: f64, h: f64) -> Result<(), String>;
     /// Back to the state right after instantiate (parameters at start values).

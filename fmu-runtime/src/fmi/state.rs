@@ -133,6 +133,9 @@ pub struct FnSpec {
     pub allowed: StateMask,
     /// Functions of only one interface are refused on instances of the other.
     pub interface: Option<Interface>,
+    /// Where "allowed in:" alone would leave the host guessing (a state the standard
+    /// allows but this layer refuses): the states it concerns and what to say.
+    pub hint: Option<(StateMask, &'static str)>,
 }
 
 impl FnSpec {
@@ -148,12 +151,22 @@ impl FnSpec {
             ));
         }
         if self.allowed.contains(state) {
-            None
-        } else {
-            Some(format!(
-                "{} called in state {state:?}; allowed in: {}",
-                self.name, self.allowed
-            ))
+            return None;
+        }
+        let hint = match self.hint {
+            Some((states, why)) if states.contains(state) => format!(" ({why})"),
+            _ => String::new(),
+        };
+        Some(format!(
+            "{} called in state {state:?}; allowed in: {}{hint}",
+            self.name, self.allowed
+        ))
+    }
+
+    const fn with_hint(self, states: StateMask, why: &'static str) -> FnSpec {
+        FnSpec {
+            hint: Some((states, why)),
+            ..self
         }
     }
 }
@@ -163,6 +176,7 @@ const fn common(name: &'static str, allowed: StateMask) -> FnSpec {
         name,
         allowed,
         interface: None,
+        hint: None,
     }
 }
 const fn me(name: &'static str, allowed: StateMask) -> FnSpec {
@@ -170,6 +184,7 @@ const fn me(name: &'static str, allowed: StateMask) -> FnSpec {
         name,
         allowed,
         interface: Some(Interface::ModelExchange),
+        hint: None,
     }
 }
 const fn cs(name: &'static str, allowed: StateMask) -> FnSpec {
@@ -177,6 +192,7 @@ const fn cs(name: &'static str, allowed: StateMask) -> FnSpec {
         name,
         allowed,
         interface: Some(Interface::CoSimulation),
+        hint: None,
     }
 }
 
@@ -195,6 +211,21 @@ const ANY_BUT_FATAL: StateMask = StateMask::of(&[
 /// fmi2GetXXX: once initialization has begun; in Error "for diagnostics only".
 const GETTERS: StateMask = StateMask::of(&[
     InitializationMode,
+    EventMode,
+    ContinuousTimeMode,
+    StepComplete,
+    StepFailed,
+    StepCanceled,
+    Terminated,
+    Error,
+]);
+/// fmi2GetDirectionalDerivative: the getters' states less InitializationMode. The standard's
+/// tables (3.2.3, 4.2.4) allow InitializationMode too, there for another Jacobian: that of the
+/// ModelStructure/InitialUnknowns with respect to the exact start values (section 2.1.9).
+/// [`Model::directional_derivative`](super::Model::directional_derivative) offers only that of
+/// outputs and state derivatives with respect to inputs and states, which exists once
+/// initialization has ended.
+const AFTER_INITIALIZATION: StateMask = StateMask::of(&[
     EventMode,
     ContinuousTimeMode,
     StepComplete,
@@ -248,7 +279,11 @@ pub const fmi2FreeFMUstate: FnSpec = common("fmi2FreeFMUstate", ANY_BUT_FATAL);
 pub const fmi2SerializedFMUstateSize: FnSpec = common("fmi2SerializedFMUstateSize", ANY_BUT_FATAL);
 pub const fmi2SerializeFMUstate: FnSpec = common("fmi2SerializeFMUstate", ANY_BUT_FATAL);
 pub const fmi2DeSerializeFMUstate: FnSpec = common("fmi2DeSerializeFMUstate", ANY_BUT_FATAL);
-pub const fmi2GetDirectionalDerivative: FnSpec = common("fmi2GetDirectionalDerivative", GETTERS);
+pub const fmi2GetDirectionalDerivative: FnSpec =
+    common("fmi2GetDirectionalDerivative", AFTER_INITIALIZATION).with_hint(
+        StateMask::of(&[Instantiated, InitializationMode]),
+        "directional derivatives are available after fmi2ExitInitializationMode",
+    );
 
 // Model Exchange.
 pub const fmi2EnterEventMode: FnSpec = me(
@@ -364,6 +399,35 @@ mod tests {
         assert!(!ContinuousTimeMode.can_be_saved_in(Interface::CoSimulation));
         assert!(!Fatal.can_be_saved_in(Interface::CoSimulation));
         assert!(!StepInProgress.can_be_saved_in(Interface::CoSimulation));
+    }
+
+    /// The standard allows fmi2GetDirectionalDerivative in InitializationMode; refusing it there
+    /// says why, so the host does not read it as a broken FMU.
+    #[test]
+    fn directional_derivative_refusal_before_initialization_ends_says_when() {
+        for s in [Instantiated, InitializationMode] {
+            let msg = fmi2GetDirectionalDerivative
+                .refuse(s, Interface::CoSimulation)
+                .unwrap();
+            assert_eq!(
+                msg,
+                format!(
+                    "fmi2GetDirectionalDerivative called in state {s:?}; allowed in: EventMode, \
+                     ContinuousTimeMode, StepComplete, StepFailed, StepCanceled, Terminated, Error \
+                     (directional derivatives are available after fmi2ExitInitializationMode)"
+                )
+            );
+        }
+        let msg = fmi2GetDirectionalDerivative
+            .refuse(Fatal, Interface::ModelExchange)
+            .unwrap();
+        assert!(!msg.contains("fmi2ExitInitializationMode"), "{msg}");
+        for s in [EventMode, ContinuousTimeMode, Terminated, Error] {
+            assert!(fmi2GetDirectionalDerivative.refuse(s, Interface::ModelExchange).is_none());
+        }
+        for s in [StepComplete, StepFailed, StepCanceled] {
+            assert!(fmi2GetDirectionalDerivative.refuse(s, Interface::CoSimulation).is_none());
+        }
     }
 
     /// The FMU state functions may be called in every state but Fatal (and StepInProgress,

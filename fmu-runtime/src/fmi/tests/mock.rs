@@ -1,5 +1,8 @@
 //! One-mass spring x'' = -k x - d x' + u, the mock model for the layer's tests.
 //! Extra variables exercise the layer: a panic trigger, a failure trigger, strings.
+//! Its Jacobian is the constant matrix of a linear system, and the output derivatives
+//! follow from the equation, so tests know the exact answers. Instantiated from a resources
+//! folder whose path contains "no-derivatives", it provides neither.
 
 use std::path::Path;
 
@@ -19,8 +22,12 @@ pub const CRASH: u32 = 7;
 pub const LABEL: u32 = 8;
 pub const FAIL: u32 = 9;
 pub const RESOURCES: u32 = 10;
+/// The acceleration as an output: the one output with direct feedthrough from the input.
+pub const ACC: u32 = 11;
 
-const VARS: [VarInfo; 11] = [
+const NAMES: [&str; 12] = ["x", "v", "k", "u", "a", "d", "steps", "crash", "label", "fail", "resources", "acc"];
+
+const VARS: [VarInfo; 12] = [
     VarInfo { var_type: T::Real, causality: C::Output, variability: V::Continuous, initial: Some(I::Exact) },
     VarInfo { var_type: T::Real, causality: C::Local, variability: V::Continuous, initial: Some(I::Exact) },
     VarInfo { var_type: T::Real, causality: C::Parameter, variability: V::Fixed, initial: Some(I::Exact) },
@@ -32,6 +39,7 @@ const VARS: [VarInfo; 11] = [
     VarInfo { var_type: T::String, causality: C::Parameter, variability: V::Fixed, initial: Some(I::Exact) },
     VarInfo { var_type: T::Boolean, causality: C::Input, variability: V::Discrete, initial: None },
     VarInfo { var_type: T::String, causality: C::CalculatedParameter, variability: V::Fixed, initial: None },
+    VarInfo { var_type: T::Real, causality: C::Output, variability: V::Continuous, initial: Some(I::Calculated) },
 ];
 
 #[derive(Clone, Debug)]
@@ -55,6 +63,24 @@ impl Spring {
             panic!("crash requested at t = {}", self.time);
         }
         -self.k * x - self.d * v + self.u
+    }
+
+    fn has_derivatives(&self) -> bool {
+        !self.resources.contains("no-derivatives")
+    }
+
+    /// d unknown / d known; x, v and u are the only knowns the layer lets through.
+    fn partial(&self, unknown: u32, known: u32) -> f64 {
+        match (unknown, known) {
+            // x is an output, and v is der(x): each depends on itself only.
+            (X, X) | (V_, V_) => 1.0,
+            (X | V_, _) => 0.0,
+            // a = der(v), and acc its copy as an output.
+            (A | ACC, X) => -self.k,
+            (A | ACC, V_) => -self.d,
+            (A | ACC, U) => 1.0,
+            _ => unreachable!("the layer checks unknowns and knowns"),
+        }
     }
 
     fn start(resources: String) -> Spring {
@@ -88,13 +114,16 @@ impl Model for Spring {
     fn var_info(&self, vr: u32) -> Option<VarInfo> {
         VARS.get(vr as usize).copied()
     }
+    fn var_name(&self, vr: u32) -> Option<&str> {
+        NAMES.get(vr as usize).copied()
+    }
     fn get_real(&mut self, vr: u32) -> Result<f64, String> {
         Ok(match vr {
             X => self.x,
             V_ => self.v,
             K => self.k,
             U => self.u,
-            A => self.accel(self.x, self.v),
+            A | ACC => self.accel(self.x, self.v),
             D => self.d,
             _ => unreachable!("the layer checks value references"),
         })
@@ -163,6 +192,39 @@ impl Model for Spring {
     }
     fn exit_initialization(&mut self) -> Result<(), String> {
         Ok(())
+    }
+    fn provides_directional_derivative(&self) -> bool {
+        self.has_derivatives()
+    }
+    fn is_continuous_state(&self, vr: u32) -> bool {
+        matches!(vr, X | V_)
+    }
+    fn is_state_derivative(&self, vr: u32) -> bool {
+        matches!(vr, V_ | A)
+    }
+    fn directional_derivative(&mut self, unknowns: &[u32], knowns: &[u32], dv_known: &[f64], dv_unknown: &mut [f64]) -> Result<(), String> {
+        if self.fail {
+            return Err("Jacobian failed".into());
+        }
+        for (&unknown, dv) in unknowns.iter().zip(dv_unknown) {
+            *dv = knowns.iter().zip(dv_known).map(|(&known, &seed)| self.partial(unknown, known) * seed).sum();
+        }
+        Ok(())
+    }
+    fn max_output_derivative_order(&self) -> i32 {
+        if self.has_derivatives() { 1 } else { 0 }
+    }
+    /// do_step holds u over a step, so d acc/dt = -k v - d a.
+    fn get_real_output_derivative(&mut self, vr: u32, order: i32) -> Result<f64, String> {
+        assert_eq!(order, 1, "the layer checks the order");
+        if self.fail {
+            return Err("no derivative after a failure".into());
+        }
+        Ok(match vr {
+            X => self.v,
+            ACC => -self.k * self.v - self.d * self.accel(self.x, self.v),
+            _ => unreachable!("the layer checks for outputs"),
+        })
     }
     fn do_step(&mut self, t: f64, h: f64) -> Result<(), String> {
         if self.fail {

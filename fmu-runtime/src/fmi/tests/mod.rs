@@ -237,7 +237,7 @@ fn state_machine_errors() {
         assert_eq!(api::fmi2GetReal::<Spring>(c, &vr, 1, &mut x), fmi2Error);
         assert_eq!(log.last(), "fmi2GetReal: unknown value reference 99");
         assert_eq!(set_real(c, CRASH, 1.0), fmi2Error);
-        assert_eq!(log.last(), "fmi2SetReal: value reference 7 is a Boolean variable, not Real");
+        assert_eq!(log.last(), "fmi2SetReal: value reference 7 (crash) is a Boolean variable, not Real");
 
         // Null pointers.
         assert_eq!(api::fmi2GetReal::<Spring>(c, &X, 1, null_mut()), fmi2Error);
@@ -298,13 +298,11 @@ fn co_simulation_run() {
         assert_eq!(api::fmi2GetStringStatus::<Spring>(c, fmi2PendingStatus, &mut s), fmi2Discard);
         assert_eq!(api::fmi2GetRealStatus::<Spring>(c, fmi2DoStepStatus, &mut time), fmi2Discard);
 
-        // Unsupported capabilities say so.
-        let mut size = 0;
+        // Unsupported capabilities say so (more in derivatives_need_the_capability).
         let order = 1;
-        let mut v = 0.0;
-        assert_eq!(api::fmi2GetRealOutputDerivatives::<Spring>(c, &X, 1, &order, &mut v), fmi2Error);
+        let v = 0.0;
         assert_eq!(api::fmi2SetRealInputDerivatives::<Spring>(c, &U, 1, &order, &v), fmi2Error);
-        assert_eq!(api::fmi2GetDirectionalDerivative::<Spring>(c, &X, 1, &U, 1, &v, &mut size as *mut _ as *mut f64), fmi2Error);
+        assert!(log.last().contains("canInterpolateInputs=false"), "{}", log.last());
 
         assert_eq!(api::fmi2Terminate::<Spring>(c), fmi2OK);
         // Reset and run again from scratch, with the default k = 1.
@@ -839,5 +837,313 @@ fn serialized_state_recovers_from_the_error_state() {
     assert_eq!(b, fmi2False);
     run_cs(c, 0.2, 0.5, 0.1);
     free_state(c, restored);
+    unsafe { api::fmi2FreeInstance::<Spring>(c) };
+}
+
+// ---------------------------------------------------------------------------
+// Directional derivatives and output derivatives
+// ---------------------------------------------------------------------------
+
+/// fmi2GetDirectionalDerivative into a result prefilled with NaN, to see what was written.
+fn directional(c: fmi2Component, unknowns: &[u32], knowns: &[u32], seed: &[f64]) -> (fmi2Status, Vec<f64>) {
+    assert_eq!(knowns.len(), seed.len());
+    let mut out = vec![f64::NAN; unknowns.len()];
+    let status = unsafe {
+        api::fmi2GetDirectionalDerivative::<Spring>(c, unknowns.as_ptr(), unknowns.len(), knowns.as_ptr(), knowns.len(), seed.as_ptr(), out.as_mut_ptr())
+    };
+    (status, out)
+}
+
+fn output_derivatives(c: fmi2Component, vrs: &[u32], orders: &[i32]) -> (fmi2Status, Vec<f64>) {
+    assert_eq!(vrs.len(), orders.len());
+    let mut out = vec![f64::NAN; vrs.len()];
+    let status = unsafe { api::fmi2GetRealOutputDerivatives::<Spring>(c, vrs.as_ptr(), vrs.len(), orders.as_ptr(), out.as_mut_ptr()) };
+    (status, out)
+}
+
+/// A refusal: fmi2Error, one logStatusError message from `function` giving `reason`,
+/// the instance still in the state it was in.
+fn assert_refused(c: fmi2Component, log: &Log, status: fmi2Status, function: &str, reason: &str) {
+    let state = model_state_of(c);
+    assert_eq!(status, fmi2Error, "accepted; expected: {reason}");
+    let last = log.0.borrow().last().cloned().expect("no message logged");
+    assert_eq!((last.status, last.category.as_str()), (fmi2Error, "logStatusError"));
+    assert!(last.text.starts_with(function), "{} (expected from {function})", last.text);
+    assert!(last.text.contains(reason), "{} (expected {reason})", last.text);
+    assert_eq!(model_state_of(c), state);
+}
+
+/// The Jacobian of the linear spring, d(der(x), der(v), x, acc) / d(x, v, u), column by column
+/// and for a mixed seed, in Event Mode, Continuous-Time Mode and after fmi2Terminate.
+#[test]
+fn directional_derivatives_model_exchange() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2ModelExchange);
+    assert_eq!(set_real(c, K, 4.0), fmi2OK);
+    initialize(c, 0.0);
+    assert_eq!(set_real(c, D, 0.3), fmi2OK);
+    assert_eq!(set_real(c, U, 0.7), fmi2OK);
+    let (k, d) = (4.0, 0.3);
+    let unknowns = [V_, A, X, ACC];
+    let knowns = [X, V_, U];
+    let jacobian = [[0.0, 1.0, 0.0], [-k, -d, 1.0], [1.0, 0.0, 0.0], [-k, -d, 1.0]];
+    let check = |c: fmi2Component| {
+        for j in 0..3 {
+            let mut seed = [0.0; 3];
+            seed[j] = 1.0;
+            let (status, column) = directional(c, &unknowns, &knowns, &seed);
+            assert_eq!(status, fmi2OK, "{}", log.last());
+            assert_eq!(column, jacobian.map(|row| row[j]), "column {j}");
+        }
+        let seed = [0.5, -2.0, 3.0];
+        let (status, dv) = directional(c, &unknowns, &knowns, &seed);
+        assert_eq!(status, fmi2OK);
+        let expected = jacobian.map(|row| row.iter().zip(seed).map(|(j, s)| j * s).sum::<f64>());
+        assert_eq!(dv, expected);
+    };
+    check(c);
+    unsafe {
+        assert_eq!(api::fmi2EnterContinuousTimeMode::<Spring>(c), fmi2OK);
+        assert_eq!(api::fmi2SetTime::<Spring>(c, 0.1), fmi2OK);
+        let x = [0.2, -0.4];
+        assert_eq!(api::fmi2SetContinuousStates::<Spring>(c, x.as_ptr(), 2), fmi2OK);
+    }
+    check(c);
+
+    // Any subset, in any order, repeats included.
+    let (status, dv) = directional(c, &[ACC, ACC, X], &[U, X, U], &[1.0, 2.0, 0.5]);
+    assert_eq!(status, fmi2OK);
+    assert_eq!(dv, [1.5 - 2.0 * k, 1.5 - 2.0 * k, 2.0]);
+    // No knowns: the zero vector.
+    let (status, dv) = directional(c, &[A, X], &[], &[]);
+    assert_eq!(status, fmi2OK);
+    assert_eq!(dv, [0.0, 0.0]);
+    unsafe {
+        // No unknowns: nothing to compute, any pointer may be NULL.
+        assert_eq!(api::fmi2GetDirectionalDerivative::<Spring>(c, null(), 0, null(), 3, null(), null_mut()), fmi2OK);
+        // The seed in the result buffer, as a C host may pass it: read before written.
+        let mut buf = [1.0, 10.0, 100.0];
+        let (u, kn) = ([X, A, ACC], [X, V_, U]);
+        assert_eq!(api::fmi2GetDirectionalDerivative::<Spring>(c, u.as_ptr(), 3, kn.as_ptr(), 3, buf.as_ptr(), buf.as_mut_ptr()), fmi2OK);
+        assert_eq!(buf, [1.0, -k - 10.0 * d + 100.0, -k - 10.0 * d + 100.0]);
+        // Overlapping by one element.
+        let mut buf = [1.0, 10.0, 100.0];
+        let p = buf.as_mut_ptr();
+        assert_eq!(api::fmi2GetDirectionalDerivative::<Spring>(c, u.as_ptr(), 2, kn.as_ptr(), 2, p.add(1), p), fmi2OK);
+        assert_eq!(buf, [10.0, -10.0 * k - 100.0 * d, 100.0]);
+
+        assert_eq!(api::fmi2Terminate::<Spring>(c), fmi2OK);
+    }
+    check(c);
+    unsafe { api::fmi2FreeInstance::<Spring>(c) };
+}
+
+/// In Co-Simulation only outputs with respect to inputs: acc feeds through, x does not.
+#[test]
+fn directional_derivatives_co_simulation() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2CoSimulation);
+    initialize(c, 0.0);
+    run_cs(c, 0.0, 0.3, 0.1);
+    let (status, dv) = directional(c, &[X, ACC], &[U], &[2.5]);
+    assert_eq!(status, fmi2OK, "{}", log.last());
+    assert_eq!(dv, [0.0, 2.5]);
+    // Tracing names the call.
+    let cats = [c"logAll".as_ptr()];
+    assert_eq!(unsafe { api::fmi2SetDebugLogging::<Spring>(c, fmi2True, 1, cats.as_ptr()) }, fmi2OK);
+    assert_eq!(directional(c, &[ACC], &[U], &[1.0]).0, fmi2OK);
+    assert_eq!(log.last(), "fmi2GetDirectionalDerivative: 1 unknowns, 1 knowns");
+    assert_eq!(model_state_of(c), crate::fmi::state::ModelState::StepComplete);
+    run_cs(c, 0.3, 0.5, 0.1);
+    unsafe { api::fmi2FreeInstance::<Spring>(c) };
+}
+
+#[test]
+fn directional_derivative_refusals_leave_the_instance_usable() {
+    const F: &str = "fmi2GetDirectionalDerivative: ";
+    let log = Log::default();
+    for kind in [fmi2CoSimulation, fmi2ModelExchange] {
+        let c = instantiate(&log, kind);
+        let refused = |(status, out): (fmi2Status, Vec<f64>), reason: &str| {
+            assert_refused(c, &log, status, "fmi2GetDirectionalDerivative", reason);
+            assert!(out.iter().all(|v| v.is_nan()), "written on a refused call: {out:?}");
+        };
+        let works = || {
+            let (status, dv) = directional(c, &[ACC], &[U], &[1.0]);
+            assert_eq!((status, dv), (fmi2OK, vec![1.0]), "{}", log.last());
+        };
+
+        // Not before initialization has ended; the standard's InitializationMode included.
+        let before = "called in state Instantiated; allowed in: EventMode, ContinuousTimeMode, StepComplete, StepFailed, StepCanceled, Terminated, Error (directional derivatives are available after fmi2ExitInitializationMode)";
+        refused(directional(c, &[ACC], &[U], &[1.0]), before);
+        assert_eq!(set_real(c, K, 2.0), fmi2OK);
+        unsafe {
+            assert_eq!(api::fmi2SetupExperiment::<Spring>(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
+            assert_eq!(api::fmi2EnterInitializationMode::<Spring>(c), fmi2OK);
+        }
+        refused(
+            directional(c, &[ACC], &[U], &[1.0]),
+            "fmi2GetDirectionalDerivative called in state InitializationMode; allowed in: EventMode, ContinuousTimeMode, StepComplete, StepFailed, StepCanceled, Terminated, Error (directional derivatives are available after fmi2ExitInitializationMode)",
+        );
+        assert_eq!(unsafe { api::fmi2ExitInitializationMode::<Spring>(c) }, fmi2OK);
+        works();
+
+        // Unknowns: Real outputs, and in Model Exchange state derivatives.
+        refused(directional(c, &[U], &[U], &[1.0]), &format!("{F}unknown value reference 3 (u) has causality Input; expected an output"));
+        refused(directional(c, &[ACC, K], &[U], &[1.0]), "unknown value reference 2 (k) has causality Parameter");
+        refused(directional(c, &[ACC, 99], &[U], &[1.0]), &format!("{F}unknown value reference 99"));
+        refused(directional(c, &[STEPS], &[U], &[1.0]), &format!("{F}value reference 6 (steps) is a Integer variable, not Real"));
+        // Knowns: Real inputs, and in Model Exchange continuous states.
+        refused(directional(c, &[ACC], &[ACC], &[1.0]), "known value reference 11 (acc) has causality Output; expected an input");
+        refused(directional(c, &[ACC], &[D], &[1.0]), "known value reference 5 (d) has causality Parameter");
+        refused(directional(c, &[ACC], &[U, 99], &[1.0, 1.0]), &format!("{F}unknown value reference 99"));
+        refused(directional(c, &[ACC], &[CRASH], &[1.0]), "value reference 7 (crash) is a Boolean variable, not Real");
+        if kind == fmi2CoSimulation {
+            refused(directional(c, &[A], &[U], &[1.0]), "unknown value reference 4 (a) has causality Local; expected an output (state derivatives are unknowns in Model Exchange only)");
+            refused(directional(c, &[ACC], &[V_], &[1.0]), "known value reference 1 (v) has causality Local; expected an input (continuous states are knowns in Model Exchange only)");
+            refused(directional(c, &[ACC], &[X], &[1.0]), "known value reference 0 (x) has causality Output; expected an input (continuous states are knowns in Model Exchange only)");
+        } else {
+            refused(directional(c, &[U], &[U], &[1.0]), "expected an output or the derivative of a continuous state");
+            refused(directional(c, &[ACC], &[ACC], &[1.0]), "known value reference 11 (acc) has causality Output; expected an input or a continuous state");
+            let (status, dv) = directional(c, &[A], &[V_], &[1.0]);
+            assert_eq!((status, dv), (fmi2OK, vec![0.0]), "{}", log.last());
+        }
+        // Seeds must be numbers.
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            refused(directional(c, &[ACC], &[U, U], &[1.0, bad]), &format!("{F}dvKnown[1] = {bad} for known value reference 3 (u) is not finite"));
+        }
+        // NULL arrays with a count.
+        unsafe {
+            let (u, k, seed, mut out) = ([ACC], [U], [1.0], [f64::NAN]);
+            let call = |u: *const u32, k: *const u32, seed: *const f64, out: *mut f64| {
+                api::fmi2GetDirectionalDerivative::<Spring>(c, u, 1, k, 1, seed, out)
+            };
+            let status = call(null(), k.as_ptr(), seed.as_ptr(), out.as_mut_ptr());
+            refused((status, out.to_vec()), &format!("{F}argument vUnknown_ref[] must not be NULL"));
+            let status = call(u.as_ptr(), null(), seed.as_ptr(), out.as_mut_ptr());
+            refused((status, out.to_vec()), &format!("{F}argument vKnown_ref[] must not be NULL"));
+            let status = call(u.as_ptr(), k.as_ptr(), null(), out.as_mut_ptr());
+            refused((status, out.to_vec()), &format!("{F}argument dvKnown[] must not be NULL"));
+            let status = call(u.as_ptr(), k.as_ptr(), seed.as_ptr(), null_mut());
+            assert_refused(c, &log, status, F, "argument dvUnknown[] must not be NULL");
+        }
+        works();
+        unsafe { api::fmi2FreeInstance::<Spring>(c) };
+    }
+}
+
+#[test]
+fn output_derivatives_co_simulation() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2CoSimulation);
+    assert_eq!(set_real(c, K, 4.0), fmi2OK);
+    initialize(c, 0.0);
+    assert_eq!(set_real(c, D, 0.3), fmi2OK);
+    assert_eq!(set_real(c, U, 0.7), fmi2OK);
+    run_cs(c, 0.0, 0.5, 0.1);
+    let (x, v, a) = (get_real(c, X), get_real(c, V_), get_real(c, ACC));
+    let (status, dv) = output_derivatives(c, &[X, ACC, X], &[1, 1, 1]);
+    assert_eq!(status, fmi2OK, "{}", log.last());
+    assert_eq!(dv, [v, -4.0 * v - 0.3 * a, v]);
+    assert!(v != 0.0 && x != 1.0, "the spring has moved");
+    assert_eq!(unsafe { api::fmi2GetRealOutputDerivatives::<Spring>(c, null(), 0, null(), null_mut()) }, fmi2OK);
+
+    // Refusals: logged, nothing written, the instance carries on.
+    const F: &str = "fmi2GetRealOutputDerivatives: ";
+    let refused = |(status, out): (fmi2Status, Vec<f64>), reason: &str| {
+        assert_refused(c, &log, status, "fmi2GetRealOutputDerivatives", reason);
+        assert!(out.iter().all(|v| v.is_nan()), "written on a refused call: {out:?}");
+    };
+    for order in [0, 2, -1] {
+        refused(
+            output_derivatives(c, &[X, ACC], &[1, order]),
+            &format!("{F}value reference 11 (acc): derivative order {order} requested; this FMU provides orders 1 to 1 (maxOutputDerivativeOrder 1)"),
+        );
+    }
+    refused(output_derivatives(c, &[U], &[1]), &format!("{F}value reference 3 (u) has causality Input; output derivatives are for outputs only"));
+    refused(output_derivatives(c, &[X, V_], &[1, 1]), "value reference 1 (v) has causality Local");
+    refused(output_derivatives(c, &[STEPS], &[1]), &format!("{F}value reference 6 (steps) is a Integer variable, not Real"));
+    refused(output_derivatives(c, &[99], &[1]), &format!("{F}unknown value reference 99"));
+    unsafe {
+        let (vr, order, mut out) = ([X], [1], [f64::NAN]);
+        let status = api::fmi2GetRealOutputDerivatives::<Spring>(c, null(), 1, order.as_ptr(), out.as_mut_ptr());
+        refused((status, out.to_vec()), &format!("{F}argument vr[] must not be NULL"));
+        let status = api::fmi2GetRealOutputDerivatives::<Spring>(c, vr.as_ptr(), 1, null(), out.as_mut_ptr());
+        refused((status, out.to_vec()), &format!("{F}argument order[] must not be NULL"));
+        let status = api::fmi2GetRealOutputDerivatives::<Spring>(c, vr.as_ptr(), 1, order.as_ptr(), null_mut());
+        assert_refused(c, &log, status, F, "argument value[] must not be NULL");
+    }
+    let t = run_cs(c, 0.5, 0.6, 0.1);
+    assert_eq!(output_derivatives(c, &[X], &[1]), (fmi2OK, vec![get_real(c, V_)]));
+    // Still at the last communication point after fmi2Terminate.
+    assert_eq!(unsafe { api::fmi2Terminate::<Spring>(c) }, fmi2OK);
+    assert_eq!(output_derivatives(c, &[X], &[1]), (fmi2OK, vec![get_real(c, V_)]));
+    assert!((t - 0.6).abs() < 1e-12);
+    unsafe { api::fmi2FreeInstance::<Spring>(c) };
+
+    // Only between steps, and only in Co-Simulation.
+    let c = instantiate(&log, fmi2CoSimulation);
+    assert_refused(c, &log, output_derivatives(c, &[X], &[1]).0, "fmi2GetRealOutputDerivatives called in state Instantiated", "allowed in: StepComplete, StepFailed, StepCanceled, Terminated, Error");
+    unsafe {
+        assert_eq!(api::fmi2EnterInitializationMode::<Spring>(c), fmi2OK);
+        assert_refused(c, &log, output_derivatives(c, &[X], &[1]).0, "fmi2GetRealOutputDerivatives called in state InitializationMode", "allowed in: StepComplete");
+        api::fmi2FreeInstance::<Spring>(c);
+    }
+    let c = instantiate(&log, fmi2ModelExchange);
+    initialize(c, 0.0);
+    assert_refused(c, &log, output_derivatives(c, &[X], &[1]).0, "fmi2GetRealOutputDerivatives is a CoSimulation function", "instantiated for ModelExchange");
+    unsafe { api::fmi2FreeInstance::<Spring>(c) };
+}
+
+/// A model without the capabilities: both functions say which flag is false, and nothing else changes.
+#[test]
+fn derivatives_need_the_capability() {
+    let log = Log::default();
+    for kind in [fmi2CoSimulation, fmi2ModelExchange] {
+        let c = instantiate_with(&log, kind, GUID, Some("file:///tmp/no-derivatives/resources"), false);
+        assert!(!c.is_null(), "{}", log.last());
+        initialize(c, 0.0);
+        let (status, out) = directional(c, &[ACC], &[U], &[1.0]);
+        assert_refused(c, &log, status, "fmi2GetDirectionalDerivative", "fmi2GetDirectionalDerivative: not supported by this FMU (capability flag providesDirectionalDerivative=false)");
+        assert!(out[0].is_nan());
+        if kind == fmi2CoSimulation {
+            let (status, out) = output_derivatives(c, &[X], &[1]);
+            assert_refused(c, &log, status, "fmi2GetRealOutputDerivatives", "fmi2GetRealOutputDerivatives: not supported by this FMU (capability flag maxOutputDerivativeOrder>0=false)");
+            assert!(out[0].is_nan());
+            run_cs(c, 0.0, 0.2, 0.1);
+        }
+        assert!((get_real(c, ACC) + get_real(c, X)).abs() < 1e-15, "a = -x with k = 1, d = u = 0");
+        unsafe { api::fmi2FreeInstance::<Spring>(c) };
+    }
+}
+
+/// The model's Err is a model failure, not a refusal: the instance enters Error, where
+/// both functions still answer for diagnostics, until it is reset.
+#[test]
+fn derivative_failures_of_the_model_enter_the_error_state() {
+    use crate::fmi::state::ModelState;
+    let log = Log::default();
+    let c = instantiate(&log, fmi2CoSimulation);
+    initialize(c, 0.0);
+    run_cs(c, 0.0, 0.2, 0.1);
+    assert_eq!(set_bool(c, FAIL, true), fmi2OK);
+    assert_eq!(directional(c, &[ACC], &[U], &[1.0]).0, fmi2Error);
+    assert_eq!(log.last(), "fmi2GetDirectionalDerivative: Jacobian failed");
+    assert_eq!(model_state_of(c), ModelState::Error);
+    // Allowed in Error (diagnostics); the model still fails.
+    assert_eq!(output_derivatives(c, &[ACC], &[1]).0, fmi2Error);
+    assert_eq!(log.last(), "fmi2GetRealOutputDerivatives: value reference 11: no derivative after a failure");
+    unsafe {
+        assert_eq!(api::fmi2Reset::<Spring>(c), fmi2OK);
+        initialize(c, 0.0);
+    }
+    assert_eq!(directional(c, &[ACC], &[U], &[1.0]), (fmi2OK, vec![1.0]));
+    assert_eq!(output_derivatives(c, &[X], &[1]), (fmi2OK, vec![0.0]));
+
+    // A panic in the model is contained the same way.
+    assert_eq!(set_bool(c, CRASH, true), fmi2OK);
+    assert_eq!(output_derivatives(c, &[ACC], &[1]).0, fmi2Error);
+    assert!(log.last().starts_with("fmi2GetRealOutputDerivatives: panic in the model: crash requested"), "{}", log.last());
+    assert_eq!(model_state_of(c), ModelState::Error);
     unsafe { api::fmi2FreeInstance::<Spring>(c) };
 }
