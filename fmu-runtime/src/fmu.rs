@@ -11,6 +11,11 @@ use crate::kinematics as k3;
 use crate::scalar::{Scalar, c};
 use std::sync::Arc;
 
+/// Capabilities the model implements; the builder writes them into modelDescription.xml.
+pub const PROVIDES_DIRECTIONAL_DERIVATIVE: bool = true;
+pub const MAX_OUTPUT_DERIVATIVE_ORDER: i32 = 1;
+pub const CAN_INTERPOLATE_INPUTS: bool = true;
+
 #[derive(Debug, Clone)]
 pub struct BodyFmu {
     table: Arc<VariableTable>,
@@ -172,8 +177,32 @@ impl Model for BodyFmu {
         value_of(&mut self.body, quantity)
     }
 
+    fn provides_directional_derivative(&self) -> bool {
+        PROVIDES_DIRECTIONAL_DERIVATIVE
+    }
+
+    fn is_continuous_state(&self, vr: u32) -> bool {
+        self.is_state(vr)
+    }
+
+    fn is_state_derivative(&self, vr: u32) -> bool {
+        self.is_derivative(vr)
+    }
+
+    fn directional_derivative(&mut self, unknowns: &[u32], knowns: &[u32], dv_known: &[f64], dv_unknown: &mut [f64]) -> Result<(), String> {
+        BodyFmu::directional_derivative(self, unknowns, knowns, dv_known, dv_unknown)
+    }
+
+    fn max_output_derivative_order(&self) -> i32 {
+        MAX_OUTPUT_DERIVATIVE_ORDER
+    }
+
+    fn get_real_output_derivative(&mut self, vr: u32, _order: i32) -> Result<f64, String> {
+        self.output_derivative(vr)
+    }
+
     fn can_interpolate_inputs(&self) -> bool {
-        true
+        CAN_INTERPOLATE_INPUTS
     }
 
     fn set_real_input_derivative(&mut self, vr: u32, value: f64) -> Result<(), String> {

@@ -378,8 +378,12 @@ fn write_document(w: &mut W, info: &ModelInfo, plan: &Plan) -> io::Result<()> {
     Ok(())
 }
 
-/// Capability flags: what the runtime's fmi layer implements (fmu-runtime/src/fmi).
+/// Capability flags: what the runtime's fmi layer implements (fmu-runtime/src/fmi), and what
+/// the body model provides (fmu-runtime/src/fmu.rs says so in constants).
 fn write_interfaces(w: &mut W, model_identifier: &str) -> io::Result<()> {
+    use fmu_runtime::fmu::{CAN_INTERPOLATE_INPUTS, MAX_OUTPUT_DERIVATIVE_ORDER, PROVIDES_DIRECTIONAL_DERIVATIVE};
+    let flag = |b: bool| if b { "true" } else { "false" };
+    let max_order = MAX_OUTPUT_DERIVATIVE_ORDER.to_string();
     let common = [
         ("modelIdentifier", model_identifier),
         ("needsExecutionTool", "false"),
@@ -389,13 +393,14 @@ fn write_interfaces(w: &mut W, model_identifier: &str) -> io::Result<()> {
         ("canGetAndSetFMUstate", "true"),
         // fmi2SerializeFMUstate and friends: fmu-runtime/src/fmi/serial.rs
         ("canSerializeFMUstate", "true"),
-        ("providesDirectionalDerivative", "false"),
+        // exact, by the body's equations in dual numbers (fmu-runtime/src/scalar.rs)
+        ("providesDirectionalDerivative", flag(PROVIDES_DIRECTIONAL_DERIVATIVE)),
     ];
     w.create_element("ModelExchange").with_attributes(common).write_empty()?;
     let cs = [
         ("canHandleVariableCommunicationStepSize", "true"),
-        ("canInterpolateInputs", "true"),
-        ("maxOutputDerivativeOrder", "0"),
+        ("canInterpolateInputs", flag(CAN_INTERPOLATE_INPUTS)),
+        ("maxOutputDerivativeOrder", max_order.as_str()),
     ];
     w.create_element("CoSimulation").with_attributes(common.into_iter().chain(cs)).write_empty()?;
     Ok(())
@@ -621,12 +626,14 @@ mod tests {
         assert_eq!(root.attr("description"), Some("Reduced flexible body <test> & co"));
         let cs = doc.iter().find(|e| e.name() == "CoSimulation").unwrap();
         assert_eq!(cs.attr("canHandleVariableCommunicationStepSize"), Some("true"));
+        assert_eq!(cs.attr("canInterpolateInputs"), Some("true"));
+        assert_eq!(cs.attr("maxOutputDerivativeOrder"), Some("1"));
         // the runtime implements the FMU state functions, serialization included, for both
         for interface in ["ModelExchange", "CoSimulation"] {
             let e = doc.iter().find(|e| e.name() == interface).unwrap();
             assert_eq!(e.attr("canGetAndSetFMUstate"), Some("true"), "{interface}");
             assert_eq!(e.attr("canSerializeFMUstate"), Some("true"), "{interface}");
-            assert_eq!(e.attr("providesDirectionalDerivative"), Some("false"), "{interface}");
+            assert_eq!(e.attr("providesDirectionalDerivative"), Some("true"), "{interface}");
         }
         assert_eq!(cs.attr("modelIdentifier"), Some("Test"));
         let structure: Vec<&str> = doc.iter().filter(|e| e.parent() == "ModelStructure").map(|e| e.name()).collect();
