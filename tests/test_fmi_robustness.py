@@ -116,3 +116,42 @@ def test_calls_in_the_wrong_state_are_errors(beam):
         fmu.freeInstance()
     finally:
         shutil.rmtree(directory, ignore_errors=True)
+
+
+def test_derivative_requests_out_of_bounds_are_errors(beam):
+    """fmi2GetRealOutputDerivatives of order 2 or of an input, fmi2GetDirectionalDerivative of an
+    input or with respect to an output or (Co-Simulation) a state, and either before
+    initialisation: fmi2Error with the reason logged; the instance keeps working."""
+    md = read_model_description(str(beam[0]))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    directory = extract(str(beam[0]))
+    try:
+        fmu, rec = slave(directory, md)
+        fmu.instantiate(callbacks=rec.callbacks)
+        with pytest.raises(Exception):
+            fmu.getDirectionalDerivative([vr["tip.r[1]"]], [vr["tip.f[1]"]], [1.0])
+        assert "fmi2ExitInitializationMode" in rec.messages[-1], rec.text()
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        fmu.exitInitializationMode()
+        fmu.doStep(0.0, 0.01)
+        for call, reason in [
+            (lambda: fmu.getRealOutputDerivatives([vr["tip.r[1]"]], [2]), "maxOutputDerivativeOrder"),
+            (lambda: fmu.getRealOutputDerivatives([vr["tip.f[1]"]], [1]), "tip.f[1]"),
+            (lambda: fmu.getDirectionalDerivative([vr["tip.f[1]"]], [vr["tip.f[2]"]], [1.0]), "tip.f[1]"),
+            (lambda: fmu.getDirectionalDerivative([vr["tip.r[1]"]], [vr["tip.v[1]"]], [1.0]), "tip.v[1]"),
+            (lambda: fmu.getDirectionalDerivative([vr["tip.r[1]"]], [vr["q[1]"]], [1.0]), "Model Exchange"),
+            (lambda: fmu.getDirectionalDerivative([vr["tip.r[1]"]], [vr["tip.f[1]"]], [float("nan")]), "finite"),
+        ]:
+            n = len(rec.messages)
+            with pytest.raises(Exception):
+                call()
+            assert len(rec.messages) > n and reason in rec.messages[-1], (reason, rec.messages[n:])
+            # still usable
+            assert fmu.getDirectionalDerivative([vr["tip.a[3]"]], [vr["tip.f[3]"]], [1.0])[0] > 0  # feedthrough
+            fmu.getRealOutputDerivatives([vr["tip.r[1]"]], [1])
+        fmu.doStep(0.01, 0.01)
+        fmu.terminate()
+        fmu.freeInstance()
+    finally:
+        shutil.rmtree(directory, ignore_errors=True)

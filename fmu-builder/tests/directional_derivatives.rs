@@ -35,6 +35,10 @@ fn natural_scale(name: &str, value: f64) -> f64 {
         // the runtime accepts rotation inputs up to 1e-2 off orthonormal
         return 0.1;
     }
+    if name.starts_with("frame.Q[") {
+        // a unit quaternion: orientation is far from linear in it
+        return 0.1;
+    }
     let base: f64 = if name.starts_with("q[") {
         1e-4
     } else if name.starts_with("qd[") {
@@ -124,6 +128,16 @@ fn check_jacobian(fmu: &mut BodyFmu, table: &VariableTable, what: &str) -> f64 {
                 name(u),
                 name(k)
             );
+            // what modelDescription.xml declares must cover every dependence there is
+            if a.abs() > floor && a != 0.0 {
+                let deps = table.dependencies(table.get(u).unwrap());
+                assert!(
+                    deps.contains(&k),
+                    "{what}: {} depends on {} (d = {a:e}) but ModelStructure does not list it",
+                    name(u),
+                    name(k)
+                );
+            }
             if a.abs() > 1e3 * floor {
                 if (a - f).abs() / a.abs() > worst {
                     worst_at = format!("d {} / d {}", name(u), name(k));
