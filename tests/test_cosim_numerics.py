@@ -165,3 +165,84 @@ def test_step_size_convergence_shows_the_order(tmp_path):
         orders = np.log2(errors[:-1] / errors[1:])
         print(f"\n{'first' if first_order else 'zero'}-order hold: errors {errors}, observed orders {orders}")
         assert np.all(np.abs(orders - expected) < 0.25)
+
+
+def test_rotating_mount_convergence_shows_the_order(tmp_path):
+    """A T-square spinning up about the vertical (w = 5 + 40 t rad/s) under lateral gravity (so
+    gravity turns in the body frame) with a 30 Hz load on its head, against the Model Exchange
+    solution under the exact inputs (DOP853, rtol 1e-12). Material soft and lightly damped so
+    that the explicit reference integrator can follow every mode. The master holds its inputs
+    (order 1) or gives their derivatives (base.R' = w~R, base.w' = z, the load's rate): the
+    modal load then ramps with the rotating frame's terms included and the coupling (Coriolis,
+    Euler, centrifugal) is integrated by a predictor-corrector, so the response converges at
+    order 2 (left.u[3]); the centrifugal in-plane deflection left.u[1] and the mount reaction
+    converge too, to 5e-4 and 1e-4 at 0.625 ms (with the coupling held over each substep, as
+    before, left.u[1] of the same spin-up under vertical gravity stayed 20-39 % off at these
+    steps)."""
+    from scipy.integrate import solve_ivp
+    spec = json.loads((EXAMPLES / "t-square.json").read_text())
+    spec["material"] = {"E": 2e9, "nu": 0.3, "rho": 1200.0}
+    spec["reduction"]["modes"] = 6
+    spec["damping"] = {"alpha": 2.0, "beta": 1e-6}
+    path = tmp_path / "spec.json"
+    path.write_text(json.dumps(spec))
+    fmu_path = tmp_path / "TSquare.fmu"
+    run_builder([path, "-o", fmu_path])
+    w0, alpha, t_end = 5.0, 40.0, 0.4
+    outputs = ["left.u[3]", "left.u[1]", "base.f[1]"]
+
+    def inputs(t):
+        th = w0 * t + 0.5 * alpha * t * t
+        c, s = np.cos(th), np.sin(th)
+        return {"base.R[1,1]": c, "base.R[1,2]": -s, "base.R[2,1]": s, "base.R[2,2]": c,
+                "base.w[3]": w0 + alpha * t, "base.z[3]": alpha, "left.f[3]": 20 * np.sin(30 * t)}
+
+    def rates(t):
+        th = w0 * t + 0.5 * alpha * t * t
+        c, s, w = np.cos(th), np.sin(th), w0 + alpha * t
+        return {"base.R[1,1]": -s * w, "base.R[1,2]": -c * w, "base.R[2,1]": c * w, "base.R[2,2]": -s * w,
+                "base.w[3]": alpha, "left.f[3]": 600 * np.cos(30 * t)}
+
+    me = Fmu(fmu_path, "ModelExchange")
+    try:
+        me.set(**inputs(0.0), **{"g[1]": -9.81})
+        me.initialize()
+
+        def rhs(t, x):
+            me.fmu.setTime(t)
+            me.set(**inputs(t))
+            me.set_states(x)
+            return me.derivatives()
+        sol = solve_ivp(rhs, (0.0, t_end), me.states(), method="DOP853", rtol=1e-12, atol=1e-14)
+        me.set(**inputs(t_end))
+        me.set_states(sol.y[:, -1])
+        reference = me.get(*outputs)
+    finally:
+        me.close()
+
+    def cosim(h, first_order):
+        fmu = Fmu(fmu_path, "CoSimulation")
+        try:
+            fmu.set(**inputs(0.0), **{"g[1]": -9.81})
+            fmu.initialize()
+            for k in range(int(round(t_end / h))):
+                t = k * h
+                fmu.set(**inputs(t))
+                if first_order:
+                    r = rates(t)
+                    fmu.fmu.setRealInputDerivatives([fmu.vr[n] for n in r], [1] * len(r), list(r.values()))
+                fmu.fmu.doStep(t, h)
+            fmu.set(**inputs(t_end))
+            return fmu.get(*outputs)
+        finally:
+            fmu.close()
+
+    steps = [0.005, 0.0025, 0.00125, 0.000625]
+    for first_order, expected in ((False, 1.0), (True, 2.0)):
+        errors = np.array([np.abs(cosim(h, first_order) - reference) / np.abs(reference) for h in steps])
+        orders = np.log2(errors[:-1, 0] / errors[1:, 0])
+        print(f"\n{'first' if first_order else 'zero'}-order hold, spinning mount: errors of {outputs} "
+              f"{errors.tolist()}, observed orders of {outputs[0]} {orders}")
+        assert np.all(np.abs(orders - expected) < 0.25)
+        if first_order:
+            assert np.all(errors[-1] < 1e-3), errors[-1]

@@ -120,6 +120,18 @@ pub struct Invariants<T = f64> {
     pub angular_momentum: Vec3<T>,
 }
 
+/// Workspace of a mounted body's step with coupling terms: the substep's start state, the
+/// coupling-corrected load at its start and end, the inputs and coupling at the step's end.
+#[derive(Debug, Clone, Default)]
+struct CoupledWork {
+    q0: Vec<f64>,
+    qd0: Vec<f64>,
+    f0: Vec<f64>,
+    f1: Vec<f64>,
+    loads_end: Vec<FlangeLoad>,
+    coupling_end: Coupling<f64>,
+}
+
 /// Workspace of a free-floating body's step: the substep's start state and its two coupling
 /// loads (empty for a mounted body).
 #[derive(Debug, Clone, Default)]
@@ -183,9 +195,8 @@ pub struct FlexibleBody<T = f64> {
     frame_rate: FrameState<T>,
     /// 3 x n workspace: C_r(q) = C_r + [G_a q]^T
     cr_q: Vec<T>,
-    /// q' and q workspace for the coupled load
-    scratch: Vec<f64>,
     free_work: FreeWork,
+    coupled_work: CoupledWork,
     propagator: ModalPropagator,
     /// First derivatives of the inputs for the next step (fmi2SetRealInputDerivatives), and
     /// the modal load's rate they give.
@@ -232,7 +243,18 @@ impl FlexibleBody {
             initial_frame: InitialFrame::default(),
             frame_rate: FrameState::default(),
             cr_q: vec![0.0; 3 * n],
-            scratch: vec![0.0; n],
+            coupled_work: if body.free_floating {
+                CoupledWork::default()
+            } else {
+                CoupledWork {
+                    q0: vec![0.0; n],
+                    qd0: vec![0.0; n],
+                    f0: vec![0.0; n],
+                    f1: vec![0.0; n],
+                    loads_end: vec![FlangeLoad::default(); nf],
+                    coupling_end: Coupling { c_d: vec![0.0; n * n], c_k: vec![0.0; n * n], ..Coupling::default() },
+                }
+            },
             free_work: if body.free_floating {
                 FreeWork { q0: vec![0.0; n], qd0: vec![0.0; n], load0: vec![0.0; n], load1: vec![0.0; n] }
             } else {
@@ -274,8 +296,8 @@ impl FlexibleBody {
             frame_rate: FrameState::default(),
             cr_q: zeros(3 * n),
             // stepping is f64 only
-            scratch: Vec::new(),
             free_work: FreeWork::default(),
+            coupled_work: CoupledWork::default(),
             propagator: ModalPropagator::with_modes(0),
             rates: self.rates.clone(),
             load_rate: Vec::new(),
@@ -449,65 +471,7 @@ impl<T: Scalar> FlexibleBody<T> {
         if self.coupling.valid {
             return;
         }
-        let n = self.q.len();
-        let nn = n * n;
-        let g = self.gravity();
-        let a = &self.mount.rot;
-        let c = &mut self.coupling;
-        c.w = k3::mul_t(a, self.mount.w);
-        c.z = k3::mul_t(a, self.mount.z);
-        c.a = k3::mul_t(a, k3::sub(self.mount.a, g));
-        c.c_d.fill(T::zero());
-        c.c_k.fill(T::zero());
-        let mut active = false;
-        let mut add = |target: &mut Vec<T>, scale: T, block: &[f64]| {
-            if !scale.is_zero() {
-                active = true;
-                for (t, b) in target.iter_mut().zip(block) {
-                    *t += scale * *b;
-                }
-            }
-        };
-        if let Some(rot) = &self.body.rotation {
-            for i in 0..3 {
-                add(&mut c.c_d, c.w[i] * 2.0, &rot.g[i * nn..(i + 1) * nn]);
-                add(&mut c.c_k, c.z[i], &rot.g[i * nn..(i + 1) * nn]);
-                for j in 0..3 {
-                    add(&mut c.c_k, c.w[i] * c.w[j], &rot.o_mat[(3 * i + j) * nn..(3 * i + j + 1) * nn]);
-                }
-            }
-        }
-        if let Some(st) = &self.body.stiffening {
-            if let Some(k) = &st.centrifugal {
-                for i in 0..3 {
-                    for j in 0..3 {
-                        add(&mut c.c_k, c.w[i] * c.w[j], &k[(3 * i + j) * nn..(3 * i + j + 1) * nn]);
-                    }
-                }
-            }
-            if let Some(k) = &st.euler {
-                for i in 0..3 {
-                    add(&mut c.c_k, c.z[i], &k[i * nn..(i + 1) * nn]);
-                }
-            }
-            if let Some(k) = &st.translation {
-                for i in 0..3 {
-                    add(&mut c.c_k, c.a[i], &k[i * nn..(i + 1) * nn]);
-                }
-            }
-            for (f, k) in st.flanges.iter().enumerate() {
-                if k.is_empty() {
-                    continue;
-                }
-                let load = &self.loads[f];
-                let wrench = [k3::mul_t(a, load.f), k3::mul_t(a, load.t)];
-                for i in 0..6 {
-                    add(&mut c.c_k, wrench[i / 3][i % 3], &k[i * nn..(i + 1) * nn]);
-                }
-            }
-        }
-        c.active = active;
-        c.valid = true;
+        fill_coupling(&self.body, &self.mount, &self.loads, self.params.g, &mut self.coupling);
     }
 
     /// (C_d q' + C_k q)_i: the coupling terms' force on mode i.
@@ -910,6 +874,77 @@ impl<T: Scalar> FlexibleBody<T> {
     }
 }
 
+/// C_d = 2 sum W_a G_a and C_k = sum Z_a G_a + sum W_a W_b O_ab + K_G for the given inputs.
+fn fill_coupling<T: Scalar>(body: &ReducedBody, mount: &MountMotion<T>, loads: &[FlangeLoad<T>], g: Vec3, c: &mut Coupling<T>) {
+    let n = body.n_modes();
+    let nn = n * n;
+    let a = &mount.rot;
+    c.w = k3::mul_t(a, mount.w);
+    c.z = k3::mul_t(a, mount.z);
+    c.a = k3::mul_t(a, k3::sub(mount.a, g.map(crate::scalar::c)));
+    c.c_d.fill(T::zero());
+    c.c_k.fill(T::zero());
+    let mut active = false;
+    let mut add = |target: &mut Vec<T>, scale: T, block: &[f64]| {
+        if !scale.is_zero() {
+            active = true;
+            for (t, b) in target.iter_mut().zip(block) {
+                *t += scale * *b;
+            }
+        }
+    };
+    if let Some(rot) = &body.rotation {
+        for i in 0..3 {
+            add(&mut c.c_d, c.w[i] * 2.0, &rot.g[i * nn..(i + 1) * nn]);
+            add(&mut c.c_k, c.z[i], &rot.g[i * nn..(i + 1) * nn]);
+            for j in 0..3 {
+                add(&mut c.c_k, c.w[i] * c.w[j], &rot.o_mat[(3 * i + j) * nn..(3 * i + j + 1) * nn]);
+            }
+        }
+    }
+    if let Some(st) = &body.stiffening {
+        if let Some(k) = &st.centrifugal {
+            for i in 0..3 {
+                for j in 0..3 {
+                    add(&mut c.c_k, c.w[i] * c.w[j], &k[(3 * i + j) * nn..(3 * i + j + 1) * nn]);
+                }
+            }
+        }
+        if let Some(k) = &st.euler {
+            for i in 0..3 {
+                add(&mut c.c_k, c.z[i], &k[i * nn..(i + 1) * nn]);
+            }
+        }
+        if let Some(k) = &st.translation {
+            for i in 0..3 {
+                add(&mut c.c_k, c.a[i], &k[i * nn..(i + 1) * nn]);
+            }
+        }
+        for (f, k) in st.flanges.iter().enumerate() {
+            if k.is_empty() {
+                continue;
+            }
+            let load = &loads[f];
+            let wrench = [k3::mul_t(a, load.f), k3::mul_t(a, load.t)];
+            for i in 0..6 {
+                add(&mut c.c_k, wrench[i / 3][i % 3], &k[i * nn..(i + 1) * nn]);
+            }
+        }
+    }
+    c.active = active;
+    c.valid = true;
+}
+
+/// (C_d q' + C_k q)_i for the coupling `c`.
+fn coupling_force_of(c: &Coupling<f64>, n: usize, i: usize, q: &[f64], qd: &[f64]) -> f64 {
+    let (rd, rk) = (&c.c_d[i * n..(i + 1) * n], &c.c_k[i * n..(i + 1) * n]);
+    let mut s = 0.0;
+    for j in 0..n {
+        s += rd[j] * qd[j] + rk[j] * q[j];
+    }
+    s
+}
+
 /// sum_j s_j x_j of a constant row and a state vector.
 #[inline]
 fn shape_dot<T: Scalar>(s: &[f64], x: &[T]) -> T {
@@ -965,24 +1000,70 @@ impl FlexibleBody {
             self.eval.valid = false;
             return Ok(());
         }
-        let c = &self.coupling;
+        // inputs that move over the step move the coupling too: its matrices at the step's end
+        let moving = ramp;
+        let mut work = std::mem::take(&mut self.coupled_work);
+        if moving {
+            let mut end = self.mount;
+            let r = &self.rates.mount;
+            for i in 0..3 {
+                end.w[i] += h * r.w[i];
+                end.z[i] += h * r.z[i];
+                end.a[i] += h * r.a[i];
+            }
+            for i in 0..9 {
+                end.rot[i] += h * r.rot[i];
+            }
+            for ((e, l), rate) in work.loads_end.iter_mut().zip(&self.loads).zip(&self.rates.loads) {
+                *e = FlangeLoad { f: k3::add(l.f, k3::scale(h, rate.f)), t: k3::add(l.t, k3::scale(h, rate.t)) };
+            }
+            fill_coupling(&self.body, &end, &work.loads_end, self.params.g, &mut work.coupling_end);
+        }
         let row_norm = |m: &[f64]| (0..n).map(|i| m[i * n..(i + 1) * n].iter().map(|v| v.abs()).sum::<f64>()).fold(0.0, f64::max);
-        let rate = row_norm(&c.c_d) + row_norm(&c.c_k).sqrt();
+        let mut rate = row_norm(&self.coupling.c_d) + row_norm(&self.coupling.c_k).sqrt();
+        if moving {
+            rate = rate.max(row_norm(&work.coupling_end.c_d) + row_norm(&work.coupling_end.c_k).sqrt());
+        }
         let substeps = ((h * rate / 0.1).ceil() as usize).clamp(1, 100_000);
         let hs = h / substeps as f64;
         self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, hs);
-        for s in 0..substeps {
-            // the inputs' ramp enters the load exactly; the coupling is held over the substep
-            let tau = s as f64 * hs;
+        // Heun's predictor-corrector on the coupling, the modes still propagated exactly: the
+        // coupling force enters as a load ramping from its value at the substep's start to its
+        // value at the predicted end (second order, where holding it was first order)
+        let coupled_load = |b: &Self, work: &CoupledWork, tau: f64, out: &mut [f64]| {
+            let theta = tau / h;
             for i in 0..n {
-                self.scratch[i] = self.load[i] + tau * self.load_rate[i] - self.coupling_force(i);
+                let mut f = b.coupling_force(i);
+                if moving {
+                    f = (1.0 - theta) * f + theta * coupling_force_of(&work.coupling_end, n, i, &b.q, &b.qd);
+                }
+                let ramped = if ramp { tau * b.load_rate[i] } else { 0.0 };
+                out[i] = b.load[i] + ramped - f;
             }
+        };
+        for s in 0..substeps {
+            let tau = s as f64 * hs;
+            work.q0.copy_from_slice(&self.q);
+            work.qd0.copy_from_slice(&self.qd);
+            let mut f0 = std::mem::take(&mut work.f0);
+            let mut f1 = std::mem::take(&mut work.f1);
+            coupled_load(self, &work, tau, &mut f0);
             if ramp {
-                self.propagator.advance_ramp(&self.body.omega, &self.scratch, &self.load_rate, &mut self.q, &mut self.qd);
+                self.propagator.advance_ramp(&self.body.omega, &f0, &self.load_rate, &mut self.q, &mut self.qd);
             } else {
-                self.propagator.advance(&self.body.omega, &self.scratch, &mut self.q, &mut self.qd);
+                self.propagator.advance(&self.body.omega, &f0, &mut self.q, &mut self.qd);
             }
+            coupled_load(self, &work, tau + hs, &mut f1);
+            for i in 0..n {
+                f1[i] = (f1[i] - f0[i]) / hs;
+            }
+            self.q.copy_from_slice(&work.q0);
+            self.qd.copy_from_slice(&work.qd0);
+            self.propagator.advance_ramp(&self.body.omega, &f0, &f1, &mut self.q, &mut self.qd);
+            work.f0 = f0;
+            work.f1 = f1;
         }
+        self.coupled_work = work;
         if ramp {
             self.extrapolate_inputs(h);
         }
@@ -990,21 +1071,34 @@ impl FlexibleBody {
         Ok(())
     }
 
-    /// dp/dt of the modal load for the input rates: linear in the rates of a, z and the flange
-    /// loads, and d(w_i w_k)/dt of the centrifugal part. The mount orientation's own rate is
-    /// the rotation's business (coupling terms), not the load's.
+    /// dp/dt of the modal load for the input rates: every body-frame input x_B = A^T x changes
+    /// as A^T x' + A'^T x, with A' = A skew(A^T R') the rotational part of the orientation's rate
+    /// (the derivative of the projection onto the rotations); the centrifugal part as
+    /// d(w_i w_k)/dt.
     fn modal_load_rate(&mut self) {
         let a = &self.rot;
         let r = &self.rates;
         let n = self.q.len();
-        let a_b = k3::mul_t(a, r.mount.a);
+        let m = {
+            let at_rdot: Mat3 = std::array::from_fn(|ij| {
+                let (i, j) = (ij / 3, ij % 3);
+                a[i] * r.mount.rot[j] + a[3 + i] * r.mount.rot[3 + j] + a[6 + i] * r.mount.rot[6 + j]
+            });
+            let skew: Mat3 = std::array::from_fn(|ij| {
+                let (i, j) = (ij / 3, ij % 3);
+                0.5 * (at_rdot[3 * i + j] - at_rdot[3 * j + i])
+            });
+            k3::mat_mul(a, &skew)
+        };
+        let body_rate = |x: Vec3, rate: Vec3| k3::add(k3::mul_t(a, rate), k3::mul_t(&m, x));
+        let a_b = body_rate(k3::sub(self.mount.a, self.params.g), r.mount.a);
         for j in 0..n {
             self.load_rate[j] = -(self.body.c_t[j] * a_b[0] + self.body.c_t[n + j] * a_b[1] + self.body.c_t[2 * n + j] * a_b[2]);
         }
         if let Some(rot) = &self.body.rotation {
             let w = k3::mul_t(a, self.mount.w);
-            let dw = k3::mul_t(a, r.mount.w);
-            let dz = k3::mul_t(a, r.mount.z);
+            let dw = body_rate(self.mount.w, r.mount.w);
+            let dz = body_rate(self.mount.z, r.mount.z);
             for i in 0..3 {
                 if dz[i] != 0.0 {
                     let c_a = &self.body.c_r[i * n..(i + 1) * n];
@@ -1023,9 +1117,9 @@ impl FlexibleBody {
                 }
             }
         }
-        for (flange, rate) in self.body.flanges.iter().zip(&r.loads) {
-            let f_b = k3::mul_t(a, rate.f);
-            let t_b = k3::mul_t(a, rate.t);
+        for ((flange, rate), load) in self.body.flanges.iter().zip(&r.loads).zip(&self.loads) {
+            let f_b = body_rate(load.f, rate.f);
+            let t_b = body_rate(load.t, rate.t);
             let wrench = [f_b[0], f_b[1], f_b[2], t_b[0], t_b[1], t_b[2]];
             for (row, w) in wrench.iter().enumerate() {
                 if *w != 0.0 {
