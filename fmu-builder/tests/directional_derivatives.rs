@@ -215,6 +215,28 @@ fn spinning_beam_jacobian_equals_finite_differences() {
     fmu.exit_initialization().unwrap();
     excite(&mut fmu, 1e-4);
     check_jacobian(&mut fmu, &table, "spinning beam");
+
+    // A change of base.R off the rotations (dR = R S, S symmetric) moves nothing: the body
+    // uses the input's rotational part only. A rotation (dR = R W~) moves everything.
+    let r_vrs: Vec<u32> = (0..9).map(|ij| vr(&table, &format!("base.R[{},{}]", ij / 3 + 1, ij % 3 + 1))).collect();
+    let unknowns: Vec<u32> = all(&table)
+        .into_iter()
+        .filter(|&r| table.get(r).unwrap().causality == Causality::Output)
+        .chain(table.derivatives())
+        .collect();
+    let times = |m: [f64; 9]| -> Vec<f64> {
+        (0..9).map(|ij| (0..3).map(|k| rot[3 * (ij / 3) + k] * m[3 * k + ij % 3]).sum()).collect()
+    };
+    let mut stretch = vec![0.0; unknowns.len()];
+    fmu.directional_derivative(&unknowns, &r_vrs, &times([0.3, 0.1, -0.2, 0.1, -0.5, 0.4, -0.2, 0.4, 0.7]), &mut stretch).unwrap();
+    let mut turn = vec![0.0; unknowns.len()];
+    fmu.directional_derivative(&unknowns, &r_vrs, &times([0.0, -0.4, 0.2, 0.4, 0.0, -0.6, -0.2, 0.6, 0.0]), &mut turn).unwrap();
+    for ((u, s), t) in unknowns.iter().zip(&stretch).zip(&turn) {
+        let name = &table.get(*u).unwrap().name;
+        let scale = turn.iter().zip(&unknowns).filter(|(_, v)| table.get(**v).unwrap().unit == table.get(*u).unwrap().unit).map(|(x, _)| x.abs()).fold(0.0, f64::max);
+        assert!(s.abs() <= 1e-9 * scale.max(t.abs()), "{name}: {s:e} under a non-rotational change of base.R (rotation: {t:e})");
+    }
+    assert!(turn.iter().any(|t| t.abs() > 1.0));
 }
 
 #[test]

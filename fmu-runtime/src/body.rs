@@ -471,7 +471,7 @@ impl<T: Scalar> FlexibleBody<T> {
         if self.coupling.valid {
             return;
         }
-        fill_coupling(&self.body, &self.mount, &self.loads, self.params.g, &mut self.coupling);
+        fill_coupling(&self.body, &self.rot, &self.mount, &self.loads, self.params.g, &mut self.coupling);
     }
 
     /// (C_d q' + C_k q)_i: the coupling terms' force on mode i.
@@ -769,9 +769,10 @@ impl<T: Scalar> FlexibleBody<T> {
             self.eval.qdd[r] -= f;
         }
         self.mount.z = k3::mul(&a, w_dot);
-        let [q0, q1, q2, q3] = quat;
+        // d/dt quat = 1/2 quat (x) (0, W) of the state's own quaternion: keeps its norm, so the
+        // frame turns at exactly W whatever the norm has drifted to
+        let [q0, q1, q2, q3] = frame.quat;
         let half = [w[0] * 0.5, w[1] * 0.5, w[2] * 0.5];
-        // d/dt quat = 1/2 quat (x) (0, W)
         let quat_rate = [
             -(q1 * half[0]) - q2 * half[1] - q3 * half[2],
             q0 * half[0] + q2 * half[2] - q3 * half[1],
@@ -875,10 +876,18 @@ impl<T: Scalar> FlexibleBody<T> {
 }
 
 /// C_d = 2 sum W_a G_a and C_k = sum Z_a G_a + sum W_a W_b O_ab + K_G for the given inputs.
-fn fill_coupling<T: Scalar>(body: &ReducedBody, mount: &MountMotion<T>, loads: &[FlangeLoad<T>], g: Vec3, c: &mut Coupling<T>) {
+/// `rot` is the mount orientation in use (the input projected onto the rotations), as in the load.
+fn fill_coupling<T: Scalar>(
+    body: &ReducedBody,
+    rot: &Mat3<T>,
+    mount: &MountMotion<T>,
+    loads: &[FlangeLoad<T>],
+    g: Vec3,
+    c: &mut Coupling<T>,
+) {
     let n = body.n_modes();
     let nn = n * n;
-    let a = &mount.rot;
+    let a = rot;
     c.w = k3::mul_t(a, mount.w);
     c.z = k3::mul_t(a, mount.z);
     c.a = k3::mul_t(a, k3::sub(mount.a, g.map(crate::scalar::c)));
@@ -989,17 +998,6 @@ impl FlexibleBody {
         }
         self.prepare_coupling();
         let n = self.q.len();
-        if !self.coupling.active {
-            self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, h);
-            if ramp {
-                self.propagator.advance_ramp(&self.body.omega, &self.load, &self.load_rate, &mut self.q, &mut self.qd);
-                self.extrapolate_inputs(h);
-            } else {
-                self.propagator.advance(&self.body.omega, &self.load, &mut self.q, &mut self.qd);
-            }
-            self.eval.valid = false;
-            return Ok(());
-        }
         // inputs that move over the step move the coupling too: its matrices at the step's end
         let moving = ramp;
         let mut work = std::mem::take(&mut self.coupled_work);
@@ -1017,7 +1015,21 @@ impl FlexibleBody {
             for ((e, l), rate) in work.loads_end.iter_mut().zip(&self.loads).zip(&self.rates.loads) {
                 *e = FlangeLoad { f: k3::add(l.f, k3::scale(h, rate.f)), t: k3::add(l.t, k3::scale(h, rate.t)) };
             }
-            fill_coupling(&self.body, &end, &work.loads_end, self.params.g, &mut work.coupling_end);
+            let end_rot = k3::nearest_rotation(&end.rot);
+            fill_coupling(&self.body, &end_rot, &end, &work.loads_end, self.params.g, &mut work.coupling_end);
+        }
+        // a coupling that starts at zero (spin-up from rest) still couples within the step
+        if !self.coupling.active && !(moving && work.coupling_end.active) {
+            self.coupled_work = work;
+            self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, h);
+            if ramp {
+                self.propagator.advance_ramp(&self.body.omega, &self.load, &self.load_rate, &mut self.q, &mut self.qd);
+                self.extrapolate_inputs(h);
+            } else {
+                self.propagator.advance(&self.body.omega, &self.load, &mut self.q, &mut self.qd);
+            }
+            self.eval.valid = false;
+            return Ok(());
         }
         let row_norm = |m: &[f64]| (0..n).map(|i| m[i * n..(i + 1) * n].iter().map(|v| v.abs()).sum::<f64>()).fold(0.0, f64::max);
         let mut rate = row_norm(&self.coupling.c_d) + row_norm(&self.coupling.c_k).sqrt();

@@ -122,6 +122,16 @@ fn exercise_body(name: &str, reduced: ReducedBody, motion: Motion) {
         for k in 0..1000 {
             b.load_mut(0).f = [1.0, 0.5, (k % 17) as f64];
             b.load_mut(0).t = [0.0, 0.1, 0.0];
+            if k % 2 == 1 {
+                // every other step with interpolated inputs: the ramp and its coupling at the end
+                b.load_rate_mut(0).f = [0.0, 3.0, -5.0];
+                let r = b.mount_rate_mut();
+                r.a = [1.0, 0.0, 0.0];
+                if let Motion::Rotating = motion {
+                    r.w = [0.0, 0.0, 2.0];
+                    r.rot = [0.0, -0.01, 0.0, 0.01, 0.0, 0.0, 0.0, 0.0, 0.0];
+                }
+            }
             b.step(1e-3).unwrap();
             for f in 0..nf {
                 let m = b.flange_motion(f).unwrap();
