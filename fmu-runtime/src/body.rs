@@ -476,14 +476,7 @@ impl<T: Scalar> FlexibleBody<T> {
 
     /// (C_d q' + C_k q)_i: the coupling terms' force on mode i.
     fn coupling_force(&self, i: usize) -> T {
-        let n = self.q.len();
-        let c = &self.coupling;
-        let (rd, rk) = (&c.c_d[i * n..(i + 1) * n], &c.c_k[i * n..(i + 1) * n]);
-        let mut s = T::zero();
-        for j in 0..n {
-            s += rd[j] * self.qd[j] + rk[j] * self.q[j];
-        }
-        s
+        coupling_force_of(&self.coupling, i, &self.q, &self.qd)
     }
 
     /// p = -C_t^T a_B + sum_k Phi_k^T [A^T f_k; A^T t_k]
@@ -944,10 +937,11 @@ fn fill_coupling<T: Scalar>(
     c.valid = true;
 }
 
-/// (C_d q' + C_k q)_i for the coupling `c`.
-fn coupling_force_of(c: &Coupling<f64>, n: usize, i: usize, q: &[f64], qd: &[f64]) -> f64 {
+/// (C_d q' + C_k q)_i for the coupling `c` (the present one or the step end's).
+fn coupling_force_of<T: Scalar>(c: &Coupling<T>, i: usize, q: &[T], qd: &[T]) -> T {
+    let n = q.len();
     let (rd, rk) = (&c.c_d[i * n..(i + 1) * n], &c.c_k[i * n..(i + 1) * n]);
-    let mut s = 0.0;
+    let mut s = T::zero();
     for j in 0..n {
         s += rd[j] * qd[j] + rk[j] * q[j];
     }
@@ -999,9 +993,8 @@ impl FlexibleBody {
         self.prepare_coupling();
         let n = self.q.len();
         // inputs that move over the step move the coupling too: its matrices at the step's end
-        let moving = ramp;
         let mut work = std::mem::take(&mut self.coupled_work);
-        if moving {
+        if ramp {
             let mut end = self.mount;
             let r = &self.rates.mount;
             for i in 0..3 {
@@ -1019,7 +1012,7 @@ impl FlexibleBody {
             fill_coupling(&self.body, &end_rot, &end, &work.loads_end, self.params.g, &mut work.coupling_end);
         }
         // a coupling that starts at zero (spin-up from rest) still couples within the step
-        if !self.coupling.active && !(moving && work.coupling_end.active) {
+        if !self.coupling.active && !(ramp && work.coupling_end.active) {
             self.coupled_work = work;
             self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, h);
             if ramp {
@@ -1033,7 +1026,7 @@ impl FlexibleBody {
         }
         let row_norm = |m: &[f64]| (0..n).map(|i| m[i * n..(i + 1) * n].iter().map(|v| v.abs()).sum::<f64>()).fold(0.0, f64::max);
         let mut rate = row_norm(&self.coupling.c_d) + row_norm(&self.coupling.c_k).sqrt();
-        if moving {
+        if ramp {
             rate = rate.max(row_norm(&work.coupling_end.c_d) + row_norm(&work.coupling_end.c_k).sqrt());
         }
         let substeps = ((h * rate / 0.1).ceil() as usize).clamp(1, 100_000);
@@ -1046,8 +1039,8 @@ impl FlexibleBody {
             let theta = tau / h;
             for i in 0..n {
                 let mut f = b.coupling_force(i);
-                if moving {
-                    f = (1.0 - theta) * f + theta * coupling_force_of(&work.coupling_end, n, i, &b.q, &b.qd);
+                if ramp {
+                    f = (1.0 - theta) * f + theta * coupling_force_of(&work.coupling_end, i, &b.q, &b.qd);
                 }
                 let ramped = if ramp { tau * b.load_rate[i] } else { 0.0 };
                 out[i] = b.load[i] + ramped - f;

@@ -33,99 +33,6 @@ impl BodyFmu {
         &self.body
     }
 
-    /// dv_unknown = (d unknowns / d knowns) dv_known at the present state and inputs, exact:
-    /// the body's equations in dual numbers along the direction dv_known.
-    pub fn directional_derivative(&mut self, unknowns: &[u32], knowns: &[u32], dv_known: &[f64], dv_unknown: &mut [f64]) -> Result<(), String> {
-        let mut d = self.body.to_dual();
-        for (&vr, &dv) in knowns.iter().zip(dv_known) {
-            let quantity = self.quantity(vr)?;
-            let x = input_or_state(&mut d, quantity)
-                .ok_or_else(|| format!("{} is neither an input nor a continuous state", self.name(vr)))?;
-            x.d += dv;
-        }
-        for (&vr, out) in unknowns.iter().zip(dv_unknown.iter_mut()) {
-            *out = value_of(&mut d, self.quantity(vr)?)?.d;
-        }
-        Ok(())
-    }
-
-    /// d/dt of a Real output at the present instant, along the body's own motion: the modes
-    /// and a free body's frame move at their rates; the mount moves as its inputs say it does
-    /// (r' = v, R' = w~ R, v' = a, w' = z), and a, z and the flange loads change at the rates
-    /// fmi2SetRealInputDerivatives set for the next step (zero when none are set: held).
-    pub fn output_derivative(&mut self, vr: u32) -> Result<f64, String> {
-        let quantity = self.quantity(vr)?;
-        let mut d = self.body.to_dual();
-        let qdd = self.body.qdd()?.to_vec();
-        for j in 0..qdd.len() {
-            d.q_mut()[j].d = self.body.qd()[j];
-            d.qd_mut()[j].d = qdd[j];
-        }
-        if self.body.frame().is_some() {
-            let rate = self.body.frame_rate()?;
-            let f = d.frame_mut().ok_or("not a free-floating body")?;
-            for i in 0..3 {
-                f.r[i].d = rate.r[i];
-                f.v[i].d = rate.v[i];
-                f.w_body[i].d = rate.w_body[i];
-            }
-            for i in 0..4 {
-                f.quat[i].d = rate.quat[i];
-            }
-        } else {
-            let m = *self.body.mount();
-            let rates = self.body.input_rates().clone();
-            let dm = d.mount_mut();
-            // R' = w~ R, row by row: (w x R e_j) per column j
-            for j in 0..3 {
-                let col = k3::cross(m.w, [m.rot[j], m.rot[3 + j], m.rot[6 + j]]);
-                for i in 0..3 {
-                    dm.rot[3 * i + j].d = col[i];
-                }
-            }
-            for i in 0..3 {
-                dm.r[i].d = m.v[i];
-                dm.v[i].d = m.a[i];
-                dm.w[i].d = m.z[i];
-                dm.a[i].d = rates.mount.a[i];
-                dm.z[i].d = rates.mount.z[i];
-            }
-        }
-        let rates = self.body.input_rates().clone();
-        for (k, rate) in rates.loads.iter().enumerate() {
-            let l = d.load_mut(k);
-            for i in 0..3 {
-                l.f[i].d = rate.f[i];
-                l.t[i].d = rate.t[i];
-            }
-        }
-        Ok(value_of(&mut d, quantity)?.d)
-    }
-
-    /// Whether `vr` is a continuous state of Model Exchange.
-    pub fn is_state(&self, vr: u32) -> bool {
-        use Quantity as Q;
-        self.quantity(vr).is_ok_and(|q| {
-            matches!(
-                q,
-                Q::ModalCoordinate(_) | Q::ModalVelocity(_) | Q::FramePosition(_) | Q::FrameQuaternion(_) | Q::FrameVelocity(_)
-                    | Q::FrameAngularVelocity(_)
-            )
-        })
-    }
-
-    /// Whether `vr` is the derivative of a continuous state (der(q) = qd, der(r) = v, ...).
-    pub fn is_derivative(&self, vr: u32) -> bool {
-        use Quantity as Q;
-        self.quantity(vr).is_ok_and(|q| {
-            matches!(
-                q,
-                Q::ModalVelocity(_) | Q::ModalAcceleration(_) | Q::FrameVelocity(_) | Q::FrameQuaternionRate(_)
-                    | Q::FrameAcceleration(_) | Q::FrameAngularAcceleration(_)
-            )
-        })
-    }
-
     fn name(&self, vr: u32) -> String {
         self.table.get(vr).map_or_else(|| format!("value reference {vr}"), |v| v.name.clone())
     }
@@ -181,24 +88,99 @@ impl Model for BodyFmu {
         PROVIDES_DIRECTIONAL_DERIVATIVE
     }
 
-    fn is_continuous_state(&self, vr: u32) -> bool {
-        self.is_state(vr)
-    }
-
-    fn is_state_derivative(&self, vr: u32) -> bool {
-        self.is_derivative(vr)
-    }
-
+    /// dv_unknown = (d unknowns / d knowns) dv_known at the present state and inputs, exact:
+    /// the body's equations in dual numbers along the direction dv_known.
     fn directional_derivative(&mut self, unknowns: &[u32], knowns: &[u32], dv_known: &[f64], dv_unknown: &mut [f64]) -> Result<(), String> {
-        BodyFmu::directional_derivative(self, unknowns, knowns, dv_known, dv_unknown)
+        let mut d = self.body.to_dual();
+        for (&vr, &dv) in knowns.iter().zip(dv_known) {
+            let quantity = self.quantity(vr)?;
+            let x = input_or_state(&mut d, quantity)
+                .ok_or_else(|| format!("{} is neither an input nor a continuous state", self.name(vr)))?;
+            x.d += dv;
+        }
+        for (&vr, out) in unknowns.iter().zip(dv_unknown.iter_mut()) {
+            *out = value_of(&mut d, self.quantity(vr)?)?.d;
+        }
+        Ok(())
+    }
+
+    /// d/dt of a Real output at the present instant, along the body's own motion: the modes
+    /// and a free body's frame move at their rates; the mount moves as its inputs say it does
+    /// (r' = v, R' = w~ R, v' = a, w' = z), and a, z and the flange loads change at the rates
+    /// fmi2SetRealInputDerivatives set for the next step (zero when none are set: held).
+    fn get_real_output_derivative(&mut self, vr: u32, _order: i32) -> Result<f64, String> {
+        let quantity = self.quantity(vr)?;
+        let mut d = self.body.to_dual();
+        let rates = self.body.input_rates().clone();
+        let qdd = self.body.qdd()?.to_vec();
+        for j in 0..qdd.len() {
+            d.q_mut()[j].d = self.body.qd()[j];
+            d.qd_mut()[j].d = qdd[j];
+        }
+        if self.body.frame().is_some() {
+            let rate = self.body.frame_rate()?;
+            let f = d.frame_mut().ok_or("not a free-floating body")?;
+            for i in 0..3 {
+                f.r[i].d = rate.r[i];
+                f.v[i].d = rate.v[i];
+                f.w_body[i].d = rate.w_body[i];
+            }
+            for i in 0..4 {
+                f.quat[i].d = rate.quat[i];
+            }
+        } else {
+            let m = *self.body.mount();
+            let dm = d.mount_mut();
+            // R' = w~ R, row by row: (w x R e_j) per column j
+            for j in 0..3 {
+                let col = k3::cross(m.w, [m.rot[j], m.rot[3 + j], m.rot[6 + j]]);
+                for i in 0..3 {
+                    dm.rot[3 * i + j].d = col[i];
+                }
+            }
+            for i in 0..3 {
+                dm.r[i].d = m.v[i];
+                dm.v[i].d = m.a[i];
+                dm.w[i].d = m.z[i];
+                dm.a[i].d = rates.mount.a[i];
+                dm.z[i].d = rates.mount.z[i];
+            }
+        }
+        for (k, rate) in rates.loads.iter().enumerate() {
+            let l = d.load_mut(k);
+            for i in 0..3 {
+                l.f[i].d = rate.f[i];
+                l.t[i].d = rate.t[i];
+            }
+        }
+        Ok(value_of(&mut d, quantity)?.d)
+    }
+
+    fn is_continuous_state(&self, vr: u32) -> bool {
+        use Quantity as Q;
+        self.quantity(vr).is_ok_and(|q| {
+            matches!(
+                q,
+                Q::ModalCoordinate(_) | Q::ModalVelocity(_) | Q::FramePosition(_) | Q::FrameQuaternion(_) | Q::FrameVelocity(_)
+                    | Q::FrameAngularVelocity(_)
+            )
+        })
+    }
+
+    /// der(q) = qd, der(r) = v, ...
+    fn is_state_derivative(&self, vr: u32) -> bool {
+        use Quantity as Q;
+        self.quantity(vr).is_ok_and(|q| {
+            matches!(
+                q,
+                Q::ModalVelocity(_) | Q::ModalAcceleration(_) | Q::FrameVelocity(_) | Q::FrameQuaternionRate(_)
+                    | Q::FrameAcceleration(_) | Q::FrameAngularAcceleration(_)
+            )
+        })
     }
 
     fn max_output_derivative_order(&self) -> i32 {
         MAX_OUTPUT_DERIVATIVE_ORDER
-    }
-
-    fn get_real_output_derivative(&mut self, vr: u32, _order: i32) -> Result<f64, String> {
-        self.output_derivative(vr)
     }
 
     fn can_interpolate_inputs(&self) -> bool {
