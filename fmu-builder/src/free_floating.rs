@@ -114,6 +114,7 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
     };
     reduced.guid = guid(&reduced);
     let accuracy = accuracy(&model, &solver, shift, &rigid, &basis)?;
+    crate::report::enforce(&accuracy)?;
     let statics = basis.omega.len() - basis.n_normal;
     let report = report_of(&spec, &part, &flanges, &model, &basis, &reduced, "free-interface modes + inertia-relief attachment shapes", statics, accuracy);
     Ok(Built { spec, part, flanges, model, basis, reduced, report })

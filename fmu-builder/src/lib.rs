@@ -27,3 +27,4 @@ pub mod package;
 pub mod report;
 pub mod summary;
 pub mod sweep;
+pub mod symmetric_eigen;

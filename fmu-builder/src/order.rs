@@ -8,7 +8,8 @@
 //! work beyond the full-model responses computed once.
 
 use crate::frf::ComparisonDamping;
-use faer::{Mat, Side, c64};
+use crate::symmetric_eigen::symmetric_eigen;
+use faer::{Mat, c64};
 
 /// A selection in the rich model's coordinates: columns Y (r_rich x r_sel, orthonormal) and the
 /// selected model's frequencies (Y^T Lambda Y = diag(omega^2)).
@@ -59,10 +60,10 @@ pub fn select(omega: &[f64], kept: &[usize], loads: &Mat<f64>) -> Selection {
     let gram = residual.transpose() * &residual;
     let mut extra: Vec<(Vec<f64>, f64)> = Vec::new();
     if gram.nrows() > 0 {
-        let evd = gram.self_adjoint_eigen(Side::Lower).ok();
+        let evd = symmetric_eigen(&gram, "the residual static shapes").ok();
         if let Some(evd) = evd {
-            let s = evd.S();
-            let u = evd.U();
+            let s = &evd.values;
+            let u = &evd.vectors;
             let largest = (0..gram.nrows()).map(|i| s[i]).fold(0.0f64, f64::max);
             let mut w = Vec::new();
             for i in 0..gram.nrows() {
@@ -76,8 +77,8 @@ pub fn select(omega: &[f64], kept: &[usize], loads: &Mat<f64>) -> Selection {
             let nw = w.len();
             let kw = Mat::<f64>::from_fn(nw, nw, |a, b| (0..r).map(|k| w[a][k] * omega[k] * omega[k] * w[b][k]).sum());
             if nw > 0 {
-                if let Ok(e) = kw.self_adjoint_eigen(Side::Lower) {
-                    let (ks, ku) = (e.S(), e.U());
+                if let Ok(e) = symmetric_eigen(&kw, "the residual stiffness") {
+                    let (ks, ku) = (&e.values, &e.vectors);
                     for c in 0..nw {
                         let v: Vec<f64> = (0..r).map(|k| (0..nw).map(|a| w[a][k] * ku[(a, c)]).sum()).collect();
                         extra.push((v, ks[c].max(0.0).sqrt()));

@@ -409,6 +409,7 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
     let force_dofs: Vec<(String, usize)> =
         force.iter().map(|&k| (flanges[k].name.clone(), model.dofs.flange_first[k])).collect();
     let mut accuracy = report::accuracy(&model, &solver, &basis, &force_dofs, basis.omega.len().max(10))?;
+    report::enforce(&accuracy)?;
     // the transfer-function comparison costs a complex factorization per sampled frequency:
     // done when the scene names its band
     if !force.is_empty() && spec.scene.as_ref().is_some_and(|s| s.band.is_some() || s.tolerance.is_some()) {

@@ -8,7 +8,8 @@ use crate::assembly::Assembled;
 use crate::eigen;
 use crate::error::{BuildError, Result};
 use crate::sparse::{SpdSolver, block, mul_compensated, mul_new};
-use faer::{Mat, Side};
+use crate::symmetric_eigen::symmetric_eigen;
+use faer::Mat;
 
 #[derive(Debug, Clone, Copy)]
 pub enum ModeCount {
@@ -113,11 +114,9 @@ pub fn orthonormalise(model: &Assembled, v: Mat<f64>) -> Result<(Mat<f64>, Vec<f
         let gram = w.transpose() * mul_new(&m, w.as_ref());
         let r = gram.nrows();
         let gram = Mat::<f64>::from_fn(r, r, |i, j| 0.5 * (gram[(i, j)] + gram[(j, i)]));
-        let evd = gram
-            .self_adjoint_eigen(Side::Lower)
-            .map_err(|e| BuildError::Numerical(format!("reduced mass eigenproblem failed: {e:?}")))?;
-        let s = evd.S();
-        let u = evd.U();
+        let evd = symmetric_eigen(&gram, "the Gram matrix of the reduction basis")?;
+        let s = &evd.values;
+        let u = &evd.vectors;
         let largest = (0..r).map(|i| s[i]).fold(0.0f64, f64::max);
         let keep: Vec<usize> = (0..r).filter(|&i| s[i] > 1e-13 * largest).collect();
         if keep.is_empty() {
@@ -130,10 +129,8 @@ pub fn orthonormalise(model: &Assembled, v: Mat<f64>) -> Result<(Mat<f64>, Vec<f
     let r = w.ncols();
     let kr = w.transpose() * &kw;
     let c = Mat::<f64>::from_fn(r, r, |i, j| 0.5 * (kr[(i, j)] + kr[(j, i)]));
-    let evd = c
-        .self_adjoint_eigen(Side::Lower)
-        .map_err(|e| BuildError::Numerical(format!("reduced eigenproblem failed: {e:?}")))?;
-    let s = evd.S();
+    let evd = symmetric_eigen(&c, "the reduced stiffness")?;
+    let s = &evd.values;
     let mut omega = Vec::with_capacity(r);
     for i in 0..r {
         let lambda = s[i];
@@ -144,7 +141,7 @@ pub fn orthonormalise(model: &Assembled, v: Mat<f64>) -> Result<(Mat<f64>, Vec<f
         }
         omega.push(lambda.sqrt());
     }
-    Ok((&w * evd.U(), omega))
+    Ok((&w * &evd.vectors, omega))
 }
 
 /// A free-floating body: the frame follows the body's mean motion (origin at the centre of mass,

@@ -174,6 +174,11 @@ impl SpdSolver {
         self.n
     }
 
+    /// The factored matrix.
+    pub fn matrix(&self) -> &Sparse {
+        &self.matrix
+    }
+
     pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
         self.llt.solve_in_place(rhs);
     }

@@ -9,6 +9,7 @@
 //! two r x r matrices whenever the inputs change.
 
 use crate::kinematics::{self as k3, Mat3, Vec3};
+use crate::coupled_propagator::{CoupledPropagator, Prepared};
 use crate::propagator::ModalPropagator;
 use crate::reduced::ReducedBody;
 use crate::scalar::{Dual, Scalar, c};
@@ -120,14 +121,14 @@ pub struct Invariants<T = f64> {
     pub angular_momentum: Vec3<T>,
 }
 
-/// Workspace of a mounted body's step with coupling terms: the substep's start state, the
-/// coupling-corrected load at its start and end, the inputs and coupling at the step's end.
+/// Workspace of a mounted body's step with coupling terms: the inputs and coupling at the
+/// step's end and their midpoint.
 #[derive(Debug, Clone, Default)]
 struct CoupledWork {
-    q0: Vec<f64>,
-    qd0: Vec<f64>,
-    f0: Vec<f64>,
-    f1: Vec<f64>,
+    /// The coupling at the step's midpoint (ramped inputs) and a zero load rate (held inputs).
+    c_d_mid: Vec<f64>,
+    c_k_mid: Vec<f64>,
+    zeros: Vec<f64>,
     loads_end: Vec<FlangeLoad>,
     coupling_end: Coupling<f64>,
 }
@@ -198,6 +199,10 @@ pub struct FlexibleBody<T = f64> {
     free_work: FreeWork,
     coupled_work: CoupledWork,
     propagator: ModalPropagator,
+    /// Exact transition of the coupled modes (mounted bodies with rotation or stiffening terms).
+    coupled: CoupledPropagator,
+    /// A warning of the last step for the host's log.
+    warning: Option<&'static str>,
     /// First derivatives of the inputs for the next step (fmi2SetRealInputDerivatives), and
     /// the modal load's rate they give.
     rates: InputRates,
@@ -211,6 +216,9 @@ pub struct InputRates {
     pub loads: Vec<FlangeLoad>,
     pub any: bool,
 }
+
+/// Why a body spinning above its critical speed misbehaves, for the host's log.
+pub const UNSTABLE_STIFFNESS: &str = "the effective stiffness of the body (elastic plus centrifugal and geometric terms at the present spin and loads) is not positive definite: the spin is above a critical speed of this body, whose deformation can grow without bound (declare geometric_stiffening in the scene if the real part is stiffened by its rotation)";
 
 /// Largest |A^T A - I| accepted for the mount orientation. Hosts interpolate rotation-matrix
 /// inputs entry by entry (FMPy between samples, masters with first-order hold), which leaves them
@@ -247,10 +255,9 @@ impl FlexibleBody {
                 CoupledWork::default()
             } else {
                 CoupledWork {
-                    q0: vec![0.0; n],
-                    qd0: vec![0.0; n],
-                    f0: vec![0.0; n],
-                    f1: vec![0.0; n],
+                    c_d_mid: vec![0.0; n * n],
+                    c_k_mid: vec![0.0; n * n],
+                    zeros: vec![0.0; n],
                     loads_end: vec![FlangeLoad::default(); nf],
                     coupling_end: Coupling { c_d: vec![0.0; n * n], c_k: vec![0.0; n * n], ..Coupling::default() },
                 }
@@ -261,6 +268,12 @@ impl FlexibleBody {
                 FreeWork::default()
             },
             propagator: ModalPropagator::with_modes(n),
+            coupled: if body.free_floating || (body.rotation.is_none() && body.stiffening.is_none()) {
+                CoupledPropagator::default()
+            } else {
+                CoupledPropagator::with_modes(n)
+            },
+            warning: None,
             rates: InputRates { mount: MountMotion { rot: [0.0; 9], ..MountMotion::default() }, loads: vec![FlangeLoad::default(); nf], any: false },
             load_rate: vec![0.0; n],
             body,
@@ -299,6 +312,8 @@ impl FlexibleBody {
             free_work: FreeWork::default(),
             coupled_work: CoupledWork::default(),
             propagator: ModalPropagator::with_modes(0),
+            coupled: CoupledPropagator::default(),
+            warning: None,
             rates: self.rates.clone(),
             load_rate: Vec::new(),
         }
@@ -968,9 +983,10 @@ fn dot<T: Scalar>(a: &[T], b: &[T]) -> T {
 }
 
 impl FlexibleBody {
-    /// Advance by h with the inputs held over the step: exact propagation of the modal diagonal;
-    /// the coupling terms (gyroscopic, centrifugal, stiffening) as loads held over substeps short
-    /// enough for them (h_sub * (|C_d| + |C_k|^1/2) <= 0.1), none when nothing couples.
+    /// Advance by h with the inputs held (or ramped at their rates) over the step: exact
+    /// propagation of the modal diagonal when nothing couples the modes, else of the whole
+    /// coupled system (gyroscopic, centrifugal, stiffening terms) by its matrix exponential,
+    /// which keeps an undamped spinning body's energy at any step (see `coupled_propagator`).
     pub fn step(&mut self, h: f64) -> Result<(), String> {
         if !(h > 0.0 && h.is_finite()) {
             return Err(format!("step size {h} must be positive and finite"));
@@ -991,7 +1007,6 @@ impl FlexibleBody {
             self.modal_load_rate();
         }
         self.prepare_coupling();
-        let n = self.q.len();
         // inputs that move over the step move the coupling too: its matrices at the step's end
         let mut work = std::mem::take(&mut self.coupled_work);
         if ramp {
@@ -1024,56 +1039,44 @@ impl FlexibleBody {
             self.eval.valid = false;
             return Ok(());
         }
-        let row_norm = |m: &[f64]| (0..n).map(|i| m[i * n..(i + 1) * n].iter().map(|v| v.abs()).sum::<f64>()).fold(0.0, f64::max);
-        let mut rate = row_norm(&self.coupling.c_d) + row_norm(&self.coupling.c_k).sqrt();
-        if ramp {
-            rate = rate.max(row_norm(&work.coupling_end.c_d) + row_norm(&work.coupling_end.c_k).sqrt());
-        }
-        let substeps = ((h * rate / 0.1).ceil() as usize).clamp(1, 100_000);
-        let hs = h / substeps as f64;
-        self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, hs);
-        // Heun's predictor-corrector on the coupling, the modes still propagated exactly: the
-        // coupling force enters as a load ramping from its value at the substep's start to its
-        // value at the predicted end (second order, where holding it was first order)
-        let coupled_load = |b: &Self, work: &CoupledWork, tau: f64, out: &mut [f64]| {
-            let theta = tau / h;
-            for i in 0..n {
-                let mut f = b.coupling_force(i);
-                if ramp {
-                    f = (1.0 - theta) * f + theta * coupling_force_of(&work.coupling_end, i, &b.q, &b.qd);
-                }
-                let ramped = if ramp { tau * b.load_rate[i] } else { 0.0 };
-                out[i] = b.load[i] + ramped - f;
+        // the coupling over the step: held, or at the step's midpoint when the inputs ramp
+        // (exponential midpoint rule: second order, and still exact for the held part)
+        let (c_d, c_k): (&[f64], &[f64]) = if ramp {
+            for (m, (a, b)) in work.c_d_mid.iter_mut().zip(self.coupling.c_d.iter().zip(&work.coupling_end.c_d)) {
+                *m = 0.5 * (a + b);
             }
+            for (m, (a, b)) in work.c_k_mid.iter_mut().zip(self.coupling.c_k.iter().zip(&work.coupling_end.c_k)) {
+                *m = 0.5 * (a + b);
+            }
+            (&work.c_d_mid, &work.c_k_mid)
+        } else {
+            (&self.coupling.c_d, &self.coupling.c_k)
         };
-        for s in 0..substeps {
-            let tau = s as f64 * hs;
-            work.q0.copy_from_slice(&self.q);
-            work.qd0.copy_from_slice(&self.qd);
-            let mut f0 = std::mem::take(&mut work.f0);
-            let mut f1 = std::mem::take(&mut work.f1);
-            coupled_load(self, &work, tau, &mut f0);
-            if ramp {
-                self.propagator.advance_ramp(&self.body.omega, &f0, &self.load_rate, &mut self.q, &mut self.qd);
-            } else {
-                self.propagator.advance(&self.body.omega, &f0, &mut self.q, &mut self.qd);
-            }
-            coupled_load(self, &work, tau + hs, &mut f1);
-            for i in 0..n {
-                f1[i] = (f1[i] - f0[i]) / hs;
-            }
-            self.q.copy_from_slice(&work.q0);
-            self.qd.copy_from_slice(&work.qd0);
-            self.propagator.advance_ramp(&self.body.omega, &f0, &f1, &mut self.q, &mut self.qd);
-            work.f0 = f0;
-            work.f1 = f1;
+        let was_definite = self.coupled.definite();
+        let prepared = self.coupled.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, c_d, c_k, h);
+        if prepared == Prepared::Computed && was_definite && !self.coupled.definite() {
+            self.warning = Some(UNSTABLE_STIFFNESS);
         }
+        let rate: &[f64] = if ramp { &self.load_rate } else { &work.zeros };
+        self.coupled.advance(&self.body.omega, &self.load, rate, &mut self.q, &mut self.qd);
         self.coupled_work = work;
         if ramp {
             self.extrapolate_inputs(h);
         }
         self.eval.valid = false;
+        if !(self.q.iter().chain(&self.qd).all(|v| v.is_finite())) {
+            return Err(if self.coupled.definite() {
+                "the modal state became non-finite in this step".into()
+            } else {
+                format!("the deformation grew without bound: {UNSTABLE_STIFFNESS}")
+            });
+        }
         Ok(())
+    }
+
+    /// A warning about the last step, once: the FMI layer logs it.
+    pub fn take_warning(&mut self) -> Option<&'static str> {
+        self.warning.take()
     }
 
     /// dp/dt of the modal load for the input rates: every body-frame input x_B = A^T x changes

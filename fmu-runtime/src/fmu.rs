@@ -341,6 +341,10 @@ impl Model for BodyFmu {
         self.body.step(h)
     }
 
+    fn take_warning(&mut self) -> Option<&'static str> {
+        self.body.take_warning()
+    }
+
     fn reset(&mut self) -> Result<(), String> {
         let reduced = self.body.reduced().clone();
         *self = Self::from_reduced(reduced);

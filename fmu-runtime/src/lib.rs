@@ -4,6 +4,7 @@
 //! `format`/`reduced` define the reduced-model file the builder writes into `resources/`.
 
 pub mod body;
+pub mod coupled_propagator;
 pub mod format;
 pub mod kinematics;
 pub mod propagator;

@@ -20,7 +20,7 @@ use super::logger::{Category, Logger};
 use super::resource::parse_resource_location;
 use super::serial;
 use super::state::{self as spec, FnSpec, ModelState};
-use super::types::fmi2Status::{fmi2Discard, fmi2Error, fmi2Fatal, fmi2OK};
+use super::types::fmi2Status::{fmi2Discard, fmi2Error, fmi2Fatal, fmi2OK, fmi2Warning};
 use super::types::*;
 use super::{Causality, Interface, Model, VarInfo, VarType};
 
@@ -1075,6 +1075,11 @@ pub unsafe fn fmi2DoStep<M: Model>(
             inst.last_do_step_status = if result.is_ok() { fmi2OK } else { fmi2Error };
             result.map_err(Failure::Model)?;
             inst.time += h;
+            if let Some(warning) = inst.model.take_warning() {
+                inst.logger.warning(fmi2Warning, warning);
+                inst.last_do_step_status = fmi2Warning;
+                return Ok(fmi2Warning);
+            }
             Ok(fmi2OK)
         })
     }

@@ -157,6 +157,10 @@ pub trait Model: Sized + Clone {
     }
     /// Co-Simulation: advance from t to t + h exactly.
     fn do_step(&mut self, t: f64, h: f64) -> Result<(), String>;
+    /// A warning about the last successful step (the layer logs it and returns fmi2Warning).
+    fn take_warning(&mut self) -> Option<&'static str> {
+        None
+    }
     /// Back to the state right after instantiate (parameters at start values).
     fn reset(&mut self) -> Result<(), String>;
     /// fmi2SerializeFMUstate: append a portable encoding (see [`bytes`]) of everything that

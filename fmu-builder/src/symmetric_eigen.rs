@@ -1,0 +1,99 @@
+//! Dense symmetric eigendecomposition, checked. Every reduced eigenproblem of the builder (the
+//! Lanczos tridiagonal, the Rayleigh-Ritz projection of a basis, the Gram matrix of a basis)
+//! goes through here.
+//!
+//! Why not faer's `self_adjoint_eigen`: on the projected stiffness of a 306-mode Craig-Bampton
+//! basis (eigenvalues spanning 1e9) it returned |C U - U S| = 3.5e-5 |C| with orthonormal U, a
+//! backward error eleven orders above round-off, which made reduced frequencies fall below the
+//! full model's. nalgebra's Householder tridiagonalisation and implicit symmetric QR give
+//! 7e-16 |C| on the same matrix. The result is checked either way: a decomposition whose
+//! backward error is not at round-off is an error, never a silent wrong basis.
+
+use crate::error::{BuildError, Result};
+use faer::Mat;
+
+/// Eigenvalues (ascending) and orthonormal eigenvectors of a symmetric matrix.
+pub struct SymmetricEigen {
+    pub values: Vec<f64>,
+    pub vectors: Mat<f64>,
+}
+
+/// Largest accepted backward error |A U - U S|_max / |A|_max, relative to round-off of the size:
+/// Householder QR achieves about n eps; 100 n eps leaves room without hiding a failure like
+/// the one above (1e11 eps).
+fn accepted_backward_error(n: usize) -> f64 {
+    100.0 * (n.max(1) as f64) * f64::EPSILON
+}
+
+/// Eigendecomposition of `a` (its symmetric part is used). `what` names the problem in errors.
+pub fn symmetric_eigen(a: &Mat<f64>, what: &str) -> Result<SymmetricEigen> {
+    let n = a.nrows();
+    if a.ncols() != n {
+        return Err(BuildError::Numerical(format!("{what}: not a square matrix ({n} x {})", a.ncols())));
+    }
+    if n == 0 {
+        return Ok(SymmetricEigen { values: Vec::new(), vectors: Mat::zeros(0, 0) });
+    }
+    let sym = nalgebra::DMatrix::<f64>::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
+    let scale = sym.amax();
+    if !scale.is_finite() {
+        return Err(BuildError::Numerical(format!("{what}: the matrix has non-finite entries")));
+    }
+    let evd = sym.clone().symmetric_eigen();
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&i, &j| evd.eigenvalues[i].total_cmp(&evd.eigenvalues[j]));
+    let values: Vec<f64> = order.iter().map(|&i| evd.eigenvalues[i]).collect();
+    let vectors = Mat::<f64>::from_fn(n, n, |i, c| evd.eigenvectors[(i, order[c])]);
+    if scale > 0.0 {
+        let residual = &sym * &evd.eigenvectors - &evd.eigenvectors * nalgebra::DMatrix::from_diagonal(&evd.eigenvalues);
+        let backward = residual.amax() / scale;
+        let orthogonality =
+            (evd.eigenvectors.transpose() * &evd.eigenvectors - nalgebra::DMatrix::<f64>::identity(n, n)).amax();
+        let limit = accepted_backward_error(n);
+        if !(backward <= limit && orthogonality <= limit) {
+            return Err(BuildError::Numerical(format!(
+                "{what}: the dense eigensolver's result is not accurate (backward error {backward:.1e}, loss of orthogonality {orthogonality:.1e}, accepted {limit:.1e}; size {n})"
+            )));
+        }
+    }
+    Ok(SymmetricEigen { values, vectors })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A graded matrix like a reduced stiffness (eigenvalues 1 .. 1e12 in a random orthogonal
+    /// basis): the decomposition must reproduce the lowest eigenvalue to relative round-off of
+    /// the largest, as backward stability promises.
+    #[test]
+    fn graded_spectrum_is_accurate() {
+        let n = 120;
+        let mut s: u64 = 42;
+        let mut rnd = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let g = Mat::<f64>::from_fn(n, n, |_, _| rnd());
+        let q = g.qr().compute_Q();
+        let exact: Vec<f64> = (0..n).map(|i| 10f64.powf(12.0 * i as f64 / (n - 1) as f64)).collect();
+        let d = Mat::<f64>::from_fn(n, n, |i, j| if i == j { exact[i] } else { 0.0 });
+        let a = &q * &d * q.transpose();
+        let e = symmetric_eigen(&a, "test").unwrap();
+        assert_eq!(e.values.len(), exact.len());
+        for (found, want) in e.values.iter().zip(&exact) {
+            // absolute accuracy eps |A| = 2e-4 here, plus the error of forming A itself (same size)
+            assert!((found - want).abs() <= 1e-3 + 1e-13 * want, "{found} vs {want}");
+        }
+    }
+
+    #[test]
+    fn non_finite_input_is_refused_with_the_reason() {
+        let mut a = Mat::<f64>::identity(3, 3);
+        a[(1, 1)] = f64::NAN;
+        let err = symmetric_eigen(&a, "the test matrix").err().unwrap().to_string();
+        assert!(err.contains("the test matrix") && err.contains("non-finite"), "{err}");
+    }
+}
