@@ -8,7 +8,7 @@ use crate::assembly::Assembled;
 use crate::eigen;
 use crate::error::{BuildError, Result};
 use crate::sparse::{SpdSolver, block, mul_compensated, mul_new};
-use crate::symmetric_eigen::symmetric_eigen;
+use crate::symmetric_eigen::graded_spd_eigen;
 use faer::Mat;
 
 #[derive(Debug, Clone, Copy)]
@@ -27,6 +27,10 @@ pub struct Basis {
     /// Frequencies of the fixed-interface normal modes [rad/s].
     pub fixed_interface_omega: Vec<f64>,
 }
+
+/// A basis column whose M-orthogonal remainder is below this fraction of its M-norm is taken as
+/// dependent on the columns before it (after two Gram-Schmidt passes round-off leaves 1e-15).
+const DEPENDENT: f64 = 1e-10;
 
 /// Eigensolver tolerance: Ritz residual relative to 1/lambda; tight because the reduced model's
 /// frequencies are compared with the full model's to 1e-5.
@@ -110,26 +114,49 @@ pub fn orthonormalise(model: &Assembled, v: Mat<f64>) -> Result<(Mat<f64>, Vec<f
             }
         }
     }
-    for _pass in 0..2 {
-        let gram = w.transpose() * mul_new(&m, w.as_ref());
-        let r = gram.nrows();
-        let gram = Mat::<f64>::from_fn(r, r, |i, j| 0.5 * (gram[(i, j)] + gram[(j, i)]));
-        let evd = symmetric_eigen(&gram, "the Gram matrix of the reduction basis")?;
-        let s = &evd.values;
-        let u = &evd.vectors;
-        let largest = (0..r).map(|i| s[i]).fold(0.0f64, f64::max);
-        let keep: Vec<usize> = (0..r).filter(|&i| s[i] > 1e-13 * largest).collect();
-        if keep.is_empty() {
-            return Err(BuildError::Numerical("the reduction basis is empty or massless".into()));
+    // Gram-Schmidt in the columns' order (normal modes first, already M-orthonormal), each
+    // column twice against those kept: the soft directions stay as they are and the static
+    // shapes contribute only their stiff remainder, so W^T K W stays graded (see
+    // graded_spd_eigen); a symmetric orthonormalisation would mix every column into every other
+    let mw_all = mul_new(&m, w.as_ref());
+    let mut kept: Vec<usize> = Vec::with_capacity(w.ncols());
+    let mut basis = Mat::<f64>::zeros(w.nrows(), w.ncols());
+    let mut m_basis = Mat::<f64>::zeros(w.nrows(), w.ncols());
+    for j in 0..w.ncols() {
+        let norm0 = (0..w.nrows()).map(|i| w[(i, j)] * mw_all[(i, j)]).sum::<f64>().max(0.0).sqrt();
+        if !(norm0 > 0.0) {
+            continue;
         }
-        let t = Mat::<f64>::from_fn(r, keep.len(), |i, c| u[(i, keep[c])] / s[keep[c]].sqrt());
-        w = &w * &t;
+        let r = kept.len();
+        let mut v = w.col(j).to_owned().as_mat().to_owned();
+        for _ in 0..2 {
+            let c = m_basis.subcols(0, r).transpose() * &v;
+            v -= basis.subcols(0, r) * &c;
+        }
+        let mv = mul_new(&m, v.as_ref());
+        let norm = (0..v.nrows()).map(|i| v[(i, 0)] * mv[(i, 0)]).sum::<f64>().max(0.0).sqrt();
+        // a remainder at round-off of the column is a dependent direction: kept, it would be
+        // noise with a spurious stiff frequency
+        if norm <= DEPENDENT * norm0 {
+            continue;
+        }
+        for i in 0..v.nrows() {
+            basis[(i, r)] = v[(i, 0)] / norm;
+            m_basis[(i, r)] = mv[(i, 0)] / norm;
+        }
+        kept.push(j);
     }
+    if kept.is_empty() {
+        return Err(BuildError::Numerical("the reduction basis is empty or massless".into()));
+    }
+    let w = basis.subcols(0, kept.len()).to_owned();
     let kw = mul_compensated(None, 1.0, &k, w.as_ref());
     let r = w.ncols();
     let kr = w.transpose() * &kw;
     let c = Mat::<f64>::from_fn(r, r, |i, j| 0.5 * (kr[(i, j)] + kr[(j, i)]));
-    let evd = symmetric_eigen(&c, "the reduced stiffness")?;
+    let evd = graded_spd_eigen(&c, "the reduced stiffness").map_err(|_| {
+        BuildError::Numerical("the reduced stiffness is not positive definite: the part is not held by its mount".into())
+    })?;
     let s = &evd.values;
     let mut omega = Vec::with_capacity(r);
     for i in 0..r {
