@@ -23,6 +23,9 @@ pub struct Eigenpairs {
 /// eigenvalue is exact to about 1e-14.
 pub const RESIDUAL_TOL: f64 = 1e-7;
 
+/// Most modes a build computes (requested or below a frequency).
+pub const MAX_MODES: usize = 1000;
+
 /// Deterministic start vector with all components non-zero (no symmetry can hide a mode from it).
 fn start_vector(n: usize) -> Vec<f64> {
     let mut s: u64 = 0x9E37_79B9_7F4A_7C15;
@@ -259,6 +262,12 @@ pub fn below_shifted(
             let vectors = pairs.vectors.subcols(0, keep).to_owned();
             return Ok(Eigenpairs { values: pairs.values[..keep].to_vec(), vectors });
         }
-        count *= 2;
+        if count > MAX_MODES {
+            return Err(BuildError::Numerical(format!(
+                "more than {MAX_MODES} modes lie below {:.6e} Hz: lower reduction.max_frequency",
+                omega_max / (2.0 * std::f64::consts::PI)
+            )));
+        }
+        count = (count * 2).min(MAX_MODES + 1);
     }
 }

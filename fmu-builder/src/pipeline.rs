@@ -286,13 +286,43 @@ fn choose_order(
     })
 }
 
+/// The requested number of modes, or why it cannot be delivered accurately: the eigensolver
+/// needs a Krylov space of twice the modes within the mesh's DoFs, and modes beyond a quarter
+/// of them resolve the mesh rather than the part; beyond `eigen::MAX_MODES` the build's dense
+/// reduced eigenproblems (cubic in the order) take minutes for a model no system simulation
+/// steps fast.
+fn check_mode_count(requested: usize, nodes: usize, file: &Path) -> Result<usize> {
+    let dofs = 3 * nodes;
+    if requested > eigen::MAX_MODES {
+        return Err(BuildError::input(
+            file,
+            "reduction.modes",
+            format!(
+                "{requested} modes requested, at most {} are supported: a reduced body for system simulation needs the modes of its scene's band (use reduction.max_frequency, or scene.band with scene.tolerance)",
+                eigen::MAX_MODES
+            ),
+        ));
+    }
+    if requested > dofs / 4 {
+        return Err(BuildError::input(
+            file,
+            "reduction.modes",
+            format!(
+                "{requested} modes requested from a mesh with {dofs} DoFs: at most a quarter of the DoFs ({}) can be computed accurately (the eigensolver needs a space of twice the modes, and higher modes resolve the mesh, not the part); refine the mesh or request fewer modes",
+                dofs / 4
+            ),
+        ));
+    }
+    Ok(requested)
+}
+
 /// Read, mesh, couple, assemble and reduce: everything but writing the FMU.
 pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
     let mut part = part::part_of(&spec, file)?;
     let flanges = flange::select_flanges(&spec, file, &part)?;
     let free = part.free_free()?;
     let modes = match (spec.reduction.modes, spec.reduction.max_frequency) {
-        (Some(n), _) => ModeCount::Count(n),
+        (Some(n), _) => ModeCount::Count(check_mode_count(n, part.mesh.n_nodes(), file)?),
         (None, Some(f)) => ModeCount::Below(f),
         (None, None) => ModeCount::Count(0),
     };

@@ -1,7 +1,7 @@
 //! The body as an FMI model: maps value references onto the mechanics layer and the FMI calls
 //! (initialise, step, derivatives) onto its equations. Knows FMI's model trait, not C.
 
-use crate::body::{BodyState, FlangeLoad, FlexibleBody, FrameState, InitialFrame, InputRates, MountMotion, Parameters};
+use crate::body::{BodyState, CouplingReference, FlangeLoad, FlexibleBody, FrameState, InitialFrame, InputRates, MountMotion, Parameters};
 use crate::fmi::bytes::{Reader, Writer};
 use crate::fmi::{Interface, Model, VarInfo};
 use crate::format::RESOURCE_FILE;
@@ -388,6 +388,14 @@ impl Model for BodyFmu {
             w.f64s(&l.f);
             w.f64s(&l.t);
         }
+        w.bool(s.coupling_reference.is_some());
+        if let Some(c) = &s.coupling_reference {
+            w.f64(c.h);
+            w.f64(c.alpha);
+            w.f64(c.beta);
+            w.f64s(&c.c_d);
+            w.f64s(&c.c_k);
+        }
     }
 
     fn load_state(&mut self, bytes: &[u8]) -> Result<(), String> {
@@ -451,9 +459,19 @@ impl Model for BodyFmu {
         for _ in 0..nf {
             rate_loads.push(FlangeLoad { f: r.f64_array("flange force rate")?, t: r.f64_array("flange torque rate")? });
         }
+        let coupling_reference = if version >= 2 && r.bool("coupling reference flag")? {
+            let (h, alpha, beta) = (r.f64("coupling reference h")?, r.f64("coupling reference alpha")?, r.f64("coupling reference beta")?);
+            let mut c_d = vec![0.0; n * n];
+            r.f64s_into(&mut c_d, "coupling reference C_d")?;
+            let mut c_k = vec![0.0; n * n];
+            r.f64s_into(&mut c_k, "coupling reference C_k")?;
+            Some(CouplingReference { h, alpha, beta, c_d, c_k })
+        } else {
+            None
+        };
         r.finish("body state")?;
         let rates = InputRates { mount: rate_mount, loads: rate_loads, any };
-        let state = BodyState { mount, loads, params, q, qd, frame, initial_frame, rates };
+        let state = BodyState { mount, loads, params, q, qd, frame, initial_frame, rates, coupling_reference };
         self.body = self.body.with_state(state)?;
         self.static_start = static_start;
         Ok(())
@@ -553,8 +571,9 @@ fn input_or_state<T: Scalar>(b: &mut FlexibleBody<T>, quantity: Quantity) -> Opt
 /// per force flange f[3] t[3]; g[3], alpha, beta; q[n]; qd[n]; initial r[3] phi[3] v[3] w[3];
 /// free-floating only: frame r[3] quaternion[4] v[3] W[3]; then the input derivatives set for
 /// the next step: flag (u8 0/1), mount rates r[3] R[9] v[3] w[3] a[3] z[3], per force flange
-/// f[3] t[3]. Sizes are checked against the body before any array is read.
-pub const BODY_STATE_VERSION: u32 = 1;
+/// f[3] t[3]; since version 2 the coupled transition's reference: flag (u8), then h, alpha,
+/// beta, C_d[n*n], C_k[n*n]. Sizes are checked against the body before any array is read.
+pub const BODY_STATE_VERSION: u32 = 2;
 
 fn write_frame_state(w: &mut Writer, f: &FrameState) {
     w.f64s(&f.r);
