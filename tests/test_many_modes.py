@@ -27,25 +27,39 @@ def build(tmp_path, example, modes, name):
     return json.loads(report_path.read_text())
 
 
-@pytest.mark.parametrize("example,modes", [("beam.json", m) for m in (12, 50, 100, 150, 200, 300, 600)]
-                         + [("l-beam.json", 200)])
-def test_many_modes_keep_the_projection_exact(tmp_path, example, modes):
-    report = build(tmp_path, example, modes, "body")
+def check_projection(report, example, modes):
     acc = report["accuracy"]
     reduced, full = np.array(acc["reduced_hz"]), np.array(acc["full_hz"])
     assert report["fixed_interface_modes"] == modes
     assert len(reduced) == modes + 6 and len(full) == len(reduced)
-    below = (reduced - full) / full
+    error = (reduced - full) / full
     compliance = acc["compliance_max_relative_error"]
     print(f"\n{example} {modes} modes: f1 {reduced[0]:.9f} vs {full[0]:.9f} Hz, lowest 10 within "
-          f"{np.abs(below[:10]).max():.1e}, most negative (reduced - full)/full {below.min():.1e}, "
+          f"{np.abs(error[:10]).max():.1e}, most negative (reduced - full)/full {error.min():.1e}, "
           f"compliance {compliance:.1e}")
-    # round-off of the two eigensolves: reduced - full measured >= -2e-11 (the lowest frequencies
-    # agree to 1e-9, from the eigensolver's 1e-10 tolerance on lambda)
-    assert below.min() >= -1e-9
-    assert np.abs(below[:10]).max() < 1e-6
-    # measured 3e-13 (12 modes) .. 8e-10 (300 modes): the issue's bound
-    assert compliance < 1e-9
+    # reduced >= full up to the eigensolver's tolerance (1e-10 on lambda, 5e-11 on f); measured
+    # (reduced - full) / full >= +3e-13 on every build here
+    assert error.min() >= -1e-10
+    # measured 7e-14 .. 2.6e-13 (the issue asks 1e-9)
+    assert compliance < 3e-12
+    return np.abs(error[:10]).max()
+
+
+def test_beam_with_many_modes_keeps_the_projection_exact(tmp_path):
+    """12 .. 600 fixed-interface modes of the beam. The lowest ten frequencies converge as the
+    basis grows (nested spaces; measured 4.4e-3, 2.0e-5, 2.3e-6, 5.8e-7, 9.6e-8, 3.1e-8, 1.2e-9)
+    and are within 1e-6 of the full model's from 150 modes on; below that the difference is the
+    reduction's own, not round-off."""
+    counts = [12, 50, 100, 150, 200, 300, 600]
+    errors = [check_projection(build(tmp_path, "beam.json", m, f"beam{m}"), "beam.json", m) for m in counts]
+    assert len(errors) == len(counts)
+    assert all(b < a for a, b in zip(errors, errors[1:])), errors
+    assert all(e < 1e-6 for m, e in zip(counts, errors) if m >= 150), errors
+
+
+def test_lbeam_with_200_modes_keeps_the_projection_exact(tmp_path):
+    error = check_projection(build(tmp_path, "l-beam.json", 200, "lbeam"), "l-beam.json", 200)
+    assert error < 1e-6
 
 
 def test_too_many_modes_are_refused_quickly(tmp_path):
