@@ -11,9 +11,11 @@
 //!   A = [[0, Omega], [-(Omega + C_k Omega^-1), -(D + C_d)]],
 //! whose norm is that of the frequencies, not of their squares: scaling and squaring then needs
 //! half the squarings, and the round-off it accumulates stays at 1e-12 even for one step over
-//! many periods of the stiffest mode. The load enters through the phi functions, taken from one
-//! exponential of the block matrix [[A h, E h, 0], [0, 0, I h], [0, 0, 0]] (E = [0; I]): its top
-//! rows hold exp(A h), h phi1(A h) E and h^2 phi2(A h) E (Van Loan; Al-Mohy and Higham).
+//! many periods of the stiffest mode. The load enters through the phi functions, the top rows of
+//! the exponential of the block matrix [[A h, E h, 0], [0, 0, I h], [0, 0, 0]] (E = [0; I]):
+//! exp(A h), h phi1(A h) E and h^2 phi2(A h) E (Van Loan; Al-Mohy and Higham). Its structure is
+//! used throughout: Taylor series of phi2 on the scaled A, then squaring of the blocks, all in
+//! 2n x 2n and 2n x n products (a quarter of the full block matrix's work).
 //!
 //! All storage is allocated at construction; `prepare` and `advance` allocate nothing.
 
@@ -33,11 +35,15 @@ pub struct CoupledPropagator {
     key_c_k: Vec<f64>,
     /// Top 2n rows of exp(X), row-major 2n x 4n: [P | G1 | G2].
     top: Vec<f64>,
-    /// Expm workspace, (4n)^2 each.
-    x: Vec<f64>,
-    term: Vec<f64>,
-    sum: Vec<f64>,
+    /// Workspace, (2n)^2 each: the scaled A, the phi series and products.
+    a: Vec<f64>,
+    phi: Vec<f64>,
+    p: Vec<f64>,
     tmp: Vec<f64>,
+    /// 2n x n each: G1, G2 while squaring, and a product.
+    g1: Vec<f64>,
+    g2: Vec<f64>,
+    gt: Vec<f64>,
     /// 2n vectors.
     y: Vec<f64>,
     y1: Vec<f64>,
@@ -62,10 +68,13 @@ impl CoupledPropagator {
             key_c_d: vec![0.0; n * n],
             key_c_k: vec![0.0; n * n],
             top: vec![0.0; 2 * n * m],
-            x: vec![0.0; m * m],
-            term: vec![0.0; m * m],
-            sum: vec![0.0; m * m],
-            tmp: vec![0.0; m * m],
+            a: vec![0.0; 4 * n * n],
+            phi: vec![0.0; 4 * n * n],
+            p: vec![0.0; 4 * n * n],
+            tmp: vec![0.0; 4 * n * n],
+            g1: vec![0.0; 2 * n * n],
+            g2: vec![0.0; 2 * n * n],
+            gt: vec![0.0; 2 * n * n],
             y: vec![0.0; 2 * n],
             y1: vec![0.0; 2 * n],
             chol: vec![0.0; n * n],
@@ -115,53 +124,80 @@ impl CoupledPropagator {
         self.key_c_d.copy_from_slice(c_d);
         self.key_c_k.copy_from_slice(c_k);
         self.definite = self.effective_stiffness_definite(omega);
-        let m = 4 * n;
-        // X = [[A h, E h, 0], [0, 0, I h], [0, 0, 0]]: the generator of y' = A y + E u, u' = v,
-        // v' = 0 with u(0) = p0, v(0) = p1
-        let x = &mut self.x;
-        x.fill(0.0);
+        let m = 2 * n;
+        // A h in the scaled state, then scaled by 2^-s so that |A h 2^-s|_1 <= SCALED_NORM
+        let a = &mut self.a;
+        a.fill(0.0);
         for i in 0..n {
-            x[i * m + n + i] = h * omega[i];
+            a[i * m + n + i] = h * omega[i];
             let row = n + i;
             for j in 0..n {
-                x[row * m + j] = -h * c_k[i * n + j] / omega[j];
-                x[row * m + n + j] = -h * c_d[i * n + j];
+                a[row * m + j] = -h * c_k[i * n + j] / omega[j];
+                a[row * m + n + j] = -h * c_d[i * n + j];
             }
-            x[row * m + i] -= h * omega[i];
-            x[row * m + n + i] -= h * (alpha + beta * omega[i] * omega[i] + extra[i]);
-            x[row * m + 2 * n + i] = h;
-            x[(2 * n + i) * m + 3 * n + i] = h;
+            a[row * m + i] -= h * omega[i];
+            a[row * m + n + i] -= h * (alpha + beta * omega[i] * omega[i] + extra[i]);
         }
-        // scaling: |X / 2^s|_1 <= SCALED_NORM
-        let norm = (0..m).map(|j| (0..m).map(|i| x[i * m + j].abs()).sum::<f64>()).fold(0.0, f64::max);
+        let norm = (0..m).map(|j| (0..m).map(|i| a[i * m + j].abs()).sum::<f64>()).fold(0.0, f64::max);
+        // the load blocks have norm h, like A h's time scale: scale them alike
+        let norm = norm.max(h);
         let s = if norm > SCALED_NORM { (norm / SCALED_NORM).log2().ceil() as i32 } else { 0 };
+        let tau = h * 0.5f64.powi(s);
         let scale = 0.5f64.powi(s);
-        for v in x.iter_mut() {
+        for v in a.iter_mut() {
             *v *= scale;
         }
-        // Taylor by Horner: sum = I + X (I + X/2 (I + X/3 (...)))
-        let (term, sum, tmp) = (&mut self.term, &mut self.sum, &mut self.tmp);
-        sum.fill(0.0);
-        for i in 0..m {
-            sum[i * m + i] = 1.0;
+        // The block matrix X = [[a, e, 0], [0, 0, tau I], [0, 0, 0]] (a = A tau, e = [0; tau I])
+        // has X^k = [[a^k, a^(k-1) e, a^(k-2) e tau], 0, 0], so exp(X) = [[P, G1, G2], [0, I,
+        // tau I], [0, 0, I]] with P = I + a phi1(a), G1 = phi1(a) e, G2 = phi2(a) e tau, and
+        // phi2(a) = sum a^k / (k + 2)! by Horner, phi1 = I + a phi2.
+        let (phi, p, tmp) = (&mut self.phi, &mut self.p, &mut self.tmp);
+        identity_scaled(m, phi, 1.0 / factorial(TAYLOR_DEGREE + 2));
+        for k in (0..TAYLOR_DEGREE).rev() {
+            mat_mul(m, m, m, a, phi, tmp);
+            std::mem::swap(phi, tmp);
+            add_identity(m, phi, 1.0 / factorial(k + 2));
         }
-        for k in (1..=TAYLOR_DEGREE).rev() {
-            // sum <- I + (X / k) sum
-            mat_mul(m, x, sum, tmp);
-            let inv = 1.0 / k as f64;
-            for (t, v) in term.iter_mut().zip(tmp.iter()) {
-                *t = v * inv;
+        // G2 = phi2 e tau: the right half columns of phi2, times tau^2
+        let (g1, g2, gt) = (&mut self.g1, &mut self.g2, &mut self.gt);
+        for r in 0..m {
+            for j in 0..n {
+                g2[r * n + j] = phi[r * m + n + j] * tau * tau;
             }
-            for i in 0..m {
-                term[i * m + i] += 1.0;
-            }
-            std::mem::swap(term, sum);
         }
+        // phi1 = I + a phi2
+        mat_mul(m, m, m, a, phi, tmp);
+        std::mem::swap(phi, tmp);
+        add_identity(m, phi, 1.0);
+        for r in 0..m {
+            for j in 0..n {
+                g1[r * n + j] = phi[r * m + n + j] * tau;
+            }
+        }
+        // P = I + a phi1
+        mat_mul(m, m, m, a, phi, p);
+        add_identity(m, p, 1.0);
+        // squaring: exp(X)^2 = [[P^2, P G1 + G1, P G2 + G1 c + G2], [0, I, 2c I], [0, 0, I]]
+        let mut c = tau;
         for _ in 0..s {
-            mat_mul(m, sum, sum, tmp);
-            std::mem::swap(sum, tmp);
+            mat_mul(m, m, n, p, g2, gt);
+            for (g, (pg, g1v)) in g2.iter_mut().zip(gt.iter().zip(g1.iter())) {
+                *g += pg + g1v * c;
+            }
+            mat_mul(m, m, n, p, g1, gt);
+            for (g, pg) in g1.iter_mut().zip(gt.iter()) {
+                *g += pg;
+            }
+            mat_mul(m, m, m, p, p, tmp);
+            std::mem::swap(p, tmp);
+            c *= 2.0;
         }
-        self.top.copy_from_slice(&sum[..2 * n * m]);
+        let w = 4 * n;
+        for r in 0..m {
+            self.top[r * w..r * w + m].copy_from_slice(&p[r * m..(r + 1) * m]);
+            self.top[r * w + m..r * w + m + n].copy_from_slice(&g1[r * n..(r + 1) * n]);
+            self.top[r * w + m + n..(r + 1) * w].copy_from_slice(&g2[r * n..(r + 1) * n]);
+        }
         Prepared::Computed
     }
 
@@ -222,22 +258,39 @@ impl CoupledPropagator {
     }
 }
 
-/// out = a b, all m x m row-major; out must not alias a or b.
-fn mat_mul(m: usize, a: &[f64], b: &[f64], out: &mut [f64]) {
-    out.fill(0.0);
-    for i in 0..m {
-        let row = &mut out[i * m..(i + 1) * m];
-        for k in 0..m {
-            let aik = a[i * m + k];
-            if aik == 0.0 {
+/// out = a b with a r x k, b k x c, out r x c, row-major; out must not alias a or b.
+fn mat_mul(r: usize, k: usize, c: usize, a: &[f64], b: &[f64], out: &mut [f64]) {
+    out[..r * c].fill(0.0);
+    for i in 0..r {
+        let row = &mut out[i * c..(i + 1) * c];
+        for l in 0..k {
+            let ail = a[i * k + l];
+            if ail == 0.0 {
                 continue;
             }
-            let bk = &b[k * m..(k + 1) * m];
-            for (o, bv) in row.iter_mut().zip(bk) {
-                *o += aik * bv;
+            let bl = &b[l * c..(l + 1) * c];
+            for (o, bv) in row.iter_mut().zip(bl) {
+                *o += ail * bv;
             }
         }
     }
+}
+
+fn identity_scaled(m: usize, out: &mut [f64], value: f64) {
+    out.fill(0.0);
+    for i in 0..m {
+        out[i * m + i] = value;
+    }
+}
+
+fn add_identity(m: usize, out: &mut [f64], value: f64) {
+    for i in 0..m {
+        out[i * m + i] += value;
+    }
+}
+
+fn factorial(k: usize) -> f64 {
+    (1..=k).map(|i| i as f64).product()
 }
 
 #[cfg(test)]
