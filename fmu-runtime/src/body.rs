@@ -1109,9 +1109,13 @@ impl FlexibleBody {
         // then gains at most (h |dC|)^4 / 8 = 1e-9 of energy per step, and a steady spin runs on
         // one exponential.
         let end = if ramp { &work.coupling_end } else { &self.coupling };
-        let current = self.coupled.is_prepared(h, self.params.alpha, self.params.beta)
-            && h * coupling_drift(&self.coupling, self.coupled.reference()) <= REFERENCE_DRIFT
-            && h * coupling_drift(end, self.coupled.reference()) <= REFERENCE_DRIFT;
+        let prepared = self.coupled.is_prepared(h, self.params.alpha, self.params.beta);
+        // a steady spin meets its own transition again: compared first, cheaper than the drift
+        let held_exactly = !ramp && prepared && self.coupled.reference() == (&self.coupling.c_d[..], &self.coupling.c_k[..]);
+        let current = held_exactly
+            || prepared
+                && h * coupling_drift(&self.coupling, self.coupled.reference()) <= REFERENCE_DRIFT
+                && h * coupling_drift(end, self.coupled.reference()) <= REFERENCE_DRIFT;
         if !current {
             let (c_d, c_k): (&[f64], &[f64]) = if ramp {
                 for (m, (a, b)) in work.c_d_mid.iter_mut().zip(self.coupling.c_d.iter().zip(&work.coupling_end.c_d)) {
@@ -1131,8 +1135,8 @@ impl FlexibleBody {
             }
         }
         let end = if ramp { &work.coupling_end } else { &self.coupling };
-        let exact = !ramp && self.coupled.reference() == (&self.coupling.c_d[..], &self.coupling.c_k[..]);
-        let exact = exact || (ramp && self.coupled.reference() == (&work.c_d_mid[..], &work.c_k_mid[..]) && !current);
+        let exact = held_exactly
+            || !current && (!ramp || self.coupled.reference() == (&work.c_d_mid[..], &work.c_k_mid[..]));
         let rate: &[f64] = if ramp { &self.load_rate } else { &work.zeros };
         if exact {
             self.coupled.advance(&self.body.omega, &self.load, rate, &mut self.q, &mut self.qd);

@@ -209,16 +209,15 @@ impl CoupledPropagator {
             self.y[i] = omega[i] * q[i];
             self.y[n + i] = qd[i];
         }
-        for r in 0..2 * n {
-            let row = &self.top[r * m..(r + 1) * m];
-            let mut acc = 0.0;
-            for c in 0..2 * n {
-                acc += row[c] * self.y[c];
+        let ramp = p1.iter().any(|v| *v != 0.0);
+        for (row, out) in self.top.chunks_exact(m).zip(self.y1.iter_mut()) {
+            let (p, g) = row.split_at(2 * n);
+            let (g1, g2) = g.split_at(n);
+            let mut acc = dot(p, &self.y) + dot(g1, p0);
+            if ramp {
+                acc += dot(g2, p1);
             }
-            for j in 0..n {
-                acc += row[2 * n + j] * p0[j] + row[3 * n + j] * p1[j];
-            }
-            self.y1[r] = acc;
+            *out = acc;
         }
         for i in 0..n {
             q[i] = self.y1[i] / omega[i];
@@ -256,6 +255,24 @@ impl CoupledPropagator {
         }
         true
     }
+}
+
+/// a . b with four partial sums (independent chains the compiler can keep in flight).
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut s = [0.0; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for k in 0..4 {
+            s[k] += x[k] * y[k];
+        }
+    }
+    let mut tail = 0.0;
+    for (x, y) in ra.iter().zip(rb) {
+        tail += x * y;
+    }
+    (s[0] + s[1]) + (s[2] + s[3]) + tail
 }
 
 /// out = a b with a r x k, b k x c, out r x c, row-major; out must not alias a or b.
