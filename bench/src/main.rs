@@ -8,7 +8,7 @@
 //! many-mode reduction against the full model and an undamped spinning body's energy, with the
 //! cost of each.
 //!
-//! `cargo run --release -p bench` (about 40 s after the build; options: `--modes 10,20`,
+//! `cargo run --release -p bench` (about 3 minutes after the build; options: `--modes 10,20`,
 //! `--fixed-modes 20`, `--repeats N`, `--skip-full`, `--keep DIR` to keep the FMUs). Prints
 //! markdown. The speed targets are reported; a missed hard-case accuracy target ends the run
 //! with a non-zero exit.
