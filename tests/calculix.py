@@ -11,7 +11,7 @@ that deck, runs `ccx` and reads the printed results back:
     result = run_ccx(deck, analysis, workdir)
     u_tip = result.u(set_node(deck, "TIP_REF"))
 
-Conventions (CalculiX 2.20, REFERENCES.md section 3): `*RIGID BODY` ties a flange's slave nodes
+Conventions (CalculiX 2.20, docs/REFERENCES.md section 3): `*RIGID BODY` ties a flange's slave nodes
 rigidly to its reference node (translations = DoFs 1-3) and rotation node (small rotations =
 DoFs 1-3), i.e. the same rigid coupling as the builder's flanges. Forces go on the reference
 node, moments on the rotation node; `*NODE PRINT` with U prints both. Results in the .dat file

@@ -4,7 +4,7 @@ References: the builder's full FE static solution on the same mesh (it proves th
 Craig-Bampton constraint modes make the static response to flange loads exact, so 1e-8 is
 round-off, not approximation), Euler-Bernoulli beam theory (1 %: shear and the 3D end ties add
 (h/l)^2 ~ 4e-4 and local effects), and the CalculiX C3D20 result on the same 50x2x2 mesh quoted in
-REFERENCES.md section 3 (5 significant digits, so 1e-4)."""
+docs/REFERENCES.md section 3 (5 significant digits, so 1e-4)."""
 
 import numpy as np
 import pytest
@@ -67,7 +67,7 @@ def test_static_tip_against_beam_theory_and_calculix(beam):
     phi_y = M_Y * L / ei - F_Z * L**2 / (2 * ei)
     assert u[2] == pytest.approx(u_z, rel=0.01, abs=0)
     assert u[4] == pytest.approx(phi_y, rel=0.01, abs=0)
-    # CalculiX 2.20, C3D20, same mesh, *RIGID BODY flanges (REFERENCES.md section 3)
+    # CalculiX 2.20, C3D20, same mesh, *RIGID BODY flanges (docs/REFERENCES.md section 3)
     assert u[2] == pytest.approx(-1.2493e-8, rel=1e-4, abs=0)
     assert u[3] == pytest.approx(2.7634e-7, rel=1e-4, abs=0)
     assert u[4] == pytest.approx(3.7436e-8, rel=1e-4, abs=0)

@@ -1,5 +1,5 @@
 """Large rigid motion of a mounted body: rotating and accelerating mounts, gravity and geometric
-stiffening, against analytic theory and published tables (REFERENCES.md section 2)."""
+stiffening, against analytic theory and published tables (docs/REFERENCES.md section 2)."""
 
 import json
 
@@ -64,7 +64,7 @@ def test_rotating_bar_axial_displacement(tmp_path):
     assert u == pytest.approx(expected, rel=5e-3, abs=0)
 
 
-# Wright et al. 1982 / Hodges & Rutkowski 1981 (REFERENCES.md section 2): first flapwise
+# Wright et al. 1982 / Hodges & Rutkowski 1981 (docs/REFERENCES.md section 2): first flapwise
 # frequency / sqrt(EI / (rho A l^4)) versus lambda = W sqrt(rho A l^4 / (EI))
 ROTATING_CANTILEVER = {0: 3.5160, 2: 4.1373, 5: 6.4496, 10: 11.2023}
 

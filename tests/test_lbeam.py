@@ -62,7 +62,7 @@ def test_in_plane_frequencies(lbeam):
           "fixed-interface modes +", report["constraint_modes"], "constraint modes")
     for f, ansys, ccx in zip(in_plane, ANSYS_IN_PLANE_HZ, CALCULIX_IN_PLANE_HZ):
         assert f == pytest.approx(ansys, rel=3e-3, abs=0)
-        # same mesh and element as CalculiX's run quoted in REFERENCES.md: agree to its digits
+        # same mesh and element as CalculiX's run quoted in docs/REFERENCES.md section 3: agree to its digits
         assert f == pytest.approx(ccx, rel=2e-5, abs=0)
     # against the full FE model on the same mesh (the reduction's error)
     full = np.array(report["accuracy"]["full_hz"])

@@ -1,4 +1,4 @@
-"""Reduction methods, the scene's band and tolerance, and the accuracy report (issue 4).
+"""Reduction methods, the scene's band and tolerance, and the accuracy report.
 
 References: an independent sparse solve of the full model with SciPy on the matrices the builder
 exports (Matrix Market), and the FMU's own transfer functions obtained through FMI calls only

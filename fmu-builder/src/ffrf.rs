@@ -1,4 +1,4 @@
-//! Floating-frame invariants of the reduced body (DESIGN.md "Large motion"): what the runtime
+//! Floating-frame invariants of the reduced body (docs/ARCHITECTURE.md, "Equations"): what the runtime
 //! needs to couple the elastic coordinates to the body frame's rigid motion. All are projections
 //! of the consistent mass onto rigid-body fields and the basis, computed once here.
 

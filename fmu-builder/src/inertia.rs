@@ -1,6 +1,6 @@
 //! Mesh-level fields for the floating frame: the basis expanded to every mesh node (slaves follow
 //! their flange rigidly), inertial load cases of frame motion, and the rotation invariants of
-//! DESIGN.md (G_a, O_ab, o_ab). Cross products act per node (E_a w = e_a x w_j), and with the
+//! docs/ARCHITECTURE.md (G_a, O_ab, o_ab). Cross products act per node (E_a w = e_a x w_j), and with the
 //! consistent mass M = M_s (x) I3 they commute with M, so every invariant is a product of the
 //! nodal mass with per-node cross products of the basis and the positions.
 

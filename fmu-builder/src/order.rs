@@ -1,6 +1,6 @@
 //! Choosing the reduced order from the scene: from a rich reduced model (orthonormal modes
 //! Lambda, Phi) keep the modes that dominate the flange transfer functions, |phi_b,k|^2 /
-//! (2 zeta_k w_k^2) for the connected flanges (REFERENCES.md section 5: dominance beats keeping
+//! (2 zeta_k w_k^2) for the connected flanges (docs/REFERENCES.md section 4: dominance beats keeping
 //! the lowest), plus the residual flexibility of the rest (the static response of the dropped
 //! modes to flange and inertial loads, Rayleigh-Ritz'ed among themselves), so statics stay exact.
 //! The smallest selection whose flange FRF error against the full model stays under the

@@ -1,7 +1,7 @@
 //! The reduced flexible body's equations, free of anything FMI: inputs (mount motion, flange
 //! loads, gravity), modal state q, q', and what the flanges see.
 //!
-//! Equations (body frame B, modal mass I, stiffness diag(w^2), Rayleigh damping; DESIGN.md):
+//! Equations (body frame B, modal mass I, stiffness diag(w^2), Rayleigh damping; docs/ARCHITECTURE.md):
 //!   q'' + (D + 2 sum_a W_a G_a) q' + (K + sum_a Z_a G_a + sum_ab W_a W_b O_ab + K_G) q
 //!       = -C_t^T a_B - sum_a Z_a c_a - sum_ab W_a W_b o_ab + sum_k Phi_k^T [A^T f_k; A^T t_k],
 //! with W = A^T w, Z = A^T z, a_B = A^T (a - g), and K_G the geometric stiffness of the present
@@ -713,7 +713,7 @@ impl<T: Scalar> FlexibleBody<T> {
     /// mass's (mean axes: C_t = 0), its rotation and the modes couple through J(q) and C_r(q):
     ///   [J(q)  C_r(q)] [W']   [tau - W x h - J'(q) W                                   ]
     ///   [C_r^T   I   ] [q''] = [p - D q' - K q - 2 sum W_a G_a q' - sum W_a W_b (O_ab q + o_ab)]
-    /// with h = J W + C_r q' (DESIGN.md invariants, exact in q to second order).
+    /// with h = J W + C_r q' (floating-frame invariants, exact in q to second order).
     fn free_accelerations(&mut self) -> Result<(), String> {
         let frame = self.frame.ok_or("not a free-floating body")?;
         let n = self.q.len();

@@ -1,6 +1,6 @@
 //! The FMU's variables and what each one means for the body: the one table from which the builder
 //! writes modelDescription.xml and through which the runtime answers fmi2Get/Set. Names follow
-//! DESIGN.md: flange `tip` has inputs `tip.f[i]`, `tip.t[i]`, outputs `tip.r[i]`, `tip.R[i,j]`, ...
+//! Naming: flange `tip` has inputs `tip.f[i]`, `tip.t[i]`, outputs `tip.r[i]`, `tip.R[i,j]`, ...
 
 use crate::fmi::{Causality, Initial, VarType, Variability};
 use crate::reduced::ReducedBody;

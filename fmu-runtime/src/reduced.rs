@@ -14,7 +14,7 @@ pub struct FlangeShapes {
     pub shapes: Vec<f64>,
 }
 
-/// Rotating-frame invariants (DESIGN.md "Large motion"), row-major:
+/// Rotating-frame invariants (docs/ARCHITECTURE.md, "Equations"), row-major:
 /// G_a = Phi^T M E_a Phi (3 x r x r, skew), O_ab = Phi^T M E_a E_b Phi (3 x 3 x r x r),
 /// o_ab = Phi^T M E_a E_b X (3 x 3 x r). (c_a = Phi^T M E_a X are the rows of C_r.)
 #[derive(Debug, Clone, PartialEq)]

@@ -1,9 +1,10 @@
 //! modelDescription.xml from the runtime's variable table.
 //!
 //! Everything is checked and resolved first (`Plan`), then written: the writing itself can only
-//! fail on I/O, which a `Vec<u8>` sink does not do. ModelStructure follows REFERENCES.md section
-//! 6, the most common reason importers reject an FMU: explicit (possibly empty) dependency lists
-//! everywhere, because an absent attribute means "depends on everything".
+//! fail on I/O, which a `Vec<u8>` sink does not do. ModelStructure follows the FMI 2.0 standard
+//! (docs/REFERENCES.md section 5), the most common reason importers reject an FMU: explicit
+//! (possibly empty) dependency lists everywhere, because an absent attribute means "depends on
+//! everything".
 
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::io;
