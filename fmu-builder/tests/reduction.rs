@@ -57,10 +57,13 @@ fn lanczos_matches_dense_eigenvalues() {
     let m = block(&built.model.mass, 0..nc, 0..nc).unwrap();
     let reference = dense_eigenvalues(&k, &m);
     let lanczos = eigen::lowest(&SpdSolver::new(&k, "K").unwrap(), &m, 15, EIGEN_TOL).unwrap();
+    assert_eq!(lanczos.values.len(), 15);
+    assert!(reference.len() >= 15);
     for (i, (l, r)) in lanczos.values.iter().zip(&reference).enumerate() {
         assert!((l - r).abs() <= 1e-9 * r, "mode {i}: {l} vs {r}");
     }
     // and the report's full-model frequencies are these
+    assert!(built.report.accuracy.full_hz.len() >= 10);
     for (f, r) in built.report.accuracy.full_hz.iter().zip(&reference) {
         assert!((f - r.sqrt() / (2.0 * std::f64::consts::PI)).abs() <= 1e-9 * f);
     }
