@@ -14,7 +14,9 @@ import pytest
 from scipy.linalg import expm
 
 from conftest import ROOT
+from fmpy.fmi1 import FMICallException
 from fmu_access import Fmu
+from test_fmi_robustness import Recorder, restore_default_logger  # noqa: F401 (autouse fixture)
 
 E, RHO, L, B, H = 2e11, 7850.0, 1.0, 0.01, 0.02
 TIP_U = ["tip.u[1]", "tip.u[2]", "tip.u[3]"]
@@ -84,13 +86,15 @@ def test_rotated_mount_resolves_loads_and_outputs_in_the_world_frame(beam):
 
 
 def test_a_non_rotation_base_R_is_refused(beam):
-    fmu = Fmu(beam[0], "ModelExchange")
+    rec = Recorder()
+    fmu = Fmu(beam[0], "ModelExchange", callbacks=rec.callbacks)
     try:
         fmu.set(**{"base.R[1,1]": 2.0})
-        with pytest.raises(Exception):
+        with pytest.raises(FMICallException):
             fmu.initialize()
     finally:
         fmu.close(terminate=False)
+    assert "base.R is not a proper rotation matrix" in rec.text(), rec.text()
 
 
 FMI2_FUNCTIONS = """GetTypesPlatform GetVersion SetDebugLogging Instantiate FreeInstance SetupExperiment

@@ -13,7 +13,9 @@ import scipy.io
 import scipy.sparse.linalg
 
 from conftest import EXAMPLES, run_builder
+from fmpy.fmi1 import FMICallException
 from fmu_access import Fmu
+from test_fmi_robustness import Recorder, restore_default_logger  # noqa: F401 (autouse fixture)
 
 
 def build(tmp_path, spec, name, *extra):
@@ -223,13 +225,15 @@ def test_a_scene_without_rotation_has_no_rotation_terms(tmp_path):
     rotating, _, _ = build(tmp_path, with_reduction({"method": "craig_bampton", "modes": 6}, {"loads": ["rotation"]}), "rot")
     size = lambda p: zipfile.ZipFile(p).getinfo("resources/reduced_body.bin").file_size
     assert size(plain) < size(rotating)
-    fmu = Fmu(plain, "CoSimulation")
+    rec = Recorder()
+    fmu = Fmu(plain, "CoSimulation", callbacks=rec.callbacks)
     try:
         fmu.set(**{"base.w[3]": 1.0})
-        with pytest.raises(Exception):
+        with pytest.raises(FMICallException):
             fmu.initialize()
     finally:
         fmu.close(terminate=False)
+    assert "built for a scene without rotation" in rec.text(), rec.text()
 
 
 def test_sweep_prints_error_cost_and_build_time(tmp_path):
