@@ -21,7 +21,6 @@ use crate::stiffening::reduced_geometric_stiffness;
 use faer::{Mat, MatRef};
 use fmu_runtime::reduced::{RotationTerms, Stiffening};
 use fmu_runtime::reduced::{FlangeShapes, ReducedBody};
-use std::hash::{Hash, Hasher};
 use std::path::Path;
 
 pub struct Built {
@@ -34,21 +33,12 @@ pub struct Built {
     pub report: Report,
 }
 
+/// The FMU's GUID: a name-based UUID (RFC 9562 version 5, SHA-1) of the reduced model's bytes in
+/// a namespace of this tool, so the same model gives the same GUID on every machine and Rust
+/// release, and any change of the model gives another.
 fn guid_of(bytes: &[u8]) -> String {
-    let mut h1 = std::collections::hash_map::DefaultHasher::new();
-    bytes.hash(&mut h1);
-    let a = h1.finish();
-    let mut h2 = std::collections::hash_map::DefaultHasher::new();
-    (a, bytes.len(), "fmu-builder").hash(&mut h2);
-    let b = h2.finish();
-    format!(
-        "{{{:08x}-{:04x}-{:04x}-{:04x}-{:012x}}}",
-        a >> 32,
-        (a >> 16) & 0xffff,
-        a & 0xffff,
-        b >> 48,
-        b & 0xffff_ffff_ffff
-    )
+    const NAMESPACE: uuid::Uuid = uuid::Uuid::from_u128(0x6f4d_2a61_8e3b_4c57_9a0e_52b1_c3d8_f7e4);
+    format!("{{{}}}", uuid::Uuid::new_v5(&NAMESPACE, bytes).hyphenated())
 }
 
 /// Reduced geometric stiffness of every unit prestress the scene can apply: centrifugal and
@@ -465,3 +455,14 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
     Ok(Built { spec, part, flanges, model, basis, reduced, report })
 }
 
+
+#[cfg(test)]
+mod tests {
+    /// The GUID is RFC 9562's version-5 UUID, as any implementation computes it: the expected
+    /// value comes from Python's `uuid.uuid5` with the same namespace and name.
+    #[test]
+    fn guid_is_a_standard_name_based_uuid() {
+        assert_eq!(super::guid_of(b"reduced body"), "{7f7ca901-e4fb-5418-9b2f-592a98c5c92c}");
+        assert_ne!(super::guid_of(b"reduced body"), super::guid_of(b"reduced body "));
+    }
+}
