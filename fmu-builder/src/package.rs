@@ -26,7 +26,7 @@ pub fn write_fmu(built: &Built, output: &Path) -> Result<()> {
         }),
         guid: built.reduced.guid.clone(),
         generation_tool: format!("fmu-builder {}", env!("CARGO_PKG_VERSION")),
-        generation_date_time: now_utc(),
+        generation_date_time: generation_time()?,
         default_experiment: fmu::DefaultExperiment {
             start: 0.0,
             stop: (10.0 * period).max(1e-3),
@@ -61,12 +61,26 @@ pub fn build(input: &Path, output: &Path) -> Result<Built> {
     Ok(built)
 }
 
-/// xs:dateTime of now, UTC, without a date crate.
-fn now_utc() -> String {
-    let secs = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_secs() as i64)
-        .unwrap_or(0);
+/// The FMU's generation time: `SOURCE_DATE_EPOCH` (seconds since 1970, UTC) when set, as
+/// reproducible builds specify, so that the same input and builder version give the same FMU
+/// bytes; else now.
+fn generation_time() -> Result<String> {
+    let secs = match std::env::var("SOURCE_DATE_EPOCH") {
+        Ok(text) => text.trim().parse::<i64>().ok().filter(|s| (0..253_402_300_800).contains(s)).ok_or_else(|| {
+            BuildError::Numerical(format!(
+                "the environment variable SOURCE_DATE_EPOCH is {text:?}: expected whole seconds since 1970-01-01 UTC"
+            ))
+        })?,
+        Err(_) => std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_secs() as i64)
+            .unwrap_or(0),
+    };
+    Ok(xs_date_time(secs))
+}
+
+/// xs:dateTime (UTC) of `secs` since 1970, without a date crate.
+fn xs_date_time(secs: i64) -> String {
     let days = secs.div_euclid(86_400);
     let rem = secs.rem_euclid(86_400);
     // civil-from-days (Howard Hinnant)
@@ -80,4 +94,15 @@ fn now_utc() -> String {
     let m = if mp < 10 { mp + 3 } else { mp - 9 };
     let y = yoe + era * 400 + if m <= 2 { 1 } else { 0 };
     format!("{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z", rem / 3600, (rem / 60) % 60, rem % 60)
+}
+
+#[cfg(test)]
+mod tests {
+    /// Against `date -u -d @SECS +%Y-%m-%dT%H:%M:%SZ` (GNU coreutils).
+    #[test]
+    fn date_time_matches_coreutils() {
+        assert_eq!(super::xs_date_time(0), "1970-01-01T00:00:00Z");
+        assert_eq!(super::xs_date_time(951_782_400), "2000-02-29T00:00:00Z");
+        assert_eq!(super::xs_date_time(1_795_000_000), "2026-11-18T11:06:40Z");
+    }
 }
