@@ -250,11 +250,6 @@ pub fn rigid_coupling(part: &Uncoupled, nodes: &[[f64; 3]], flanges: &[Flange], 
     Ok(Assembled { dofs, stiffness, mass, nodal_mass: part.nodal_mass.clone(), mass_properties, damping })
 }
 
-/// Mesh, materials and flanges to the constrained model.
-pub fn assemble(mesh: &Mesh, flanges: &[Flange], materials: &[SolidMaterial], origin: [f64; 3]) -> Result<Assembled> {
-    rigid_coupling(&uncoupled(mesh, materials)?, &mesh.nodes, flanges, origin)
-}
-
 /// The matrix of the triplets made bit-exactly symmetric, (A + A^T) / 2: coupled elements'
 /// T^T K T products and summation order leave round-off asymmetry, and an exported matrix read
 /// back by another solver (mirrored from one triangle) must be the very matrix we factor.

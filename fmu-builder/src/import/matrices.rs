@@ -504,11 +504,6 @@ pub fn parse_matrix_market(
     m.to_sparse(&identity, path)
 }
 
-/// Reads a Matrix Market file; see [`parse_matrix_market`].
-pub fn read_matrix_market(path: &Path) -> Result<SparseColMat<usize, f64>, ImportError> {
-    parse_matrix_market(&read_text(path)?, path)
-}
-
 fn read_mm(
     path: &Path,
     expect: Option<(usize, &Path)>,
