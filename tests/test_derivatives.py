@@ -4,8 +4,8 @@ Exchange and Co-Simulation, fmi2GetRealOutputDerivatives in Co-Simulation.
 References, none of them the derivative code: central finite differences of the FMU's own
 fmi2GetReal / fmi2GetDerivatives (Richardson-extrapolated, error O(h^4)); the time slope of the
 outputs over short fmi2DoStep steps; kinematics (d/dt of a flange's position is its velocity
-output, and so on). Tolerance 1e-6 of each entry (the issue's figure; the measured worst is
-~1e-7, limited by the differences' rounding), with a floor of 1e-9 of the unknown's largest
+output, and so on). Tolerance 5e-7 of each entry (ten times the measured worst, 5.2e-8, which is
+the differences' rounding), with a floor of 1e-9 of the unknown's largest
 response to a natural-size change of any known, below which a finite difference is noise."""
 
 import json
@@ -155,7 +155,7 @@ def check_jacobian(fmu, unknowns, knowns, what):
     response = np.max(np.abs(exact) * scales[:, None], axis=0)
     floor = 1e-9 * response[None, :] / scales[:, None]
     err = np.abs(exact - fd)
-    bad = err > 1e-6 * np.abs(exact) + floor
+    bad = err > 5e-7 * np.abs(exact) + floor
     if bad.any():
         k, u = np.argwhere(bad)[0]
         raise AssertionError(f"{what}: d {unknowns[u]} / d {knowns[k]}: exact {exact[k, u]:e}, "
@@ -285,5 +285,6 @@ def test_output_derivatives_are_the_slope_of_the_steps(soft_tsquare, free_block)
         worst = int(np.argmax(err))
         print(f"\n{start.__name__}: {len(outputs)} output derivatives vs the steps' slope, worst {err[worst]:.1e} "
               f"({outputs[worst]}: {exact[worst]:e} vs {fd[worst]:e})")
-        assert err[worst] < 1e-6, (outputs[worst], exact[worst], fd[worst])
+        # ten times the measured worst (3.3e-9, the steps' slope's own truncation)
+        assert err[worst] < 3e-8, (outputs[worst], exact[worst], fd[worst])
         fmu.close()
