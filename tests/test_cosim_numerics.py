@@ -82,11 +82,13 @@ def test_free_vibration_energy_never_grows(stiff_beam, beta, h):
         fmu.close()
     energy = np.array(energy)
     growth = np.max(np.diff(energy)) / energy[0]
-    print(f"\nh {h} (h w_max {h * omega.max():.0f}), beta {beta}: E0 {energy[0]:.6e}, E_end {energy[-1]:.6e}, largest step increase {growth:.1e} of E0")
+    drift = np.max(np.abs(energy / energy[0] - 1))
+    print(f"\nh {h} (h w_max {h * omega.max():.0f}), beta {beta}: E0 {energy[0]:.6e}, E_end {energy[-1]:.6e}, "
+          f"largest step increase {growth:.1e} of E0, largest drift {drift:.1e}")
     assert energy[0] > 0
     if beta == 0.0:
-        # exact propagation: conserved to round-off over 10^4 steps
-        assert np.max(np.abs(energy / energy[0] - 1)) < 1e-10
+        # exact propagation: conserved to round-off over 10^4 steps (measured drift 8.6e-13)
+        assert drift < 1e-11
     else:
         assert growth <= 1e-13
         assert energy[-1] < 1e-3 * energy[0]
