@@ -1120,14 +1120,11 @@ impl FlexibleBody {
         // top of the exact coupled transition; the reference is renewed (one matrix exponential,
         // at the step's midpoint coupling) when h |dC| exceeds REFERENCE_DRIFT. A steady spin
         // runs on one exponential.
-        let end = if ramp { &work.coupling_end } else { &self.coupling };
         let prepared = self.coupled.is_prepared(h, self.params.alpha, self.params.beta);
         // a steady spin meets its own transition again: compared first, cheaper than the drift
         let held_exactly = !ramp && prepared && self.coupled.reference() == (&self.coupling.c_d[..], &self.coupling.c_k[..]);
-        let current = held_exactly
-            || prepared
-                && h * coupling_drift(&self.coupling, self.coupled.reference(), &self.body.omega) <= REFERENCE_DRIFT
-                && h * coupling_drift(end, self.coupled.reference(), &self.body.omega) <= REFERENCE_DRIFT;
+        let drift_ok = |c: &Coupling<f64>| h * coupling_drift(c, self.coupled.reference(), &self.body.omega) <= REFERENCE_DRIFT;
+        let current = held_exactly || prepared && drift_ok(&self.coupling) && (!ramp || drift_ok(&work.coupling_end));
         if !current {
             let (c_d, c_k): (&[f64], &[f64]) = if ramp {
                 for (m, (a, b)) in work.c_d_mid.iter_mut().zip(self.coupling.c_d.iter().zip(&work.coupling_end.c_d)) {
@@ -1147,8 +1144,8 @@ impl FlexibleBody {
             }
         }
         let end = if ramp { &work.coupling_end } else { &self.coupling };
-        let exact = held_exactly
-            || !current && (!ramp || self.coupled.reference() == (&work.c_d_mid[..], &work.c_k_mid[..]));
+        // a transition made for this step (held or midpoint coupling) needs no correction
+        let exact = held_exactly || !current;
         let rate: &[f64] = if ramp { &self.load_rate } else { &work.zeros };
         if exact {
             self.coupled.advance(&self.body.omega, &self.load, rate, &mut self.q, &mut self.qd);
