@@ -1,30 +1,29 @@
 //! fmu-builder: from a finite-element description of an elastic part to an FMI 2.0 FMU of the
-//! reduced flexible body. Modules follow the data: spec -> mesh -> fe/assembly -> flange ->
-//! reduce -> ffrf -> fmu.
+//! reduced flexible body.
+//!
+//! The modules are the stages of the data flow, in order; a stage uses only the stages before it
+//! (and `linalg`/`error`, which every stage may use):
+//!
+//! 1. [`input`]: what the user wrote: the JSON spec, the built-in box mesher, the importers of
+//!    Abaqus/CalculiX decks, Gmsh meshes and Matrix Market matrices, the element catalogue.
+//! 2. [`model`]: the FE model: element matrices, assembly, the part, flange selection and the
+//!    rigid coupling of flanges to six-DoF masters, and the writers of the full model.
+//! 3. [`reduce`]: the reduction: basis methods (Craig-Bampton, modal, Krylov), frequency
+//!    responses, order selection and the accuracy comparison against the full model.
+//! 4. [`ffrf`]: the floating-frame terms of the reduced body: inertia invariants, inertial load
+//!    cases and geometric stiffening.
+//! 5. [`output`]: what the user gets: report, summary, HTML documentation and plots, the FMU
+//!    archive with its modelDescription.xml.
+//!
+//! [`build`] drives the stages for one spec (mounted or free-floating bodies, order sweeps).
 
-pub mod assembly;
-pub mod eigen;
 pub mod error;
-pub mod export;
-pub mod fe;
-pub mod fmu;
-pub mod flange;
-pub mod free_floating;
-pub mod frf;
-pub mod import;
-pub mod inertia;
-pub mod mesh;
-pub mod order;
-pub mod part;
+pub mod linalg;
+
+pub mod input;
+pub mod model;
 pub mod reduce;
-pub mod sparse;
-pub mod spec;
-pub mod stiffening;
-pub mod documentation;
 pub mod ffrf;
-pub mod pipeline;
-pub mod package;
-pub mod report;
-pub mod summary;
-pub mod sweep;
-pub mod symmetric_eigen;
+pub mod output;
+
+pub mod build;

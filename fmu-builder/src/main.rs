@@ -40,18 +40,18 @@ struct Args {
 fn main() -> ExitCode {
     let args = Args::parse();
     if args.sweep {
-        let spec = match fmu_builder::spec::Spec::from_file(&args.input) {
+        let spec = match fmu_builder::input::spec::Spec::from_file(&args.input) {
             Ok(s) => s,
             Err(e) => {
                 eprintln!("error: {e}");
                 return ExitCode::FAILURE;
             }
         };
-        return match fmu_builder::sweep::sweep(&spec, &args.input) {
+        return match fmu_builder::build::sweep::sweep(&spec, &args.input) {
             Ok(rows) => {
-                print!("{}", fmu_builder::sweep::table(&rows, spec.scene.as_ref().and_then(|s| s.band)));
+                print!("{}", fmu_builder::build::sweep::table(&rows, spec.scene.as_ref().and_then(|s| s.band)));
                 if let Some(path) = &args.sweep_svg {
-                    if let Err(e) = std::fs::write(path, fmu_builder::sweep::plot(&rows)) {
+                    if let Err(e) = std::fs::write(path, fmu_builder::build::sweep::plot(&rows)) {
                         eprintln!("error: {}: {e}", path.display());
                         return ExitCode::FAILURE;
                     }
@@ -68,7 +68,7 @@ fn main() -> ExitCode {
         eprintln!("error: --output is required");
         return ExitCode::FAILURE;
     };
-    match fmu_builder::package::build(&args.input, &output) {
+    match fmu_builder::output::package::build(&args.input, &output) {
         Ok(built) => {
             if let Some(path) = &args.report {
                 let json = serde_json::to_string_pretty(&built.report).unwrap_or_default();
@@ -79,25 +79,25 @@ fn main() -> ExitCode {
             }
             if let Some(path) = &args.export_inp {
                 let b = &built;
-                if let Err(e) = fmu_builder::export::write_abaqus_deck(path, &b.part, &b.flanges) {
+                if let Err(e) = fmu_builder::model::export::write_abaqus_deck(path, &b.part, &b.flanges) {
                     eprintln!("error: {e}");
                     return ExitCode::FAILURE;
                 }
             }
             if let Some(dir) = &args.export_free_free {
-                if let Err(e) = fmu_builder::export::write_free_free_matrices(dir, &built.part) {
+                if let Err(e) = fmu_builder::model::export::write_free_free_matrices(dir, &built.part) {
                     eprintln!("error: {e}");
                     return ExitCode::FAILURE;
                 }
             }
             if let Some(dir) = &args.export_matrices {
-                if let Err(e) = fmu_builder::export::write_matrix_market(dir, &built.model) {
+                if let Err(e) = fmu_builder::model::export::write_matrix_market(dir, &built.model) {
                     eprintln!("error: {e}");
                     return ExitCode::FAILURE;
                 }
             }
             if !args.quiet {
-                print!("{}", fmu_builder::summary::text(&built.report));
+                print!("{}", fmu_builder::output::summary::text(&built.report));
                 if let Some(mib) = peak_memory_mib() {
                     println!("peak memory {mib:.0} MiB");
                 }

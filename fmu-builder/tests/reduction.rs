@@ -3,11 +3,11 @@
 //! independent of our Lanczos and of the reduction).
 
 use faer::{Mat, Side};
-use fmu_builder::eigen;
-use fmu_builder::pipeline::reduce_spec;
-use fmu_builder::reduce::EIGEN_TOL;
-use fmu_builder::sparse::{SpdSolver, Sparse, block};
-use fmu_builder::spec::Spec;
+use fmu_builder::linalg::eigen;
+use fmu_builder::build::mounted::reduce_spec;
+use fmu_builder::reduce::basis::EIGEN_TOL;
+use fmu_builder::linalg::sparse::{SpdSolver, Sparse, block};
+use fmu_builder::input::spec::Spec;
 use std::path::Path;
 
 fn spec(reduction: &str) -> Spec {

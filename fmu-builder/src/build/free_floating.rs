@@ -4,18 +4,18 @@
 //! shapes of the flanges, and the report compares against the full model's free-free modes and
 //! inertia-relief flange compliance.
 
-use crate::assembly::{self, Assembled, MassProperties, Uncoupled};
-use crate::eigen::{self, Deflation};
+use crate::model::assembly::{self, Assembled, MassProperties, Uncoupled};
+use crate::linalg::eigen::{self, Deflation};
 use crate::error::{BuildError, Result};
-use crate::ffrf;
-use crate::flange::Flange;
-use crate::inertia;
-use crate::part::Part;
-use crate::pipeline::{Built, guid, modal_damping, report_of};
-use crate::reduce::{self, Basis, EIGEN_TOL, ModeCount};
-use crate::report::{Accuracy, compare_compliance};
-use crate::sparse::{Sparse, SpdSolver, mul_new};
-use crate::spec::{Role, Spec};
+use crate::ffrf::invariants;
+use crate::model::flange::Flange;
+use crate::ffrf::inertia;
+use crate::model::part::Part;
+use crate::build::mounted::{Built, guid, modal_damping, report_of};
+use crate::reduce::basis::{self, Basis, EIGEN_TOL, ModeCount};
+use crate::output::report::{Accuracy, compare_compliance};
+use crate::linalg::sparse::{Sparse, SpdSolver, mul_new};
+use crate::input::spec::{Role, Spec};
 use faer::{Mat, Side};
 use fmu_runtime::reduced::{FlangeShapes, ReducedBody, RotationTerms};
 
@@ -41,13 +41,13 @@ fn shifted(k: &Sparse, m: &Sparse) -> Result<(Sparse, f64)> {
     };
     let ratio = (0..n).map(|j| diag(k, j) / diag(m, j).max(f64::MIN_POSITIVE)).fold(0.0f64, f64::max);
     let s = 1e-9 * ratio;
-    let sum = crate::sparse::add_scaled(k, s, m)?;
+    let sum = crate::linalg::sparse::add_scaled(k, s, m)?;
     Ok((sum, s))
 }
 
 /// The six rigid-body fields about the centre of mass, M-orthonormalised.
 fn rigid_deflation(model: &Assembled, nodes: &[[f64; 3]], flanges: &[Flange], origin: [f64; 3]) -> Result<Deflation> {
-    let r = ffrf::rigid_fields(model, nodes, flanges, origin);
+    let r = invariants::rigid_fields(model, nodes, flanges, origin);
     let mr = mul_new(&model.mass, r.as_ref());
     let gram = r.transpose() * &mr;
     let l = gram
@@ -72,8 +72,8 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
     let (k_shifted, shift) = shifted(&model.stiffness, &model.mass)?;
     let solver = SpdSolver::new(&k_shifted, "K + s M of the free body")?;
     let rigid = rigid_deflation(&model, &mesh.nodes, &flanges, origin)?;
-    let basis = reduce::free_free(&model, &solver, shift, &rigid, modes)?;
-    let inv = ffrf::invariants(&model, &mesh.nodes, &flanges, origin, &basis);
+    let basis = basis::free_free(&model, &solver, shift, &rigid, modes)?;
+    let inv = invariants::invariants(&model, &mesh.nodes, &flanges, origin, &basis);
     // mean axes: the elastic shapes carry no momentum
     let scale = props.mass.sqrt() * (1.0 + props.inertia[0].abs().sqrt());
     let drift = inv.c_t.iter().chain(&inv.c_r).fold(0.0f64, |m, v| m.max(v.abs()));
@@ -92,7 +92,7 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
         omega: basis.omega.clone(),
         alpha: spec.damping.alpha,
         beta: spec.damping.beta,
-        modal_damping: crate::pipeline::with_user_damping(modal_damping(&spec, &basis.omega), &model, &basis)?,
+        modal_damping: crate::build::mounted::with_user_damping(modal_damping(&spec, &basis.omega), &model, &basis)?,
         mass: props.mass,
         first_moment: [0.0; 3],
         inertia: props.inertia,
@@ -114,7 +114,7 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
     };
     reduced.guid = guid(&reduced);
     let accuracy = accuracy(&model, &solver, shift, &rigid, &basis)?;
-    crate::report::enforce(&accuracy)?;
+    crate::output::report::enforce(&accuracy)?;
     let statics = basis.omega.len() - basis.n_normal;
     let report = report_of(&spec, &part, &flanges, &model, &basis, &reduced, "free-interface modes + inertia-relief attachment shapes", statics, accuracy);
     Ok(Built { spec, part, flanges, model, basis, reduced, report })
@@ -134,7 +134,7 @@ fn accuracy(model: &Assembled, solver: &SpdSolver, shift: f64, rigid: &Deflation
     for (c, &r) in rows.iter().enumerate() {
         unit[(r, c)] = 1.0;
     }
-    let x = reduce::inertia_relief_solve(solver, &model.mass, shift, rigid, &unit);
+    let x = basis::inertia_relief_solve(solver, &model.mass, shift, rigid, &unit);
     // the flexibility seen at the flanges: B^T u with the rigid part of the load removed
     let (compliance_full, compliance_reduced, compliance_max_relative_error) = compare_compliance(&rows, &x, basis);
     Ok(Accuracy {

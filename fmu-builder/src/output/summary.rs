@@ -1,6 +1,6 @@
 //! The short terminal summary printed after a build.
 
-use crate::report::Report;
+use crate::output::report::Report;
 use std::fmt::Write;
 
 pub fn text(r: &Report) -> String {

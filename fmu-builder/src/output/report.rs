@@ -2,11 +2,11 @@
 //! eigenfrequencies of the mounted body (full vs reduced) and the static compliance of the force
 //! flanges (full sparse solve vs reduced model). Written into the FMU's documentation as JSON.
 
-use crate::assembly::Assembled;
-use crate::eigen;
+use crate::model::assembly::Assembled;
+use crate::linalg::eigen;
 use crate::error::Result;
-use crate::reduce::{Basis, EIGEN_TOL};
-use crate::sparse::{SpdSolver, block};
+use crate::reduce::basis::{Basis, EIGEN_TOL};
+use crate::linalg::sparse::{SpdSolver, block};
 use faer::Mat;
 use serde::Serialize;
 
@@ -37,7 +37,7 @@ pub struct Accuracy {
     pub inertial_cases: Vec<String>,
     pub inertial_flange_response_full: Vec<Vec<f64>>,
     /// Flange transfer functions full vs reduced over the band (mounted bodies with force flanges).
-    pub frequency_response: Option<crate::frf::FrequencyResponse>,
+    pub frequency_response: Option<crate::reduce::frf::FrequencyResponse>,
 }
 
 #[derive(Debug, Clone, Serialize)]

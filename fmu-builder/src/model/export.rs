@@ -4,9 +4,9 @@
 //! rotation node (set `<NAME>_ROT`) at its reference point, ready for `*RIGID BODY`.
 
 use crate::error::{BuildError, Result};
-use crate::fe::ElementKind;
-use crate::flange::Flange;
-use crate::part::Part;
+use crate::model::fe::ElementKind;
+use crate::model::flange::Flange;
+use crate::model::part::Part;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -140,7 +140,7 @@ pub fn write_free_free_matrices(dir: &Path, part: &Part) -> Result<()> {
         return Err(BuildError::io(dir, "--export-free-free needs a part with elements (this one is given by its matrices)"));
     }
     std::fs::create_dir_all(dir).map_err(|e| BuildError::io(dir, e))?;
-    let free = crate::assembly::uncoupled(&part.mesh, &part.materials)?;
+    let free = crate::model::assembly::uncoupled(&part.mesh, &part.materials)?;
     let write = |name: &str, text: String| {
         let path = dir.join(name);
         std::fs::write(&path, text).map_err(|e| BuildError::io(&path, e))
@@ -162,11 +162,11 @@ pub fn write_free_free_matrices(dir: &Path, part: &Part) -> Result<()> {
 /// The mounted body's matrices (mount held) in Matrix Market coordinate format, with the DoF of
 /// each flange load: K.mtx, M.mtx (symmetric, lower triangle), and flange_dofs.txt (0-based row
 /// of each unit flange load, 6 per force flange: u_x..z, theta_x..z).
-pub fn write_matrix_market(dir: &Path, model: &crate::assembly::Assembled) -> Result<()> {
+pub fn write_matrix_market(dir: &Path, model: &crate::model::assembly::Assembled) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| BuildError::io(dir, e))?;
     let nc = model.dofs.n_clamped();
     for (name, a) in [("K.mtx", &model.stiffness), ("M.mtx", &model.mass)] {
-        let b = crate::sparse::block(a, 0..nc, 0..nc)?;
+        let b = crate::linalg::sparse::block(a, 0..nc, 0..nc)?;
         let path = dir.join(name);
         std::fs::write(&path, matrix_market(&b, &format!("{name} of the mounted body (mount held)"))).map_err(|e| BuildError::io(&path, e))?;
     }

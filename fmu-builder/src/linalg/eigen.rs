@@ -9,8 +9,8 @@
 //! with the residual found.
 
 use crate::error::{BuildError, Result};
-use crate::sparse::{Sparse, SpdSolver, mul_new};
-use crate::symmetric_eigen::symmetric_eigen;
+use crate::linalg::sparse::{Sparse, SpdSolver, mul_new};
+use crate::linalg::symmetric_eigen::symmetric_eigen;
 use faer::Mat;
 
 pub struct Eigenpairs {

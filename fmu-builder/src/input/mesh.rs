@@ -9,7 +9,7 @@
 //! hex20 (two lattice intervals per element). For hex20 a lattice point is a
 //! node only if at most one of its indices is odd (no face or body centres).
 
-use crate::fe::{ElementKind, MAX_NODES_PER_ELEMENT};
+use crate::model::fe::{ElementKind, MAX_NODES_PER_ELEMENT};
 use std::collections::HashMap;
 use std::fmt;
 
@@ -563,7 +563,7 @@ fn add_box(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fe::element_mass;
+    use crate::model::fe::element_mass;
 
     fn cube(min: [f64; 3], max: [f64; 3], divisions: [usize; 3]) -> BoxRegion {
         BoxRegion {

@@ -4,8 +4,8 @@
 //! run so the ratios mean something on a noisy machine.
 
 use crate::error::Result;
-use crate::pipeline::{Built, reduce_spec};
-use crate::spec::{Method, Reduction, Scene, Spec};
+use crate::build::mounted::{Built, reduce_spec};
+use crate::input::spec::{Method, Reduction, Scene, Spec};
 use fmu_runtime::body::FlexibleBody;
 use std::path::Path;
 use std::sync::Arc;
@@ -94,8 +94,8 @@ pub fn sweep(spec: &Spec, file: &Path) -> Result<Vec<SweepRow>> {
     // the same body with rotation declared in the scene: what modelling rotation costs per step
     let mut rotating = spec.clone();
     let mut scene = rotating.scene.clone().unwrap_or_default();
-    if !scene.loads.contains(&crate::spec::SceneLoad::Rotation) {
-        scene.loads.push(crate::spec::SceneLoad::Rotation);
+    if !scene.loads.contains(&crate::input::spec::SceneLoad::Rotation) {
+        scene.loads.push(crate::input::spec::SceneLoad::Rotation);
     }
     scene.band = Some(band);
     scene.tolerance = None;
@@ -156,7 +156,7 @@ pub fn table(rows: &[SweepRow], band: Option<[f64; 2]>) -> String {
 
 /// Error in band against cost per step, one line per method (log-log), as a standalone SVG.
 pub fn plot(rows: &[SweepRow]) -> String {
-    use crate::documentation::{PALETTE, PlotSpec, Series, Stroke, line_plot};
+    use crate::output::documentation::{PALETTE, PlotSpec, Series, Stroke, line_plot};
     let mut spec = PlotSpec::new("Speed against error", "cost per step [ns] (fixed mount, h = 1 ms)", "flange FRF error in band", true);
     spec.log_x = true;
     let mut series = Vec::new();

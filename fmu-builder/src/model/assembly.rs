@@ -11,10 +11,10 @@
 //! is the leading block.
 
 use crate::error::{BuildError, Result};
-use crate::fe::{self, ElementKind, Elasticity, MAX_NODES_PER_ELEMENT};
-use crate::flange::Flange;
-use crate::mesh::Mesh;
-use crate::spec::Role;
+use crate::model::fe::{self, ElementKind, Elasticity, MAX_NODES_PER_ELEMENT};
+use crate::model::flange::Flange;
+use crate::input::mesh::Mesh;
+use crate::input::spec::Role;
 use faer::sparse::{SparseColMat, Triplet};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

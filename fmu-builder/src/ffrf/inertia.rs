@@ -4,9 +4,9 @@
 //! consistent mass M = M_s (x) I3 they commute with M, so every invariant is a product of the
 //! nodal mass with per-node cross products of the basis and the positions.
 
-use crate::assembly::{Assembled, NodeDofs};
-use crate::flange::Flange;
-use crate::sparse::mul_new;
+use crate::model::assembly::{Assembled, NodeDofs};
+use crate::model::flange::Flange;
+use crate::linalg::sparse::mul_new;
 use faer::{Mat, MatRef};
 
 /// A unit inertial load case of the frame's motion (loads on the body, in the body frame).

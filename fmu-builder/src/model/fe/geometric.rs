@@ -60,7 +60,7 @@ pub fn element_geometric_stiffness(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fe::{tet10, tet4};
+    use crate::model::fe::{tet10, tet4};
 
     /// A bar under uniform axial stress sigma_xx = s: the geometric stiffness is the "string"
     /// stiffness s A int N_a' N_b' dx for transverse motion; a transverse rigid rotation theta

@@ -3,8 +3,8 @@
 //! (no JavaScript, no external files): [`line_plot`] draws any set of series on linear or
 //! logarithmic axes; [`frequency_response_plot`] and [`relative_error_plot`] build on it.
 
-use crate::frf::{ComparisonDamping, FrequencyResponse};
-use crate::report::Report;
+use crate::reduce::frf::{ComparisonDamping, FrequencyResponse};
+use crate::output::report::Report;
 use std::fmt::Write;
 
 fn esc(s: &str) -> String {
@@ -589,7 +589,7 @@ font-family=\"sans-serif\" font-size=\"11\" role=\"img\" aria-label=\"{t}\">\n<t
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::report::{Accuracy, FlangeReport};
+    use crate::output::report::{Accuracy, FlangeReport};
     use quick_xml::Reader;
     use quick_xml::events::Event;
 

@@ -3,9 +3,9 @@
 //! the coupling itself enters at assembly (`assembly::rigid_coupling`).
 
 use crate::error::{BuildError, Result};
-use crate::mesh::Mesh;
-use crate::part::Part;
-use crate::spec::{NodeSelector, Role, Spec};
+use crate::input::mesh::Mesh;
+use crate::model::part::Part;
+use crate::input::spec::{NodeSelector, Role, Spec};
 use std::path::Path;
 
 #[derive(Debug, Clone)]
@@ -202,7 +202,7 @@ mod tests {
                 "material": {"E": 1e9, "nu": 0.3, "rho": 1000}, "flanges": [], "reduction": {"modes": 2}}"#,
         )
         .unwrap();
-        let mut p = crate::part::part_of(&spec, Path::new("in.json")).unwrap();
+        let mut p = crate::model::part::part_of(&spec, Path::new("in.json")).unwrap();
         let tip: Vec<usize> = (0..p.mesh.n_nodes()).filter(|&i| p.mesh.nodes[i][0] == 4.0).collect();
         p.node_sets = BTreeMap::from([("TIP".to_string(), tip)]);
         (spec, p)

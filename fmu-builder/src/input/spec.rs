@@ -7,7 +7,7 @@ use crate::error::{BuildError, Result};
 use serde::Deserialize;
 use std::path::Path;
 
-pub const SCHEMA: &str = include_str!("../../schemas/fmu-builder-input.schema.json");
+pub const SCHEMA: &str = include_str!("../../../schemas/fmu-builder-input.schema.json");
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]

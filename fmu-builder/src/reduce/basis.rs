@@ -4,11 +4,11 @@
 //! fixed-interface normal modes (all flanges held) cover the dynamics. The basis is finally
 //! orthonormalised so the reduced mass is I and the reduced stiffness diag(omega^2).
 
-use crate::assembly::Assembled;
-use crate::eigen;
+use crate::model::assembly::Assembled;
+use crate::linalg::eigen;
 use crate::error::{BuildError, Result};
-use crate::sparse::{SpdSolver, block, mul_compensated, mul_new};
-use crate::symmetric_eigen::graded_spd_eigen;
+use crate::linalg::sparse::{SpdSolver, block, mul_compensated, mul_new};
+use crate::linalg::symmetric_eigen::graded_spd_eigen;
 use faer::Mat;
 
 #[derive(Debug, Clone, Copy)]
@@ -223,7 +223,7 @@ pub fn free_free(
 /// f - M Y Y^T f (Y: M-orthonormal rigid fields) solved with the singular K, the answer taken
 /// M-orthogonal to the rigid fields. Solved as u <- (K + s M)^-1 (f_eq + s M u), which converges
 /// by the factor s / (lambda_1 + s) per sweep on the elastic part.
-pub fn inertia_relief_solve(k_shifted: &SpdSolver, m: &crate::sparse::Sparse, shift: f64, rigid: &eigen::Deflation, f: &Mat<f64>) -> Mat<f64> {
+pub fn inertia_relief_solve(k_shifted: &SpdSolver, m: &crate::linalg::sparse::Sparse, shift: f64, rigid: &eigen::Deflation, f: &Mat<f64>) -> Mat<f64> {
     let c = rigid.vectors.transpose() * f;
     let f_eq = f - &rigid.m_vectors * &c;
     let mut u = Mat::<f64>::zeros(f.nrows(), f.ncols());
@@ -323,13 +323,13 @@ pub fn krylov(
         let lu = if shift == 0.0 {
             None
         } else {
-            let a = crate::sparse::add_scaled(&k, shift, &m)?;
+            let a = crate::linalg::sparse::add_scaled(&k, shift, &m)?;
             let what = if shift < 0.0 {
                 format!("K - w^2 M at the expansion point {} Hz (an eigenfrequency?)", (-shift).sqrt() / (2.0 * std::f64::consts::PI))
             } else {
                 format!("K + s^2 M at the real expansion point s = {}", shift.sqrt())
             };
-            Some(crate::sparse::LuSolver::new(&a, &what)?)
+            Some(crate::linalg::sparse::LuSolver::new(&a, &what)?)
         };
         let apply = |x: &mut Mat<f64>| match &lu {
             Some(lu) => lu.solve_refined(x.as_mut()),
@@ -360,7 +360,7 @@ pub fn krylov(
 /// of the column's M-norm is mostly round-off of the solves, and kept it would only add a
 /// spurious stiff direction that costs the reduced eigenproblem its conditioning. Returns how
 /// many were kept.
-fn m_orthogonal_extend(basis: &mut Mat<f64>, m_basis: &mut Mat<f64>, new: &Mat<f64>, m: &crate::sparse::Sparse) -> usize {
+fn m_orthogonal_extend(basis: &mut Mat<f64>, m_basis: &mut Mat<f64>, new: &Mat<f64>, m: &crate::linalg::sparse::Sparse) -> usize {
     let n = new.nrows();
     let mut kept = 0;
     for j in 0..new.ncols() {
@@ -392,7 +392,7 @@ fn m_orthogonal_extend(basis: &mut Mat<f64>, m_basis: &mut Mat<f64>, new: &Mat<f
     kept
 }
 
-fn m_norm(v: &Mat<f64>, m: &crate::sparse::Sparse) -> f64 {
+fn m_norm(v: &Mat<f64>, m: &crate::linalg::sparse::Sparse) -> f64 {
     let mv = mul_new(m, v.as_ref());
     (0..v.nrows()).map(|i| v[(i, 0)] * mv[(i, 0)]).sum::<f64>().max(0.0).sqrt()
 }

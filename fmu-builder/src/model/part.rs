@@ -3,12 +3,12 @@
 //! material (the input's `materials` over `material` over the mesh file) and keeps the node sets
 //! flanges may name. Everything downstream sees one `Part`.
 
-use crate::assembly::{self, SolidMaterial, Uncoupled};
+use crate::model::assembly::{self, SolidMaterial, Uncoupled};
 use crate::error::{BuildError, Result};
-use crate::fe::{ElementKind, Elasticity};
-use crate::import::{self, ElementType, ImportError, ImportedMesh};
-use crate::mesh::{self, BoxRegion, Mesh, MeshError};
-use crate::spec::{Element, MaterialSpec, Spec};
+use crate::model::fe::{ElementKind, Elasticity};
+use crate::input::import::{self, ElementType, ImportError, ImportedMesh};
+use crate::input::mesh::{self, BoxRegion, Mesh, MeshError};
+use crate::input::spec::{Element, MaterialSpec, Spec};
 use faer::sparse::{SparseColMat, Triplet};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -258,7 +258,7 @@ fn resolve_material(
     Ok(SolidMaterial { name: section.unwrap_or("material").to_string(), elasticity: Elasticity { e, nu }, rho })
 }
 
-fn matrix_part(_spec: &Spec, file: &Path, m: &crate::spec::MatrixSpec) -> Result<Part> {
+fn matrix_part(_spec: &Spec, file: &Path, m: &crate::input::spec::MatrixSpec) -> Result<Part> {
     let path = |name: &str| -> PathBuf { Spec::resolve(file, name) };
     let (k, mm, d, dofs, nodes) = (path(&m.stiffness), path(&m.mass), m.damping.as_deref().map(path), path(&m.dofs), path(&m.nodes));
     let files = import::matrices::MatrixFiles {

@@ -2,22 +2,22 @@
 //! invariants -> report. Each stage's output is a plain value; this file only wires them;
 //! `package` turns the result into the FMU.
 
-use crate::assembly::{self, Assembled, SolidMaterial};
+use crate::model::assembly::{self, Assembled, SolidMaterial};
 use crate::error::{BuildError, Result};
-use crate::ffrf;
-use crate::flange::{self, Flange};
-use crate::mesh::Mesh;
-use crate::part::{self, Part};
-use crate::reduce::{self, Basis, ModeCount};
-use crate::report::{self, FlangeReport, Report};
-use crate::eigen;
-use crate::order;
-use crate::free_floating;
-use crate::frf;
-use crate::inertia::{self, LoadCase};
-use crate::sparse::{self, SpdSolver};
-use crate::spec::{Method, Role, SceneLoad, Spec};
-use crate::stiffening::reduced_geometric_stiffness;
+use crate::ffrf::invariants;
+use crate::model::flange::{self, Flange};
+use crate::input::mesh::Mesh;
+use crate::model::part::{self, Part};
+use crate::reduce::basis::{self, Basis, ModeCount};
+use crate::output::report::{self, FlangeReport, Report};
+use crate::linalg::eigen;
+use crate::reduce::order;
+use crate::build::free_floating;
+use crate::reduce::frf;
+use crate::ffrf::inertia::{self, LoadCase};
+use crate::linalg::sparse::{self, SpdSolver};
+use crate::input::spec::{Method, Role, SceneLoad, Spec};
+use crate::ffrf::stiffening::reduced_geometric_stiffness;
 use faer::{Mat, MatRef};
 use fmu_runtime::reduced::{RotationTerms, Stiffening};
 use fmu_runtime::reduced::{FlangeShapes, ReducedBody};
@@ -221,7 +221,7 @@ fn choose_order(
 ) -> Result<Basis> {
     let nc = model.dofs.n_clamped();
     let m = sparse::block(&model.mass, 0..nc, 0..nc)?;
-    let b = reduce::flange_unit_loads(model);
+    let b = basis::flange_unit_loads(model);
     let rows: Vec<usize> = (0..b.ncols()).map(|j| (0..nc).find(|&i| b[(i, j)] != 0.0).unwrap_or(0)).collect();
     let phi_b = Mat::<f64>::from_fn(rows.len(), rich.omega.len(), |i, k| rich.phi[(rows[i], k)]);
     // loads in the rich model's coordinates: flange unit loads and the scene's inertial loads
@@ -239,10 +239,10 @@ fn choose_order(
         loads = both;
     }
     let damping = frf::ComparisonDamping::new(spec.damping.alpha, spec.damping.beta);
-    let full_modes = eigen::lowest(solver, &m, 10, reduce::EIGEN_TOL)?;
+    let full_modes = eigen::lowest(solver, &m, 10, basis::EIGEN_TOL)?;
     let full_hz: Vec<f64> = full_modes.values.iter().map(|l| l.sqrt() / (2.0 * std::f64::consts::PI)).collect();
     let band = band_of(spec, &full_hz);
-    let in_band = eigen::below(solver, &m, 2.0 * std::f64::consts::PI * band[1] * 1.01, 1, reduce::EIGEN_TOL)?;
+    let in_band = eigen::below(solver, &m, 2.0 * std::f64::consts::PI * band[1] * 1.01, 1, basis::EIGEN_TOL)?;
     let eigen_hz: Vec<f64> = in_band.values.iter().map(|l| l.sqrt() / (2.0 * std::f64::consts::PI)).collect();
     let freqs = frf::grid(band, &eigen_hz, 60);
     let mut full = frf::FullResponse::new(model)?;
@@ -354,10 +354,10 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
             // Craig-Bampton factors the stiffness with every flange held; one sparse factor at a
             // time keeps 1e5-DoF parts within a few GiB (each factor costs ~1.5 GB there)
             solver = None;
-            (reduce::craig_bampton(&model, modes, load_shapes.as_ref())?, "Craig-Bampton".to_string())
+            (basis::craig_bampton(&model, modes, load_shapes.as_ref())?, "Craig-Bampton".to_string())
         }
         Method::Modal => (
-            reduce::modal(&model, solver_of(&solver)?, modes, load_shapes.as_ref())?,
+            basis::modal(&model, solver_of(&solver)?, modes, load_shapes.as_ref())?,
             "modal with residual flexibility".to_string(),
         ),
         Method::Krylov => {
@@ -365,7 +365,7 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
             let moments = spec.reduction.moments.unwrap_or(2);
             let real = spec.reduction.real_expansion_points.clone().unwrap_or_default();
             let name = format!("second-order Krylov, {moments} block moments at s = 0, 2 pi i {points:?} Hz, {real:?} 1/s");
-            (reduce::krylov(&model, solver_of(&solver)?, &points, &real, moments, load_shapes.as_ref())?, name)
+            (basis::krylov(&model, solver_of(&solver)?, &points, &real, moments, load_shapes.as_ref())?, name)
         }
     };
     let solver = match solver {
@@ -378,7 +378,7 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
         }
         _ => basis,
     };
-    let inv = ffrf::invariants(&model, &mesh.nodes, &flanges, origin, &basis);
+    let inv = invariants::invariants(&model, &mesh.nodes, &flanges, origin, &basis);
     let phi_mesh = inertia::expand(&model, &mesh.nodes, &flanges, basis.phi.as_ref());
     let rotation = spec.rotates().then(|| {
         let r = inertia::rotation_invariants(&model, &mesh.nodes, origin, phi_mesh.as_ref());

@@ -52,9 +52,9 @@
 //!
 //! # Node files
 //!
-//! `.inp` (Abaqus/CalculiX, via [`crate::import::read_inp`]; a deck with only
+//! `.inp` (Abaqus/CalculiX, via [`crate::input::import::read_inp`]; a deck with only
 //! `*NODE`/`*NSET` is fine) or `.msh` (Gmsh 4.1, via
-//! [`crate::import::parse_msh`]; the `$Elements` section may be absent) give
+//! [`crate::input::import::parse_msh`]; the `$Elements` section may be absent) give
 //! coordinates and node sets. Any other extension is read as a table of
 //! `id x y z` lines (comma and/or whitespace separated; lines starting with
 //! `#`, `*` or `%` are comments). Nodes of the file that the DoF map does not
@@ -415,7 +415,7 @@ fn rigid_body_check(k: &SparseColMat<usize, f64>, nodes: &[[f64; 3]]) -> [(f64, 
         r[(3 * a, 5)] = -x[1];
         r[(3 * a + 1, 5)] = x[0];
     }
-    let kr = crate::sparse::mul_compensated(None, 1.0, k, r.as_ref());
+    let kr = crate::linalg::sparse::mul_compensated(None, 1.0, k, r.as_ref());
     let mut out = [(0.0, 0); 6];
     for (col, o) in out.iter_mut().enumerate() {
         let mut rmax = 0.0f64;
@@ -1743,7 +1743,7 @@ mod tests {
     /// 11, 21, ..., 81: coordinates, 24x24 stiffness and mass
     /// (row-major, node-major DoFs).
     fn hex8(base: [f64; 3]) -> (Vec<u64>, Vec<[f64; 3]>, Vec<f64>, Vec<f64>) {
-        use crate::fe::{Elasticity, ElementKind, element_mass, element_stiffness};
+        use crate::model::fe::{Elasticity, ElementKind, element_mass, element_stiffness};
         let unit = [
             [0.0, 0.0, 0.0],
             [1.1, 0.0, 0.05],
@@ -1958,7 +1958,7 @@ mod tests {
     /// CCX_DOF, to the 14 digits CalculiX prints.
     #[test]
     fn hex8_matches_calculix_matrixstorage() {
-        use crate::fe::{Elasticity, ElementKind, element_mass, element_stiffness};
+        use crate::model::fe::{Elasticity, ElementKind, element_mass, element_stiffness};
         let cube = [
             [0.0, 0.0, 0.0],
             [1.0, 0.0, 0.0],

@@ -7,8 +7,8 @@
 //! tolerance over the band wins. All of it happens in the rich model's coordinates: no sparse
 //! work beyond the full-model responses computed once.
 
-use crate::frf::ComparisonDamping;
-use crate::symmetric_eigen::symmetric_eigen;
+use crate::reduce::frf::ComparisonDamping;
+use crate::linalg::symmetric_eigen::symmetric_eigen;
 use faer::{Mat, c64};
 
 /// A selection in the rich model's coordinates: columns Y (r_rich x r_sel, orthonormal) and the

@@ -2,10 +2,10 @@
 //! needs to couple the elastic coordinates to the body frame's rigid motion. All are projections
 //! of the consistent mass onto rigid-body fields and the basis, computed once here.
 
-use crate::assembly::{Assembled, NodeDofs};
-use crate::flange::Flange;
-use crate::reduce::Basis;
-use crate::sparse::mul_new;
+use crate::model::assembly::{Assembled, NodeDofs};
+use crate::model::flange::Flange;
+use crate::reduce::basis::Basis;
+use crate::linalg::sparse::mul_new;
 use faer::Mat;
 
 pub struct Invariants {

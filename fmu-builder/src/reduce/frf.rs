@@ -3,10 +3,10 @@
 //! B the unit loads at the force flanges, by a complex sparse LU of the full model per sampled
 //! frequency, and in closed form for the reduced model (its matrices are diagonal).
 
-use crate::assembly::Assembled;
+use crate::model::assembly::Assembled;
 use crate::error::{BuildError, Result};
-use crate::reduce::{Basis, flange_unit_loads};
-use crate::sparse::{block, mul_compensated};
+use crate::reduce::basis::{Basis, flange_unit_loads};
+use crate::linalg::sparse::{block, mul_compensated};
 use faer::c64;
 use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, Triplet};
@@ -64,8 +64,8 @@ pub fn grid(band: [f64; 2], eigen_hz: &[f64], points: usize) -> Vec<f64> {
 /// The full model's flange FRF, factor by factor: K + M pattern and the symbolic LU analysed
 /// once, a numeric complex LU per frequency.
 pub struct FullResponse {
-    k: crate::sparse::Sparse,
-    m: crate::sparse::Sparse,
+    k: crate::linalg::sparse::Sparse,
+    m: crate::linalg::sparse::Sparse,
     b: Mat<f64>,
     rows: Vec<usize>,
     /// Pattern of K + M, and where each stored entry of K and of M lands in it.
@@ -96,7 +96,7 @@ impl FullResponse {
         let union = SparseColMat::<usize, f64>::try_new_from_triplets(nc, nc, &trip)
             .map_err(|e| BuildError::Numerical(format!("pattern of K + M: {e:?}")))?;
         let pattern = union.symbolic().to_owned().map_err(|e| BuildError::Numerical(format!("pattern of K + M: {e:?}")))?;
-        let slots = |a: &crate::sparse::Sparse| -> Vec<usize> {
+        let slots = |a: &crate::linalg::sparse::Sparse| -> Vec<usize> {
             let mut out = Vec::with_capacity(a.val().len());
             for j in 0..nc {
                 let start = union.symbolic().col_ptr()[j];

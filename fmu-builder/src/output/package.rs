@@ -1,10 +1,10 @@
 //! The FMU of a reduced body: modelDescription.xml, binary, resources and documentation.
 
-use crate::documentation;
+use crate::output::documentation;
 use crate::error::{BuildError, Result};
-use crate::fmu;
-use crate::pipeline::{Built, reduce_spec};
-use crate::spec::Spec;
+use crate::output::fmu;
+use crate::build::mounted::{Built, reduce_spec};
+use crate::input::spec::Spec;
 use fmu_runtime::format::RESOURCE_FILE;
 use fmu_runtime::interface::VariableTable;
 use std::path::Path;

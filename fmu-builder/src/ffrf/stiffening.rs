@@ -3,9 +3,9 @@
 //! never assembled. Linear in the load: the runtime scales each case by its present load.
 
 use crate::error::{BuildError, Result};
-use crate::assembly::SolidMaterial;
-use crate::fe::{ElementKind, MAX_NODES_PER_ELEMENT, geometric::element_geometric_stiffness};
-use crate::mesh::Mesh;
+use crate::model::assembly::SolidMaterial;
+use crate::model::fe::{ElementKind, MAX_NODES_PER_ELEMENT, geometric::element_geometric_stiffness};
+use crate::input::mesh::Mesh;
 use faer::{Mat, MatRef};
 
 /// Phi^T K_sigma(u) Phi (r x r, symmetric) for the mesh-level prestress displacement `u` (3N) and

@@ -3,7 +3,7 @@
 //! Timoshenko beam theory.
 
 use super::*;
-use crate::mesh::{BoxRegion, mesh_boxes};
+use crate::input::mesh::{BoxRegion, mesh_boxes};
 
 const STEEL: Elasticity = Elasticity { e: 210e9, nu: 0.3 };
 const KINDS: [ElementKind; 5] = ElementKind::ALL;

@@ -1,0 +1,7 @@
+//! Stage 4, ffrf: the floating-frame-of-reference terms of the reduced body. Inertia invariants
+//! (`invariants`), inertial load cases and their reduced projections (`inertia`), and geometric
+//! stiffening under unit loads (`stiffening`).
+
+pub mod inertia;
+pub mod invariants;
+pub mod stiffening;

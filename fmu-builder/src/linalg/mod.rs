@@ -1,0 +1,6 @@
+//! Linear algebra every stage uses: sparse matrices and their factorisations, the shift-invert
+//! Lanczos eigen-solver, and the dense symmetric eigen-solver whose backward error is checked.
+
+pub mod eigen;
+pub mod sparse;
+pub mod symmetric_eigen;

@@ -1,0 +1,9 @@
+//! Stage 5, output: what the user gets. The report of a build (`report`) and its printed summary
+//! (`summary`), the HTML documentation (`documentation`), the FMU's modelDescription.xml and
+//! archive (`fmu`), and the packaging of it all with the runtime binary (`package`).
+
+pub mod documentation;
+pub mod fmu;
+pub mod package;
+pub mod report;
+pub mod summary;

@@ -1,0 +1,8 @@
+//! Stage 3, reduce: the reduction basis of the coupled model (`basis`: Craig-Bampton, modal with
+//! static correction, Krylov moment matching), the frequency responses of the full and reduced
+//! models (`frf`), the choice of reduced order (`order`), and the accuracy comparison against
+//! the full model that every build must pass (`accuracy`).
+
+pub mod basis;
+pub mod frf;
+pub mod order;
