@@ -3,7 +3,7 @@
 //! body on a steadily spinning mount stepped in Co-Simulation (the rotating-frame energy must
 //! not grow). Each line names its target; `run` returns false when one is missed.
 
-use fmu_builder::build::mounted::reduce_spec;
+use fmu_builder::build::reduce_spec;
 use fmu_builder::input::spec::Spec;
 use fmu_runtime::body::FlexibleBody;
 use std::path::Path;

@@ -467,7 +467,7 @@ fn run_in(opts: &Options, work: &Path) -> Result<(), String> {
         let output = work.join(format!("BenchBeam{tag}.fmu"));
         std::fs::write(&input, spec).map_err(|e| e.to_string())?;
         let start = Instant::now();
-        let built = fmu_builder::output::package::build(&input, &output).map_err(|e| format!("building {}: {e}", input.display()))?;
+        let built = fmu_builder::build::build(&input, &output).map_err(|e| format!("building {}: {e}", input.display()))?;
         let build_s = start.elapsed().as_secs_f64();
         let order = built.reduced.n_modes();
         let top_hz = built.basis.fixed_interface_omega.iter().copied().fold(0.0, f64::max) / (2.0 * std::f64::consts::PI);
@@ -559,7 +559,7 @@ struct NewmarkRun {
 
 /// Full FE model by Newmark against the FMUs, same scene: mount fixed, tip force F_TIP along z
 /// from t = 0, T_END seconds, tip u_z compared every millisecond.
-fn full_comparison(built: &fmu_builder::build::mounted::Built, rows: &[&Row]) -> Result<(), String> {
+fn full_comparison(built: &fmu_builder::build::Built, rows: &[&Row]) -> Result<(), String> {
     let model = &built.model;
     let nc = model.dofs.n_clamped();
     let k = fmu_builder::linalg::sparse::block(&model.stiffness, 0..nc, 0..nc).map_err(|e| e.to_string())?;

@@ -68,7 +68,7 @@ fn main() -> ExitCode {
         eprintln!("error: --output is required");
         return ExitCode::FAILURE;
     };
-    match fmu_builder::output::package::build(&args.input, &output) {
+    match fmu_builder::build::build(&args.input, &output) {
         Ok(built) => {
             if let Some(path) = &args.report {
                 let json = serde_json::to_string_pretty(&built.report).unwrap_or_default();

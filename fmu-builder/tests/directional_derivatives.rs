@@ -9,7 +9,7 @@
 //! largest response to a natural-size change of any known (entries that small are rounding
 //! noise in the finite difference, not a test of the derivative).
 
-use fmu_builder::build::mounted::reduce_spec;
+use fmu_builder::build::reduce_spec;
 use fmu_builder::input::spec::Spec;
 use fmu_runtime::fmi::{Causality, Model};
 use fmu_runtime::fmu::BodyFmu;

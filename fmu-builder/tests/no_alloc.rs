@@ -5,7 +5,7 @@
 //! Model-Exchange derivative evaluations. Counted per thread by a counting global allocator.
 //! fmu-runtime's tests/no_alloc.rs covers the exported C functions and free-floating bodies.
 
-use fmu_builder::build::mounted::reduce_spec;
+use fmu_builder::build::reduce_spec;
 use fmu_builder::input::spec::Spec;
 use fmu_runtime::fmi::Model;
 use fmu_runtime::fmu::BodyFmu;

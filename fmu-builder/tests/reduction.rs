@@ -4,7 +4,7 @@
 
 use faer::{Mat, Side};
 use fmu_builder::linalg::eigen;
-use fmu_builder::build::mounted::reduce_spec;
+use fmu_builder::build::reduce_spec;
 use fmu_builder::reduce::basis::EIGEN_TOL;
 use fmu_builder::linalg::sparse::{SpdSolver, Sparse, block};
 use fmu_builder::input::spec::Spec;

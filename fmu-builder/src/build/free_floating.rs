@@ -4,19 +4,23 @@
 //! shapes of the flanges, and the report compares against the full model's free-free modes and
 //! inertia-relief flange compliance.
 
-use crate::model::assembly::{self, Assembled, MassProperties, Uncoupled};
-use crate::linalg::eigen::{self, Deflation};
+use super::Built;
 use crate::error::{BuildError, Result};
-use crate::ffrf::invariants;
-use crate::model::flange::Flange;
 use crate::ffrf::inertia;
-use crate::model::part::Part;
-use crate::build::mounted::{Built, guid, modal_damping, report_of};
-use crate::reduce::basis::{self, Basis, EIGEN_TOL, ModeCount};
-use crate::output::report::{Accuracy, compare_compliance};
-use crate::linalg::sparse::{Sparse, SpdSolver, mul_new};
+use crate::ffrf::invariants;
 use crate::input::spec::{Role, Spec};
-use faer::{Mat, Side};
+use crate::linalg::eigen::Deflation;
+use crate::linalg::sparse::{Sparse, SpdSolver, mul_new};
+use crate::model::assembly::{MassProperties, Uncoupled};
+use crate::model::rigid_coupling::{self, Assembled};
+use crate::model::flange::Flange;
+use crate::model::part::Part;
+use crate::output::fmu::guid::guid;
+use crate::output::report::report_of;
+use crate::reduce::accuracy::{enforce, free_free_accuracy};
+use crate::reduce::basis::{self, ModeCount};
+use crate::reduce::damping::{modal_damping, with_user_damping};
+use faer::Side;
 use fmu_runtime::reduced::{FlangeShapes, ReducedBody, RotationTerms};
 
 /// Mass properties about the centre of mass, from those about the mesh origin.
@@ -65,7 +69,7 @@ fn rigid_deflation(model: &Assembled, nodes: &[[f64; 3]], flanges: &[Flange], or
 
 pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, modes: ModeCount) -> Result<Built> {
     let mesh = &part.mesh;
-    let mut model = assembly::rigid_coupling(&free, &mesh.nodes, &flanges, [0.0; 3])?;
+    let mut model = rigid_coupling::rigid_coupling(&free, &mesh.nodes, &flanges, [0.0; 3])?;
     drop(free);
     let (origin, props) = about_centre_of_mass(model.mass_properties);
     model.mass_properties = props;
@@ -92,7 +96,7 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
         omega: basis.omega.clone(),
         alpha: spec.damping.alpha,
         beta: spec.damping.beta,
-        modal_damping: crate::build::mounted::with_user_damping(modal_damping(&spec, &basis.omega), &model, &basis)?,
+        modal_damping: with_user_damping(modal_damping(&spec, &basis.omega), &model, &basis)?,
         mass: props.mass,
         first_moment: [0.0; 3],
         inertia: props.inertia,
@@ -113,40 +117,10 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
         free_floating: true,
     };
     reduced.guid = guid(&reduced);
-    let accuracy = accuracy(&model, &solver, shift, &rigid, &basis)?;
-    crate::output::report::enforce(&accuracy)?;
+    let accuracy = free_free_accuracy(&model, &solver, shift, &rigid, &basis)?;
+    enforce(&accuracy)?;
     let statics = basis.omega.len() - basis.n_normal;
     let report = report_of(&spec, &part, &flanges, &model, &basis, &reduced, "free-interface modes + inertia-relief attachment shapes", statics, accuracy);
     Ok(Built { spec, part, flanges, model, basis, reduced, report })
 }
 
-/// Free-free elastic frequencies and inertia-relief flange compliance, full vs reduced.
-fn accuracy(model: &Assembled, solver: &SpdSolver, shift: f64, rigid: &Deflation, basis: &Basis) -> Result<Accuracy> {
-    let full = eigen::lowest_shifted(solver, &model.mass, basis.omega.len(), EIGEN_TOL, shift, Some(rigid))?;
-    let two_pi = 2.0 * std::f64::consts::PI;
-    let full_hz: Vec<f64> = full.values.iter().map(|l| l.max(0.0).sqrt() / two_pi).collect();
-    let reduced_hz: Vec<f64> = basis.omega.iter().map(|w| w / two_pi).collect();
-    let relative_error = reduced_hz.iter().zip(&full_hz).map(|(r, f)| (r - f) / f).collect();
-    let d = &model.dofs;
-    let force: Vec<usize> = (0..d.flange_first.len()).map(|k| d.flange_first[k]).collect();
-    let rows: Vec<usize> = force.iter().flat_map(|first| (0..6).map(move |i| first + i)).collect();
-    let mut unit = Mat::<f64>::zeros(d.n_dofs, rows.len());
-    for (c, &r) in rows.iter().enumerate() {
-        unit[(r, c)] = 1.0;
-    }
-    let x = basis::inertia_relief_solve(solver, &model.mass, shift, rigid, &unit);
-    // the flexibility seen at the flanges: B^T u with the rigid part of the load removed
-    let (compliance_full, compliance_reduced, compliance_max_relative_error) = compare_compliance(&rows, &x, basis);
-    Ok(Accuracy {
-        reduced_hz,
-        full_hz,
-        relative_error,
-        compliance_flanges: Vec::new(),
-        compliance_full,
-        compliance_reduced,
-        compliance_max_relative_error,
-        inertial_cases: Vec::new(),
-        inertial_flange_response_full: Vec::new(),
-        frequency_response: None,
-    })
-}

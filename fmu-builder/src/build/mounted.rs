@@ -1,45 +1,30 @@
-//! The whole job, stage after stage: spec -> mesh -> flanges -> assembly -> reduction ->
-//! invariants -> report. Each stage's output is a plain value; this file only wires them;
-//! `package` turns the result into the FMU.
+//! A body held at its mount flange, stage after stage: rigid coupling -> reduction of the
+//! mounted model -> order selection -> floating-frame terms -> accuracy checks -> report. Each
+//! stage's output is a plain value; this file only wires them.
 
-use crate::model::assembly::{self, Assembled, SolidMaterial};
+use super::Built;
 use crate::error::{BuildError, Result};
-use crate::ffrf::invariants;
-use crate::model::flange::{self, Flange};
-use crate::input::mesh::Mesh;
-use crate::model::part::{self, Part};
-use crate::reduce::basis::{self, Basis, ModeCount};
-use crate::output::report::{self, FlangeReport, Report};
-use crate::linalg::eigen;
-use crate::reduce::order;
-use crate::build::free_floating;
-use crate::reduce::frf;
 use crate::ffrf::inertia::{self, LoadCase};
-use crate::linalg::sparse::{self, SpdSolver};
-use crate::input::spec::{Method, Role, SceneLoad, Spec};
+use crate::ffrf::invariants;
 use crate::ffrf::stiffening::reduced_geometric_stiffness;
+use crate::input::mesh::Mesh;
+use crate::input::spec::{Method, Role, SceneLoad, Spec};
+use crate::linalg::eigen;
+use crate::linalg::sparse::{self, SpdSolver};
+use crate::model::assembly::{SolidMaterial, Uncoupled};
+use crate::model::rigid_coupling::{self, Assembled};
+use crate::model::flange::Flange;
+use crate::model::part::Part;
+use crate::output::fmu::guid::guid;
+use crate::output::report::report_of;
+use crate::reduce::accuracy;
+use crate::reduce::basis::{self, Basis, ModeCount};
+use crate::reduce::damping::{modal_damping, with_user_damping};
+use crate::reduce::frf;
+use crate::reduce::order;
 use faer::{Mat, MatRef};
-use fmu_runtime::reduced::{RotationTerms, Stiffening};
-use fmu_runtime::reduced::{FlangeShapes, ReducedBody};
-use std::path::Path;
+use fmu_runtime::reduced::{FlangeShapes, ReducedBody, RotationTerms, Stiffening};
 
-pub struct Built {
-    pub spec: Spec,
-    pub part: Part,
-    pub flanges: Vec<Flange>,
-    pub model: Assembled,
-    pub basis: Basis,
-    pub reduced: ReducedBody,
-    pub report: Report,
-}
-
-/// The FMU's GUID: a name-based UUID (RFC 9562 version 5, SHA-1) of the reduced model's bytes in
-/// a namespace of this tool, so the same model gives the same GUID on every machine and Rust
-/// release, and any change of the model gives another.
-fn guid_of(bytes: &[u8]) -> String {
-    const NAMESPACE: uuid::Uuid = uuid::Uuid::from_u128(0x6f4d_2a61_8e3b_4c57_9a0e_52b1_c3d8_f7e4);
-    format!("{{{}}}", uuid::Uuid::new_v5(&NAMESPACE, bytes).hyphenated())
-}
 
 /// Reduced geometric stiffness of every unit prestress the scene can apply: centrifugal and
 /// angular-acceleration loads if it rotates, translational ones if it has gravity or
@@ -125,80 +110,8 @@ fn stiffening_terms(
     Ok(out)
 }
 
-/// The build's report: what was built and what its reduction costs.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn report_of(
-    spec: &Spec,
-    part: &Part,
-    flanges: &[Flange],
-    model: &Assembled,
-    basis: &Basis,
-    reduced: &ReducedBody,
-    method: &str,
-    static_shapes: usize,
-    accuracy: report::Accuracy,
-) -> Report {
-    let props = model.mass_properties;
-    Report {
-        model_name: spec.name.clone(),
-        guid: reduced.guid.clone(),
-        element: part.element_description(),
-        source: part.source.clone(),
-        rigid_body_residual: part.rigid_body_residual,
-        nodes: part.mesh.n_nodes(),
-        elements: part.mesh.n_elements(),
-        dofs_constrained: model.dofs.n_dofs,
-        mass: props.mass,
-        volume: props.volume,
-        center_of_mass: props.first_moment.map(|m| m / props.mass),
-        inertia_about_origin: props.inertia,
-        method: method.into(),
-        fixed_interface_modes: basis.n_normal,
-        constraint_modes: static_shapes,
-        order: basis.omega.len(),
-        flanges: flanges
-            .iter()
-            .map(|f| FlangeReport {
-                name: f.name.clone(),
-                role: match f.role {
-                    Role::Motion => "motion".into(),
-                    Role::Force => "force".into(),
-                },
-                reference_point: f.reference,
-                slave_nodes: f.slaves.len(),
-            })
-            .collect(),
-        accuracy,
-    }
-}
-
-/// 2 zeta_k omega_k per mode from the input's modal damping ratios.
-pub(crate) fn modal_damping(spec: &Spec, omega: &[f64]) -> Vec<f64> {
-    omega.iter().map(|w| 2.0 * spec.damping.modal_ratio_at(w / (2.0 * std::f64::consts::PI)) * w).collect()
-}
-
 fn solver_of(solver: &Option<SpdSolver>) -> Result<&SpdSolver> {
     solver.as_ref().ok_or_else(|| BuildError::Numerical("internal: the mounted body's factor was released".into()))
-}
-
-/// Modal damping plus the diagonal of Phi^T D Phi for a user damping matrix D (matrix input).
-/// The off-diagonal coupling is dropped: the runtime integrates decoupled modes. Rayleigh-like
-/// D projects exactly diagonal on our K- and M-orthogonal basis.
-pub(crate) fn with_user_damping(mut modal: Vec<f64>, model: &Assembled, basis: &Basis) -> Result<Vec<f64>> {
-    let Some(d) = &model.damping else {
-        return Ok(modal);
-    };
-    let n = basis.phi.nrows();
-    let d = sparse::block(d, 0..n, 0..n)?;
-    let dphi = sparse::mul_new(&d, basis.phi.as_ref());
-    for (k, m) in modal.iter_mut().enumerate() {
-        *m += (0..n).map(|i| basis.phi[(i, k)] * dphi[(i, k)]).sum::<f64>();
-    }
-    Ok(modal)
-}
-
-pub(crate) fn guid(reduced: &ReducedBody) -> String {
-    guid_of(&reduced.to_bytes())
 }
 
 /// The band of the scene, or 0 to the tenth eigenfrequency of the mounted body.
@@ -276,51 +189,10 @@ fn choose_order(
     })
 }
 
-/// The requested number of modes, or why it cannot be delivered accurately: the eigensolver
-/// needs a Krylov space of twice the modes within the mesh's DoFs, and modes beyond a quarter
-/// of them resolve the mesh rather than the part; beyond `eigen::MAX_MODES` the build's dense
-/// reduced eigenproblems (cubic in the order) take minutes for a model no system simulation
-/// steps fast.
-fn check_mode_count(requested: usize, nodes: usize, file: &Path) -> Result<usize> {
-    let dofs = 3 * nodes;
-    if requested > eigen::MAX_MODES {
-        return Err(BuildError::input(
-            file,
-            "reduction.modes",
-            format!(
-                "{requested} modes requested, at most {} are supported: a reduced body for system simulation needs the modes of its scene's band (use reduction.max_frequency, or scene.band with scene.tolerance)",
-                eigen::MAX_MODES
-            ),
-        ));
-    }
-    if requested > dofs / 4 {
-        return Err(BuildError::input(
-            file,
-            "reduction.modes",
-            format!(
-                "{requested} modes requested from a mesh with {dofs} DoFs: at most a quarter of the DoFs ({}) can be computed accurately (the eigensolver needs a space of twice the modes, and higher modes resolve the mesh, not the part); refine the mesh or request fewer modes",
-                dofs / 4
-            ),
-        ));
-    }
-    Ok(requested)
-}
-
-/// Read, mesh, couple, assemble and reduce: everything but writing the FMU.
-pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
-    let mut part = part::part_of(&spec, file)?;
-    let flanges = flange::select_flanges(&spec, file, &part)?;
-    let free = part.free_free()?;
-    let modes = match (spec.reduction.modes, spec.reduction.max_frequency) {
-        (Some(n), _) => ModeCount::Count(check_mode_count(n, part.mesh.n_nodes(), file)?),
-        (None, Some(f)) => ModeCount::Below(f),
-        (None, None) => ModeCount::Count(0),
-    };
-    let Some(mount) = spec.mount_index() else {
-        return free_floating::reduce(spec, part, free, flanges, modes);
-    };
+/// The reduced body of a part held at its mount flange `mount`.
+pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, modes: ModeCount, mount: usize) -> Result<Built> {
     let origin = flanges[mount].reference;
-    let model = assembly::rigid_coupling(&free, &part.mesh.nodes, &flanges, origin)?;
+    let model = rigid_coupling::rigid_coupling(&free, &part.mesh.nodes, &flanges, origin)?;
     drop(free);
     let mesh = &part.mesh;
     let nc = model.dofs.n_clamped();
@@ -424,12 +296,12 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
         stiffening,
         free_floating: false,
     };
-    reduced.guid = guid_of(&reduced.to_bytes());
+    reduced.guid = guid(&reduced);
 
     let force_dofs: Vec<(String, usize)> =
         force.iter().map(|&k| (flanges[k].name.clone(), model.dofs.flange_first[k])).collect();
-    let mut accuracy = report::accuracy(&model, &solver, &basis, &force_dofs, basis.omega.len().max(10))?;
-    report::enforce(&accuracy)?;
+    let mut accuracy = accuracy::accuracy(&model, &solver, &basis, &force_dofs, basis.omega.len().max(10))?;
+    accuracy::enforce(&accuracy)?;
     // the transfer-function comparison costs a complex factorization per sampled frequency:
     // done when the scene names its band
     if !force.is_empty() && spec.scene.as_ref().is_some_and(|s| s.band.is_some() || s.tolerance.is_some()) {
@@ -453,16 +325,4 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
     let statics = basis.omega.len() - basis.n_normal;
     let report = report_of(&spec, &part, &flanges, &model, &basis, &reduced, &method, statics, accuracy);
     Ok(Built { spec, part, flanges, model, basis, reduced, report })
-}
-
-
-#[cfg(test)]
-mod tests {
-    /// The GUID is RFC 9562's version-5 UUID, as any implementation computes it: the expected
-    /// value comes from Python's `uuid.uuid5` with the same namespace and name.
-    #[test]
-    fn guid_is_a_standard_name_based_uuid() {
-        assert_eq!(super::guid_of(b"reduced body"), "{7f7ca901-e4fb-5418-9b2f-592a98c5c92c}");
-        assert_ne!(super::guid_of(b"reduced body"), super::guid_of(b"reduced body "));
-    }
 }

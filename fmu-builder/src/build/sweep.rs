@@ -4,7 +4,7 @@
 //! run so the ratios mean something on a noisy machine.
 
 use crate::error::Result;
-use crate::build::mounted::{Built, reduce_spec};
+use super::{Built, reduce_spec};
 use crate::input::spec::{Method, Reduction, Scene, Spec};
 use fmu_runtime::body::FlexibleBody;
 use std::path::Path;

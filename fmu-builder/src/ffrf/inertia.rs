@@ -4,7 +4,7 @@
 //! consistent mass M = M_s (x) I3 they commute with M, so every invariant is a product of the
 //! nodal mass with per-node cross products of the basis and the positions.
 
-use crate::model::assembly::{Assembled, NodeDofs};
+use crate::model::rigid_coupling::{Assembled, NodeDofs};
 use crate::model::flange::Flange;
 use crate::linalg::sparse::mul_new;
 use faer::{Mat, MatRef};

@@ -2,7 +2,7 @@
 //! needs to couple the elastic coordinates to the body frame's rigid motion. All are projections
 //! of the consistent mass onto rigid-body fields and the basis, computed once here.
 
-use crate::model::assembly::{Assembled, NodeDofs};
+use crate::model::rigid_coupling::{Assembled, NodeDofs};
 use crate::model::flange::Flange;
 use crate::reduce::basis::Basis;
 use crate::linalg::sparse::mul_new;

@@ -162,7 +162,7 @@ pub fn write_free_free_matrices(dir: &Path, part: &Part) -> Result<()> {
 /// The mounted body's matrices (mount held) in Matrix Market coordinate format, with the DoF of
 /// each flange load: K.mtx, M.mtx (symmetric, lower triangle), and flange_dofs.txt (0-based row
 /// of each unit flange load, 6 per force flange: u_x..z, theta_x..z).
-pub fn write_matrix_market(dir: &Path, model: &crate::model::assembly::Assembled) -> Result<()> {
+pub fn write_matrix_market(dir: &Path, model: &crate::model::rigid_coupling::Assembled) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| BuildError::io(dir, e))?;
     let nc = model.dofs.n_clamped();
     for (name, a) in [("K.mtx", &model.stiffness), ("M.mtx", &model.mass)] {

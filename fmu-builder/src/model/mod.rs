@@ -8,3 +8,4 @@ pub mod export;
 pub mod fe;
 pub mod flange;
 pub mod part;
+pub mod rigid_coupling;

@@ -589,7 +589,8 @@ font-family=\"sans-serif\" font-size=\"11\" role=\"img\" aria-label=\"{t}\">\n<t
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::output::report::{Accuracy, FlangeReport};
+    use crate::output::report::FlangeReport;
+    use crate::reduce::accuracy::Accuracy;
     use quick_xml::Reader;
     use quick_xml::events::Event;
 

@@ -3,28 +3,29 @@
 use crate::output::documentation;
 use crate::error::{BuildError, Result};
 use crate::output::fmu;
-use crate::build::mounted::{Built, reduce_spec};
+use crate::output::report::Report;
 use crate::input::spec::Spec;
 use fmu_runtime::format::RESOURCE_FILE;
 use fmu_runtime::interface::VariableTable;
+use fmu_runtime::reduced::ReducedBody;
 use std::path::Path;
 
 /// The runtime cdylib, built by build.rs: the FMU's binaries/linux64/<id>.so.
 pub const RUNTIME_SO: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/fmu_runtime.so"));
 
 /// The FMU of a reduced body.
-pub fn write_fmu(built: &Built, output: &Path) -> Result<()> {
-    let id = fmu::model_identifier(&built.spec.name);
-    let table = VariableTable::new(&built.reduced);
-    let slowest = built.reduced.omega.first().copied().unwrap_or(1.0);
+pub fn write_fmu(spec: &Spec, reduced: &ReducedBody, report: &Report, output: &Path) -> Result<()> {
+    let id = fmu::model_identifier(&spec.name);
+    let table = VariableTable::new(&reduced);
+    let slowest = reduced.omega.first().copied().unwrap_or(1.0);
     let period = 2.0 * std::f64::consts::PI / slowest;
     let info = fmu::ModelInfo {
-        model_name: built.spec.name.clone(),
+        model_name: spec.name.clone(),
         model_identifier: id.clone(),
-        description: built.spec.description.clone().unwrap_or_else(|| {
-            format!("Reduced flexible body '{}' ({} modal coordinates)", built.spec.name, built.reduced.n_modes())
+        description: spec.description.clone().unwrap_or_else(|| {
+            format!("Reduced flexible body '{}' ({} modal coordinates)", spec.name, reduced.n_modes())
         }),
-        guid: built.reduced.guid.clone(),
+        guid: reduced.guid.clone(),
         generation_tool: format!("fmu-builder {}", env!("CARGO_PKG_VERSION")),
         generation_date_time: generation_time()?,
         default_experiment: fmu::DefaultExperiment {
@@ -35,15 +36,15 @@ pub fn write_fmu(built: &Built, output: &Path) -> Result<()> {
         },
     };
     let xml = fmu::model_description_xml(&info, &table).map_err(|e| BuildError::Numerical(e.to_string()))?;
-    let report_json = serde_json::to_vec_pretty(&built.report)
+    let report_json = serde_json::to_vec_pretty(report)
         .map_err(|e| BuildError::Numerical(format!("serialising the report: {e}")))?;
     let archive = fmu::FmuArchive {
         model_description: xml,
         model_identifier: &id,
         binary_linux64: RUNTIME_SO,
-        resources: vec![(RESOURCE_FILE.to_string(), built.reduced.to_bytes())],
+        resources: vec![(RESOURCE_FILE.to_string(), reduced.to_bytes())],
         documentation: vec![
-            ("index.html".to_string(), documentation::index_html(&built.report).into_bytes()),
+            ("index.html".to_string(), documentation::index_html(report).into_bytes()),
             ("report.json".to_string(), report_json),
         ],
     };
@@ -51,14 +52,6 @@ pub fn write_fmu(built: &Built, output: &Path) -> Result<()> {
         fmu::FmuError::Archive { path, message } => BuildError::Io { path, message },
         other => BuildError::Numerical(other.to_string()),
     })
-}
-
-/// Read `input`, reduce, write the FMU to `output`.
-pub fn build(input: &Path, output: &Path) -> Result<Built> {
-    let spec = Spec::from_file(input)?;
-    let built = reduce_spec(spec, input)?;
-    write_fmu(&built, output)?;
-    Ok(built)
 }
 
 /// The FMU's generation time: `SOURCE_DATE_EPOCH` (seconds since 1970, UTC) when set, as

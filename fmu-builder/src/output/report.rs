@@ -1,13 +1,13 @@
-//! What the reduction costs in accuracy, measured against the full FE model on the same mesh:
-//! eigenfrequencies of the mounted body (full vs reduced) and the static compliance of the force
-//! flanges (full sparse solve vs reduced model). Written into the FMU's documentation as JSON.
+//! The report of a build: what was built (part, mass properties, flanges, method and order) and
+//! what the reduction costs in accuracy. Written into the FMU's documentation as JSON.
 
-use crate::model::assembly::Assembled;
-use crate::linalg::eigen;
-use crate::error::Result;
-use crate::reduce::basis::{Basis, EIGEN_TOL};
-use crate::linalg::sparse::{SpdSolver, block};
-use faer::Mat;
+use crate::input::spec::{Role, Spec};
+use crate::model::rigid_coupling::Assembled;
+use crate::model::flange::Flange;
+use crate::model::part::Part;
+use crate::reduce::accuracy::Accuracy;
+use crate::reduce::basis::Basis;
+use fmu_runtime::reduced::ReducedBody;
 use serde::Serialize;
 
 #[derive(Debug, Clone, Serialize)]
@@ -16,28 +16,6 @@ pub struct FlangeReport {
     pub role: String,
     pub reference_point: [f64; 3],
     pub slave_nodes: usize,
-}
-
-#[derive(Debug, Clone, Serialize)]
-pub struct Accuracy {
-    /// Eigenfrequencies of the mounted body [Hz], reduced and full, lowest first.
-    pub reduced_hz: Vec<f64>,
-    pub full_hz: Vec<f64>,
-    pub relative_error: Vec<f64>,
-    /// Force flanges in the order of the compliance rows (6 per flange: u_x..z, phi_x..z).
-    pub compliance_flanges: Vec<String>,
-    /// Static compliance [m/N, rad/(N m), ...] of the force flanges, full model, row-major.
-    pub compliance_full: Vec<Vec<f64>>,
-    pub compliance_reduced: Vec<Vec<f64>>,
-    /// max |C_red - C_full| / max |C_full|
-    pub compliance_max_relative_error: f64,
-    /// The scene's unit inertial load cases (e.g. "translation x", "centrifugal xy") and, per case,
-    /// the full model's static displacement of the force flanges (6 per flange, as the compliance
-    /// rows): what the FMU must reproduce exactly in statics.
-    pub inertial_cases: Vec<String>,
-    pub inertial_flange_response_full: Vec<Vec<f64>>,
-    /// Flange transfer functions full vs reduced over the band (mounted bodies with force flanges).
-    pub frequency_response: Option<crate::reduce::frf::FrequencyResponse>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -65,95 +43,49 @@ pub struct Report {
     pub accuracy: Accuracy,
 }
 
-/// Full-vs-reduced comparison. `n_full` eigenfrequencies of the full clamped model are computed.
-/// `solver` factors the stiffness of the mounted body (mount held).
-pub fn accuracy(model: &Assembled, solver: &SpdSolver, basis: &Basis, force_flanges: &[(String, usize)], n_full: usize) -> Result<Accuracy> {
-    let nc = model.dofs.n_clamped();
-    let m = block(&model.mass, 0..nc, 0..nc)?;
-    let full = eigen::lowest(solver, &m, n_full, EIGEN_TOL)?;
-    let two_pi = 2.0 * std::f64::consts::PI;
-    let full_hz: Vec<f64> = full.values.iter().map(|l| l.sqrt() / two_pi).collect();
-    let reduced_hz: Vec<f64> = basis.omega.iter().map(|w| w / two_pi).collect();
-    let relative_error = reduced_hz.iter().zip(&full_hz).map(|(r, f)| (r - f) / f).collect();
-
-    // static compliance: B^T K^-1 B with B the unit loads at the force flanges' master DoFs
-    let nb = 6 * force_flanges.len();
-    let mut x = Mat::<f64>::zeros(nc, nb);
-    for (f, (_, first)) in force_flanges.iter().enumerate() {
-        for i in 0..6 {
-            x[(first + i, 6 * f + i)] = 1.0;
-        }
+/// The build's report: what was built and what its reduction costs.
+#[allow(clippy::too_many_arguments)]
+pub fn report_of(
+    spec: &Spec,
+    part: &Part,
+    flanges: &[Flange],
+    model: &Assembled,
+    basis: &Basis,
+    reduced: &ReducedBody,
+    method: &str,
+    static_shapes: usize,
+    accuracy: Accuracy,
+) -> Report {
+    let props = model.mass_properties;
+    Report {
+        model_name: spec.name.clone(),
+        guid: reduced.guid.clone(),
+        element: part.element_description(),
+        source: part.source.clone(),
+        rigid_body_residual: part.rigid_body_residual,
+        nodes: part.mesh.n_nodes(),
+        elements: part.mesh.n_elements(),
+        dofs_constrained: model.dofs.n_dofs,
+        mass: props.mass,
+        volume: props.volume,
+        center_of_mass: props.first_moment.map(|m| m / props.mass),
+        inertia_about_origin: props.inertia,
+        method: method.into(),
+        fixed_interface_modes: basis.n_normal,
+        constraint_modes: static_shapes,
+        order: basis.omega.len(),
+        flanges: flanges
+            .iter()
+            .map(|f| FlangeReport {
+                name: f.name.clone(),
+                role: match f.role {
+                    Role::Motion => "motion".into(),
+                    Role::Force => "force".into(),
+                },
+                reference_point: f.reference,
+                slave_nodes: f.slaves.len(),
+            })
+            .collect(),
+        accuracy,
     }
-    solver.solve_refined(x.as_mut());
-    let rows: Vec<usize> = force_flanges.iter().flat_map(|(_, first)| (0..6).map(move |i| first + i)).collect();
-    let (compliance_full, compliance_reduced, compliance_max_relative_error) = compare_compliance(&rows, &x, basis);
-    Ok(Accuracy {
-        reduced_hz,
-        full_hz,
-        relative_error,
-        compliance_flanges: force_flanges.iter().map(|(n, _)| n.clone()).collect(),
-        compliance_full,
-        compliance_reduced,
-        compliance_max_relative_error,
-        inertial_cases: Vec::new(),
-        inertial_flange_response_full: Vec::new(),
-        frequency_response: None,
-    })
-}
-
-/// Full compliance (rows of the static responses `x` at the flange DoFs `rows`) against the
-/// reduced model's Phi_b diag(1/omega^2) Phi_b^T, and their largest deviation relative to the
-/// largest full entry.
-pub fn compare_compliance(rows: &[usize], x: &Mat<f64>, basis: &Basis) -> (Vec<Vec<f64>>, Vec<Vec<f64>>, f64) {
-    let full: Vec<Vec<f64>> = rows.iter().map(|&r| (0..rows.len()).map(|c| x[(r, c)]).collect()).collect();
-    let reduced: Vec<Vec<f64>> = rows
-        .iter()
-        .map(|&r| {
-            rows.iter()
-                .map(|&c| (0..basis.omega.len()).map(|j| basis.phi[(r, j)] * basis.phi[(c, j)] / basis.omega[j].powi(2)).sum())
-                .collect()
-        })
-        .collect();
-    let scale = full.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
-    let diff = full.iter().flatten().zip(reduced.iter().flatten()).fold(0.0f64, |a, (f, r)| a.max((f - r).abs()));
-    (full, reduced, if scale > 0.0 { diff / scale } else { 0.0 })
-}
-
-/// A reduced eigenfrequency may lie below the full model's by no more than this (relative):
-/// the reduced frequencies come from a dense eigensolve with absolute error eps |K_r|, which for
-/// the spread of a many-mode basis (1e9) is 1e-7 of the lowest eigenvalue; a lost Rayleigh-Ritz
-/// bound, as the failure this check guards against, shows as 1e-3 .. 1e-2.
-pub const RAYLEIGH_RITZ_TOL: f64 = 1e-6;
-
-/// Largest accepted deviation of the reduced static flange compliance from the full model's,
-/// relative to its largest entry. Every basis contains the flange loads' static shapes, so the
-/// deviation is round-off (measured 7e-14 .. 3e-13 on the beams with 12 .. 600 modes, whose
-/// cond(K) ~ 1e10; left room for worse-conditioned parts); a dropped static direction shows
-/// as 1e-4 and more.
-pub const COMPLIANCE_TOL: f64 = 1e-8;
-
-/// The checks every build must pass before it becomes an FMU: a Galerkin projection never lowers
-/// an eigenvalue (reduced >= full, mode by mode), and static flange loads are exact. A failure is
-/// an error with the figures, never a wrong FMU.
-pub fn enforce(accuracy: &Accuracy) -> Result<()> {
-    let n = accuracy.reduced_hz.len().min(accuracy.full_hz.len());
-    let below: Vec<usize> = (0..n)
-        .filter(|&i| accuracy.reduced_hz[i] < accuracy.full_hz[i] * (1.0 - RAYLEIGH_RITZ_TOL))
-        .collect();
-    if let Some(&i) = below.first() {
-        return Err(crate::error::BuildError::Numerical(format!(
-            "the reduced model is not a valid projection of the FE model: {} of its {n} lowest frequencies lie below the full model's (mode {}: {:.6} Hz reduced vs {:.6} Hz full); the reduction basis lost accuracy, no FMU was written",
-            below.len(),
-            i + 1,
-            accuracy.reduced_hz[i],
-            accuracy.full_hz[i]
-        )));
-    }
-    let e = accuracy.compliance_max_relative_error;
-    if !(e <= COMPLIANCE_TOL) {
-        return Err(crate::error::BuildError::Numerical(format!(
-            "the reduced model's static flange compliance deviates from the full model's by {e:.2e} (relative to its largest entry; accepted {COMPLIANCE_TOL:.0e}): the reduction basis lost a static direction, no FMU was written"
-        )));
-    }
-    Ok(())
 }

@@ -4,7 +4,7 @@
 //! fixed-interface normal modes (all flanges held) cover the dynamics. The basis is finally
 //! orthonormalised so the reduced mass is I and the reduced stiffness diag(omega^2).
 
-use crate::model::assembly::Assembled;
+use crate::model::rigid_coupling::Assembled;
 use crate::linalg::eigen;
 use crate::error::{BuildError, Result};
 use crate::linalg::sparse::{SpdSolver, block, mul_compensated, mul_new};

@@ -3,7 +3,7 @@
 //! B the unit loads at the force flanges, by a complex sparse LU of the full model per sampled
 //! frequency, and in closed form for the reduced model (its matrices are diagonal).
 
-use crate::model::assembly::Assembled;
+use crate::model::rigid_coupling::Assembled;
 use crate::error::{BuildError, Result};
 use crate::reduce::basis::{Basis, flange_unit_loads};
 use crate::linalg::sparse::{block, mul_compensated};

@@ -6,3 +6,5 @@
 pub mod basis;
 pub mod frf;
 pub mod order;
+pub mod accuracy;
+pub mod damping;

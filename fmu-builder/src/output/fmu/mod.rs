@@ -4,6 +4,7 @@
 //! reduced model and the documentation.
 
 pub mod archive;
+pub mod guid;
 pub mod model_description;
 
 pub use archive::{FmuArchive, write_fmu};
