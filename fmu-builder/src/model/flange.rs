@@ -6,6 +6,7 @@ use crate::error::{BuildError, Result};
 use crate::input::mesh::Mesh;
 use crate::model::part::Part;
 use crate::input::spec::{NodeSelector, Role, Spec};
+use nalgebra::{Matrix3, Vector3};
 use std::path::Path;
 
 #[derive(Debug, Clone)]
@@ -33,27 +34,16 @@ fn bounds(mesh: &Mesh) -> ([f64; 3], [f64; 3]) {
 /// Bounding-box diagonal of the mesh: the length scale for geometric tolerances.
 pub fn model_size(mesh: &Mesh) -> f64 {
     let (lo, hi) = bounds(mesh);
-    (0..3).map(|a| (hi[a] - lo[a]).powi(2)).sum::<f64>().sqrt()
+    (Vector3::from(hi) - Vector3::from(lo)).norm()
 }
 
-fn unit(v: [f64; 3]) -> [f64; 3] {
-    let len = v.iter().map(|c| c * c).sum::<f64>().sqrt();
-    v.map(|c| c / len)
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-/// The slave nodes a selector names; Err(message) when a named node set does not exist.
-fn select(spec: &Spec, selector: &NodeSelector, part: &Part, size: f64) -> std::result::Result<Vec<usize>, String> {
+/// The slave nodes a selector names; Err(message) when a named node set or box does not exist.
+fn select(selector: &NodeSelector, part: &Part, size: f64) -> std::result::Result<Vec<usize>, String> {
     let mesh = &part.mesh;
     let tol_default = 1e-6 * size;
-    let within = |keep: &dyn Fn([f64; 3]) -> bool| (0..mesh.nodes.len()).filter(|&i| keep(mesh.nodes[i])).collect::<Vec<_>>();
+    let within = |keep: &dyn Fn(Vector3<f64>) -> bool| {
+        (0..mesh.nodes.len()).filter(|&i| keep(Vector3::from(mesh.nodes[i]))).collect::<Vec<_>>()
+    };
     Ok(match selector {
         NodeSelector::NodeSet(name) => match part.node_set(name) {
             Some(nodes) => nodes.to_vec(),
@@ -68,59 +58,44 @@ fn select(spec: &Spec, selector: &NodeSelector, part: &Part, size: f64) -> std::
         NodeSelector::Box { min, max } => {
             within(&|p| (0..3).all(|a| p[a] >= min[a] - tol_default && p[a] <= max[a] + tol_default))
         }
-        NodeSelector::Sphere { center, radius } => {
-            within(&|p| dot(sub(p, *center), sub(p, *center)).sqrt() <= radius + tol_default)
-        }
+        NodeSelector::Sphere { center, radius } => within(&|p| (p - Vector3::from(*center)).norm() <= radius + tol_default),
         NodeSelector::Cylinder { point, axis, radius, length } => {
-            let n = unit(*axis);
+            let n = Vector3::from(*axis).normalize();
             within(&|p| {
-                let d = sub(p, *point);
-                let along = dot(d, n);
-                let radial = sub(d, n.map(|c| c * along));
-                dot(radial, radial).sqrt() <= radius + tol_default
-                    && length.is_none_or(|l| along.abs() <= 0.5 * l + tol_default)
+                let d = p - Vector3::from(*point);
+                let along = d.dot(&n);
+                (d - n * along).norm() <= radius + tol_default && length.is_none_or(|l| along.abs() <= 0.5 * l + tol_default)
             })
         }
         NodeSelector::BoxFace { box_index, face } => {
-            let b = &spec.geometry.boxes[*box_index];
+            let Some(b) = part.boxes.get(*box_index) else {
+                return Err(format!("there is no box {box_index}: the part has {} box(es)", part.boxes.len()));
+            };
             let (axis, upper) = face.axis_side();
             let level = if upper { b.max[axis] } else { b.min[axis] };
-            (0..mesh.nodes.len())
-                .filter(|&i| {
-                    let p = mesh.nodes[i];
-                    (p[axis] - level).abs() <= tol_default
-                        && (0..3).filter(|&a| a != axis).all(|a| {
-                            p[a] >= b.min[a] - tol_default && p[a] <= b.max[a] + tol_default
-                        })
-                })
-                .collect()
+            within(&|p| {
+                (p[axis] - level).abs() <= tol_default
+                    && (0..3).filter(|&a| a != axis).all(|a| p[a] >= b.min[a] - tol_default && p[a] <= b.max[a] + tol_default)
+            })
         }
         NodeSelector::Plane { point, normal, tolerance } => {
-            let len = normal.iter().map(|c| c * c).sum::<f64>().sqrt();
-            let n = normal.map(|c| c / len);
+            let n = Vector3::from(*normal).normalize();
             let tol = tolerance.unwrap_or(tol_default);
-            (0..mesh.nodes.len())
-                .filter(|&i| {
-                    let p = mesh.nodes[i];
-                    ((p[0] - point[0]) * n[0] + (p[1] - point[1]) * n[1] + (p[2] - point[2]) * n[2]).abs() <= tol
-                })
-                .collect()
+            within(&|p| (p - Vector3::from(*point)).dot(&n).abs() <= tol)
         }
     })
 }
 
+fn centroid(points: &[[f64; 3]]) -> Vector3<f64> {
+    points.iter().fold(Vector3::zeros(), |c, p| c + Vector3::from(*p) / points.len() as f64)
+}
+
 /// Ratio of the second to the first principal extent of a point set: ~0 for collinear points.
 fn planarity(points: &[[f64; 3]]) -> f64 {
-    let n = points.len() as f64;
-    let mut c = [0.0; 3];
+    let c = centroid(points);
+    let mut s = Matrix3::<f64>::zeros();
     for p in points {
-        for a in 0..3 {
-            c[a] += p[a] / n;
-        }
-    }
-    let mut s = nalgebra::Matrix3::<f64>::zeros();
-    for p in points {
-        let d = nalgebra::Vector3::new(p[0] - c[0], p[1] - c[1], p[2] - c[2]);
+        let d = Vector3::from(*p) - c;
         s += d * d.transpose();
     }
     let mut ev: Vec<f64> = s.symmetric_eigenvalues().iter().copied().collect();
@@ -135,7 +110,7 @@ pub fn select_flanges(spec: &Spec, file: &Path, part: &Part) -> Result<Vec<Flang
     let mut flanges = Vec::with_capacity(spec.flanges.len());
     for (k, fs) in spec.flanges.iter().enumerate() {
         let field = format!("flanges[{k}].nodes");
-        let slaves = select(spec, &fs.nodes, part, size).map_err(|m| BuildError::input(file, format!("{field}.node_set"), m))?;
+        let slaves = select(&fs.nodes, part, size).map_err(|m| BuildError::input(file, format!("{field}.node_set"), m))?;
         if slaves.is_empty() {
             let (lo, hi) = bounds(mesh);
             return Err(BuildError::input(
@@ -174,16 +149,7 @@ pub fn select_flanges(spec: &Spec, file: &Path, part: &Part) -> Result<Vec<Flang
             }
             owner[s] = Some(k);
         }
-        let reference = fs.reference_point.unwrap_or_else(|| {
-            let n = points.len() as f64;
-            let mut c = [0.0; 3];
-            for p in &points {
-                for a in 0..3 {
-                    c[a] += p[a] / n;
-                }
-            }
-            c
-        });
+        let reference = fs.reference_point.unwrap_or_else(|| centroid(&points).into());
         flanges.push(Flange { name: fs.name.clone(), role: fs.role, reference, slaves });
     }
     Ok(flanges)
@@ -208,35 +174,35 @@ mod tests {
         (spec, p)
     }
 
-    fn selected(spec: &Spec, part: &Part, json: &str) -> std::result::Result<Vec<[f64; 3]>, String> {
+    fn selected(part: &Part, json: &str) -> std::result::Result<Vec<[f64; 3]>, String> {
         let selector: NodeSelector = serde_json::from_str(json).unwrap();
-        select(spec, &selector, part, model_size(&part.mesh)).map(|s| s.iter().map(|&i| part.mesh.nodes[i]).collect())
+        select(&selector, part, model_size(&part.mesh)).map(|s| s.iter().map(|&i| part.mesh.nodes[i]).collect())
     }
 
     #[test]
     fn every_selector_picks_what_it_says() {
-        let (spec, part) = part();
+        let (_, part) = part();
         // 3 x 3 nodes on the face x = 4, however it is named
         for json in [
             r#"{"node_set": "tip"}"#,
             r#"{"plane": {"point": [4, 0, 0], "normal": [2, 0, 0]}}"#,
             r#"{"box": {"min": [3.5, -1, -1], "max": [5, 3, 3]}}"#,
         ] {
-            let nodes = selected(&spec, &part, json).unwrap();
+            let nodes = selected(&part, json).unwrap();
             assert_eq!(nodes.len(), 9, "{json}");
             assert!(nodes.iter().all(|p| p[0] == 4.0), "{json}");
         }
         // the sphere of radius 1 around the face centre: the centre and its 4 edge neighbours
-        let nodes = selected(&spec, &part, r#"{"sphere": {"center": [4, 1, 1], "radius": 1}}"#).unwrap();
+        let nodes = selected(&part, r#"{"sphere": {"center": [4, 1, 1], "radius": 1}}"#).unwrap();
         assert_eq!(nodes.len(), 6, "{nodes:?}"); // plus the node one step inside, at (3, 1, 1)
         // the cylinder around the x axis through (., 1, 1), radius 1: 5 nodes per cross-section
-        let nodes = selected(&spec, &part, r#"{"cylinder": {"point": [0, 1, 1], "axis": [1, 0, 0], "radius": 1}}"#).unwrap();
+        let nodes = selected(&part, r#"{"cylinder": {"point": [0, 1, 1], "axis": [1, 0, 0], "radius": 1}}"#).unwrap();
         assert_eq!(nodes.len(), 5 * 5);
         // with a length, only the cross-sections within length/2 of the point
         let nodes =
-            selected(&spec, &part, r#"{"cylinder": {"point": [4, 1, 1], "axis": [-1, 0, 0], "radius": 1, "length": 1}}"#).unwrap();
+            selected(&part, r#"{"cylinder": {"point": [4, 1, 1], "axis": [-1, 0, 0], "radius": 1, "length": 1}}"#).unwrap();
         assert_eq!(nodes.len(), 5);
-        let e = selected(&spec, &part, r#"{"node_set": "ROOT"}"#).unwrap_err();
+        let e = selected(&part, r#"{"node_set": "ROOT"}"#).unwrap_err();
         assert!(e.contains("ROOT") && e.contains("TIP"), "{e}");
     }
 }

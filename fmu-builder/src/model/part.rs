@@ -15,6 +15,9 @@ use std::path::{Path, PathBuf};
 
 pub struct Part {
     pub mesh: Mesh,
+    /// The boxes a built-in mesh was generated from (empty for mesh files and matrices): the
+    /// regions `box_face` selectors refer to.
+    pub boxes: Vec<BoxRegion>,
     pub materials: Vec<SolidMaterial>,
     /// Named node sets (mesh-file or node-file names), as dense node indices.
     pub node_sets: BTreeMap<String, Vec<usize>>,
@@ -98,6 +101,7 @@ fn box_part(spec: &Spec, file: &Path) -> Result<Part> {
     };
     Ok(Part {
         mesh,
+        boxes,
         materials: vec![SolidMaterial { name: "material".into(), elasticity: Elasticity { e, nu }, rho }],
         node_sets: BTreeMap::new(),
         matrices: None,
@@ -204,6 +208,7 @@ fn mesh_file_part(spec: &Spec, file: &Path, mesh_path: &Path) -> Result<Part> {
     Ok(Part {
         source: format!("{} ({} elements)", mesh_path.display(), mesh.n_elements()),
         mesh,
+        boxes: Vec::new(),
         materials,
         node_sets,
         matrices: None,
@@ -274,6 +279,7 @@ fn matrix_part(_spec: &Spec, file: &Path, m: &crate::input::spec::MatrixSpec) ->
     Ok(Part {
         source: format!("matrices {} and {}", k.display(), mm.display()),
         mesh,
+        boxes: Vec::new(),
         materials: Vec::new(),
         node_sets: model.node_sets,
         matrices: Some(Uncoupled { stiffness: model.stiffness, mass: model.mass, damping: model.damping, nodal_mass, volume: None }),
