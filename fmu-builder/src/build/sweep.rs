@@ -156,7 +156,7 @@ pub fn table(rows: &[SweepRow], band: Option<[f64; 2]>) -> String {
 
 /// Error in band against cost per step, one line per method (log-log), as a standalone SVG.
 pub fn plot(rows: &[SweepRow]) -> String {
-    use crate::output::documentation::{PALETTE, PlotSpec, Series, Stroke, line_plot};
+    use crate::output::plot::{PALETTE, PlotSpec, Series, Stroke, line_plot};
     let mut spec = PlotSpec::new("Speed against error", "cost per step [ns] (fixed mount, h = 1 ms)", "flange FRF error in band", true);
     spec.log_x = true;
     let mut series = Vec::new();

@@ -5,5 +5,6 @@
 pub mod documentation;
 pub mod fmu;
 pub mod package;
+pub mod plot;
 pub mod report;
 pub mod summary;

@@ -59,43 +59,15 @@ pub fn write_fmu(spec: &Spec, reduced: &ReducedBody, report: &Report, output: &P
 /// bytes; else now.
 fn generation_time() -> Result<String> {
     let secs = match std::env::var("SOURCE_DATE_EPOCH") {
-        Ok(text) => text.trim().parse::<i64>().ok().filter(|s| (0..253_402_300_800).contains(s)).ok_or_else(|| {
+        Ok(text) => text.trim().parse::<u64>().ok().filter(|s| (0..253_402_300_800).contains(s)).ok_or_else(|| {
             BuildError::Numerical(format!(
                 "the environment variable SOURCE_DATE_EPOCH is {text:?}: expected whole seconds since 1970-01-01 UTC"
             ))
         })?,
         Err(_) => std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
-            .map(|d| d.as_secs() as i64)
+            .map(|d| d.as_secs())
             .unwrap_or(0),
     };
-    Ok(xs_date_time(secs))
-}
-
-/// xs:dateTime (UTC) of `secs` since 1970, without a date crate.
-fn xs_date_time(secs: i64) -> String {
-    let days = secs.div_euclid(86_400);
-    let rem = secs.rem_euclid(86_400);
-    // civil-from-days (Howard Hinnant)
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    let y = yoe + era * 400 + if m <= 2 { 1 } else { 0 };
-    format!("{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z", rem / 3600, (rem / 60) % 60, rem % 60)
-}
-
-#[cfg(test)]
-mod tests {
-    /// Against `date -u -d @SECS +%Y-%m-%dT%H:%M:%SZ` (GNU coreutils).
-    #[test]
-    fn date_time_matches_coreutils() {
-        assert_eq!(super::xs_date_time(0), "1970-01-01T00:00:00Z");
-        assert_eq!(super::xs_date_time(951_782_400), "2000-02-29T00:00:00Z");
-        assert_eq!(super::xs_date_time(1_795_000_000), "2026-11-18T11:06:40Z");
-    }
+    Ok(fmu::xs_date_time(secs))
 }

@@ -60,24 +60,8 @@ pub fn model_description_xml(info: &ModelInfo, table: &VariableTable) -> Result<
 /// A time as xs:dateTime in UTC (`YYYY-MM-DDThh:mm:ssZ`), from seconds since the Unix epoch
 /// (e.g. SOURCE_DATE_EPOCH for reproducible builds).
 pub fn xs_date_time(unix_seconds: u64) -> String {
-    let days = (unix_seconds / 86_400) as i64;
-    let secs = unix_seconds % 86_400;
-    // Civil date from day count (H. Hinnant's days_from_civil inverse), proleptic Gregorian.
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z.rem_euclid(146_097);
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let day = doy - (153 * mp + 2) / 5 + 1;
-    let month = if mp < 10 { mp + 3 } else { mp - 9 };
-    let year = yoe + era * 400 + i64::from(month <= 2);
-    format!(
-        "{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}Z",
-        secs / 3600,
-        secs / 60 % 60,
-        secs % 60
-    )
+    let time = std::time::UNIX_EPOCH + std::time::Duration::from_secs(unix_seconds);
+    humantime::format_rfc3339_seconds(time).to_string()
 }
 
 fn check_info(info: &ModelInfo) -> Result<()> {
@@ -790,6 +774,8 @@ mod tests {
         assert_eq!(xs_date_time(0), "1970-01-01T00:00:00Z");
         assert_eq!(xs_date_time(1_795_330_800), "2026-11-22T07:00:00Z");
         assert_eq!(xs_date_time(951_782_400), "2000-02-29T00:00:00Z");
+        // `date -u -d @1795000000 +%Y-%m-%dT%H:%M:%SZ` (GNU coreutils)
+        assert_eq!(xs_date_time(1_795_000_000), "2026-11-18T11:06:40Z");
         for ok in ["2026-11-22T07:00:00Z", "2026-11-22T07:00:00", "2026-11-22T07:00:00.25+01:00", "2026-01-31T23:59:59-05:30"] {
             assert!(is_xs_date_time(ok), "{ok}");
         }
