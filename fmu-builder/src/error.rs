@@ -4,13 +4,21 @@
 use std::fmt;
 use std::path::PathBuf;
 
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum BuildError {
-    /// Something in the input file: `field` is a path like `flanges[1].nodes`.
+    /// Something in the input file: `field` is a path like `flanges[1].nodes`, or empty when the
+    /// whole file is meant.
+    #[error("{}: {}{message}", .file.display(), field_prefix(.field))]
     Input { file: PathBuf, field: String, message: String },
     /// A numerical step failed (a singular stiffness, an eigensolver that did not converge).
+    #[error("{0}")]
     Numerical(String),
+    #[error("{}: {message}", .path.display())]
     Io { path: PathBuf, message: String },
+}
+
+fn field_prefix(field: &str) -> String {
+    if field.is_empty() { String::new() } else { format!("{field}: ") }
 }
 
 impl BuildError {
@@ -22,19 +30,19 @@ impl BuildError {
     }
 }
 
-impl fmt::Display for BuildError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            BuildError::Input { file, field, message } if field.is_empty() => {
-                write!(f, "{}: {message}", file.display())
-            }
-            BuildError::Input { file, field, message } => write!(f, "{}: {field}: {message}", file.display()),
-            BuildError::Numerical(m) => write!(f, "{m}"),
-            BuildError::Io { path, message } => write!(f, "{}: {message}", path.display()),
-        }
+pub type Result<T> = std::result::Result<T, BuildError>;
+
+#[cfg(test)]
+mod tests {
+    use super::BuildError;
+    use std::path::Path;
+
+    #[test]
+    fn messages_name_the_file_and_the_field() {
+        let with_field = BuildError::input(Path::new("beam.json"), "flanges[1].nodes", "selects no node");
+        assert_eq!(with_field.to_string(), "beam.json: flanges[1].nodes: selects no node");
+        let whole_file = BuildError::input(Path::new("beam.json"), "", "is not JSON");
+        assert_eq!(whole_file.to_string(), "beam.json: is not JSON");
+        assert_eq!(BuildError::io(Path::new("out/B.fmu"), "denied").to_string(), "out/B.fmu: denied");
     }
 }
-
-impl std::error::Error for BuildError {}
-
-pub type Result<T> = std::result::Result<T, BuildError>;

@@ -1,7 +1,7 @@
 //! fmu-builder: read an input file, build the FMU, print a summary. All work is in the library.
 
 use clap::Parser;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -10,7 +10,7 @@ struct Args {
     /// Input file (JSON, see schemas/fmu-builder-input.schema.json)
     input: PathBuf,
     /// Output FMU
-    #[arg(short, long, required_unless_present = "sweep")]
+    #[arg(short, long, required_unless_present = "sweep", conflicts_with = "sweep")]
     output: Option<PathBuf>,
     /// Instead of building, reduce the body by every method at growing orders and print error in
     /// band vs cost per step vs build time
@@ -39,36 +39,43 @@ struct Args {
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    if args.sweep {
-        let spec = match fmu_builder::input::spec::Spec::from_file(&args.input) {
-            Ok(s) => s,
-            Err(e) => {
-                eprintln!("error: {e}");
-                return ExitCode::FAILURE;
-            }
-        };
-        return match fmu_builder::build::sweep::sweep(&spec, &args.input) {
-            Ok(rows) => {
-                print!("{}", fmu_builder::build::sweep::table(&rows, spec.scene.as_ref().and_then(|s| s.band)));
-                if let Some(path) = &args.sweep_svg {
-                    if let Err(e) = std::fs::write(path, fmu_builder::build::sweep::plot(&rows)) {
-                        eprintln!("error: {}: {e}", path.display());
-                        return ExitCode::FAILURE;
-                    }
-                }
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::FAILURE
-            }
-        };
+    // clap lets exactly one of --output and --sweep through
+    match args.output.clone() {
+        Some(output) => build(&args, &output),
+        None => sweep(&args),
     }
-    let Some(output) = args.output.clone() else {
-        eprintln!("error: --output is required");
-        return ExitCode::FAILURE;
+}
+
+/// Reduce by every method at growing orders and print the table (and plot).
+fn sweep(args: &Args) -> ExitCode {
+    let spec = match fmu_builder::input::spec::Spec::from_file(&args.input) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
     };
-    match fmu_builder::build::build(&args.input, &output) {
+    match fmu_builder::build::sweep::sweep(&spec, &args.input) {
+        Ok(rows) => {
+            print!("{}", fmu_builder::build::sweep::table(&rows, spec.scene.as_ref().and_then(|s| s.band)));
+            if let Some(path) = &args.sweep_svg {
+                if let Err(e) = std::fs::write(path, fmu_builder::build::sweep::plot(&rows)) {
+                    eprintln!("error: {}: {e}", path.display());
+                    return ExitCode::FAILURE;
+                }
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Build the FMU, write what else was asked for, print the summary.
+fn build(args: &Args, output: &Path) -> ExitCode {
+    match fmu_builder::build::build(&args.input, output) {
         Ok(built) => {
             if let Some(path) = &args.report {
                 let json = serde_json::to_string_pretty(&built.report).unwrap_or_default();

@@ -10,30 +10,20 @@ pub mod model_description;
 pub use archive::{FmuArchive, write_fmu};
 pub use model_description::{DefaultExperiment, ModelInfo, model_description_xml, xs_date_time};
 
-use std::fmt;
 use std::path::PathBuf;
 
 use crate::error::BuildError;
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FmuError {
     /// The model cannot be written as a valid modelDescription.xml; the message names the
     /// variable or attribute.
+    #[error("modelDescription.xml: {0}")]
     Description(String),
     /// The archive could not be written, or its content would make an invalid FMU.
+    #[error("{}: {message}", .path.display())]
     Archive { path: PathBuf, message: String },
 }
-
-impl fmt::Display for FmuError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            FmuError::Description(m) => write!(f, "modelDescription.xml: {m}"),
-            FmuError::Archive { path, message } => write!(f, "{}: {message}", path.display()),
-        }
-    }
-}
-
-impl std::error::Error for FmuError {}
 
 // So that the build pipeline can use `?` on packaging steps.
 impl From<FmuError> for BuildError {
