@@ -58,11 +58,11 @@ fn sweep(args: &Args) -> ExitCode {
     match fmu_builder::build::sweep::sweep(&spec, &args.input) {
         Ok(rows) => {
             print!("{}", fmu_builder::build::sweep::table(&rows, spec.scene.as_ref().and_then(|s| s.band)));
-            if let Some(path) = &args.sweep_svg {
-                if let Err(e) = std::fs::write(path, fmu_builder::build::sweep::plot(&rows)) {
-                    eprintln!("error: {}: {e}", path.display());
-                    return ExitCode::FAILURE;
-                }
+            if let Some(path) = &args.sweep_svg
+                && let Err(e) = std::fs::write(path, fmu_builder::build::sweep::plot(&rows))
+            {
+                eprintln!("error: {}: {e}", path.display());
+                return ExitCode::FAILURE;
             }
             ExitCode::SUCCESS
         }
@@ -91,17 +91,17 @@ fn build(args: &Args, output: &Path) -> ExitCode {
                     return ExitCode::FAILURE;
                 }
             }
-            if let Some(dir) = &args.export_free_free {
-                if let Err(e) = fmu_builder::model::export::write_free_free_matrices(dir, &built.part) {
-                    eprintln!("error: {e}");
-                    return ExitCode::FAILURE;
-                }
+            if let Some(dir) = &args.export_free_free
+                && let Err(e) = fmu_builder::model::export::write_free_free_matrices(dir, &built.part)
+            {
+                eprintln!("error: {e}");
+                return ExitCode::FAILURE;
             }
-            if let Some(dir) = &args.export_matrices {
-                if let Err(e) = fmu_builder::model::export::write_matrix_market(dir, &built.model) {
-                    eprintln!("error: {e}");
-                    return ExitCode::FAILURE;
-                }
+            if let Some(dir) = &args.export_matrices
+                && let Err(e) = fmu_builder::model::export::write_matrix_market(dir, &built.model)
+            {
+                eprintln!("error: {e}");
+                return ExitCode::FAILURE;
             }
             if !args.quiet {
                 print!("{}", fmu_builder::output::summary::text(&built.report));

@@ -45,8 +45,7 @@ fn dense_eigenvalues(k: &Sparse, m: &Sparse) -> Vec<f64> {
     let mut ct = c.transpose().to_owned();
     faer::linalg::triangular_solve::solve_lower_triangular_in_place(l.as_ref(), ct.as_mut(), faer::Par::Seq);
     let sym = Mat::<f64>::from_fn(ct.nrows(), ct.ncols(), |i, j| 0.5 * (ct[(i, j)] + ct[(j, i)]));
-    let s = sym.self_adjoint_eigenvalues(Side::Lower).unwrap();
-    s
+    sym.self_adjoint_eigenvalues(Side::Lower).unwrap()
 }
 
 #[test]

@@ -85,16 +85,6 @@ pub fn mul_compensated(c: Option<MatRef<'_, f64>>, sign: f64, a: &Sparse, x: Mat
     out
 }
 
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn product_error_is_exact() {
-        for (a, b) in [(0.1, 0.3), (1e10 / 3.0, 7.0 / 3.0), (-2.5e-8, 1.0 / 7.0), (123456.789, -9.87654321e-5)] {
-            let p = a * b;
-            assert_eq!(super::product_error(a, b, p), a.mul_add(b, -p));
-        }
-    }
-}
 
 /// The rounding error of p = a * b (exactly a * b - p), by Dekker's splitting: `f64::mul_add`
 /// would do it in one instruction, but without the FMA target feature it becomes a call into
@@ -201,6 +191,17 @@ impl SpdSolver {
                     rhs[(i, j)] += r[(i, j)];
                 }
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn product_error_is_exact() {
+        for (a, b) in [(0.1, 0.3), (1e10 / 3.0, 7.0 / 3.0), (-2.5e-8, 1.0 / 7.0), (123456.789, -9.87654321e-5)] {
+            let p = a * b;
+            assert_eq!(super::product_error(a, b, p), a.mul_add(b, -p));
         }
     }
 }

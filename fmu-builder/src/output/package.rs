@@ -16,7 +16,7 @@ pub const RUNTIME_SO: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/fmu_runt
 /// The FMU of a reduced body.
 pub fn write_fmu(spec: &Spec, reduced: &ReducedBody, report: &Report, output: &Path) -> Result<()> {
     let id = fmu::model_identifier(&spec.name);
-    let table = VariableTable::new(&reduced);
+    let table = VariableTable::new(reduced);
     let slowest = reduced.omega.first().copied().unwrap_or(1.0);
     let period = 2.0 * std::f64::consts::PI / slowest;
     let info = fmu::ModelInfo {

@@ -76,13 +76,13 @@ pub fn select(omega: &[f64], kept: &[usize], loads: &Mat<f64>) -> Selection {
             // Rayleigh-Ritz of the residual block with K = Lambda
             let nw = w.len();
             let kw = Mat::<f64>::from_fn(nw, nw, |a, b| (0..r).map(|k| w[a][k] * omega[k] * omega[k] * w[b][k]).sum());
-            if nw > 0 {
-                if let Ok(e) = symmetric_eigen(&kw, "the residual stiffness") {
-                    let (ks, ku) = (&e.values, &e.vectors);
-                    for c in 0..nw {
-                        let v: Vec<f64> = (0..r).map(|k| (0..nw).map(|a| w[a][k] * ku[(a, c)]).sum()).collect();
-                        extra.push((v, ks[c].max(0.0).sqrt()));
-                    }
+            if nw > 0
+                && let Ok(e) = symmetric_eigen(&kw, "the residual stiffness")
+            {
+                let (ks, ku) = (&e.values, &e.vectors);
+                for c in 0..nw {
+                    let v: Vec<f64> = (0..r).map(|k| (0..nw).map(|a| w[a][k] * ku[(a, c)]).sum()).collect();
+                    extra.push((v, ks[c].max(0.0).sqrt()));
                 }
             }
         }
