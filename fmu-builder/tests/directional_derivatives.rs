@@ -11,7 +11,7 @@
 
 use fmu_builder::pipeline::reduce_spec;
 use fmu_builder::spec::Spec;
-use fmu_runtime::fmi::{Causality, Model};
+use fmi2::{Causality, Model};
 use fmu_runtime::fmu::BodyFmu;
 use fmu_runtime::interface::VariableTable;
 use std::path::Path;

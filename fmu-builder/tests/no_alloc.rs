@@ -7,7 +7,7 @@
 
 use fmu_builder::pipeline::reduce_spec;
 use fmu_builder::spec::Spec;
-use fmu_runtime::fmi::Model;
+use fmi2::Model;
 use fmu_runtime::fmu::BodyFmu;
 use fmu_runtime::interface::VariableTable;
 use std::path::Path;

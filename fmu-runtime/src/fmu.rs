@@ -1,9 +1,9 @@
 //! The body as an FMI model: maps value references onto the mechanics layer and the FMI calls
-//! (initialise, step, derivatives) onto its equations. Knows FMI's model trait, not C.
+//! (initialise, step, derivatives) onto its equations. Knows the `fmi2::Model` trait, not C.
 
 use crate::body::{BodyState, CouplingReference, FlangeLoad, FlexibleBody, FrameState, InitialFrame, InputRates, MountMotion, Parameters};
-use crate::fmi::bytes::{Reader, Writer};
-use crate::fmi::{Interface, Model, VarInfo};
+use fmi2::bytes::{Reader, Writer};
+use fmi2::{Interface, Model, VarInfo};
 use crate::format::RESOURCE_FILE;
 use crate::interface::{FlangeOutput, Quantity, VariableTable};
 use crate::reduced::ReducedBody;

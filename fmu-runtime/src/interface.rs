@@ -2,7 +2,7 @@
 //! writes modelDescription.xml and through which the runtime answers fmi2Get/Set. Names follow
 //! Naming: flange `tip` has inputs `tip.f[i]`, `tip.t[i]`, outputs `tip.r[i]`, `tip.R[i,j]`, ...
 
-use crate::fmi::{Causality, Initial, VarType, Variability};
+use fmi2::{Causality, Initial, VarType, Variability};
 use crate::reduced::ReducedBody;
 
 /// Per-flange output quantities.

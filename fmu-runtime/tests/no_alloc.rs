@@ -9,8 +9,8 @@
 //! a beam built by the builder.
 
 use fmu_runtime::body::FlexibleBody;
-use fmu_runtime::fmi::types::*;
-use fmu_runtime::fmi::Model;
+use fmi2::types::*;
+use fmi2::Model;
 use fmu_runtime::fmu::BodyFmu;
 use fmu_runtime::interface::VariableTable;
 use fmu_runtime::reduced::{FlangeShapes, ReducedBody, RotationTerms, Stiffening, two_mode_body};

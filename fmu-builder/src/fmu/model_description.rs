@@ -9,9 +9,9 @@
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::io;
 
-use fmu_runtime::fmi::access::effective_initial;
-use fmu_runtime::fmi::logger::Category;
-use fmu_runtime::fmi::{Causality, Initial, VarInfo, VarType, Variability};
+use fmi2::access::effective_initial;
+use fmi2::logger::Category;
+use fmi2::{Causality, Initial, VarInfo, VarType, Variability};
 use fmu_runtime::interface::{Start, UNITS, Variable, VariableTable};
 use quick_xml::Writer;
 use quick_xml::events::{BytesDecl, Event};
