@@ -424,6 +424,16 @@ impl VariableTable {
         (vr as usize).checked_sub(1).and_then(|i| self.variables.get(i))
     }
 
+    /// The variable of this name (a linear search: for setting up, not for every get/set).
+    pub fn variable(&self, name: &str) -> Option<&Variable> {
+        self.variables.iter().find(|v| v.name == name)
+    }
+
+    /// The value reference of the variable of this name.
+    pub fn value_reference(&self, name: &str) -> Option<u32> {
+        self.variable(name).map(|v| v.vr)
+    }
+
     /// State value references in state order: q[1..n] then qd[1..n].
     pub fn states(&self) -> Vec<u32> {
         let mut s: Vec<u32> = self
@@ -547,5 +557,23 @@ impl VariableTable {
         deps.sort_unstable();
         deps.dedup();
         deps
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::reduced::two_mode_body;
+
+    #[test]
+    fn every_name_finds_its_value_reference() {
+        let table = VariableTable::new(&two_mode_body());
+        for v in &table.variables {
+            assert_eq!(table.value_reference(&v.name), Some(v.vr), "{}", v.name);
+            assert_eq!(table.get(v.vr).map(|w| &w.name), Some(&v.name));
+        }
+        assert_eq!(table.value_reference("tip.f[1]"), table.variable("tip.f[1]").map(|v| v.vr));
+        assert!(table.value_reference("tip.f[1]").is_some());
+        assert_eq!(table.value_reference("no.such[1]"), None);
     }
 }

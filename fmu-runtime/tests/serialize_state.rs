@@ -139,15 +139,6 @@ fn free() -> Case {
 }
 
 impl Case {
-    fn vr(&self, name: &str) -> u32 {
-        self.table
-            .variables
-            .iter()
-            .find(|v| v.name == name)
-            .unwrap_or_else(|| panic!("no variable {name}"))
-            .vr
-    }
-
     fn instantiate(&self, kind: fmi2Type) -> fmi2Component {
         let c = unsafe {
             api::fmi2Instantiate::<BodyFmu>(c"serialize".as_ptr(), kind, self.guid.as_ptr(), self.uri.as_ptr(), null(), 0, 0)
@@ -158,7 +149,7 @@ impl Case {
 
     fn set(&self, c: fmi2Component, values: &[(&str, f64)]) {
         for (name, v) in values {
-            let vr = self.vr(name);
+            let vr = self.table.value_reference(name).unwrap();
             let status = if *name == "static_start" {
                 let b = *v as fmi2Boolean;
                 unsafe { api::fmi2SetBoolean::<BodyFmu>(c, &vr, 1, &b) }
