@@ -204,9 +204,9 @@ fn mount_inputs(table: &VariableTable) -> (Vec<u32>, Vec<f64>) {
         }
     }
     for (name, v) in [("base.w", [0.0, 1.0, 10.0]), ("base.r", [0.2, 0.0, 0.0]), ("base.v", [0.0, 2.0, 0.0]), ("base.a", [-20.0, 0.0, 0.0])] {
-        for i in 0..3 {
+        for (i, x) in v.into_iter().enumerate() {
             vrs.push(table.value_reference(&format!("{name}[{}]", i + 1)).unwrap());
-            values.push(v[i]);
+            values.push(x);
         }
     }
     (vrs, values)

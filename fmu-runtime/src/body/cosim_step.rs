@@ -137,7 +137,8 @@ impl FlexibleBody {
             );
         }
         // a coupling that starts at zero (spin-up from rest) still couples within the step
-        if !self.coupling.active && !(ramp && work.coupling_end.active) {
+        let coupled = self.coupling.active || (ramp && work.coupling_end.active);
+        if !coupled {
             self.coupled_work = work;
             self.propagator.prepare(
                 &self.body.omega,
@@ -248,8 +249,8 @@ impl FlexibleBody {
             }
             self.coupled
                 .advance(&self.body.omega, &work.f0, rate, &mut self.q, &mut self.qd);
-            for i in 0..n {
-                let f_end = self.load[i] + h * rate[i]
+            for (i, rate) in rate.iter().enumerate() {
+                let f_end = self.load[i] + h * rate
                     - residual_coupling_force(end, self.coupled.reference(), i, &self.q, &self.qd);
                 work.f1[i] = (f_end - work.f0[i]) / h;
             }
@@ -318,16 +319,16 @@ impl FlexibleBody {
             for i in 0..3 {
                 if dz[i] != 0.0 {
                     let c_a = &self.body.c_r[i * n..(i + 1) * n];
-                    for j in 0..n {
-                        self.load_rate[j] -= dz[i] * c_a[j];
+                    for (rate, c_a) in self.load_rate.iter_mut().zip(c_a) {
+                        *rate -= dz[i] * c_a;
                     }
                 }
                 for k in 0..3 {
                     let dww = dw[i] * w[k] + w[i] * dw[k];
                     if dww != 0.0 {
                         let o = &rot.o_vec[(3 * i + k) * n..(3 * i + k + 1) * n];
-                        for j in 0..n {
-                            self.load_rate[j] -= dww * o[j];
+                        for (rate, o) in self.load_rate.iter_mut().zip(o) {
+                            *rate -= dww * o;
                         }
                     }
                 }
@@ -340,8 +341,8 @@ impl FlexibleBody {
             for (row, w) in wrench.iter().enumerate() {
                 if *w != 0.0 {
                     let shape = &flange.shapes[row * n..(row + 1) * n];
-                    for j in 0..n {
-                        self.load_rate[j] += shape[j] * w;
+                    for (rate, s) in self.load_rate.iter_mut().zip(shape) {
+                        *rate += s * w;
                     }
                 }
             }
@@ -437,9 +438,9 @@ impl FlexibleBody {
     /// The part of q'' beyond the modal diagonal at the last evaluation.
     fn coupling_load(&self, out: &mut [f64]) {
         let (alpha, beta) = (self.params.alpha, self.params.beta);
-        for j in 0..self.q.len() {
+        for (j, out) in out.iter_mut().enumerate() {
             let w2 = self.body.omega[j] * self.body.omega[j];
-            out[j] = self.eval.qdd[j]
+            *out = self.eval.qdd[j]
                 + (alpha + beta * w2 + self.body.modal_damping[j]) * self.qd[j]
                 + w2 * self.q[j];
         }

@@ -38,7 +38,9 @@ pub(super) fn solve_dense<T: Scalar>(a: &mut [T], b: &mut [T], n: usize) -> Resu
                     .total_cmp(&a[j * n + col].value().abs())
             })
             .ok_or(())?;
-        if !(a[piv * n + col].value().abs() > 1e-14 * scale) {
+        // a NaN pivot is singular too (scale, a max ignoring NaN, is never NaN)
+        let pivot = a[piv * n + col].value().abs();
+        if pivot.is_nan() || pivot <= 1e-14 * scale {
             return Err(());
         }
         if piv != col {

@@ -73,9 +73,9 @@ impl<T: Scalar> FlexibleBody<T> {
         self.modal_load();
         let (alpha, beta) = (self.params.alpha, self.params.beta);
         let rhs_q = &mut self.eval.qdd;
-        for j in 0..n {
+        for (j, rhs) in rhs_q.iter_mut().enumerate() {
             let w2 = b.omega[j] * b.omega[j];
-            rhs_q[j] = self.load[j]
+            *rhs = self.load[j]
                 - self.qd[j] * (alpha + beta * w2 + b.modal_damping[j])
                 - self.q[j] * w2;
         }

@@ -16,7 +16,8 @@ impl<T: Scalar> FlexibleBody<T> {
     /// the orientation in use.
     pub(super) fn check_inputs(&mut self) -> Result<(), String> {
         let defect = k3::rotation_defect(&self.mount.rot.map(T::value));
-        if !(defect <= ROTATION_TOLERANCE) {
+        // a NaN defect (non-finite entries) is refused too
+        if defect.is_nan() || defect > ROTATION_TOLERANCE {
             return Err(format!(
                 "{}.R is not a proper rotation matrix (|R^T R - I| = {defect:.3e}, det must be +1)",
                 self.body.mount
@@ -80,16 +81,16 @@ impl<T: Scalar> FlexibleBody<T> {
             for i in 0..3 {
                 if !z[i].is_zero() {
                     let c_a = &self.body.c_r[i * n..(i + 1) * n];
-                    for j in 0..n {
-                        self.load[j] -= z[i] * c_a[j];
+                    for (load, c_a) in self.load.iter_mut().zip(c_a) {
+                        *load -= z[i] * *c_a;
                     }
                 }
                 for k in 0..3 {
                     let ww = w[i] * w[k];
                     if !ww.is_zero() {
                         let o = &rot.o_vec[(3 * i + k) * n..(3 * i + k + 1) * n];
-                        for j in 0..n {
-                            self.load[j] -= ww * o[j];
+                        for (load, o) in self.load.iter_mut().zip(o) {
+                            *load -= ww * *o;
                         }
                     }
                 }
@@ -102,8 +103,8 @@ impl<T: Scalar> FlexibleBody<T> {
             for (row, w) in wrench.iter().enumerate() {
                 if !w.is_zero() {
                     let shape = &flange.shapes[row * n..(row + 1) * n];
-                    for j in 0..n {
-                        self.load[j] += *w * shape[j];
+                    for (load, s) in self.load.iter_mut().zip(shape) {
+                        *load += *w * *s;
                     }
                 }
             }
