@@ -392,7 +392,7 @@ fn write_interfaces(w: &mut W, model_identifier: &str) -> io::Result<()> {
         // the runtime allocates with Rust's allocator and accepts NULL memory callbacks
         ("canNotUseMemoryManagementFunctions", "true"),
         ("canGetAndSetFMUstate", "true"),
-        // fmi2SerializeFMUstate and friends: fmu-runtime/src/fmi/serial.rs
+        // fmi2SerializeFMUstate and friends: fmi2/src/serial.rs
         ("canSerializeFMUstate", "true"),
         // exact, by the body's equations in dual numbers (fmu-runtime/src/scalar.rs)
         ("providesDirectionalDerivative", flag(PROVIDES_DIRECTIONAL_DERIVATIVE)),
