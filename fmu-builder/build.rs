@@ -13,6 +13,10 @@ fn main() {
     let out_dir = PathBuf::from(env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
     println!("cargo:rerun-if-changed={}", runtime.join("src").display());
     println!("cargo:rerun-if-changed={}", runtime.join("Cargo.toml").display());
+    // the generic FMI layer the runtime links
+    let fmi2 = manifest_dir.join("../fmi2");
+    println!("cargo:rerun-if-changed={}", fmi2.join("src").display());
+    println!("cargo:rerun-if-changed={}", fmi2.join("Cargo.toml").display());
     println!("cargo:rerun-if-env-changed=FMU_RUNTIME_SO");
 
     let so = if let Ok(prebuilt) = env::var("FMU_RUNTIME_SO") {

@@ -2,7 +2,7 @@
 //! binary and call it through the FMI 2.0 C API only. The C types come from fmu-runtime (types
 //! only: every call goes through the dlopen'ed library, checked with dladdr).
 
-use fmu_runtime::fmi::types::*;
+use fmi2::types::*;
 use std::collections::HashMap;
 use std::ffi::{CStr, CString, c_char, c_void};
 use std::path::{Path, PathBuf};

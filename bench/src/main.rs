@@ -18,7 +18,7 @@ mod hard_cases;
 mod newmark;
 
 use fmi::{Fmu, Instance};
-use fmu_runtime::fmi::types::{fmi2CoSimulation, fmi2FMUstate, fmi2ModelExchange, fmi2Status};
+use fmi2::types::{fmi2CoSimulation, fmi2FMUstate, fmi2ModelExchange, fmi2Status};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::hint::black_box;
 use std::path::{Path, PathBuf};

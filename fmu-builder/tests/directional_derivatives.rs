@@ -11,14 +11,10 @@
 
 use fmu_builder::build::reduce_spec;
 use fmu_builder::input::spec::Spec;
-use fmu_runtime::fmi::{Causality, Model};
+use fmi2::{Causality, Model};
 use fmu_runtime::fmu::BodyFmu;
 use fmu_runtime::interface::VariableTable;
 use std::path::Path;
-
-fn vr(table: &VariableTable, name: &str) -> u32 {
-    all(table).into_iter().find(|&r| table.get(r).unwrap().name == name).unwrap_or_else(|| panic!("no variable {name}"))
-}
 
 fn all(table: &VariableTable) -> Vec<u32> {
     (1..).map_while(|vr| table.get(vr).map(|_| vr)).collect()
@@ -186,7 +182,7 @@ fn spinning_beam_jacobian_equals_finite_differences() {
     );
     let table = VariableTable::new(&reduced);
     let mut fmu = BodyFmu::from_reduced(reduced);
-    let set = |fmu: &mut BodyFmu, name: &str, x: f64| fmu.set_real(vr(&table, name), x).unwrap();
+    let set = |fmu: &mut BodyFmu, name: &str, x: f64| fmu.set_real(table.value_reference(name).unwrap(), x).unwrap();
     // tilted about an oblique axis, spinning and spinning up, accelerating, loaded
     let rot = {
         let (phi, axis) = (0.7f64, [1.0f64 / 3f64.sqrt(); 3]);
@@ -218,7 +214,7 @@ fn spinning_beam_jacobian_equals_finite_differences() {
 
     // A change of base.R off the rotations (dR = R S, S symmetric) moves nothing: the body
     // uses the input's rotational part only. A rotation (dR = R W~) moves everything.
-    let r_vrs: Vec<u32> = (0..9).map(|ij| vr(&table, &format!("base.R[{},{}]", ij / 3 + 1, ij % 3 + 1))).collect();
+    let r_vrs: Vec<u32> = (0..9).map(|ij| table.value_reference(&format!("base.R[{},{}]", ij / 3 + 1, ij % 3 + 1)).unwrap()).collect();
     let unknowns: Vec<u32> = all(&table)
         .into_iter()
         .filter(|&r| table.get(r).unwrap().causality == Causality::Output)
@@ -252,7 +248,7 @@ fn free_block_jacobian_equals_finite_differences() {
     );
     let table = VariableTable::new(&reduced);
     let mut fmu = BodyFmu::from_reduced(reduced);
-    let set = |fmu: &mut BodyFmu, name: &str, x: f64| fmu.set_real(vr(&table, name), x).unwrap();
+    let set = |fmu: &mut BodyFmu, name: &str, x: f64| fmu.set_real(table.value_reference(name).unwrap(), x).unwrap();
     for (name, x) in [
         ("initial.r[1]", 0.3), ("initial.phi[1]", 0.4), ("initial.phi[3]", -1.1), ("initial.v[2]", 0.5),
         ("initial.w[1]", 0.5), ("initial.w[2]", -2.0), ("initial.w[3]", 3.0), ("g[3]", -9.81),

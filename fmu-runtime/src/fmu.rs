@@ -1,9 +1,9 @@
 //! The body as an FMI model: maps value references onto the mechanics layer and the FMI calls
-//! (initialise, step, derivatives) onto its equations. Knows FMI's model trait, not C.
+//! (initialise, step, derivatives) onto its equations. Knows the `fmi2::Model` trait, not C.
 
 use crate::body::{BodyState, CouplingReference, FlangeLoad, FlexibleBody, FrameState, InitialFrame, InputRates, MountMotion, Parameters};
-use crate::fmi::bytes::{Reader, Writer};
-use crate::fmi::{Interface, Model, VarInfo};
+use fmi2::bytes::{Reader, Writer};
+use fmi2::{Interface, Model, VarInfo};
 use crate::format::RESOURCE_FILE;
 use crate::interface::{FlangeOutput, Quantity, VariableTable};
 use crate::reduced::ReducedBody;
@@ -113,9 +113,9 @@ impl Model for BodyFmu {
         let mut d = self.body.to_dual();
         let rates = self.body.input_rates().clone();
         let qdd = self.body.qdd()?.to_vec();
-        for j in 0..qdd.len() {
+        for (j, &qdd) in qdd.iter().enumerate() {
             d.q_mut()[j].d = self.body.qd()[j];
-            d.qd_mut()[j].d = qdd[j];
+            d.qd_mut()[j].d = qdd;
         }
         if self.body.frame().is_some() {
             let rate = self.body.frame_rate()?;
@@ -134,8 +134,8 @@ impl Model for BodyFmu {
             // R' = w~ R, row by row: (w x R e_j) per column j
             for j in 0..3 {
                 let col = k3::cross(m.w, [m.rot[j], m.rot[3 + j], m.rot[6 + j]]);
-                for i in 0..3 {
-                    dm.rot[3 * i + j].d = col[i];
+                for (i, &rate) in col.iter().enumerate() {
+                    dm.rot[3 * i + j].d = rate;
                 }
             }
             for i in 0..3 {

@@ -2,7 +2,7 @@
 //! writes modelDescription.xml and through which the runtime answers fmi2Get/Set. Names follow
 //! Naming: flange `tip` has inputs `tip.f[i]`, `tip.t[i]`, outputs `tip.r[i]`, `tip.R[i,j]`, ...
 
-use crate::fmi::{Causality, Initial, VarType, Variability};
+use fmi2::{Causality, Initial, VarType, Variability};
 use crate::reduced::ReducedBody;
 
 /// Per-flange output quantities.
@@ -146,10 +146,10 @@ impl Builder {
     }
 
     fn input3(&mut self, prefix: &str, what: &str, unit: &'static str, q: impl Fn(usize) -> Quantity) {
-        for i in 0..3 {
+        for (i, axis) in AXES.iter().enumerate() {
             self.push(
                 format!("{prefix}[{}]", i + 1),
-                format!("{what}, {} component, world frame", AXES[i]),
+                format!("{what}, {axis} component, world frame"),
                 Causality::Input,
                 Variability::Continuous,
                 None,
@@ -161,10 +161,10 @@ impl Builder {
     }
 
     fn output3(&mut self, prefix: &str, what: &str, frame: &str, unit: &'static str, q: impl Fn(usize) -> Quantity) {
-        for i in 0..3 {
+        for (i, axis) in AXES.iter().enumerate() {
             self.push(
                 format!("{prefix}[{}]", i + 1),
-                format!("{what}, {} component, {frame}", AXES[i]),
+                format!("{what}, {axis} component, {frame}"),
                 Causality::Output,
                 Variability::Continuous,
                 None,
@@ -242,10 +242,10 @@ impl VariableTable {
                 out(FlangeOutput::RotationVector(i))
             });
         }
-        for i in 0..3 {
+        for (i, axis) in AXES.iter().enumerate() {
             b.push(
                 format!("g[{}]", i + 1),
-                format!("Gravitational acceleration, {} component, world frame", AXES[i]),
+                format!("Gravitational acceleration, {axis} component, world frame"),
                 Causality::Parameter,
                 Variability::Fixed,
                 None,
@@ -304,7 +304,7 @@ impl VariableTable {
             ));
         }
         let mut qd_vr = Vec::with_capacity(n);
-        for j in 0..n {
+        for (j, &q_vr_j) in q_vr.iter().enumerate() {
             let vr = b.push(
                 format!("qd[{}]", j + 1),
                 format!("Modal velocity {}", j + 1),
@@ -315,10 +315,10 @@ impl VariableTable {
                 Some("1/s"),
                 Quantity::ModalVelocity(j),
             );
-            b.variables[vr as usize - 1].derivative_of = Some(q_vr[j]);
+            b.variables[vr as usize - 1].derivative_of = Some(q_vr_j);
             qd_vr.push(vr);
         }
-        for j in 0..n {
+        for (j, &qd_vr_j) in qd_vr.iter().enumerate() {
             let vr = b.push(
                 format!("der(qd[{}])", j + 1),
                 format!("Modal acceleration {}", j + 1),
@@ -329,7 +329,7 @@ impl VariableTable {
                 None,
                 Quantity::ModalAcceleration(j),
             );
-            b.variables[vr as usize - 1].derivative_of = Some(qd_vr[j]);
+            b.variables[vr as usize - 1].derivative_of = Some(qd_vr_j);
         }
         if body.free_floating {
             Self::free_body_states_and_outputs(&mut b);
@@ -339,17 +339,19 @@ impl VariableTable {
     }
 
     fn free_body_parameters(b: &mut Builder) {
-        let params: [(&str, &str, &'static str, fn(usize) -> Quantity); 4] = [
+        /// Name, description, unit and quantity of a vector parameter.
+        type VectorParameter = (&'static str, &'static str, &'static str, fn(usize) -> Quantity);
+        let params: [VectorParameter; 4] = [
             ("initial.r", "Initial position of the centre of mass", "m", Quantity::InitialPosition),
             ("initial.phi", "Initial orientation as a rotation vector (from the axes as meshed)", "rad", Quantity::InitialRotation),
             ("initial.v", "Initial velocity of the centre of mass", "m/s", Quantity::InitialVelocity),
             ("initial.w", "Initial angular velocity", "rad/s", Quantity::InitialAngularVelocity),
         ];
         for (name, what, unit, q) in params {
-            for i in 0..3 {
+            for (i, axis) in AXES.iter().enumerate() {
                 b.push(
                     format!("{name}[{}]", i + 1),
-                    format!("{what}, {} component, world frame", AXES[i]),
+                    format!("{what}, {axis} component, world frame"),
                     Causality::Parameter,
                     Variability::Fixed,
                     None,
@@ -374,8 +376,8 @@ impl VariableTable {
         for i in 0..3 {
             r_vr[i] = state(b, format!("frame.r[{}]", i + 1), format!("Centre-of-mass position, {}, world (state)", AXES[i]), Some("m"), Quantity::FramePosition(i));
         }
-        for i in 0..4 {
-            quat_vr[i] = state(b, format!("frame.Q[{}]", i + 1), format!("Orientation quaternion component {} (w, x, y, z; state)", i + 1), Some("1"), Quantity::FrameQuaternion(i));
+        for (i, vr) in quat_vr.iter_mut().enumerate() {
+            *vr = state(b, format!("frame.Q[{}]", i + 1), format!("Orientation quaternion component {} (w, x, y, z; state)", i + 1), Some("1"), Quantity::FrameQuaternion(i));
         }
         for i in 0..3 {
             v_vr[i] = state(b, format!("frame.v[{}]", i + 1), format!("Centre-of-mass velocity, {}, world (state)", AXES[i]), Some("m/s"), Quantity::FrameVelocity(i));
@@ -388,8 +390,8 @@ impl VariableTable {
             let vr = b.push(name, what, Causality::Local, Variability::Continuous, None, None, unit, q);
             b.variables[vr as usize - 1].derivative_of = Some(of);
         };
-        for i in 0..4 {
-            derivative(b, format!("der(frame.Q[{}])", i + 1), format!("Quaternion rate {}", i + 1), Some("1/s"), Quantity::FrameQuaternionRate(i), quat_vr[i]);
+        for (i, &of) in quat_vr.iter().enumerate() {
+            derivative(b, format!("der(frame.Q[{}])", i + 1), format!("Quaternion rate {}", i + 1), Some("1/s"), Quantity::FrameQuaternionRate(i), of);
         }
         for i in 0..3 {
             derivative(b, format!("der(frame.v[{}])", i + 1), format!("Centre-of-mass acceleration, {}, world", AXES[i]), Some("m/s2"), Quantity::FrameAcceleration(i), v_vr[i]);
@@ -405,23 +407,33 @@ impl VariableTable {
                 out(b, format!("body.R[{},{}]", i + 1, j + 1), format!("Body orientation, row {} column {} (columns: body axes in world)", i + 1, j + 1), "1", Quantity::BodyRotation(i, j));
             }
         }
-        for i in 0..3 {
-            out(b, format!("body.w[{}]", i + 1), format!("Body angular velocity, {}, world frame", AXES[i]), "rad/s", Quantity::BodyAngularVelocity(i));
+        for (i, axis) in AXES.iter().enumerate() {
+            out(b, format!("body.w[{}]", i + 1), format!("Body angular velocity, {axis}, world frame"), "rad/s", Quantity::BodyAngularVelocity(i));
         }
-        for i in 0..3 {
-            out(b, format!("body.z[{}]", i + 1), format!("Body angular acceleration, {}, world frame", AXES[i]), "rad/s2", Quantity::BodyAngularAcceleration(i));
+        for (i, axis) in AXES.iter().enumerate() {
+            out(b, format!("body.z[{}]", i + 1), format!("Body angular acceleration, {axis}, world frame"), "rad/s2", Quantity::BodyAngularAcceleration(i));
         }
         out(b, "body.energy".into(), "Total energy: kinetic, elastic and gravitational".into(), "J", Quantity::BodyEnergy);
-        for i in 0..3 {
-            out(b, format!("body.p[{}]", i + 1), format!("Linear momentum, {}, world frame", AXES[i]), "N.s", Quantity::BodyMomentum(i));
+        for (i, axis) in AXES.iter().enumerate() {
+            out(b, format!("body.p[{}]", i + 1), format!("Linear momentum, {axis}, world frame"), "N.s", Quantity::BodyMomentum(i));
         }
-        for i in 0..3 {
-            out(b, format!("body.h[{}]", i + 1), format!("Angular momentum about the world origin, {}, world frame", AXES[i]), "J.s", Quantity::BodyAngularMomentum(i));
+        for (i, axis) in AXES.iter().enumerate() {
+            out(b, format!("body.h[{}]", i + 1), format!("Angular momentum about the world origin, {axis}, world frame"), "J.s", Quantity::BodyAngularMomentum(i));
         }
     }
 
     pub fn get(&self, vr: u32) -> Option<&Variable> {
         (vr as usize).checked_sub(1).and_then(|i| self.variables.get(i))
+    }
+
+    /// The variable of this name (a linear search: for setting up, not for every get/set).
+    pub fn variable(&self, name: &str) -> Option<&Variable> {
+        self.variables.iter().find(|v| v.name == name)
+    }
+
+    /// The value reference of the variable of this name.
+    pub fn value_reference(&self, name: &str) -> Option<u32> {
+        self.variable(name).map(|v| v.vr)
     }
 
     /// State value references in state order: q[1..n] then qd[1..n].
@@ -547,5 +559,23 @@ impl VariableTable {
         deps.sort_unstable();
         deps.dedup();
         deps
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::reduced::two_mode_body;
+
+    #[test]
+    fn every_name_finds_its_value_reference() {
+        let table = VariableTable::new(&two_mode_body());
+        for v in &table.variables {
+            assert_eq!(table.value_reference(&v.name), Some(v.vr), "{}", v.name);
+            assert_eq!(table.get(v.vr).map(|w| &w.name), Some(&v.name));
+        }
+        assert_eq!(table.value_reference("tip.f[1]"), table.variable("tip.f[1]").map(|v| v.vr));
+        assert!(table.value_reference("tip.f[1]").is_some());
+        assert_eq!(table.value_reference("no.such[1]"), None);
     }
 }

@@ -1,7 +1,8 @@
 //! FMI 2.0 runtime of a reduced flexible body. Two layers, as in the Reference-FMUs:
-//! `fmi` knows the C API and the FMI state machine and nothing of mechanics; `body` knows the
-//! reduced equations and nothing of C; `interface` maps FMU variables onto the body.
-//! `format`/`reduced` define the reduced-model file the builder writes into `resources/`.
+//! the `fmi2` crate knows the C API and the FMI state machine and nothing of mechanics; `body`
+//! knows the reduced equations and nothing of C; `fmu` implements `fmi2::Model` for the body,
+//! and `interface` maps FMU variables onto it. `format`/`reduced` define the reduced-model file
+//! the builder writes into `resources/`.
 
 pub mod body;
 pub mod coupled_propagator;
@@ -10,8 +11,7 @@ pub mod kinematics;
 pub mod propagator;
 pub mod reduced;
 pub mod scalar;
-pub mod fmi;
 pub mod fmu;
 pub mod interface;
 
-export_fmi2!(crate::fmu::BodyFmu);
+fmi2::export_fmi2!(crate::fmu::BodyFmu);

@@ -212,7 +212,9 @@ fn to3(s: &[f64]) -> [f64; 3] {
 }
 
 /// A two-mode body with one force flange: a small, valid body for tests (here and in the
-/// builder's packaging tests).
+/// builder's packaging tests). Not in the FMU's binary: compiled for this crate's tests and
+/// with the `fixtures` feature, which only dev-dependencies enable.
+#[cfg(any(test, feature = "fixtures"))]
 #[doc(hidden)]
 pub fn two_mode_body() -> ReducedBody {
     ReducedBody {

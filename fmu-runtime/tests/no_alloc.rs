@@ -9,8 +9,8 @@
 //! a beam built by the builder.
 
 use fmu_runtime::body::FlexibleBody;
-use fmu_runtime::fmi::types::*;
-use fmu_runtime::fmi::Model;
+use fmi2::types::*;
+use fmi2::Model;
 use fmu_runtime::fmu::BodyFmu;
 use fmu_runtime::interface::VariableTable;
 use fmu_runtime::reduced::{FlangeShapes, ReducedBody, RotationTerms, Stiffening, two_mode_body};
@@ -173,11 +173,6 @@ fn body_steps_and_derivatives_allocate_nothing() {
     exercise_body("free-floating body (26 modes)", synthetic_body(26, true), Motion::Fixed);
 }
 
-/// Value reference of a variable by name.
-fn vr(table: &VariableTable, name: &str) -> u32 {
-    (1..).map_while(|vr| table.get(vr).map(|v| (vr, v))).find(|(_, v)| v.name == name).map(|(vr, _)| vr).unwrap_or_else(|| panic!("no variable {name}"))
-}
-
 fn outputs(table: &VariableTable, reduced: &ReducedBody) -> Vec<u32> {
     let mut names = Vec::new();
     for f in &reduced.flanges {
@@ -194,7 +189,7 @@ fn outputs(table: &VariableTable, reduced: &ReducedBody) -> Vec<u32> {
     }
     let extra: &[&str] = if reduced.free_floating { &["body.energy", "body.h[3]", "frame.r[1]"] } else { &["base.f[3]", "base.t[2]"] };
     names.extend(extra.iter().map(|s| s.to_string()));
-    names.iter().map(|n| vr(table, n)).collect()
+    names.iter().map(|n| table.value_reference(n).unwrap()).collect()
 }
 
 fn mount_inputs(table: &VariableTable) -> (Vec<u32>, Vec<f64>) {
@@ -204,14 +199,14 @@ fn mount_inputs(table: &VariableTable) -> (Vec<u32>, Vec<f64>) {
     let rot = [c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0];
     for i in 0..3 {
         for j in 0..3 {
-            vrs.push(vr(table, &format!("base.R[{},{}]", i + 1, j + 1)));
+            vrs.push(table.value_reference(&format!("base.R[{},{}]", i + 1, j + 1)).unwrap());
             values.push(rot[3 * i + j]);
         }
     }
     for (name, v) in [("base.w", [0.0, 1.0, 10.0]), ("base.r", [0.2, 0.0, 0.0]), ("base.v", [0.0, 2.0, 0.0]), ("base.a", [-20.0, 0.0, 0.0])] {
-        for i in 0..3 {
-            vrs.push(vr(table, &format!("{name}[{}]", i + 1)));
-            values.push(v[i]);
+        for (i, x) in v.into_iter().enumerate() {
+            vrs.push(table.value_reference(&format!("{name}[{}]", i + 1)).unwrap());
+            values.push(x);
         }
     }
     (vrs, values)
@@ -228,7 +223,7 @@ fn fmi_model_calls_allocate_nothing() {
         let name = format!("{} {motion:?}", reduced.guid);
         let table = VariableTable::new(&reduced);
         let out = outputs(&table, &reduced);
-        let force = [vr(&table, "tip.f[1]"), vr(&table, "tip.f[2]"), vr(&table, "tip.f[3]")];
+        let force = ["tip.f[1]", "tip.f[2]", "tip.f[3]"].map(|n| table.value_reference(n).unwrap());
         let mut fmu = BodyFmu::from_reduced(reduced.clone());
         if let Motion::Rotating = motion {
             let (vrs, values) = mount_inputs(&table);
@@ -308,7 +303,7 @@ fn exported_c_functions_allocate_nothing() {
     ] {
         let table = VariableTable::new(&reduced);
         let out = outputs(&table, &reduced);
-        let force = [vr(&table, "tip.f[1]"), vr(&table, "tip.f[2]"), vr(&table, "tip.f[3]")];
+        let force = ["tip.f[1]", "tip.f[2]", "tip.f[3]"].map(|n| table.value_reference(n).unwrap());
         let (_dir, uri) = resources(&reduced, tag);
         let guid = CString::new(reduced.guid.clone()).unwrap();
         let cb = callbacks();

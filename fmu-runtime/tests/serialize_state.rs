@@ -8,13 +8,13 @@ use std::path::PathBuf;
 use std::ptr::{null, null_mut};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use fmu_runtime::fmi::api;
-use fmu_runtime::fmi::instance::Snapshot;
-use fmu_runtime::fmi::serial;
-use fmu_runtime::fmi::state::ModelState;
-use fmu_runtime::fmi::types::fmi2Status::{fmi2Error, fmi2OK};
-use fmu_runtime::fmi::types::*;
-use fmu_runtime::fmi::{Causality, Interface, Model, VarType};
+use fmi2::api;
+use fmi2::instance::Snapshot;
+use fmi2::serial;
+use fmi2::state::ModelState;
+use fmi2::types::fmi2Status::{fmi2Error, fmi2OK};
+use fmi2::types::*;
+use fmi2::{Causality, Interface, Model, VarType};
 use fmu_runtime::format::RESOURCE_FILE;
 use fmu_runtime::fmu::BodyFmu;
 use fmu_runtime::interface::VariableTable;
@@ -139,15 +139,6 @@ fn free() -> Case {
 }
 
 impl Case {
-    fn vr(&self, name: &str) -> u32 {
-        self.table
-            .variables
-            .iter()
-            .find(|v| v.name == name)
-            .unwrap_or_else(|| panic!("no variable {name}"))
-            .vr
-    }
-
     fn instantiate(&self, kind: fmi2Type) -> fmi2Component {
         let c = unsafe {
             api::fmi2Instantiate::<BodyFmu>(c"serialize".as_ptr(), kind, self.guid.as_ptr(), self.uri.as_ptr(), null(), 0, 0)
@@ -158,7 +149,7 @@ impl Case {
 
     fn set(&self, c: fmi2Component, values: &[(&str, f64)]) {
         for (name, v) in values {
-            let vr = self.vr(name);
+            let vr = self.table.value_reference(name).unwrap();
             let status = if *name == "static_start" {
                 let b = *v as fmi2Boolean;
                 unsafe { api::fmi2SetBoolean::<BodyFmu>(c, &vr, 1, &b) }
@@ -306,7 +297,7 @@ fn model_exchange_states_and_derivatives_are_identical_after_restore() {
         case.initialize(a);
         let nx = unsafe {
             assert_eq!(api::fmi2EnterContinuousTimeMode::<BodyFmu>(a), fmi2OK);
-            let c = &*a.cast::<fmu_runtime::fmi::instance::Instance<BodyFmu>>();
+            let c = &*a.cast::<fmi2::instance::Instance<BodyFmu>>();
             c.model.n_states()
         };
         // explicit Euler by the host (steps short against the 2000 rad/s mode): states,
@@ -338,7 +329,7 @@ fn model_exchange_states_and_derivatives_are_identical_after_restore() {
 
         let b = case.instantiate(fmi2ModelExchange);
         assert_eq!(case.restore(b, &bytes), fmi2OK, "{name}");
-        let state = unsafe { (*b.cast::<fmu_runtime::fmi::instance::Instance<BodyFmu>>()).state };
+        let state = unsafe { (*b.cast::<fmi2::instance::Instance<BodyFmu>>()).state };
         assert_eq!(state, ModelState::ContinuousTimeMode);
         assert_eq!(euler(b, 2e-4, 20), expected, "{name}");
 

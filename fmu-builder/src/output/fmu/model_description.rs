@@ -9,9 +9,9 @@
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::io;
 
-use fmu_runtime::fmi::access::effective_initial;
-use fmu_runtime::fmi::logger::Category;
-use fmu_runtime::fmi::{Causality, Initial, VarInfo, VarType, Variability};
+use fmi2::access::effective_initial;
+use fmi2::logger::Category;
+use fmi2::{Causality, Initial, VarInfo, VarType, Variability};
 use fmu_runtime::interface::{Start, UNITS, Variable, VariableTable};
 use quick_xml::Writer;
 use quick_xml::events::{BytesDecl, Event};
@@ -376,7 +376,7 @@ fn write_interfaces(w: &mut W, model_identifier: &str) -> io::Result<()> {
         // the runtime allocates with Rust's allocator and accepts NULL memory callbacks
         ("canNotUseMemoryManagementFunctions", "true"),
         ("canGetAndSetFMUstate", "true"),
-        // fmi2SerializeFMUstate and friends: fmu-runtime/src/fmi/serial.rs
+        // fmi2SerializeFMUstate and friends: fmi2/src/serial.rs
         ("canSerializeFMUstate", "true"),
         // exact, by the body's equations in dual numbers (fmu-runtime/src/scalar.rs)
         ("providesDirectionalDerivative", flag(PROVIDES_DIRECTIONAL_DERIVATIVE)),

@@ -21,7 +21,7 @@
 //! | 60+G | M | model section ([`Model::save_state`]) |
 //! | 20+P | 4 | CRC-32 (IEEE) of bytes 0 .. 20+P |
 //!
-//! The immutable model data (for a body: the reduced body from the FMU's resources) is not
+//! The immutable model data (what [`Model::instantiate`] loads from the resources) is not
 //! in it: the GUID ties the bytes to the model they belong to. Reading checks, in this order:
 //! magic, version, length, CRC, then every field; the first failure is the message, and
 //! nothing is built from bytes that fail any check.

@@ -57,7 +57,7 @@ pub fn check_settable(info: &VarInfo, state: ModelState) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fmi::VarType;
+    use crate::VarType;
 
     fn var(causality: Causality, variability: Variability, initial: Option<Initial>) -> VarInfo {
         VarInfo {

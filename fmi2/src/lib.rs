@@ -1,14 +1,15 @@
-//! Generic FMI 2.0 C-ABI layer.
+//! Generic FMI 2.0 C-ABI layer, the counterpart of the Reference-FMUs' `fmi2Functions.c`.
 //!
 //! Knows the FMI standard (calling sequence, argument checks, logging, FMU states)
-//! and nothing of physics: a model plugs in by implementing [`Model`], and
-//! `export_fmi2!(path::To::Model)` at the crate root emits the 44 `fmi2*` symbols.
+//! and nothing of the model: a model plugs in by implementing [`Model`], and the crate that
+//! builds the FMU's binary invokes `fmi2::export_fmi2!(path::To::Model)` at its root, which
+//! emits the 44 `fmi2*` symbols.
 //!
 //! Files: `types` (C types of the headers), `logger` (host logger callback),
 //! `state` (state machine tables), `access` (which variables may be set when),
 //! `resource` (fmuResourceLocation URI), `instance` (the fmi2Component),
 //! `serial` and `bytes` (serialized FMU states), `api` (generic implementations),
-//! `export` (the macro).
+//! `export` (the macro), `tests` (the layer's tests against a mock model).
 
 pub mod access;
 pub mod api;

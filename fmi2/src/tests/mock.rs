@@ -6,8 +6,8 @@
 
 use std::path::Path;
 
-use crate::fmi::bytes::{Reader, Writer};
-use crate::fmi::{Causality as C, Initial as I, Interface, Model, VarInfo, VarType as T, Variability as V};
+use crate::bytes::{Reader, Writer};
+use crate::{Causality as C, Initial as I, Interface, Model, VarInfo, VarType as T, Variability as V};
 
 pub const GUID: &str = "{8c4e810f-3df3-4a00-8276-176fa3c9f000}";
 

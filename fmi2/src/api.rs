@@ -59,7 +59,7 @@ fn panic_message(payload: &(dyn Any + Send)) -> &str {
 unsafe fn guarded<M: Model>(
     c: fmi2Component,
     rules: &FnSpec,
-    body: impl FnOnce(&mut Instance<M>) -> Outcome,
+    op: impl FnOnce(&mut Instance<M>) -> Outcome,
 ) -> fmi2Status {
     // Without an instance there is no logger to tell anyone.
     if c.is_null() {
@@ -72,7 +72,7 @@ unsafe fn guarded<M: Model>(
         if let Some(msg) = rules.refuse(inst.state, inst.interface) {
             return Err(Failure::State(msg));
         }
-        body(inst)
+        op(inst)
     }));
     // SAFETY: the borrow inside the closure has ended, whether it returned or unwound.
     let inst = unsafe { &mut *ptr };

@@ -6,10 +6,10 @@ use std::cell::RefCell;
 use std::ffi::{CStr, CString, c_char, c_void};
 use std::ptr::{null, null_mut};
 
-use crate::fmi::types::fmi2Status::*;
-use crate::fmi::types::*;
+use crate::types::fmi2Status::*;
+use crate::types::*;
 use mock::*;
-use crate::fmi::api;
+use crate::api;
 
 #[derive(Debug, Clone)]
 struct Entry {
@@ -605,8 +605,8 @@ fn reseal(bytes: &mut [u8]) {
     bytes[end..].copy_from_slice(&crc.to_le_bytes());
 }
 
-fn model_state_of(c: fmi2Component) -> crate::fmi::state::ModelState {
-    unsafe { (*c.cast::<crate::fmi::instance::Instance<Spring>>()).state }
+fn model_state_of(c: fmi2Component) -> crate::state::ModelState {
+    unsafe { (*c.cast::<crate::instance::Instance<Spring>>()).state }
 }
 
 /// Steps `n` times by `h` from `t`, changing the input on the way; every x and v bit pattern.
@@ -642,9 +642,9 @@ fn serialized_state_continues_bit_identically_in_a_fresh_instance() {
     let fresh_log = Log::default();
     let f = instantiate(&fresh_log, fmi2CoSimulation);
     let restored = deserialize(f, &bytes).unwrap_or_else(|_| panic!("{}", fresh_log.last()));
-    assert_eq!(model_state_of(f), crate::fmi::state::ModelState::Instantiated, "deserialize alone applies nothing");
+    assert_eq!(model_state_of(f), crate::state::ModelState::Instantiated, "deserialize alone applies nothing");
     assert_eq!(unsafe { api::fmi2SetFMUstate::<Spring>(f, restored) }, fmi2OK);
-    assert_eq!(model_state_of(f), crate::fmi::state::ModelState::StepComplete);
+    assert_eq!(model_state_of(f), crate::state::ModelState::StepComplete);
     let mut time = 0.0;
     assert_eq!(unsafe { api::fmi2GetRealStatus::<Spring>(f, fmi2LastSuccessfulTime, &mut time) }, fmi2OK);
     assert_eq!(time.to_bits(), t.to_bits());
@@ -703,7 +703,7 @@ fn serialized_state_restores_model_exchange_states_and_derivatives() {
     let f = instantiate(&log, fmi2ModelExchange);
     let restored = deserialize(f, &bytes).unwrap();
     assert_eq!(unsafe { api::fmi2SetFMUstate::<Spring>(f, restored) }, fmi2OK);
-    assert_eq!(model_state_of(f), crate::fmi::state::ModelState::ContinuousTimeMode);
+    assert_eq!(model_state_of(f), crate::state::ModelState::ContinuousTimeMode);
     assert_eq!(derivatives(f), expected);
     free_state(f, restored);
     free_state(c, state);
@@ -804,7 +804,7 @@ fn bad_serialized_states_are_refused_with_a_reason() {
     }
 
     // Refused bytes are a usage error: the instance stays where it was and carries on.
-    assert_eq!(model_state_of(c), crate::fmi::state::ModelState::StepComplete);
+    assert_eq!(model_state_of(c), crate::state::ModelState::StepComplete);
     let t = run_cs(c, 0.3, 0.6, 0.1);
     assert!((t - 0.6).abs() < 1e-12);
     free_state(c, state);
@@ -827,11 +827,11 @@ fn serialized_state_recovers_from_the_error_state() {
     free_state(c, state);
     assert_eq!(set_bool(c, FAIL, true), fmi2OK);
     assert_eq!(unsafe { api::fmi2DoStep::<Spring>(c, 0.2, 0.1, 0) }, fmi2Error);
-    assert_eq!(model_state_of(c), crate::fmi::state::ModelState::Error);
+    assert_eq!(model_state_of(c), crate::state::ModelState::Error);
     // In Error, only the FMU state functions (and getters, reset, free) are allowed.
     let restored = deserialize(c, &bytes).unwrap();
     assert_eq!(unsafe { api::fmi2SetFMUstate::<Spring>(c, restored) }, fmi2OK);
-    assert_eq!(model_state_of(c), crate::fmi::state::ModelState::StepComplete);
+    assert_eq!(model_state_of(c), crate::state::ModelState::StepComplete);
     let mut b = fmi2True;
     assert_eq!(unsafe { api::fmi2GetBoolean::<Spring>(c, &FAIL, 1, &mut b) }, fmi2OK);
     assert_eq!(b, fmi2False);
@@ -953,7 +953,7 @@ fn directional_derivatives_co_simulation() {
     assert_eq!(unsafe { api::fmi2SetDebugLogging::<Spring>(c, fmi2True, 1, cats.as_ptr()) }, fmi2OK);
     assert_eq!(directional(c, &[ACC], &[U], &[1.0]).0, fmi2OK);
     assert_eq!(log.last(), "fmi2GetDirectionalDerivative: 1 unknowns, 1 knowns");
-    assert_eq!(model_state_of(c), crate::fmi::state::ModelState::StepComplete);
+    assert_eq!(model_state_of(c), crate::state::ModelState::StepComplete);
     run_cs(c, 0.3, 0.5, 0.1);
     unsafe { api::fmi2FreeInstance::<Spring>(c) };
 }
@@ -1121,7 +1121,7 @@ fn derivatives_need_the_capability() {
 /// both functions still answer for diagnostics, until it is reset.
 #[test]
 fn derivative_failures_of_the_model_enter_the_error_state() {
-    use crate::fmi::state::ModelState;
+    use crate::state::ModelState;
     let log = Log::default();
     let c = instantiate(&log, fmi2CoSimulation);
     initialize(c, 0.0);

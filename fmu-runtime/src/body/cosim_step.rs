@@ -1,0 +1,489 @@
+//! Co-Simulation stepping: the input rates of the next step, the mounted body's step (exact
+//! transition of the modal diagonal or of the coupled modes, with a predictor-corrector load for
+//! the coupling's drift from the transition's) and the free body's substeps.
+
+use super::mounted::fill_coupling;
+use super::{
+    Coupling, FlangeLoad, FlexibleBody, FrameState, FreeWork, InputRates, MountMotion,
+    UNSTABLE_STIFFNESS,
+};
+use crate::coupled_propagator::Prepared;
+use crate::kinematics::{self as k3, Mat3, Vec3};
+
+/// Largest h |dC| for which the coupling's difference dC from the exact transition's is
+/// treated as a load (see `step`): the predictor-corrector then gains at most
+/// (h |dC|)^4 / 8 = 1e-7 of energy in a step (and far less on average, as the drift grows from
+/// zero after each renewal), and a renewal, one exponential, is needed only every few dozen
+/// steps of a spin-up.
+const REFERENCE_DRIFT: f64 = 3e-2;
+
+/// |dC| = |C_d - R_d| + |(C_k - R_k) Omega^-1| (largest row sums): the norm of the difference in
+/// the transition's own state [Omega q; q'], a rate in 1/s. A stiffness change of a mode at
+/// omega shifts its frequency by dC_k / (2 omega), hence the division.
+fn coupling_drift(c: &Coupling<f64>, reference: (&[f64], &[f64]), omega: &[f64]) -> f64 {
+    let n = omega.len();
+    let mut worst = 0.0f64;
+    for i in 0..n {
+        let r = i * n..(i + 1) * n;
+        let (cd, ck, rd, rk) = (
+            &c.c_d[r.clone()],
+            &c.c_k[r.clone()],
+            &reference.0[r.clone()],
+            &reference.1[r],
+        );
+        let mut sum = 0.0;
+        for j in 0..n {
+            sum += (cd[j] - rd[j]).abs() + (ck[j] - rk[j]).abs() / omega[j];
+        }
+        worst = worst.max(sum);
+    }
+    worst
+}
+
+/// ((C_d - R_d) q' + (C_k - R_k) q)_i: the coupling's force beyond the reference transition's.
+fn residual_coupling_force(
+    c: &Coupling<f64>,
+    reference: (&[f64], &[f64]),
+    i: usize,
+    q: &[f64],
+    qd: &[f64],
+) -> f64 {
+    let n = q.len();
+    let r = i * n..(i + 1) * n;
+    let (cd, ck, rd, rk) = (
+        &c.c_d[r.clone()],
+        &c.c_k[r.clone()],
+        &reference.0[r.clone()],
+        &reference.1[r],
+    );
+    let mut s = 0.0;
+    for j in 0..n {
+        s += (cd[j] - rd[j]) * qd[j] + (ck[j] - rk[j]) * q[j];
+    }
+    s
+}
+
+impl FlexibleBody {
+    /// Rates of the mount inputs over the next step (its rotation matrix's rate entry by entry).
+    pub fn mount_rate_mut(&mut self) -> &mut MountMotion {
+        self.rates.any = true;
+        &mut self.rates.mount
+    }
+    /// Rates of a flange's force and torque over the next step.
+    pub fn load_rate_mut(&mut self, flange: usize) -> &mut FlangeLoad {
+        self.rates.any = true;
+        &mut self.rates.loads[flange]
+    }
+    pub fn input_rates(&self) -> &InputRates {
+        &self.rates
+    }
+
+    /// Advance by h with the inputs held (or ramped at their rates) over the step: exact
+    /// propagation of the modal diagonal when nothing couples the modes, else of the whole
+    /// coupled system (gyroscopic, centrifugal, stiffening terms) by its matrix exponential,
+    /// which keeps an undamped spinning body's energy at any step (see `coupled_propagator`).
+    pub fn step(&mut self, h: f64) -> Result<(), String> {
+        if !(h > 0.0 && h.is_finite()) {
+            return Err(format!("step size {h} must be positive and finite"));
+        }
+        if self.frame.is_some() {
+            // free bodies hold their flange loads over the step; the inputs still end the step
+            // at their interpolated values
+            self.step_free(h)?;
+            if self.rates.any {
+                self.extrapolate_inputs(h);
+            }
+            return Ok(());
+        }
+        self.check_inputs()?;
+        self.modal_load();
+        let ramp = self.rates.any;
+        if ramp {
+            self.modal_load_rate();
+        }
+        self.prepare_coupling();
+        // inputs that move over the step move the coupling too: its matrices at the step's end
+        let mut work = std::mem::take(&mut self.coupled_work);
+        if ramp {
+            let mut end = self.mount;
+            let r = &self.rates.mount;
+            for i in 0..3 {
+                end.w[i] += h * r.w[i];
+                end.z[i] += h * r.z[i];
+                end.a[i] += h * r.a[i];
+            }
+            for i in 0..9 {
+                end.rot[i] += h * r.rot[i];
+            }
+            for ((e, l), rate) in work
+                .loads_end
+                .iter_mut()
+                .zip(&self.loads)
+                .zip(&self.rates.loads)
+            {
+                *e = FlangeLoad {
+                    f: k3::add(l.f, k3::scale(h, rate.f)),
+                    t: k3::add(l.t, k3::scale(h, rate.t)),
+                };
+            }
+            let end_rot = k3::nearest_rotation(&end.rot);
+            fill_coupling(
+                &self.body,
+                &end_rot,
+                &end,
+                &work.loads_end,
+                self.params.g,
+                &mut work.coupling_end,
+            );
+        }
+        // a coupling that starts at zero (spin-up from rest) still couples within the step
+        let coupled = self.coupling.active || (ramp && work.coupling_end.active);
+        if !coupled {
+            self.coupled_work = work;
+            self.propagator.prepare(
+                &self.body.omega,
+                self.params.alpha,
+                self.params.beta,
+                &self.body.modal_damping,
+                h,
+            );
+            if ramp {
+                self.propagator.advance_ramp(
+                    &self.body.omega,
+                    &self.load,
+                    &self.load_rate,
+                    &mut self.q,
+                    &mut self.qd,
+                );
+                self.extrapolate_inputs(h);
+            } else {
+                self.propagator
+                    .advance(&self.body.omega, &self.load, &mut self.q, &mut self.qd);
+            }
+            self.eval.valid = false;
+            return Ok(());
+        }
+        // The transition is exact for the coupling it was made for (the reference). A coupling
+        // that drifted from it (spin-up, a tumbling mount, or only the round-off of a rotating
+        // base.R) enters as the small difference dC = C - C_ref, by a predictor-corrector load on
+        // top of the exact coupled transition; the reference is renewed (one matrix exponential,
+        // at the step's midpoint coupling) when h |dC| exceeds REFERENCE_DRIFT. A steady spin
+        // runs on one exponential.
+        let prepared = self
+            .coupled
+            .is_prepared(h, self.params.alpha, self.params.beta);
+        // a steady spin meets its own transition again: compared first, cheaper than the drift
+        let held_exactly = !ramp
+            && prepared
+            && self.coupled.reference() == (&self.coupling.c_d[..], &self.coupling.c_k[..]);
+        let drift_ok = |c: &Coupling<f64>| {
+            h * coupling_drift(c, self.coupled.reference(), &self.body.omega) <= REFERENCE_DRIFT
+        };
+        let current = held_exactly
+            || prepared && drift_ok(&self.coupling) && (!ramp || drift_ok(&work.coupling_end));
+        if !current {
+            let (c_d, c_k): (&[f64], &[f64]) = if ramp {
+                for (m, (a, b)) in work
+                    .c_d_mid
+                    .iter_mut()
+                    .zip(self.coupling.c_d.iter().zip(&work.coupling_end.c_d))
+                {
+                    *m = 0.5 * (a + b);
+                }
+                for (m, (a, b)) in work
+                    .c_k_mid
+                    .iter_mut()
+                    .zip(self.coupling.c_k.iter().zip(&work.coupling_end.c_k))
+                {
+                    *m = 0.5 * (a + b);
+                }
+                (&work.c_d_mid, &work.c_k_mid)
+            } else {
+                (&self.coupling.c_d, &self.coupling.c_k)
+            };
+            let was_definite = self.coupled.definite();
+            let prepared = self.coupled.prepare(
+                &self.body.omega,
+                self.params.alpha,
+                self.params.beta,
+                &self.body.modal_damping,
+                c_d,
+                c_k,
+                h,
+            );
+            if prepared == Prepared::Computed && was_definite && !self.coupled.definite() {
+                self.warning = Some(UNSTABLE_STIFFNESS);
+            }
+        }
+        let end = if ramp {
+            &work.coupling_end
+        } else {
+            &self.coupling
+        };
+        // a transition made for this step (held or midpoint coupling) needs no correction
+        let exact = held_exactly || !current;
+        let rate: &[f64] = if ramp { &self.load_rate } else { &work.zeros };
+        if exact {
+            self.coupled.advance(
+                &self.body.omega,
+                &self.load,
+                rate,
+                &mut self.q,
+                &mut self.qd,
+            );
+        } else {
+            // Heun: the residual coupling force held at its start value, then ramped to its
+            // value at the predicted end
+            let n = self.q.len();
+            work.q0.copy_from_slice(&self.q);
+            work.qd0.copy_from_slice(&self.qd);
+            for i in 0..n {
+                work.f0[i] = self.load[i]
+                    - residual_coupling_force(
+                        &self.coupling,
+                        self.coupled.reference(),
+                        i,
+                        &work.q0,
+                        &work.qd0,
+                    );
+            }
+            self.coupled
+                .advance(&self.body.omega, &work.f0, rate, &mut self.q, &mut self.qd);
+            for (i, rate) in rate.iter().enumerate() {
+                let f_end = self.load[i] + h * rate
+                    - residual_coupling_force(end, self.coupled.reference(), i, &self.q, &self.qd);
+                work.f1[i] = (f_end - work.f0[i]) / h;
+            }
+            self.q.copy_from_slice(&work.q0);
+            self.qd.copy_from_slice(&work.qd0);
+            self.coupled.advance(
+                &self.body.omega,
+                &work.f0,
+                &work.f1,
+                &mut self.q,
+                &mut self.qd,
+            );
+        }
+        self.coupled_work = work;
+        if ramp {
+            self.extrapolate_inputs(h);
+        }
+        self.eval.valid = false;
+        if !(self.q.iter().chain(&self.qd).all(|v| v.is_finite())) {
+            return Err(if self.coupled.definite() {
+                "the modal state became non-finite in this step".into()
+            } else {
+                format!("the deformation grew without bound: {UNSTABLE_STIFFNESS}")
+            });
+        }
+        Ok(())
+    }
+
+    /// A warning about the last step, once: the FMI layer logs it.
+    pub fn take_warning(&mut self) -> Option<&'static str> {
+        self.warning.take()
+    }
+
+    /// dp/dt of the modal load for the input rates: every body-frame input x_B = A^T x changes
+    /// as A^T x' + A'^T x, with A' = A skew(A^T R') the rotational part of the orientation's rate
+    /// (the derivative of the projection onto the rotations); the centrifugal part as
+    /// d(w_i w_k)/dt.
+    fn modal_load_rate(&mut self) {
+        let a = &self.rot;
+        let r = &self.rates;
+        let n = self.q.len();
+        let m = {
+            let at_rdot: Mat3 = std::array::from_fn(|ij| {
+                let (i, j) = (ij / 3, ij % 3);
+                a[i] * r.mount.rot[j]
+                    + a[3 + i] * r.mount.rot[3 + j]
+                    + a[6 + i] * r.mount.rot[6 + j]
+            });
+            let skew: Mat3 = std::array::from_fn(|ij| {
+                let (i, j) = (ij / 3, ij % 3);
+                0.5 * (at_rdot[3 * i + j] - at_rdot[3 * j + i])
+            });
+            k3::mat_mul(a, &skew)
+        };
+        let body_rate = |x: Vec3, rate: Vec3| k3::add(k3::mul_t(a, rate), k3::mul_t(&m, x));
+        let a_b = body_rate(k3::sub(self.mount.a, self.params.g), r.mount.a);
+        for j in 0..n {
+            self.load_rate[j] = -(self.body.c_t[j] * a_b[0]
+                + self.body.c_t[n + j] * a_b[1]
+                + self.body.c_t[2 * n + j] * a_b[2]);
+        }
+        if let Some(rot) = &self.body.rotation {
+            let w = k3::mul_t(a, self.mount.w);
+            let dw = body_rate(self.mount.w, r.mount.w);
+            let dz = body_rate(self.mount.z, r.mount.z);
+            for i in 0..3 {
+                if dz[i] != 0.0 {
+                    let c_a = &self.body.c_r[i * n..(i + 1) * n];
+                    for (rate, c_a) in self.load_rate.iter_mut().zip(c_a) {
+                        *rate -= dz[i] * c_a;
+                    }
+                }
+                for k in 0..3 {
+                    let dww = dw[i] * w[k] + w[i] * dw[k];
+                    if dww != 0.0 {
+                        let o = &rot.o_vec[(3 * i + k) * n..(3 * i + k + 1) * n];
+                        for (rate, o) in self.load_rate.iter_mut().zip(o) {
+                            *rate -= dww * o;
+                        }
+                    }
+                }
+            }
+        }
+        for ((flange, rate), load) in self.body.flanges.iter().zip(&r.loads).zip(&self.loads) {
+            let f_b = body_rate(load.f, rate.f);
+            let t_b = body_rate(load.t, rate.t);
+            let wrench = [f_b[0], f_b[1], f_b[2], t_b[0], t_b[1], t_b[2]];
+            for (row, w) in wrench.iter().enumerate() {
+                if *w != 0.0 {
+                    let shape = &flange.shapes[row * n..(row + 1) * n];
+                    for (rate, s) in self.load_rate.iter_mut().zip(shape) {
+                        *rate += s * w;
+                    }
+                }
+            }
+        }
+    }
+
+    /// After a step with input rates the inputs hold their interpolated end values (what the
+    /// host's interpolation says they are at t + h); the rates are used up.
+    fn extrapolate_inputs(&mut self, h: f64) {
+        let r = &mut self.rates;
+        let m = &mut self.mount;
+        for i in 0..3 {
+            m.r[i] += h * r.mount.r[i];
+            m.v[i] += h * r.mount.v[i];
+            m.w[i] += h * r.mount.w[i];
+            m.a[i] += h * r.mount.a[i];
+            m.z[i] += h * r.mount.z[i];
+        }
+        for i in 0..9 {
+            m.rot[i] += h * r.mount.rot[i];
+        }
+        for (load, rate) in self.loads.iter_mut().zip(&r.loads) {
+            for i in 0..3 {
+                load.f[i] += h * rate.f[i];
+                load.t[i] += h * rate.t[i];
+            }
+        }
+        r.mount = MountMotion {
+            rot: [0.0; 9],
+            ..MountMotion::default()
+        };
+        for rate in r.loads.iter_mut() {
+            *rate = FlangeLoad::default();
+        }
+        r.any = false;
+        self.coupling.valid = false;
+        self.eval.valid = false;
+    }
+}
+
+impl FlexibleBody {
+    /// A free-floating body over one step, by substeps short against its rotation
+    /// (|W| h_sub <= 0.005) of a second-order (Heun) splitting: the modes propagate exactly under
+    /// the coupling load (trapezoidal in time), the rigid motion by the averaged rates, the
+    /// attitude by the exact rotation of the mean angular velocity.
+    fn step_free(&mut self, h: f64) -> Result<(), String> {
+        let spin = self
+            .frame
+            .map_or(0.0, |f| k3::dot(f.w_body, f.w_body).sqrt());
+        let substeps = ((h * spin / 0.005).ceil() as usize).clamp(1, 1_000_000);
+        let hs = h / substeps as f64;
+        self.propagator.prepare(
+            &self.body.omega,
+            self.params.alpha,
+            self.params.beta,
+            &self.body.modal_damping,
+            hs,
+        );
+        // the preallocated workspace, taken out for the substeps (leaves an empty Vec: no allocation)
+        let mut work = std::mem::take(&mut self.free_work);
+        let result = self.free_substeps(&mut work, substeps, hs);
+        self.free_work = work;
+        self.eval.valid = false;
+        result
+    }
+
+    fn free_substeps(&mut self, w: &mut FreeWork, substeps: usize, hs: f64) -> Result<(), String> {
+        let n = self.q.len();
+        for _ in 0..substeps {
+            let start = self.frame.ok_or("not a free-floating body")?;
+            w.q0.copy_from_slice(&self.q);
+            w.qd0.copy_from_slice(&self.qd);
+            // rates at the start, then at the predicted end
+            self.eval.valid = false;
+            self.evaluate()?;
+            let rate0 = self.frame_rate;
+            self.coupling_load(&mut w.load0);
+            self.advance_free(&start, &rate0, &rate0, &w.load0, hs)?;
+            self.eval.valid = false;
+            self.evaluate()?;
+            let rate1 = self.frame_rate;
+            self.coupling_load(&mut w.load1);
+            for j in 0..n {
+                w.load1[j] = 0.5 * (w.load0[j] + w.load1[j]);
+            }
+            self.q.copy_from_slice(&w.q0);
+            self.qd.copy_from_slice(&w.qd0);
+            self.advance_free(&start, &rate0, &rate1, &w.load1, hs)?;
+        }
+        Ok(())
+    }
+
+    /// The part of q'' beyond the modal diagonal at the last evaluation.
+    fn coupling_load(&self, out: &mut [f64]) {
+        let (alpha, beta) = (self.params.alpha, self.params.beta);
+        for (j, out) in out.iter_mut().enumerate() {
+            let w2 = self.body.omega[j] * self.body.omega[j];
+            *out = self.eval.qdd[j]
+                + (alpha + beta * w2 + self.body.modal_damping[j]) * self.qd[j]
+                + w2 * self.q[j];
+        }
+    }
+
+    /// From the substep's start frame: rigid motion by the mean of two rate sets, modes exactly
+    /// under `load` (q, q' must hold the start values).
+    fn advance_free(
+        &mut self,
+        start: &FrameState,
+        a: &FrameState,
+        b: &FrameState,
+        load: &[f64],
+        hs: f64,
+    ) -> Result<(), String> {
+        self.propagator
+            .advance(&self.body.omega, load, &mut self.q, &mut self.qd);
+        let w_dot = k3::scale(0.5, k3::add(a.w_body, b.w_body));
+        let accel = k3::scale(0.5, k3::add(a.v, b.v));
+        let f = self.frame.as_mut().ok_or("not a free-floating body")?;
+        let w_mid = k3::add(start.w_body, k3::scale(0.5 * hs, w_dot));
+        f.w_body = k3::add(start.w_body, k3::scale(hs, w_dot));
+        f.v = k3::add(start.v, k3::scale(hs, accel));
+        f.r = k3::add(start.r, k3::scale(0.5 * hs, k3::add(start.v, f.v)));
+        f.quat = k3::quaternion_multiply(
+            start.quat,
+            k3::quaternion_of(&k3::rotation_of(k3::scale(hs, w_mid))),
+        );
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::FlexibleBody;
+    use crate::reduced::two_mode_body;
+    use std::sync::Arc;
+
+    #[test]
+    fn a_non_rotation_mount_is_refused_with_its_name() {
+        let mut b = FlexibleBody::new(Arc::new(two_mode_body()));
+        b.mount_mut().rot = [1.1, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+        let e = b.step(0.1).unwrap_err();
+        assert!(e.contains("base.R"), "{e}");
+    }
+}

@@ -1,0 +1,235 @@
+//! The free-floating body: its initial frame, and the accelerations of frame and modes coupled
+//! through the inertia J(q) and C_r(q), and its energy and momenta.
+
+use super::dense::{dot, shape_dot, solve_dense};
+use super::{FlexibleBody, FrameState, Invariants, MountMotion};
+use crate::kinematics::{self as k3, Mat3, Vec3};
+use crate::scalar::{Scalar, c};
+
+impl FlexibleBody {
+    /// Put a free-floating body at its initial pose and velocity.
+    pub fn start_frame(&mut self) {
+        if let Some(f) = self.frame.as_mut() {
+            let i = self.initial_frame;
+            let rot = k3::rotation_of(i.phi);
+            *f = FrameState {
+                r: i.r,
+                quat: k3::quaternion_of(&rot),
+                v: i.v,
+                w_body: k3::mul_t(&rot, i.w),
+            };
+            self.eval.valid = false;
+        }
+    }
+}
+
+impl<T: Scalar> FlexibleBody<T> {
+    /// Rates of the frame state (d/dt r, quaternion, v, body angular velocity).
+    pub fn frame_rate(&mut self) -> Result<FrameState<T>, String> {
+        self.evaluate()?;
+        Ok(self.frame_rate)
+    }
+
+    /// Accelerations of a free-floating body: the frame's translational motion is the centre of
+    /// mass's (mean axes: C_t = 0), its rotation and the modes couple through J(q) and C_r(q):
+    ///   [J(q)  C_r(q)] [W']   [tau - W x h - J'(q) W                                   ]
+    ///   [C_r^T   I   ] [q''] = [p - D q' - K q - 2 sum W_a G_a q' - sum W_a W_b (O_ab q + o_ab)]
+    /// with h = J W + C_r q' (floating-frame invariants, exact in q to second order).
+    pub(super) fn free_accelerations(&mut self) -> Result<(), String> {
+        let frame = self.frame.ok_or("not a free-floating body")?;
+        let n = self.q.len();
+        let nn = n * n;
+        let b = self.body.clone();
+        let rot_terms = b
+            .rotation
+            .as_ref()
+            .ok_or("a free-floating body needs its rotation invariants")?;
+        let [q0, q1, q2, q3] = frame.quat;
+        let norm = (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3).sqrt();
+        if !(norm.value() > 0.5 && norm.value() < 2.0) {
+            return Err(format!(
+                "the orientation quaternion has drifted to norm {}",
+                norm.value()
+            ));
+        }
+        let quat = frame.quat.map(|x| x / norm);
+        let a = k3::rotation_of_quaternion(quat);
+        let w = frame.w_body;
+        let total_force: Vec3<T> = self
+            .loads
+            .iter()
+            .fold([T::zero(); 3], |acc, l| k3::add(acc, l.f));
+        let accel = k3::add(k3::scale(c(1.0 / b.mass), total_force), self.gravity());
+        self.mount = MountMotion {
+            r: frame.r,
+            rot: a,
+            v: frame.v,
+            w: k3::mul(&a, w),
+            a: accel,
+            z: [T::zero(); 3],
+        };
+        self.rot = a;
+        // modal load of the flange loads and the centrifugal o_ab terms (C_t = 0, c_a = 0 here)
+        self.modal_load();
+        let (alpha, beta) = (self.params.alpha, self.params.beta);
+        let rhs_q = &mut self.eval.qdd;
+        for (j, rhs) in rhs_q.iter_mut().enumerate() {
+            let w2 = b.omega[j] * b.omega[j];
+            *rhs = self.load[j]
+                - self.qd[j] * (alpha + beta * w2 + b.modal_damping[j])
+                - self.q[j] * w2;
+        }
+        for i in 0..3 {
+            let g = &rot_terms.g[i * nn..(i + 1) * nn];
+            if !w[i].is_zero() {
+                for r in 0..n {
+                    let s = shape_dot(&g[r * n..(r + 1) * n], &self.qd);
+                    rhs_q[r] -= w[i] * 2.0 * s;
+                }
+            }
+            for k in 0..3 {
+                let ww = w[i] * w[k];
+                if !ww.is_zero() {
+                    let o = &rot_terms.o_mat[(3 * i + k) * nn..(3 * i + k + 1) * nn];
+                    for r in 0..n {
+                        let s = shape_dot(&o[r * n..(r + 1) * n], &self.q);
+                        rhs_q[r] -= ww * s;
+                    }
+                }
+            }
+        }
+        // C_r(q), J(q), J'(q)
+        for i in 0..3 {
+            let g = &rot_terms.g[i * nn..(i + 1) * nn];
+            for col in 0..n {
+                // (G_a q)_c
+                let s = shape_dot(&g[col * n..(col + 1) * n], &self.q);
+                self.cr_q[i * n + col] = s + c(b.c_r[i * n + col]);
+            }
+        }
+        let mut j: Mat3<T> = b.inertia.map(c);
+        let mut j_rate = [T::zero(); 9];
+        for p in 0..3 {
+            for q_ in 0..3 {
+                let (o_pq, o_qp) = (
+                    &rot_terms.o_vec[(3 * p + q_) * n..][..n],
+                    &rot_terms.o_vec[(3 * q_ + p) * n..][..n],
+                );
+                let o_mat = &rot_terms.o_mat[(3 * p + q_) * nn..(3 * p + q_ + 1) * nn];
+                let (mut lin, mut lin_rate, mut quad, mut quad_rate) =
+                    (T::zero(), T::zero(), T::zero(), T::zero());
+                for r in 0..n {
+                    lin += self.q[r] * (o_pq[r] + o_qp[r]);
+                    lin_rate += self.qd[r] * (o_pq[r] + o_qp[r]);
+                    let oq = shape_dot(&o_mat[r * n..(r + 1) * n], &self.q);
+                    let oqd = shape_dot(&o_mat[r * n..(r + 1) * n], &self.qd);
+                    quad += self.q[r] * oq;
+                    quad_rate += self.qd[r] * oq + self.q[r] * oqd;
+                }
+                j[3 * p + q_] -= lin + quad;
+                j_rate[3 * p + q_] = -(lin_rate + quad_rate);
+            }
+        }
+        let cr_qd: Vec3<T> = [0, 1, 2].map(|i| dot(&self.cr_q[i * n..(i + 1) * n], &self.qd));
+        let h = k3::add(k3::mul(&j, w), cr_qd);
+        // torque of the flange loads about the centre of mass, body frame
+        let mut torque = [T::zero(); 3];
+        for (flange, load) in b.flanges.iter().zip(&self.loads) {
+            let u: Vec3<T> =
+                [0, 1, 2].map(|r| shape_dot(&flange.shapes[r * n..(r + 1) * n], &self.q));
+            let f_b = k3::mul_t(&a, load.f);
+            torque = k3::add(
+                torque,
+                k3::add(
+                    k3::cross(k3::add(flange.position.map(c), u), f_b),
+                    k3::mul_t(&a, load.t),
+                ),
+            );
+        }
+        let rhs_w = k3::sub(k3::sub(torque, k3::cross(w, h)), k3::mul(&j_rate, w));
+        // Schur complement: (J - C_r C_r^T) W' = rhs_w - C_r rhs_q
+        let mut s = j;
+        let mut rhs = rhs_w;
+        for p in 0..3 {
+            let cp = &self.cr_q[p * n..(p + 1) * n];
+            rhs[p] -= dot(cp, &self.eval.qdd);
+            for q_ in 0..3 {
+                let cq = &self.cr_q[q_ * n..(q_ + 1) * n];
+                s[3 * p + q_] -= dot(cp, cq);
+            }
+        }
+        let mut w_dot = rhs;
+        solve_dense(&mut s, &mut w_dot, 3)
+            .map_err(|_| "the body's inertia matrix became singular".to_string())?;
+        for r in 0..n {
+            let f = self.cr_q[r] * w_dot[0]
+                + self.cr_q[n + r] * w_dot[1]
+                + self.cr_q[2 * n + r] * w_dot[2];
+            self.eval.qdd[r] -= f;
+        }
+        self.mount.z = k3::mul(&a, w_dot);
+        // d/dt quat = 1/2 quat (x) (0, W) of the state's own quaternion: keeps its norm, so the
+        // frame turns at exactly W whatever the norm has drifted to
+        let [q0, q1, q2, q3] = frame.quat;
+        let half = [w[0] * 0.5, w[1] * 0.5, w[2] * 0.5];
+        let quat_rate = [
+            -(q1 * half[0]) - q2 * half[1] - q3 * half[2],
+            q0 * half[0] + q2 * half[2] - q3 * half[1],
+            q0 * half[1] + q3 * half[0] - q1 * half[2],
+            q0 * half[2] + q1 * half[1] - q2 * half[0],
+        ];
+        self.frame_rate = FrameState {
+            r: frame.v,
+            quat: quat_rate,
+            v: accel,
+            w_body: w_dot,
+        };
+        Ok(())
+    }
+
+    /// Energy and momenta of a free-floating body (gravity's potential included).
+    pub fn invariants(&mut self) -> Result<Invariants<T>, String> {
+        self.evaluate()?;
+        let frame = self
+            .frame
+            .ok_or("energy and momenta are outputs of free-floating bodies")?;
+        let n = self.q.len();
+        let b = &self.body;
+        let rot_terms = b.rotation.as_ref().ok_or("missing rotation invariants")?;
+        let nn = n * n;
+        let mut j: Mat3<T> = b.inertia.map(c);
+        for p in 0..3 {
+            for q_ in 0..3 {
+                let (o_pq, o_qp) = (
+                    &rot_terms.o_vec[(3 * p + q_) * n..][..n],
+                    &rot_terms.o_vec[(3 * q_ + p) * n..][..n],
+                );
+                let o_mat = &rot_terms.o_mat[(3 * p + q_) * nn..(3 * p + q_ + 1) * nn];
+                let mut v = T::zero();
+                for r in 0..n {
+                    v += self.q[r] * (o_pq[r] + o_qp[r]);
+                    v += self.q[r] * shape_dot(&o_mat[r * n..(r + 1) * n], &self.q);
+                }
+                j[3 * p + q_] -= v;
+            }
+        }
+        let w = frame.w_body;
+        let cr_qd: Vec3<T> = [0, 1, 2].map(|i| dot(&self.cr_q[i * n..(i + 1) * n], &self.qd));
+        let jw = k3::mul(&j, w);
+        let h = k3::add(jw, cr_qd);
+        let v2 = k3::dot(frame.v, frame.v);
+        let mut energy = v2 * (0.5 * b.mass) + k3::dot(w, jw) * 0.5 + k3::dot(w, cr_qd);
+        for r in 0..n {
+            energy += self.qd[r] * 0.5 * self.qd[r]
+                + self.q[r] * (0.5 * b.omega[r] * b.omega[r]) * self.q[r];
+        }
+        energy -= k3::dot(self.gravity(), frame.r) * b.mass;
+        let momentum = k3::scale(c(b.mass), frame.v);
+        let angular_momentum = k3::add(k3::cross(frame.r, momentum), k3::mul(&self.mount.rot, h));
+        Ok(Invariants {
+            energy,
+            momentum,
+            angular_momentum,
+        })
+    }
+}

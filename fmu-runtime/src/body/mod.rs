@@ -1,0 +1,649 @@
+//! The reduced flexible body's equations, free of anything FMI: inputs (mount motion, flange
+//! loads, gravity), modal state q, q', and what the flanges see.
+//!
+//! Equations (body frame B, modal mass I, stiffness diag(w^2), Rayleigh damping; docs/ARCHITECTURE.md):
+//!   q'' + (D + 2 sum_a W_a G_a) q' + (K + sum_a Z_a G_a + sum_ab W_a W_b O_ab + K_G) q
+//!       = -C_t^T a_B - sum_a Z_a c_a - sum_ab W_a W_b o_ab + sum_k Phi_k^T [A^T f_k; A^T t_k],
+//! with W = A^T w, Z = A^T z, a_B = A^T (a - g), and K_G the geometric stiffness of the present
+//! loads (linear in them). The coupling terms (everything off the modal diagonal) are gathered in
+//! two r x r matrices whenever the inputs change.
+//!
+//! Files, one job each: this one holds the types, construction, saved state, accessors and the
+//! evaluation shared by every body (dispatch and flange kinematics); `mounted` the equations of
+//! a body on a prescribed mount (input check, modal load, coupling terms); `reaction` the mount
+//! reaction; `free_floating` the free body's accelerations and invariants; `cosim_step`
+//! Co-Simulation stepping (input rates, exact and predictor-corrector steps, the free body's
+//! substeps); `statics` the static start; `dense` the dense kernels (dot products and the small
+//! in-place solver).
+
+mod cosim_step;
+mod dense;
+mod free_floating;
+mod mounted;
+mod reaction;
+mod statics;
+
+use crate::coupled_propagator::CoupledPropagator;
+use crate::kinematics::{self as k3, Mat3, Vec3};
+use crate::propagator::ModalPropagator;
+use crate::reduced::ReducedBody;
+use crate::scalar::{Dual, Scalar, c};
+use dense::shape_dot;
+use std::sync::Arc;
+
+/// Prescribed motion of the mount flange, resolved in the world frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MountMotion<T = f64> {
+    pub r: Vec3<T>,
+    /// Rotation B -> world (columns: body axes in world).
+    pub rot: Mat3<T>,
+    pub v: Vec3<T>,
+    pub w: Vec3<T>,
+    pub a: Vec3<T>,
+    pub z: Vec3<T>,
+}
+
+impl<T: Copy> MountMotion<T> {
+    pub fn map<U>(&self, f: impl Fn(T) -> U) -> MountMotion<U> {
+        MountMotion {
+            r: self.r.map(&f),
+            rot: self.rot.map(&f),
+            v: self.v.map(&f),
+            w: self.w.map(&f),
+            a: self.a.map(&f),
+            z: self.z.map(&f),
+        }
+    }
+}
+
+impl<T: Scalar> Default for MountMotion<T> {
+    fn default() -> Self {
+        let o = [T::zero(); 3];
+        Self {
+            r: o,
+            rot: k3::IDENTITY.map(c),
+            v: o,
+            w: o,
+            a: o,
+            z: o,
+        }
+    }
+}
+
+/// Force and torque the host applies at a force flange, world frame; torque about the flange.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FlangeLoad<T = f64> {
+    pub f: Vec3<T>,
+    pub t: Vec3<T>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Parameters {
+    pub g: Vec3,
+    pub alpha: f64,
+    pub beta: f64,
+}
+
+/// Motion of a force flange, world frame except `u`, `phi` (deformation in B).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FlangeMotion<T = f64> {
+    pub r: Vec3<T>,
+    pub rot: Mat3<T>,
+    pub v: Vec3<T>,
+    pub w: Vec3<T>,
+    pub a: Vec3<T>,
+    pub z: Vec3<T>,
+    pub u: Vec3<T>,
+    pub phi: Vec3<T>,
+}
+
+/// Everything that follows from state and inputs at one instant.
+#[derive(Debug, Clone, Default)]
+struct Evaluation<T> {
+    valid: bool,
+    qdd: Vec<T>,
+    flanges: Vec<FlangeMotion<T>>,
+    /// The mount reaction is evaluated on demand: hosts that read only flange outputs skip its
+    /// n^2 terms.
+    reaction_valid: bool,
+    mount_force: Vec3<T>,
+    mount_torque: Vec3<T>,
+}
+
+/// Rigid-body state of a free-floating body: centre-of-mass position and velocity (world), unit
+/// quaternion (w, x, y, z) of the body frame, angular velocity in the body frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrameState<T = f64> {
+    pub r: Vec3<T>,
+    pub quat: [T; 4],
+    pub v: Vec3<T>,
+    pub w_body: Vec3<T>,
+}
+
+impl<T: Copy> FrameState<T> {
+    pub fn map<U>(&self, f: impl Fn(T) -> U) -> FrameState<U> {
+        FrameState {
+            r: self.r.map(&f),
+            quat: self.quat.map(&f),
+            v: self.v.map(&f),
+            w_body: self.w_body.map(&f),
+        }
+    }
+}
+
+impl<T: Scalar> Default for FrameState<T> {
+    fn default() -> Self {
+        let o = [T::zero(); 3];
+        Self {
+            r: o,
+            quat: [c(1.0), T::zero(), T::zero(), T::zero()],
+            v: o,
+            w_body: o,
+        }
+    }
+}
+
+/// Initial pose and velocity of a free-floating body (world frame), the FMU's parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct InitialFrame {
+    pub r: Vec3,
+    /// Rotation vector of the initial orientation.
+    pub phi: Vec3,
+    pub v: Vec3,
+    pub w: Vec3,
+}
+
+/// Energy and momenta of a free-floating body (world frame; angular momentum about the origin).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Invariants<T = f64> {
+    pub energy: T,
+    pub momentum: Vec3<T>,
+    pub angular_momentum: Vec3<T>,
+}
+
+/// Workspace of a mounted body's step with coupling terms: the inputs and coupling at the
+/// step's end and their midpoint.
+#[derive(Debug, Clone, Default)]
+struct CoupledWork {
+    /// The substep's start state and the predictor-corrector's loads.
+    q0: Vec<f64>,
+    qd0: Vec<f64>,
+    f0: Vec<f64>,
+    f1: Vec<f64>,
+    /// The coupling at the step's midpoint (ramped inputs) and a zero load rate (held inputs).
+    c_d_mid: Vec<f64>,
+    c_k_mid: Vec<f64>,
+    zeros: Vec<f64>,
+    loads_end: Vec<FlangeLoad>,
+    coupling_end: Coupling<f64>,
+}
+
+/// Workspace of a free-floating body's step: the substep's start state and its two coupling
+/// loads (empty for a mounted body).
+#[derive(Debug, Clone, Default)]
+struct FreeWork {
+    q0: Vec<f64>,
+    qd0: Vec<f64>,
+    load0: Vec<f64>,
+    load1: Vec<f64>,
+}
+
+/// Everything of a [`FlexibleBody`] that evolves or can be set: what a saved state holds. The
+/// rest is the immutable reduced body and caches that are functions of these (recomputed on
+/// demand, so a body rebuilt from its state continues bit-identically).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BodyState {
+    pub mount: MountMotion,
+    pub loads: Vec<FlangeLoad>,
+    pub params: Parameters,
+    pub q: Vec<f64>,
+    pub qd: Vec<f64>,
+    /// Some exactly for free-floating bodies.
+    pub frame: Option<FrameState>,
+    pub initial_frame: InitialFrame,
+    /// Input derivatives set for the next step and not yet used.
+    pub rates: InputRates,
+    /// The coupling the exact coupled transition was last made for: later steps depend on it,
+    /// so a body restored from this state continues bit-identically.
+    pub coupling_reference: Option<CouplingReference>,
+}
+
+/// Step size, Rayleigh coefficients and coupling matrices of a coupled transition.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CouplingReference {
+    pub h: f64,
+    pub alpha: f64,
+    pub beta: f64,
+    pub c_d: Vec<f64>,
+    pub c_k: Vec<f64>,
+}
+
+/// Terms that couple the modes, for the present inputs: q'' = ... - C_d q' - C_k q.
+#[derive(Debug, Clone, Default)]
+struct Coupling<T> {
+    valid: bool,
+    active: bool,
+    c_d: Vec<T>,
+    c_k: Vec<T>,
+    /// Body-frame angular velocity, angular acceleration and a_B of the present inputs.
+    w: Vec3<T>,
+    z: Vec3<T>,
+    a: Vec3<T>,
+}
+
+/// The body's equations over the scalar `T`: `f64` for the model, [`Dual`] for the exact
+/// directional derivatives of everything it evaluates (see [`FlexibleBody::to_dual`]). Stepping
+/// is `f64` only.
+#[derive(Debug, Clone)]
+pub struct FlexibleBody<T = f64> {
+    body: Arc<ReducedBody>,
+    mount: MountMotion<T>,
+    loads: Vec<FlangeLoad<T>>,
+    params: Parameters,
+    q: Vec<T>,
+    qd: Vec<T>,
+    /// Modal load p, workspace.
+    load: Vec<T>,
+    eval: Evaluation<T>,
+    coupling: Coupling<T>,
+    /// The mount orientation in use: the input made exactly orthonormal.
+    rot: Mat3<T>,
+    /// Free-floating bodies only: the rigid-body state, its initial value and its rates.
+    frame: Option<FrameState<T>>,
+    pub initial_frame: InitialFrame,
+    frame_rate: FrameState<T>,
+    /// 3 x n workspace: C_r(q) = C_r + [G_a q]^T
+    cr_q: Vec<T>,
+    free_work: FreeWork,
+    coupled_work: CoupledWork,
+    propagator: ModalPropagator,
+    /// Exact transition of the coupled modes (mounted bodies with rotation or stiffening terms).
+    coupled: CoupledPropagator,
+    /// A warning of the last step for the host's log.
+    warning: Option<&'static str>,
+    /// First derivatives of the inputs for the next step (fmi2SetRealInputDerivatives), and
+    /// the modal load's rate they give.
+    rates: InputRates,
+    load_rate: Vec<f64>,
+}
+
+/// Time derivatives of the inputs over the next step (first-order hold); zero means held.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct InputRates {
+    pub mount: MountMotion,
+    pub loads: Vec<FlangeLoad>,
+    pub any: bool,
+}
+
+/// Why a body spinning above its critical speed misbehaves, for the host's log.
+pub const UNSTABLE_STIFFNESS: &str = "the effective stiffness of the body (elastic plus centrifugal and geometric terms at the present spin and loads) is not positive definite: the spin is above a critical speed of this body, whose deformation can grow without bound (declare geometric_stiffening in the scene if the real part is stiffened by its rotation)";
+
+impl FlexibleBody {
+    pub fn new(body: Arc<ReducedBody>) -> Self {
+        let n = body.n_modes();
+        let nf = body.flanges.len();
+        let params = Parameters {
+            g: [0.0; 3],
+            alpha: body.alpha,
+            beta: body.beta,
+        };
+        Self {
+            mount: MountMotion::default(),
+            loads: vec![FlangeLoad::default(); nf],
+            params,
+            q: vec![0.0; n],
+            qd: vec![0.0; n],
+            load: vec![0.0; n],
+            eval: Evaluation {
+                valid: false,
+                qdd: vec![0.0; n],
+                flanges: vec![FlangeMotion::default(); nf],
+                reaction_valid: false,
+                mount_force: [0.0; 3],
+                mount_torque: [0.0; 3],
+            },
+            coupling: Coupling {
+                c_d: vec![0.0; n * n],
+                c_k: vec![0.0; n * n],
+                ..Coupling::default()
+            },
+            rot: k3::IDENTITY,
+            frame: body.free_floating.then(FrameState::default),
+            initial_frame: InitialFrame::default(),
+            frame_rate: FrameState::default(),
+            cr_q: vec![0.0; 3 * n],
+            coupled_work: if body.free_floating {
+                CoupledWork::default()
+            } else {
+                CoupledWork {
+                    q0: vec![0.0; n],
+                    qd0: vec![0.0; n],
+                    f0: vec![0.0; n],
+                    f1: vec![0.0; n],
+                    c_d_mid: vec![0.0; n * n],
+                    c_k_mid: vec![0.0; n * n],
+                    zeros: vec![0.0; n],
+                    loads_end: vec![FlangeLoad::default(); nf],
+                    coupling_end: Coupling {
+                        c_d: vec![0.0; n * n],
+                        c_k: vec![0.0; n * n],
+                        ..Coupling::default()
+                    },
+                }
+            },
+            free_work: if body.free_floating {
+                FreeWork {
+                    q0: vec![0.0; n],
+                    qd0: vec![0.0; n],
+                    load0: vec![0.0; n],
+                    load1: vec![0.0; n],
+                }
+            } else {
+                FreeWork::default()
+            },
+            propagator: ModalPropagator::with_modes(n),
+            coupled: if body.free_floating || (body.rotation.is_none() && body.stiffening.is_none())
+            {
+                CoupledPropagator::default()
+            } else {
+                CoupledPropagator::with_modes(n)
+            },
+            warning: None,
+            rates: InputRates {
+                mount: MountMotion {
+                    rot: [0.0; 9],
+                    ..MountMotion::default()
+                },
+                loads: vec![FlangeLoad::default(); nf],
+                any: false,
+            },
+            load_rate: vec![0.0; n],
+            body,
+        }
+    }
+
+    /// This body in dual numbers at the present state and inputs, every derivative part zero.
+    /// Seed a direction in the `.d` parts (through `mount_mut`, `load_mut`, `q_mut`, ...) and
+    /// evaluate: every result's `.d` is then its exact directional derivative.
+    pub fn to_dual(&self) -> FlexibleBody<Dual> {
+        let n = self.n_modes();
+        let zeros = |len: usize| vec![Dual::default(); len];
+        FlexibleBody {
+            body: Arc::clone(&self.body),
+            mount: self.mount.map(Dual::from),
+            loads: self
+                .loads
+                .iter()
+                .map(|l| FlangeLoad {
+                    f: l.f.map(Dual::from),
+                    t: l.t.map(Dual::from),
+                })
+                .collect(),
+            params: self.params,
+            q: self.q.iter().map(|&x| Dual::from(x)).collect(),
+            qd: self.qd.iter().map(|&x| Dual::from(x)).collect(),
+            load: zeros(n),
+            eval: Evaluation {
+                valid: false,
+                qdd: zeros(n),
+                flanges: vec![FlangeMotion::default(); self.eval.flanges.len()],
+                reaction_valid: false,
+                mount_force: [Dual::default(); 3],
+                mount_torque: [Dual::default(); 3],
+            },
+            coupling: Coupling {
+                c_d: zeros(n * n),
+                c_k: zeros(n * n),
+                ..Coupling::default()
+            },
+            rot: k3::IDENTITY.map(Dual::from),
+            frame: self.frame.map(|f| f.map(Dual::from)),
+            initial_frame: self.initial_frame,
+            frame_rate: FrameState::default(),
+            cr_q: zeros(3 * n),
+            // stepping is f64 only
+            free_work: FreeWork::default(),
+            coupled_work: CoupledWork::default(),
+            propagator: ModalPropagator::with_modes(0),
+            coupled: CoupledPropagator::default(),
+            warning: None,
+            rates: self.rates.clone(),
+            load_rate: Vec::new(),
+        }
+    }
+
+    pub fn state(&self) -> BodyState {
+        BodyState {
+            mount: self.mount,
+            loads: self.loads.clone(),
+            params: self.params,
+            q: self.q.clone(),
+            qd: self.qd.clone(),
+            frame: self.frame,
+            initial_frame: self.initial_frame,
+            rates: self.rates.clone(),
+            coupling_reference: self.coupled.key().map(|(h, alpha, beta)| {
+                let (c_d, c_k) = self.coupled.reference();
+                CouplingReference {
+                    h,
+                    alpha,
+                    beta,
+                    c_d: c_d.to_vec(),
+                    c_k: c_k.to_vec(),
+                }
+            }),
+        }
+    }
+
+    /// A new body of the same reduced body in `state`, its caches empty; Err if the state's
+    /// sizes do not fit this body.
+    pub fn with_state(&self, state: BodyState) -> Result<Self, String> {
+        let (n, nf) = (self.n_modes(), self.loads.len());
+        if state.q.len() != n || state.qd.len() != n {
+            return Err(format!(
+                "the state has {} and {} modal coordinates and velocities, the body {n} modes",
+                state.q.len(),
+                state.qd.len()
+            ));
+        }
+        if state.loads.len() != nf || state.rates.loads.len() != nf {
+            return Err(format!(
+                "the state has loads on {} flanges, the body {nf} force flanges",
+                state.loads.len()
+            ));
+        }
+        if state.frame.is_some() != self.frame.is_some() {
+            let kind = |free: bool| if free { "free-floating" } else { "mounted" };
+            return Err(format!(
+                "the state is of a {} body, this body is {}",
+                kind(state.frame.is_some()),
+                kind(self.frame.is_some())
+            ));
+        }
+        let mut b = FlexibleBody::new(Arc::clone(&self.body));
+        b.mount = state.mount;
+        b.loads = state.loads;
+        b.params = state.params;
+        b.q = state.q;
+        b.qd = state.qd;
+        b.frame = state.frame;
+        b.initial_frame = state.initial_frame;
+        b.rates = state.rates;
+        if let Some(r) = state.coupling_reference {
+            let nn = n * n;
+            let valid = r.c_d.len() == nn && r.c_k.len() == nn && r.h > 0.0 && r.h.is_finite();
+            if !valid || !b.coupled.has_storage() {
+                return Err(format!(
+                    "the state's coupling reference does not fit this body ({} x {} values for {n} modes)",
+                    r.c_d.len(),
+                    r.c_k.len()
+                ));
+            }
+            if !(r
+                .c_d
+                .iter()
+                .chain(&r.c_k)
+                .chain([&r.alpha, &r.beta])
+                .all(|v| v.is_finite()))
+            {
+                return Err("the state's coupling reference has non-finite values".into());
+            }
+            let body = Arc::clone(&b.body);
+            b.coupled.prepare(
+                &body.omega,
+                r.alpha,
+                r.beta,
+                &body.modal_damping,
+                &r.c_d,
+                &r.c_k,
+                r.h,
+            );
+        }
+        Ok(b)
+    }
+}
+
+impl<T: Scalar> FlexibleBody<T> {
+    pub fn reduced(&self) -> &ReducedBody {
+        &self.body
+    }
+    pub fn n_modes(&self) -> usize {
+        self.q.len()
+    }
+    pub fn q(&self) -> &[T] {
+        &self.q
+    }
+    pub fn qd(&self) -> &[T] {
+        &self.qd
+    }
+    pub fn mount(&self) -> &MountMotion<T> {
+        &self.mount
+    }
+    pub fn loads(&self) -> &[FlangeLoad<T>] {
+        &self.loads
+    }
+    pub fn parameters(&self) -> &Parameters {
+        &self.params
+    }
+
+    pub fn frame(&self) -> Option<&FrameState<T>> {
+        self.frame.as_ref()
+    }
+    pub fn frame_mut(&mut self) -> Option<&mut FrameState<T>> {
+        self.eval.valid = false;
+        self.frame.as_mut()
+    }
+
+    pub fn mount_mut(&mut self) -> &mut MountMotion<T> {
+        self.eval.valid = false;
+        self.coupling.valid = false;
+        &mut self.mount
+    }
+    pub fn load_mut(&mut self, flange: usize) -> &mut FlangeLoad<T> {
+        self.eval.valid = false;
+        self.coupling.valid = false;
+        &mut self.loads[flange]
+    }
+    pub fn parameters_mut(&mut self) -> &mut Parameters {
+        self.eval.valid = false;
+        self.coupling.valid = false;
+        &mut self.params
+    }
+    pub fn set_state(&mut self, q: &[T], qd: &[T]) {
+        self.q.copy_from_slice(q);
+        self.qd.copy_from_slice(qd);
+        self.eval.valid = false;
+    }
+    pub fn q_mut(&mut self) -> &mut [T] {
+        self.eval.valid = false;
+        &mut self.q
+    }
+    pub fn qd_mut(&mut self) -> &mut [T] {
+        self.eval.valid = false;
+        &mut self.qd
+    }
+
+    fn gravity(&self) -> Vec3<T> {
+        self.params.g.map(c)
+    }
+
+    /// Everything that follows from the state and inputs (q'', flange motion), once per change.
+    fn evaluate(&mut self) -> Result<(), String> {
+        if self.eval.valid {
+            return Ok(());
+        }
+        if self.frame.is_some() {
+            self.free_accelerations()?;
+        } else {
+            self.mounted_accelerations()?;
+        }
+        self.flange_kinematics();
+        self.eval.reaction_valid = false;
+        self.eval.valid = true;
+        Ok(())
+    }
+
+    /// Position, orientation and their rates of every force flange, from q, q', q'' and the
+    /// mount (or the free body's frame) of the evaluation.
+    fn flange_kinematics(&mut self) {
+        let n = self.q.len();
+        let m = &self.mount;
+        let a = &self.rot;
+        for (i, flange) in self.body.flanges.iter().enumerate() {
+            let row = |r: usize, x: &[T]| shape_dot(&flange.shapes[r * n..(r + 1) * n], x);
+            let u = [row(0, &self.q), row(1, &self.q), row(2, &self.q)];
+            let phi = [row(3, &self.q), row(4, &self.q), row(5, &self.q)];
+            let ud = [row(0, &self.qd), row(1, &self.qd), row(2, &self.qd)];
+            let phid = [row(3, &self.qd), row(4, &self.qd), row(5, &self.qd)];
+            let udd = [
+                row(0, &self.eval.qdd),
+                row(1, &self.eval.qdd),
+                row(2, &self.eval.qdd),
+            ];
+            let phidd = [
+                row(3, &self.eval.qdd),
+                row(4, &self.eval.qdd),
+                row(5, &self.eval.qdd),
+            ];
+            let rho = k3::mul(a, k3::add(flange.position.map(c), u));
+            let ud_w = k3::mul(a, ud);
+            let phid_w = k3::mul(a, phid);
+            let out = &mut self.eval.flanges[i];
+            out.u = u;
+            out.phi = phi;
+            out.r = k3::add(m.r, rho);
+            out.rot = k3::mat_mul(a, &k3::rotation_of(phi));
+            out.v = k3::add(m.v, k3::add(k3::cross(m.w, rho), ud_w));
+            out.w = k3::add(m.w, phid_w);
+            out.a = k3::add(
+                k3::add(m.a, k3::cross(m.z, rho)),
+                k3::add(
+                    k3::add(
+                        k3::cross(m.w, k3::cross(m.w, rho)),
+                        k3::scale(c(2.0), k3::cross(m.w, ud_w)),
+                    ),
+                    k3::mul(a, udd),
+                ),
+            );
+            out.z = k3::add(k3::add(m.z, k3::cross(m.w, phid_w)), k3::mul(a, phidd));
+        }
+    }
+
+    /// d/dt (q, q') into `dq`, `dqd`.
+    pub fn derivatives(&mut self, dq: &mut [T], dqd: &mut [T]) -> Result<(), String> {
+        self.evaluate()?;
+        dq.copy_from_slice(&self.qd);
+        dqd.copy_from_slice(&self.eval.qdd);
+        Ok(())
+    }
+
+    pub fn qdd(&mut self) -> Result<&[T], String> {
+        self.evaluate()?;
+        Ok(&self.eval.qdd)
+    }
+
+    pub fn flange_motion(&mut self, flange: usize) -> Result<&FlangeMotion<T>, String> {
+        self.evaluate()?;
+        Ok(&self.eval.flanges[flange])
+    }
+}

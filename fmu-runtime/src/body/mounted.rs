@@ -1,0 +1,223 @@
+//! The equations of a body on a prescribed mount: the mount inputs' check, the modal load p, the
+//! coupling terms C_d, C_k of rotation and stiffening, and q''.
+
+use super::{Coupling, FlangeLoad, FlexibleBody, MountMotion};
+use crate::kinematics::{self as k3, Mat3, Vec3};
+use crate::reduced::ReducedBody;
+use crate::scalar::{Scalar, c};
+
+/// Largest |A^T A - I| accepted for the mount orientation. Hosts interpolate rotation-matrix
+/// inputs entry by entry (FMPy between samples, masters with first-order hold), which leaves them
+/// slightly off orthonormal; within this tolerance the nearest rotation is used.
+const ROTATION_TOLERANCE: f64 = 1e-2;
+
+impl<T: Scalar> FlexibleBody<T> {
+    /// Refuse a mount orientation off the rotations or a spin the body was not built for; set
+    /// the orientation in use.
+    pub(super) fn check_inputs(&mut self) -> Result<(), String> {
+        let defect = k3::rotation_defect(&self.mount.rot.map(T::value));
+        // a NaN defect (non-finite entries) is refused too
+        if defect.is_nan() || defect > ROTATION_TOLERANCE {
+            return Err(format!(
+                "{}.R is not a proper rotation matrix (|R^T R - I| = {defect:.3e}, det must be +1)",
+                self.body.mount
+            ));
+        }
+        // a derivative goes through the projection even at an exact rotation: a change of R
+        // off the rotations moves the body only by its rotational part
+        self.rot = if defect > 1e-14 || T::CARRIES_DERIVATIVE {
+            k3::nearest_rotation(&self.mount.rot)
+        } else {
+            self.mount.rot
+        };
+        let spinning = self
+            .mount
+            .w
+            .iter()
+            .chain(&self.mount.z)
+            .any(|x| x.value() != 0.0);
+        if self.body.rotation.is_none() && spinning {
+            return Err(format!(
+                "{m}.w and {m}.z must be zero: this FMU was built for a scene without rotation \
+                 (declare \"rotation\" in the input's scene.loads to model a rotating mount)",
+                m = self.body.mount
+            ));
+        }
+        Ok(())
+    }
+
+    /// Gather C_d = 2 sum W_a G_a and C_k = sum Z_a G_a + sum W_a W_b O_ab + K_G for the inputs.
+    pub(super) fn prepare_coupling(&mut self) {
+        if self.coupling.valid {
+            return;
+        }
+        fill_coupling(
+            &self.body,
+            &self.rot,
+            &self.mount,
+            &self.loads,
+            self.params.g,
+            &mut self.coupling,
+        );
+    }
+
+    /// (C_d q' + C_k q)_i: the coupling terms' force on mode i.
+    fn coupling_force(&self, i: usize) -> T {
+        coupling_force_of(&self.coupling, i, &self.q, &self.qd)
+    }
+
+    /// p = -C_t^T a_B + sum_k Phi_k^T [A^T f_k; A^T t_k]
+    pub(super) fn modal_load(&mut self) {
+        let a = &self.rot;
+        let a_b = k3::mul_t(a, k3::sub(self.mount.a, self.params.g.map(c)));
+        let n = self.q.len();
+        let ct = &self.body.c_t;
+        for j in 0..n {
+            self.load[j] = -(a_b[0] * ct[j] + a_b[1] * ct[n + j] + a_b[2] * ct[2 * n + j]);
+        }
+        if let Some(rot) = &self.body.rotation {
+            let w = k3::mul_t(a, self.mount.w);
+            let z = k3::mul_t(a, self.mount.z);
+            for i in 0..3 {
+                if !z[i].is_zero() {
+                    let c_a = &self.body.c_r[i * n..(i + 1) * n];
+                    for (load, c_a) in self.load.iter_mut().zip(c_a) {
+                        *load -= z[i] * *c_a;
+                    }
+                }
+                for k in 0..3 {
+                    let ww = w[i] * w[k];
+                    if !ww.is_zero() {
+                        let o = &rot.o_vec[(3 * i + k) * n..(3 * i + k + 1) * n];
+                        for (load, o) in self.load.iter_mut().zip(o) {
+                            *load -= ww * *o;
+                        }
+                    }
+                }
+            }
+        }
+        for (flange, load) in self.body.flanges.iter().zip(&self.loads) {
+            let f_b = k3::mul_t(a, load.f);
+            let t_b = k3::mul_t(a, load.t);
+            let wrench = [f_b[0], f_b[1], f_b[2], t_b[0], t_b[1], t_b[2]];
+            for (row, w) in wrench.iter().enumerate() {
+                if !w.is_zero() {
+                    let shape = &flange.shapes[row * n..(row + 1) * n];
+                    for (load, s) in self.load.iter_mut().zip(shape) {
+                        *load += *w * *s;
+                    }
+                }
+            }
+        }
+    }
+
+    /// q'' of a body on a prescribed mount: the modal diagonal, then the coupling terms.
+    pub(super) fn mounted_accelerations(&mut self) -> Result<(), String> {
+        self.check_inputs()?;
+        self.modal_load();
+        self.prepare_coupling();
+        let n = self.q.len();
+        let (alpha, beta) = (self.params.alpha, self.params.beta);
+        for j in 0..n {
+            let w2 = self.body.omega[j] * self.body.omega[j];
+            self.eval.qdd[j] = self.load[j]
+                - self.qd[j] * (alpha + beta * w2 + self.body.modal_damping[j])
+                - self.q[j] * w2;
+        }
+        if self.coupling.active {
+            for i in 0..n {
+                let f = self.coupling_force(i);
+                self.eval.qdd[i] -= f;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// C_d = 2 sum W_a G_a and C_k = sum Z_a G_a + sum W_a W_b O_ab + K_G for the given inputs.
+/// `rot` is the mount orientation in use (the input projected onto the rotations), as in the load.
+pub(super) fn fill_coupling<T: Scalar>(
+    body: &ReducedBody,
+    rot: &Mat3<T>,
+    mount: &MountMotion<T>,
+    loads: &[FlangeLoad<T>],
+    g: Vec3,
+    c: &mut Coupling<T>,
+) {
+    let n = body.n_modes();
+    let nn = n * n;
+    let a = rot;
+    c.w = k3::mul_t(a, mount.w);
+    c.z = k3::mul_t(a, mount.z);
+    c.a = k3::mul_t(a, k3::sub(mount.a, g.map(crate::scalar::c)));
+    c.c_d.fill(T::zero());
+    c.c_k.fill(T::zero());
+    let mut active = false;
+    let mut add = |target: &mut Vec<T>, scale: T, block: &[f64]| {
+        if !scale.is_zero() {
+            active = true;
+            for (t, b) in target.iter_mut().zip(block) {
+                *t += scale * *b;
+            }
+        }
+    };
+    if let Some(rot) = &body.rotation {
+        for i in 0..3 {
+            add(&mut c.c_d, c.w[i] * 2.0, &rot.g[i * nn..(i + 1) * nn]);
+            add(&mut c.c_k, c.z[i], &rot.g[i * nn..(i + 1) * nn]);
+            for j in 0..3 {
+                add(
+                    &mut c.c_k,
+                    c.w[i] * c.w[j],
+                    &rot.o_mat[(3 * i + j) * nn..(3 * i + j + 1) * nn],
+                );
+            }
+        }
+    }
+    if let Some(st) = &body.stiffening {
+        if let Some(k) = &st.centrifugal {
+            for i in 0..3 {
+                for j in 0..3 {
+                    add(
+                        &mut c.c_k,
+                        c.w[i] * c.w[j],
+                        &k[(3 * i + j) * nn..(3 * i + j + 1) * nn],
+                    );
+                }
+            }
+        }
+        if let Some(k) = &st.euler {
+            for i in 0..3 {
+                add(&mut c.c_k, c.z[i], &k[i * nn..(i + 1) * nn]);
+            }
+        }
+        if let Some(k) = &st.translation {
+            for i in 0..3 {
+                add(&mut c.c_k, c.a[i], &k[i * nn..(i + 1) * nn]);
+            }
+        }
+        for (f, k) in st.flanges.iter().enumerate() {
+            if k.is_empty() {
+                continue;
+            }
+            let load = &loads[f];
+            let wrench = [k3::mul_t(a, load.f), k3::mul_t(a, load.t)];
+            for i in 0..6 {
+                add(&mut c.c_k, wrench[i / 3][i % 3], &k[i * nn..(i + 1) * nn]);
+            }
+        }
+    }
+    c.active = active;
+    c.valid = true;
+}
+
+/// (C_d q' + C_k q)_i for the coupling `c` (the present one or the step end's).
+fn coupling_force_of<T: Scalar>(c: &Coupling<T>, i: usize, q: &[T], qd: &[T]) -> T {
+    let n = q.len();
+    let (rd, rk) = (&c.c_d[i * n..(i + 1) * n], &c.c_k[i * n..(i + 1) * n]);
+    let mut s = T::zero();
+    for j in 0..n {
+        s += rd[j] * qd[j] + rk[j] * q[j];
+    }
+    s
+}
