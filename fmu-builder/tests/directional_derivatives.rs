@@ -41,9 +41,7 @@ fn natural_scale(name: &str, value: f64) -> f64 {
         1e-2
     } else if name.contains(".f[") {
         100.0
-    } else if name.contains(".t[") {
-        10.0
-    } else if name.contains(".a[") || name.contains(".z[") {
+    } else if name.contains(".t[") || name.contains(".a[") || name.contains(".z[") {
         10.0
     } else {
         1.0
