@@ -34,7 +34,8 @@
 //! Errors in binary files have `line` 0 and start with the 0-based byte
 //! offset they refer to (`byte N: ...`).
 
-use super::{ElementType, ImportError, ImportedMesh};
+use super::{ImportError, ImportedMesh};
+use crate::input::element::ElementKind;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::fmt;
 use std::path::Path;
@@ -129,14 +130,14 @@ fn gmsh_type_info(t: i64) -> Option<(&'static str, usize, u8)> {
     })
 }
 
-fn supported_3d(t: i64) -> Option<(ElementType, &'static [usize])> {
+fn supported_3d(t: i64) -> Option<(ElementKind, &'static [usize])> {
     const TET4: [usize; 4] = [0, 1, 2, 3];
     const HEX8: [usize; 8] = [0, 1, 2, 3, 4, 5, 6, 7];
     match t {
-        4 => Some((ElementType::C3D4, &TET4)),
-        11 => Some((ElementType::C3D10, &TET10_GMSH_TO_ABAQUS)),
-        5 => Some((ElementType::C3D8, &HEX8)),
-        17 => Some((ElementType::C3D20, &HEX20_GMSH_TO_ABAQUS)),
+        4 => Some((ElementKind::Tet4, &TET4)),
+        11 => Some((ElementKind::Tet10, &TET10_GMSH_TO_ABAQUS)),
+        5 => Some((ElementKind::Hex8, &HEX8)),
+        17 => Some((ElementKind::Hex20, &HEX20_GMSH_TO_ABAQUS)),
         _ => None,
     }
 }
@@ -310,7 +311,7 @@ struct ElementBlock {
     /// (name, number of nodes, dimension) if the type is known.
     info: Option<(&'static str, usize, u8)>,
     /// Element type and Gmsh -> CalculiX node permutation of a 3D block.
-    conv: Option<(ElementType, &'static [usize])>,
+    conv: Option<(ElementKind, &'static [usize])>,
 }
 
 impl<'p> MeshBuilder<'p> {
@@ -1212,7 +1213,7 @@ $EndElements
         let m = parse_msh(CUBE, Path::new("cube.msh")).unwrap();
         assert_eq!(m.nodes.len(), 8);
         assert_eq!(m.nodes[6], [1.0, 1.0, 1.0]);
-        assert_eq!(m.element_types, vec![ElementType::C3D8]);
+        assert_eq!(m.element_types, vec![ElementKind::Hex8]);
         assert_eq!(m.element_ids, vec![5]);
         assert_eq!(m.connectivity, vec![(0..8).collect::<Vec<_>>()]);
         assert_eq!(m.node_sets["fixed"], vec![0, 1, 2, 3]);
@@ -1267,7 +1268,7 @@ $EndElements
             Path::new("t.msh"),
         )
         .unwrap();
-        assert_eq!(m.element_types, vec![ElementType::C3D10]);
+        assert_eq!(m.element_types, vec![ElementKind::Tet10]);
         assert_eq!(m.element_ids, vec![7]);
         assert_midsides_at_midpoints(&m);
     }
@@ -1305,7 +1306,7 @@ $EndElements
             Path::new("h.msh"),
         )
         .unwrap();
-        assert_eq!(m.element_types, vec![ElementType::C3D20]);
+        assert_eq!(m.element_types, vec![ElementKind::Hex20]);
         assert_midsides_at_midpoints(&m);
         // corners unchanged
         for (&n, c) in m.connectivity[0].iter().zip(&corners) {
@@ -1478,9 +1479,9 @@ $EndElements
             match name {
                 "hex8" | "hex20" => {
                     let (ty, nn, bottom) = if name == "hex8" {
-                        (ElementType::C3D8, 12, 6)
+                        (ElementKind::Hex8, 12, 6)
                     } else {
-                        (ElementType::C3D20, 32, 13)
+                        (ElementKind::Hex20, 32, 13)
                     };
                     assert_eq!(b.element_types, vec![ty; 2], "{name}");
                     assert_eq!(b.num_nodes(), nn, "{name}");
@@ -1493,9 +1494,9 @@ $EndElements
                 }
                 _ => {
                     let ty = if name == "tet4" {
-                        ElementType::C3D4
+                        ElementKind::Tet4
                     } else {
-                        ElementType::C3D10
+                        ElementKind::Tet10
                     };
                     assert!(b.num_elements() > 5, "{name}");
                     assert!(b.element_types.iter().all(|&t| t == ty), "{name}");
