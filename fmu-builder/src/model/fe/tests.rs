@@ -4,6 +4,7 @@
 
 use super::*;
 use crate::input::mesh::{BoxRegion, mesh_boxes};
+use nalgebra::{DMatrix, DVector};
 
 const STEEL: Elasticity = Elasticity { e: 210e9, nu: 0.3 };
 const KINDS: [ElementKind; 5] = ElementKind::ALL;
@@ -103,39 +104,6 @@ fn mat_vec(m: &[f64], v: &[f64]) -> Vec<f64> {
 
 fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
-/// Dense Gaussian elimination with partial pivoting; `a` is n x n row-major.
-fn solve_dense(mut a: Vec<f64>, mut b: Vec<f64>) -> Vec<f64> {
-    let n = b.len();
-    for col in 0..n {
-        let pivot = (col..n)
-            .max_by(|&i, &j| a[i * n + col].abs().total_cmp(&a[j * n + col].abs()))
-            .unwrap();
-        assert!(a[pivot * n + col].abs() > 0.0, "singular system");
-        if pivot != col {
-            for j in 0..n {
-                a.swap(pivot * n + j, col * n + j);
-            }
-            b.swap(pivot, col);
-        }
-        let d = a[col * n + col];
-        for row in col + 1..n {
-            let f = a[row * n + col] / d;
-            if f != 0.0 {
-                for j in col..n {
-                    a[row * n + j] -= f * a[col * n + j];
-                }
-                b[row] -= f * b[col];
-            }
-        }
-    }
-    let mut x = vec![0.0; n];
-    for row in (0..n).rev() {
-        let s: f64 = (row + 1..n).map(|j| a[row * n + j] * x[j]).sum();
-        x[row] = (b[row] - s) / a[row * n + row];
-    }
-    x
 }
 
 /// Eigenvalues of a symmetric matrix by cyclic Jacobi rotations.
@@ -387,9 +355,13 @@ fn check_patch(
         .flat_map(|&r| free.iter().map(move |&c| (r, c)))
         .map(|(r, c)| k[r * dofs + c])
         .collect();
-    let u = solve_dense(kff, rhs);
-    assert_eq!(free.len(), free_dofs, "{kind}");
-    for (&dof, &got) in free.iter().zip(&u) {
+    let n = free.len();
+    let u = DMatrix::from_row_slice(n, n, &kff)
+        .lu()
+        .solve(&DVector::from_vec(rhs))
+        .expect("regular system");
+    assert_eq!(n, free_dofs, "{kind}");
+    for (&dof, &got) in free.iter().zip(u.iter()) {
         assert!(
             (got - exact[dof]).abs() < 1e-12,
             "{kind} dof {dof}: {got} vs {}",
@@ -988,9 +960,13 @@ fn hex20_cantilever_matches_timoshenko() {
         .iter()
         .flat_map(|&r| free.iter().map(move |&c| k[r * dofs + c]))
         .collect();
-    let u = solve_dense(kff, free.iter().map(|&d| f[d]).collect());
+    let n = free.len();
+    let u = DMatrix::from_row_slice(n, n, &kff)
+        .lu()
+        .solve(&DVector::from_iterator(n, free.iter().map(|&d| f[d])))
+        .expect("regular system");
     let mut full = vec![0.0; dofs];
-    for (&d, &v) in free.iter().zip(&u) {
+    for (&d, &v) in free.iter().zip(u.iter()) {
         full[d] = v;
     }
     let tip_deflection = tip.iter().map(|&i| full[3 * i + 2]).sum::<f64>() / tip.len() as f64;
