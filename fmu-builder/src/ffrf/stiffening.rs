@@ -4,7 +4,8 @@
 
 use crate::error::{BuildError, Result};
 use crate::model::assembly::SolidMaterial;
-use crate::model::fe::{ElementKind, MAX_NODES_PER_ELEMENT, geometric::element_geometric_stiffness};
+use crate::input::element::{ElementKind, MAX_NODES_PER_ELEMENT};
+use crate::model::fe::geometric::element_geometric_stiffness;
 use crate::input::mesh::Mesh;
 use faer::{Mat, MatRef};
 

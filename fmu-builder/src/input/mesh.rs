@@ -9,7 +9,7 @@
 //! hex20 (two lattice intervals per element). For hex20 a lattice point is a
 //! node only if at most one of its indices is odd (no face or body centres).
 
-use crate::model::fe::{ElementKind, MAX_NODES_PER_ELEMENT};
+use crate::input::element::{ElementKind, MAX_NODES_PER_ELEMENT};
 use std::collections::HashMap;
 use std::fmt;
 
@@ -563,7 +563,6 @@ fn add_box(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::fe::element_mass;
 
     fn cube(min: [f64; 3], max: [f64; 3], divisions: [usize; 3]) -> BoxRegion {
         BoxRegion {
@@ -582,17 +581,28 @@ mod tests {
             + (x + 1) * (y + 1) * z
     }
 
-    /// Sum of element volumes (element mass with rho = 1); fails on any
-    /// element with a non-positive Jacobian.
+    /// Sum of element volumes. Fails unless every element is an axis-aligned
+    /// brick with each node at `x0 + (xi + 1) h / 2` for its natural
+    /// coordinates `xi` and all `h > 0`: an isoparametric map with a positive
+    /// Jacobian.
     fn mesh_volume(mesh: &Mesh) -> f64 {
-        let n = mesh.kind(0).nodes_per_element();
-        let mut m = vec![0.0; n * n];
         let mut buf = [[0.0; 3]; MAX_NODES_PER_ELEMENT];
         (0..mesh.n_elements())
             .map(|e| {
-                element_mass(mesh.kind(e), mesh.element_coords(e, &mut buf), 1.0, &mut m)
-                    .expect("valid element");
-                m.iter().sum::<f64>()
+                let kind = mesh.kind(e);
+                let coords = mesh.element_coords(e, &mut buf);
+                let natural = kind.natural_node_coords().expect("hexahedron");
+                assert_eq!(coords.len(), natural.len());
+                let (lo, hi) = (coords[0], coords[6]);
+                let h = [0, 1, 2].map(|d| hi[d] - lo[d]);
+                assert!(h.iter().all(|&h| h > 0.0), "element {e}: extents {h:?}");
+                for (a, (p, xi)) in coords.iter().zip(natural).enumerate() {
+                    for d in 0..3 {
+                        let want = lo[d] + 0.5 * f64::from(xi[d] + 1) * h[d];
+                        assert!((p[d] - want).abs() < 1e-12, "element {e} node {a}");
+                    }
+                }
+                h.iter().product::<f64>()
             })
             .sum()
     }

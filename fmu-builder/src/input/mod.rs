@@ -1,6 +1,8 @@
 //! Stage 1, input: what the user wrote. The JSON spec (validated against the schema), the
-//! built-in mesher of boxes, and the importers of meshes and matrices from other FE tools.
+//! catalogue of the supported elements, the built-in mesher of boxes, and the importers of meshes
+//! and matrices from other FE tools.
 
+pub mod element;
 pub mod import;
 pub mod mesh;
 pub mod spec;

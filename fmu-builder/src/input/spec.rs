@@ -4,6 +4,7 @@
 //! that need the mesh (a flange selecting no node) live with the mesh and flanges.
 
 use crate::error::{BuildError, Result};
+use crate::input::element::ElementKind;
 use serde::Deserialize;
 use std::path::Path;
 
@@ -68,20 +69,13 @@ impl Spec {
     }
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum Element {
-    #[default]
-    Hex20,
-    Hex20r,
-    Hex8,
-}
-
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Geometry {
+    /// Element kind of the box mesher (the schema allows the hexahedra only; the mesher refuses
+    /// the others). Mesh files name their element types themselves.
     #[serde(default)]
-    pub element: Element,
+    pub element: ElementKind,
     /// Empty unless the part is a union of boxes.
     #[serde(default)]
     pub boxes: Vec<BoxSpec>,
@@ -483,7 +477,7 @@ mod tests {
     #[test]
     fn good_input_parses() {
         let s = Spec::from_str(Path::new("in.json"), GOOD).unwrap();
-        assert_eq!(s.geometry.element, Element::Hex20);
+        assert_eq!(s.geometry.element, ElementKind::Hex20);
         assert_eq!(s.mount_index(), Some(0));
         assert_eq!(s.reduction.modes, Some(4));
     }

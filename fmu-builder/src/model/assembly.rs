@@ -4,7 +4,8 @@
 //! coupling.
 
 use crate::error::{BuildError, Result};
-use crate::model::fe::{self, ElementKind, Elasticity, MAX_NODES_PER_ELEMENT};
+use crate::input::element::{ElementKind, MAX_NODES_PER_ELEMENT};
+use crate::model::fe::{self, Elasticity};
 use crate::input::mesh::Mesh;
 use faer::sparse::{SparseColMat, Triplet};
 

@@ -4,7 +4,7 @@
 //! rotation node (set `<NAME>_ROT`) at its reference point, ready for `*RIGID BODY`.
 
 use crate::error::{BuildError, Result};
-use crate::model::fe::ElementKind;
+use crate::input::element::ElementKind;
 use crate::model::flange::Flange;
 use crate::model::part::Part;
 use std::fmt::Write as _;

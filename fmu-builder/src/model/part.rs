@@ -5,10 +5,11 @@
 
 use crate::model::assembly::{self, SolidMaterial, Uncoupled};
 use crate::error::{BuildError, Result};
-use crate::model::fe::{ElementKind, Elasticity};
-use crate::input::import::{self, ElementType, ImportError, ImportedMesh};
+use crate::model::fe::Elasticity;
+use crate::input::element::ElementKind;
+use crate::input::import::{self, ImportError, ImportedMesh};
 use crate::input::mesh::{self, BoxRegion, Mesh, MeshError};
-use crate::input::spec::{Element, MaterialSpec, Spec};
+use crate::input::spec::{MaterialSpec, Spec};
 use faer::sparse::{SparseColMat, Triplet};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -73,11 +74,7 @@ pub fn part_of(spec: &Spec, file: &Path) -> Result<Part> {
 }
 
 fn box_part(spec: &Spec, file: &Path) -> Result<Part> {
-    let kind = match spec.geometry.element {
-        Element::Hex20 => ElementKind::Hex20,
-        Element::Hex20r => ElementKind::Hex20R,
-        Element::Hex8 => ElementKind::Hex8,
-    };
+    let kind = spec.geometry.element;
     let boxes: Vec<BoxRegion> = spec
         .geometry
         .boxes
@@ -91,6 +88,7 @@ fn box_part(spec: &Spec, file: &Path) -> Result<Part> {
             }
             MeshError::Overlap { second, .. } => format!("geometry.boxes[{second}]"),
             MeshError::NonConforming { node_box, .. } => format!("geometry.boxes[{node_box}]"),
+            MeshError::UnsupportedElement { .. } => "geometry.element".to_string(),
             _ => "geometry.boxes".to_string(),
         };
         BuildError::input(file, field, e.to_string())
@@ -109,16 +107,6 @@ fn box_part(spec: &Spec, file: &Path) -> Result<Part> {
         source: format!("{} boxes", spec.geometry.boxes.len()),
         from_matrices: false,
     })
-}
-
-pub fn element_kind(t: ElementType) -> ElementKind {
-    match t {
-        ElementType::C3D4 => ElementKind::Tet4,
-        ElementType::C3D10 => ElementKind::Tet10,
-        ElementType::C3D8 => ElementKind::Hex8,
-        ElementType::C3D20 => ElementKind::Hex20,
-        ElementType::C3D20R => ElementKind::Hex20R,
-    }
 }
 
 /// Nodes referenced by no element carry no stiffness (a singular model): they are dropped.
@@ -148,7 +136,7 @@ fn mesh_file_part(spec: &Spec, file: &Path, mesh_path: &Path) -> Result<Part> {
         return Err(BuildError::input(
             mesh_path,
             "",
-            format!("no solid elements (supported: {})", ElementType::supported_names()),
+            format!("no solid elements (supported: {})", ElementKind::supported_names()),
         ));
     }
     for (name, _) in &spec.materials {
@@ -198,7 +186,7 @@ fn mesh_file_part(spec: &Spec, file: &Path, mesh_path: &Path) -> Result<Part> {
     for (e, c) in imported.connectivity.iter().enumerate() {
         conn.clear();
         conn.extend(c.iter().map(|&n| new_index[n].unwrap_or(0)));
-        mesh.push_element(element_kind(imported.element_types[e]), &conn, element_material[e]);
+        mesh.push_element(imported.element_types[e], &conn, element_material[e]);
     }
     let node_sets = imported
         .node_sets
@@ -381,6 +369,24 @@ mod tests {
         assert_eq!(p.mesh.n_nodes(), 5);
         assert_eq!(p.node_set("Face").unwrap(), &[0, 1, 2]);
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// The schema keeps tetrahedra out of `geometry.element`; should one get through, the box
+    /// mesher refuses it with its own message, against that field.
+    #[test]
+    fn tet_boxes_are_refused() {
+        let text = r#"{"name": "P", "geometry": {"element": "ELEMENT", "boxes": [{"min": [0,0,0], "max": [1,1,1], "elements": [1,1,1]}]},
+            "material": {"E": 1e9, "nu": 0.25, "rho": 1000},
+            "flanges": [{"name": "base", "role": "motion", "nodes": {"box_face": {"box": 0, "face": "-x"}}}], "reduction": {"modes": 2}}"#;
+        let e = Spec::from_str(Path::new("in.json"), &text.replace("ELEMENT", "tet4")).unwrap_err().to_string();
+        assert!(e.contains("geometry.element"), "{e}");
+        let mut s = spec(&text.replace("ELEMENT", "hex8"));
+        assert_eq!(s.geometry.element, ElementKind::Hex8);
+        for kind in [ElementKind::Tet4, ElementKind::Tet10] {
+            s.geometry.element = kind;
+            let e = part_of(&s, Path::new("in.json")).err().unwrap().to_string();
+            assert!(e.contains("geometry.element") && e.contains(&format!("cannot build {kind} elements")), "{e}");
+        }
     }
 
     #[test]

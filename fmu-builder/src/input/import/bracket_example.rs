@@ -14,7 +14,8 @@
 //! straight.
 
 use super::test_util::assert_midsides_at_midpoints;
-use super::{ElementType, ImportedMesh, read_mesh};
+use super::{ImportedMesh, read_mesh};
+use crate::input::element::ElementKind;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::f64::consts::PI;
 use std::path::PathBuf;
@@ -122,7 +123,7 @@ fn tet10_dn_dl(l: [f64; 4]) -> [[f64; 4]; 10] {
     for i in 0..4 {
         d[i][i] = 4.0 * l[i] - 1.0;
     }
-    for (k, &(a, b)) in ElementType::C3D10.midside_edges().iter().enumerate() {
+    for (k, &(a, b)) in ElementKind::Tet10.midside_edges().iter().enumerate() {
         d[4 + k][a] = 4.0 * l[b];
         d[4 + k][b] = 4.0 * l[a];
     }
@@ -187,7 +188,7 @@ fn bracket_msh_and_inp_describe_the_same_tet10_mesh() {
     for (name, m) in [("msh", &msh), ("inp", &inp)] {
         assert!(m.num_elements() > 0, "{name}: no elements");
         assert!(
-            m.element_types.iter().all(|&t| t == ElementType::C3D10),
+            m.element_types.iter().all(|&t| t == ElementKind::Tet10),
             "{name}: not all elements are C3D10"
         );
     }

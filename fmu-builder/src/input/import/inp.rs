@@ -17,7 +17,8 @@
 //! the whole deck has been read, so nodes may follow the elements that use
 //! them; a set name, however, must be defined before it is referenced.
 
-use super::{ElementType, ImportError, ImportedMaterial, ImportedMesh};
+use super::{ImportError, ImportedMaterial, ImportedMesh};
+use crate::input::element::ElementKind;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 
@@ -237,7 +238,7 @@ struct Parser {
     node_ids: Vec<u64>,
     node_locs: Vec<Loc>,
     node_index: HashMap<u64, usize>,
-    element_types: Vec<ElementType>,
+    element_types: Vec<ElementKind>,
     elements: Vec<PendingElement>,
     element_index: HashMap<u64, usize>,
     set_ops: Vec<SetOp>,
@@ -471,17 +472,17 @@ impl Parser {
     fn element_block(&mut self, kw: &Keyword, data: &[Line]) -> Res<()> {
         self.check_params(kw, &["TYPE", "ELSET"])?;
         let tname = self.required(kw, "TYPE")?;
-        let ty = ElementType::from_abaqus_name(tname).ok_or_else(|| {
+        let ty = ElementKind::from_calculix_name(tname).ok_or_else(|| {
             self.err(
                 kw.loc,
                 format!(
                     "unsupported element type {} (supported: {})",
                     tname.to_ascii_uppercase(),
-                    ElementType::supported_names()
+                    ElementKind::supported_names()
                 ),
             )
         })?;
-        let need = 1 + ty.nodes();
+        let need = 1 + ty.nodes_per_element();
         let mut members = Vec::new();
         let mut k = 0;
         while k < data.len() {
@@ -508,13 +509,14 @@ impl Parser {
                 return Err(self.err(
                     first.loc,
                     format!(
-                        "element {id}: type {ty} needs {} nodes, got {}",
-                        ty.nodes(),
+                        "element {id}: type {} needs {} nodes, got {}",
+                        ty.calculix_name(),
+                        ty.nodes_per_element(),
                         tokens.len() - 1
                     ),
                 ));
             }
-            let mut nodes = Vec::with_capacity(ty.nodes());
+            let mut nodes = Vec::with_capacity(ty.nodes_per_element());
             for &(s, loc) in &tokens[1..] {
                 nodes.push(self.parse_id(s, loc, &format!("node id in element {id}"))?);
             }
@@ -921,7 +923,7 @@ U
         assert_eq!(m.nodes[44], [2.0, 1.0, 1.0]);
         assert_eq!(
             m.element_types,
-            vec![ElementType::C3D20, ElementType::C3D20R]
+            vec![ElementKind::Hex20, ElementKind::Hex20R]
         );
         assert_eq!(m.element_ids, vec![1, 2]);
         assert_eq!(m.connectivity[0].len(), 20);

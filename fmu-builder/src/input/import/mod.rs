@@ -3,9 +3,10 @@
 //!
 //! Both importers produce an [`ImportedMesh`] with dense, 0-based node and
 //! element numbering, element connectivity in the CalculiX/Abaqus node order
-//! of the element type, named node/element sets and (for `.inp`) materials
+//! of the element kind (see [`crate::input::element`]), named node/element sets and (for `.inp`) materials
 //! and solid sections. Every error carries the file and line it refers to.
 
+use crate::input::element::ElementKind;
 use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -18,110 +19,6 @@ pub mod msh;
 
 pub use inp::{parse_inp, read_inp};
 pub use msh::{parse_msh, read_msh};
-
-/// Supported solid element types (CalculiX/Abaqus names).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum ElementType {
-    /// 4-node linear tetrahedron.
-    C3D4,
-    /// 10-node quadratic tetrahedron.
-    C3D10,
-    /// 8-node linear hexahedron.
-    C3D8,
-    /// 20-node quadratic hexahedron.
-    C3D20,
-    /// 20-node quadratic hexahedron, reduced integration.
-    C3D20R,
-}
-
-/// Corner pairs of the C3D10 midside nodes 5..10 (0-based positions 4..9).
-const C3D10_EDGES: [(usize, usize); 6] = [(0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3)];
-
-/// Corner pairs of the C3D20 midside nodes 9..20 (0-based positions 8..19).
-const C3D20_EDGES: [(usize, usize); 12] = [
-    (0, 1),
-    (1, 2),
-    (2, 3),
-    (3, 0),
-    (4, 5),
-    (5, 6),
-    (6, 7),
-    (7, 4),
-    (0, 4),
-    (1, 5),
-    (2, 6),
-    (3, 7),
-];
-
-impl ElementType {
-    /// All supported types.
-    pub const ALL: [ElementType; 5] = [
-        ElementType::C3D4,
-        ElementType::C3D10,
-        ElementType::C3D8,
-        ElementType::C3D20,
-        ElementType::C3D20R,
-    ];
-
-    /// Number of nodes of the element.
-    pub fn nodes(self) -> usize {
-        match self {
-            ElementType::C3D4 => 4,
-            ElementType::C3D10 => 10,
-            ElementType::C3D8 => 8,
-            ElementType::C3D20 | ElementType::C3D20R => 20,
-        }
-    }
-
-    /// Number of corner (vertex) nodes; the remaining nodes are midside nodes.
-    pub fn corner_nodes(self) -> usize {
-        match self {
-            ElementType::C3D4 | ElementType::C3D10 => 4,
-            ElementType::C3D8 | ElementType::C3D20 | ElementType::C3D20R => 8,
-        }
-    }
-
-    /// For each midside node (in connectivity order, after the corners), the
-    /// two 0-based corner positions of the edge it sits on. Empty for linear
-    /// elements.
-    pub fn midside_edges(self) -> &'static [(usize, usize)] {
-        match self {
-            ElementType::C3D4 | ElementType::C3D8 => &[],
-            ElementType::C3D10 => &C3D10_EDGES,
-            ElementType::C3D20 | ElementType::C3D20R => &C3D20_EDGES,
-        }
-    }
-
-    /// Parses an Abaqus element type name (case-insensitive).
-    pub fn from_abaqus_name(name: &str) -> Option<Self> {
-        let name = name.trim();
-        Self::ALL
-            .into_iter()
-            .find(|t| t.abaqus_name().eq_ignore_ascii_case(name))
-    }
-
-    /// The Abaqus/CalculiX name of the type.
-    pub fn abaqus_name(self) -> &'static str {
-        match self {
-            ElementType::C3D4 => "C3D4",
-            ElementType::C3D10 => "C3D10",
-            ElementType::C3D8 => "C3D8",
-            ElementType::C3D20 => "C3D20",
-            ElementType::C3D20R => "C3D20R",
-        }
-    }
-
-    /// Comma-separated list of the supported type names (for error messages).
-    pub fn supported_names() -> String {
-        Self::ALL.map(|t| t.abaqus_name()).join(", ")
-    }
-}
-
-impl fmt::Display for ElementType {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.abaqus_name())
-    }
-}
 
 /// A material as read from the mesh file (only what a linear elastic
 /// isotropic model needs). Missing properties are `None`.
@@ -140,8 +37,8 @@ pub struct ImportedMesh {
     pub nodes: Vec<[f64; 3]>,
     /// File id (label / tag) of each node, same order as `nodes`.
     pub node_ids: Vec<u64>,
-    /// Type of each element.
-    pub element_types: Vec<ElementType>,
+    /// Kind of each element.
+    pub element_types: Vec<ElementKind>,
     /// 0-based node indices of each element, in the CalculiX/Abaqus node
     /// order of its type.
     pub connectivity: Vec<Vec<usize>>,
@@ -248,7 +145,7 @@ pub(crate) mod test_util {
             .zip(&mesh.connectivity)
             .enumerate()
         {
-            assert_eq!(conn.len(), ty.nodes());
+            assert_eq!(conn.len(), ty.nodes_per_element());
             for (k, &(a, b)) in ty.midside_edges().iter().enumerate() {
                 let m = mesh.nodes[conn[ty.corner_nodes() + k]];
                 let pa = mesh.nodes[conn[a]];

@@ -3,7 +3,8 @@
 //! The prestress is that of a linear static displacement field u_e (stress = D B u_e at each Gauss
 //! point), which is how the builder turns unit load cases into load-proportional stiffness.
 
-use super::{ElementError, ElementKind, Elasticity, for_each_gauss_point, strain_displacement};
+use super::{ElementError, Elasticity, for_each_gauss_point, stiffness_rule, strain_displacement};
+use crate::input::element::ElementKind;
 
 /// Scalar geometric stiffness (n x n, row-major): the full 3n x 3n matrix is this Kronecker I3.
 /// `u_e` holds the element's nodal displacements of the prestress state (3n, node-major).
@@ -26,7 +27,7 @@ pub fn element_geometric_stiffness(
     out.fill(0.0);
     // CalculiX adds the stress stiffness in its stiffness loop, with the
     // stresses stored at those points (sti), hence the stiffness rule.
-    for_each_gauss_point(kind, kind.stiffness_rule(), coords, |_, grad, weight| {
+    for_each_gauss_point(kind, stiffness_rule(kind), coords, |_, grad, weight| {
         // engineering strain, then stress (Voigt xx, yy, zz, xy, yz, zx)
         let mut eps = [0.0; 6];
         for a in 0..n {

@@ -1,40 +1,20 @@
 //! 20-node quadratic serendipity hexahedron (CalculiX/Abaqus C3D20 node
 //! ordering).
 
-/// Number of nodes of the element.
-pub const NODE_COUNT: usize = 20;
+use crate::input::element::{ElementKind, HEX20_NATURAL_COORDS};
 
-/// Natural coordinates of the nodes in C3D20 order: corners as in C3D8, then
-/// midside nodes of the bottom edges (1-2, 2-3, 3-4, 4-1), of the top edges
-/// (5-6, 6-7, 7-8, 8-5) and of the vertical edges (1-5, 2-6, 3-7, 4-8).
-pub const NATURAL_COORDS: [[i8; 3]; NODE_COUNT] = [
-    [-1, -1, -1],
-    [1, -1, -1],
-    [1, 1, -1],
-    [-1, 1, -1],
-    [-1, -1, 1],
-    [1, -1, 1],
-    [1, 1, 1],
-    [-1, 1, 1],
-    [0, -1, -1],
-    [1, 0, -1],
-    [0, 1, -1],
-    [-1, 0, -1],
-    [0, -1, 1],
-    [1, 0, 1],
-    [0, 1, 1],
-    [-1, 0, 1],
-    [-1, -1, 0],
-    [1, -1, 0],
-    [1, 1, 0],
-    [-1, 1, 0],
-];
+/// Number of nodes of the element.
+pub const NODE_COUNT: usize = ElementKind::Hex20.nodes_per_element();
 
 /// Shape functions `n` and their derivatives with respect to the natural
 /// coordinates `dn[node] = [dN/dxi, dN/deta, dN/dzeta]` at `xi`.
 /// Only the first `NODE_COUNT` entries of the slices are written.
 pub fn shape_functions(xi: [f64; 3], n: &mut [f64], dn: &mut [[f64; 3]]) {
-    for ((node, n), dn) in NATURAL_COORDS.iter().zip(n.iter_mut()).zip(dn.iter_mut()) {
+    for ((node, n), dn) in HEX20_NATURAL_COORDS
+        .iter()
+        .zip(n.iter_mut())
+        .zip(dn.iter_mut())
+    {
         let s = [f64::from(node[0]), f64::from(node[1]), f64::from(node[2])];
         match node.iter().position(|&c| c == 0) {
             None => corner(xi, s, n, dn),

@@ -1,26 +1,19 @@
 //! 8-node trilinear hexahedron (CalculiX/Abaqus C3D8 node ordering).
 
-/// Number of nodes of the element.
-pub const NODE_COUNT: usize = 8;
+use crate::input::element::{ElementKind, HEX8_NATURAL_COORDS};
 
-/// Natural coordinates of the nodes in C3D8 order: nodes 1-4 counterclockwise
-/// on the face zeta = -1, nodes 5-8 above them on zeta = +1.
-pub const NATURAL_COORDS: [[i8; 3]; NODE_COUNT] = [
-    [-1, -1, -1],
-    [1, -1, -1],
-    [1, 1, -1],
-    [-1, 1, -1],
-    [-1, -1, 1],
-    [1, -1, 1],
-    [1, 1, 1],
-    [-1, 1, 1],
-];
+/// Number of nodes of the element.
+pub const NODE_COUNT: usize = ElementKind::Hex8.nodes_per_element();
 
 /// Shape functions `n` and their derivatives with respect to the natural
 /// coordinates `dn[node] = [dN/dxi, dN/deta, dN/dzeta]` at `xi`.
 /// Only the first `NODE_COUNT` entries of the slices are written.
 pub fn shape_functions(xi: [f64; 3], n: &mut [f64], dn: &mut [[f64; 3]]) {
-    for ((node, n), dn) in NATURAL_COORDS.iter().zip(n.iter_mut()).zip(dn.iter_mut()) {
+    for ((node, n), dn) in HEX8_NATURAL_COORDS
+        .iter()
+        .zip(n.iter_mut())
+        .zip(dn.iter_mut())
+    {
         let s = [f64::from(node[0]), f64::from(node[1]), f64::from(node[2])];
         let a = 1.0 + s[0] * xi[0];
         let b = 1.0 + s[1] * xi[1];

@@ -1,5 +1,7 @@
 //! Element matrices for linear isotropic elasticity on isoparametric
-//! hexahedra and tetrahedra.
+//! hexahedra and tetrahedra: the formulation (shape functions, quadrature) of
+//! the kinds of the element catalogue `crate::input::element`, which says
+//! what each kind is (names, node order).
 //!
 //! The formulation mirrors CalculiX 2.20 (e_c3d.f) so that eigenfrequencies
 //! computed from these matrices match CalculiX on the same mesh. e_c3d.f
@@ -36,124 +38,38 @@ pub mod hex8;
 pub mod tet10;
 pub mod tet4;
 
+use crate::input::element::{ElementKind, MAX_NODES_PER_ELEMENT};
 use gauss::{GaussOrder, Rule};
 use std::fmt;
 
-/// Largest node count of any supported element; sizes the stack buffers of
-/// the integration loop so that it never allocates.
-pub const MAX_NODES_PER_ELEMENT: usize = 20;
-
-/// Supported solid element types, each equal to the CalculiX element of
-/// `calculix_name()` (node order, shape functions and integration rules).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum ElementKind {
-    /// 8-node trilinear hexahedron (CalculiX C3D8).
-    Hex8,
-    /// 20-node quadratic serendipity hexahedron (CalculiX C3D20).
-    Hex20,
-    /// 20-node serendipity hexahedron with reduced 2x2x2 integration
-    /// (CalculiX C3D20R).
-    Hex20R,
-    /// 4-node linear tetrahedron (CalculiX C3D4).
-    Tet4,
-    /// 10-node quadratic tetrahedron (CalculiX C3D10).
-    Tet10,
-}
-
-impl ElementKind {
-    /// Every kind, in declaration order.
-    pub const ALL: [ElementKind; 5] = [
-        ElementKind::Hex8,
-        ElementKind::Hex20,
-        ElementKind::Hex20R,
-        ElementKind::Tet4,
-        ElementKind::Tet10,
-    ];
-
-    pub const fn nodes_per_element(self) -> usize {
-        match self {
-            ElementKind::Hex8 => hex8::NODE_COUNT,
-            ElementKind::Hex20 | ElementKind::Hex20R => hex20::NODE_COUNT,
-            ElementKind::Tet4 => tet4::NODE_COUNT,
-            ElementKind::Tet10 => tet10::NODE_COUNT,
-        }
-    }
-
-    pub const fn name(self) -> &'static str {
-        match self {
-            ElementKind::Hex8 => "hex8",
-            ElementKind::Hex20 => "hex20",
-            ElementKind::Hex20R => "hex20r",
-            ElementKind::Tet4 => "tet4",
-            ElementKind::Tet10 => "tet10",
-        }
-    }
-
-    /// The CalculiX/Abaqus element type name.
-    pub const fn calculix_name(self) -> &'static str {
-        match self {
-            ElementKind::Hex8 => "C3D8",
-            ElementKind::Hex20 => "C3D20",
-            ElementKind::Hex20R => "C3D20R",
-            ElementKind::Tet4 => "C3D4",
-            ElementKind::Tet10 => "C3D10",
-        }
-    }
-
-    /// The kind whose `calculix_name()` is `name` (case-insensitive, as
-    /// CalculiX reads keywords and parameters).
-    pub fn from_calculix_name(name: &str) -> Option<Self> {
-        let name = name.trim();
-        Self::ALL
-            .into_iter()
-            .find(|k| k.calculix_name().eq_ignore_ascii_case(name))
-    }
-
-    /// Natural coordinates (each -1, 0 or +1) of the nodes of the hexahedral
-    /// kinds in C3D8/C3D20 order; `None` for tetrahedra, whose nodes do not sit
-    /// on that lattice (see `tet4::NATURAL_COORDS`, `tet10::NATURAL_COORDS`).
-    /// The box mesher uses this table so that connectivity and shape functions
-    /// can never disagree about the node order.
-    pub const fn natural_node_coords(self) -> Option<&'static [[i8; 3]]> {
-        match self {
-            ElementKind::Hex8 => Some(&hex8::NATURAL_COORDS),
-            ElementKind::Hex20 | ElementKind::Hex20R => Some(&hex20::NATURAL_COORDS),
-            ElementKind::Tet4 | ElementKind::Tet10 => None,
-        }
-    }
-
-    /// Quadrature of the stiffness and of the geometric (stress) stiffness,
-    /// which CalculiX evaluates at the same points (e_c3d.f, `mint3d`).
-    pub const fn stiffness_rule(self) -> Rule {
-        match self {
-            ElementKind::Hex8 | ElementKind::Hex20R => Rule::Hex(GaussOrder::Two),
-            ElementKind::Hex20 => Rule::Hex(GaussOrder::Three),
-            ElementKind::Tet4 => Rule::TetOne,
-            ElementKind::Tet10 => Rule::TetFour,
-        }
-    }
-
-    /// Quadrature of the consistent mass. CalculiX accumulates the mass in the
-    /// stiffness loop, so this is the stiffness rule for every kind, including
-    /// the reduced C3D20R and the one-point C3D4 (verified entry by entry
-    /// against `*FREQUENCY, SOLVER=MATRIXSTORAGE` of ccx 2.20).
-    pub const fn mass_rule(self) -> Rule {
-        self.stiffness_rule()
-    }
-
-    fn shape_functions(self, xi: [f64; 3], n: &mut [f64], dn: &mut [[f64; 3]]) {
-        match self {
-            ElementKind::Hex8 => hex8::shape_functions(xi, n, dn),
-            ElementKind::Hex20 | ElementKind::Hex20R => hex20::shape_functions(xi, n, dn),
-            ElementKind::Tet4 => tet4::shape_functions(xi, n, dn),
-            ElementKind::Tet10 => tet10::shape_functions(xi, n, dn),
-        }
+/// Quadrature of the stiffness and of the geometric (stress) stiffness,
+/// which CalculiX evaluates at the same points (e_c3d.f, `mint3d`).
+pub const fn stiffness_rule(kind: ElementKind) -> Rule {
+    match kind {
+        ElementKind::Hex8 | ElementKind::Hex20R => Rule::Hex(GaussOrder::Two),
+        ElementKind::Hex20 => Rule::Hex(GaussOrder::Three),
+        ElementKind::Tet4 => Rule::TetOne,
+        ElementKind::Tet10 => Rule::TetFour,
     }
 }
 
-impl fmt::Display for ElementKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
+/// Quadrature of the consistent mass. CalculiX accumulates the mass in the
+/// stiffness loop, so this is the stiffness rule for every kind, including
+/// the reduced C3D20R and the one-point C3D4 (verified entry by entry
+/// against `*FREQUENCY, SOLVER=MATRIXSTORAGE` of ccx 2.20).
+pub const fn mass_rule(kind: ElementKind) -> Rule {
+    stiffness_rule(kind)
+}
+
+/// Shape functions `n` and their derivatives with respect to the natural
+/// coordinates `dn[node] = [dN/dxi, dN/deta, dN/dzeta]` of `kind` at `xi`.
+/// Only the first `kind.nodes_per_element()` entries of the slices are written.
+pub(crate) fn shape_functions(kind: ElementKind, xi: [f64; 3], n: &mut [f64], dn: &mut [[f64; 3]]) {
+    match kind {
+        ElementKind::Hex8 => hex8::shape_functions(xi, n, dn),
+        ElementKind::Hex20 | ElementKind::Hex20R => hex20::shape_functions(xi, n, dn),
+        ElementKind::Tet4 => tet4::shape_functions(xi, n, dn),
+        ElementKind::Tet10 => tet10::shape_functions(xi, n, dn),
     }
 }
 
@@ -295,7 +211,7 @@ pub fn element_stiffness(
 
     // D * B_b for every node, reused for all node pairs at one Gauss point.
     let mut db = [[[0.0; 3]; 6]; MAX_NODES_PER_ELEMENT];
-    for_each_gauss_point(kind, kind.stiffness_rule(), coords, |_, grad, weight| {
+    for_each_gauss_point(kind, stiffness_rule(kind), coords, |_, grad, weight| {
         for (db_b, g) in db.iter_mut().zip(grad) {
             let b = strain_displacement(g);
             for (r, row) in db_b.iter_mut().enumerate() {
@@ -341,7 +257,7 @@ pub fn element_mass(
     let n = kind.nodes_per_element();
     check_output(out, n * n)?;
     out.fill(0.0);
-    for_each_gauss_point(kind, kind.mass_rule(), coords, |shape, _, weight| {
+    for_each_gauss_point(kind, mass_rule(kind), coords, |shape, _, weight| {
         for a in 0..n {
             for b in a..n {
                 out[a * n + b] += rho * shape[a] * shape[b] * weight;
@@ -410,7 +326,7 @@ pub(crate) fn for_each_gauss_point(
     let mut dn = [[0.0; 3]; MAX_NODES_PER_ELEMENT];
     let mut grad = [[0.0; 3]; MAX_NODES_PER_ELEMENT];
     for (gauss_point, (xi, weight)) in rule.points().enumerate() {
-        kind.shape_functions(xi, &mut shape[..n], &mut dn[..n]);
+        shape_functions(kind, xi, &mut shape[..n], &mut dn[..n]);
         // J[i][j] = d x_j / d xi_i.
         let mut jac = [[0.0; 3]; 3];
         for (dn_a, x_a) in dn.iter().zip(coords) {

@@ -4,6 +4,7 @@
 
 use super::*;
 use crate::input::mesh::{BoxRegion, mesh_boxes};
+use nalgebra::{DMatrix, DVector};
 
 const STEEL: Elasticity = Elasticity { e: 210e9, nu: 0.3 };
 const KINDS: [ElementKind; 5] = ElementKind::ALL;
@@ -66,28 +67,12 @@ fn distorted_element(kind: ElementKind) -> Vec<[f64; 3]> {
 /// The two corner nodes of every midside node of a quadratic kind (empty for
 /// the linear kinds), as node indices.
 fn midside_edges(kind: ElementKind) -> Vec<(usize, usize, usize)> {
-    match kind {
-        ElementKind::Tet10 => tet10::EDGES
-            .iter()
-            .enumerate()
-            .map(|(m, &(i, j))| (4 + m, i, j))
-            .collect(),
-        ElementKind::Hex20 | ElementKind::Hex20R => {
-            let nat = &hex20::NATURAL_COORDS;
-            (8..20)
-                .map(|m| {
-                    let axis = nat[m].iter().position(|&v| v == 0).unwrap_or(0);
-                    let end = |s: i8| {
-                        let mut c = nat[m];
-                        c[axis] = s;
-                        nat.iter().position(|&x| x == c).unwrap_or(0)
-                    };
-                    (m, end(-1), end(1))
-                })
-                .collect()
-        }
-        _ => Vec::new(),
-    }
+    let corners = kind.corner_nodes();
+    kind.midside_edges()
+        .iter()
+        .enumerate()
+        .map(|(m, &(i, j))| (corners + m, i, j))
+        .collect()
 }
 
 /// Moves every midside node to the middle of its corners: straight edges,
@@ -119,39 +104,6 @@ fn mat_vec(m: &[f64], v: &[f64]) -> Vec<f64> {
 
 fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
-/// Dense Gaussian elimination with partial pivoting; `a` is n x n row-major.
-fn solve_dense(mut a: Vec<f64>, mut b: Vec<f64>) -> Vec<f64> {
-    let n = b.len();
-    for col in 0..n {
-        let pivot = (col..n)
-            .max_by(|&i, &j| a[i * n + col].abs().total_cmp(&a[j * n + col].abs()))
-            .unwrap();
-        assert!(a[pivot * n + col].abs() > 0.0, "singular system");
-        if pivot != col {
-            for j in 0..n {
-                a.swap(pivot * n + j, col * n + j);
-            }
-            b.swap(pivot, col);
-        }
-        let d = a[col * n + col];
-        for row in col + 1..n {
-            let f = a[row * n + col] / d;
-            if f != 0.0 {
-                for j in col..n {
-                    a[row * n + j] -= f * a[col * n + j];
-                }
-                b[row] -= f * b[col];
-            }
-        }
-    }
-    let mut x = vec![0.0; n];
-    for row in (0..n).rev() {
-        let s: f64 = (row + 1..n).map(|j| a[row * n + j] * x[j]).sum();
-        x[row] = (b[row] - s) / a[row * n + row];
-    }
-    x
 }
 
 /// Eigenvalues of a symmetric matrix by cyclic Jacobi rotations.
@@ -271,14 +223,14 @@ fn shape_functions_interpolate_and_sum_to_one() {
         let mut shape = [0.0; MAX_NODES_PER_ELEMENT];
         let mut dn = [[0.0; 3]; MAX_NODES_PER_ELEMENT];
         for (a, xi) in reference_coords(kind).into_iter().enumerate() {
-            kind.shape_functions(xi, &mut shape[..n], &mut dn[..n]);
+            shape_functions(kind, xi, &mut shape[..n], &mut dn[..n]);
             for (b, &v) in shape[..n].iter().enumerate() {
                 let want = if a == b { 1.0 } else { 0.0 };
                 assert!((v - want).abs() < 1e-14, "{kind}: N{b} at node {a} = {v}");
             }
         }
         let xi = [0.31, -0.72, 0.18];
-        kind.shape_functions(xi, &mut shape[..n], &mut dn[..n]);
+        shape_functions(kind, xi, &mut shape[..n], &mut dn[..n]);
         assert!((shape[..n].iter().sum::<f64>() - 1.0).abs() < 1e-14);
         for d in 0..3 {
             assert!(dn[..n].iter().map(|g| g[d]).sum::<f64>().abs() < 1e-14);
@@ -293,14 +245,14 @@ fn shape_derivatives_match_finite_differences() {
         let (mut s, mut dn, mut sp, mut sm) = ([0.0; 20], [[0.0; 3]; 20], [0.0; 20], [0.0; 20]);
         let mut scratch = [[0.0; 3]; 20];
         let xi = [0.23, -0.41, 0.67];
-        kind.shape_functions(xi, &mut s[..n], &mut dn[..n]);
+        shape_functions(kind, xi, &mut s[..n], &mut dn[..n]);
         let h = 1e-6;
         for d in 0..3 {
             let (mut p, mut m) = (xi, xi);
             p[d] += h;
             m[d] -= h;
-            kind.shape_functions(p, &mut sp[..n], &mut scratch[..n]);
-            kind.shape_functions(m, &mut sm[..n], &mut scratch[..n]);
+            shape_functions(kind, p, &mut sp[..n], &mut scratch[..n]);
+            shape_functions(kind, m, &mut sm[..n], &mut scratch[..n]);
             for a in 0..n {
                 let fd = (sp[a] - sm[a]) / (2.0 * h);
                 assert!(
@@ -403,9 +355,13 @@ fn check_patch(
         .flat_map(|&r| free.iter().map(move |&c| (r, c)))
         .map(|(r, c)| k[r * dofs + c])
         .collect();
-    let u = solve_dense(kff, rhs);
-    assert_eq!(free.len(), free_dofs, "{kind}");
-    for (&dof, &got) in free.iter().zip(&u) {
+    let n = free.len();
+    let u = DMatrix::from_row_slice(n, n, &kff)
+        .lu()
+        .solve(&DVector::from_vec(rhs))
+        .expect("regular system");
+    assert_eq!(n, free_dofs, "{kind}");
+    for (&dof, &got) in free.iter().zip(u.iter()) {
         assert!(
             (got - exact[dof]).abs() < 1e-12,
             "{kind} dof {dof}: {got} vs {}",
@@ -465,7 +421,7 @@ fn tet_patch(kind: ElementKind) -> (Vec<[f64; 3]>, Vec<usize>, Vec<bool>) {
     for tet in corners {
         elements.extend_from_slice(&tet);
         if kind == ElementKind::Tet10 {
-            for (i, j) in tet10::EDGES {
+            for &(i, j) in ElementKind::Tet10.midside_edges() {
                 let key = (tet[i].min(tet[j]), tet[i].max(tet[j]));
                 let m = *midsides.entry(key).or_insert_with(|| {
                     let (a, b) = (nodes[tet[i]], nodes[tet[j]]);
@@ -545,7 +501,7 @@ fn single_element_forces_equal_consistent_tractions() {
                     for (q, wq) in pts.iter().zip(wts) {
                         let mut xi = [0.0; 3];
                         (xi[axis], xi[t1], xi[t2]) = (side, *p, *q);
-                        kind.shape_functions(xi, &mut shape[..n], &mut dn[..n]);
+                        shape_functions(kind, xi, &mut shape[..n], &mut dn[..n]);
                         let tangent = |dir: usize| {
                             let mut t = [0.0; 3];
                             for (g, x) in dn[..n].iter().zip(&coords) {
@@ -899,25 +855,42 @@ fn left_handed_and_flat_tets_are_refused() {
     }
 }
 
+/// Our hex8 agrees with what CalculiX 2.20 wrote to job.sti / job.mas
+/// (`*FREQUENCY, SOLVER=MATRIXSTORAGE`) for the unit cube (E 210000, nu 0.3,
+/// rho 7.85e-9), node-major as in its job.dof, to the 14 digits CalculiX
+/// prints.
 #[test]
-fn names_round_trip() {
-    for kind in KINDS {
-        assert_eq!(ElementKind::from_calculix_name(kind.calculix_name()), Some(kind));
-        let lower = kind.calculix_name().to_ascii_lowercase();
-        assert_eq!(ElementKind::from_calculix_name(&lower), Some(kind));
+fn hex8_matches_calculix_matrixstorage() {
+    let cube = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [1.0, 0.0, 1.0],
+        [1.0, 1.0, 1.0],
+        [0.0, 1.0, 1.0],
+    ];
+    let mut k = vec![0.0; 576];
+    let mat = Elasticity { e: 210000.0, nu: 0.3 };
+    element_stiffness(ElementKind::Hex8, &cube, &mat, &mut k).unwrap();
+    let mut m = vec![0.0; 64];
+    element_mass(ElementKind::Hex8, &cube, 7.85e-9, &mut m).unwrap();
+    // (row, column, value) as in job.sti, 1-based
+    for (i, j, v) in [
+        (1, 1, 4.9358974358974e+04),
+        (1, 2, 1.6826923076923e+04),
+        (1, 4, -2.2435897435897e+04),
+        (1, 7, -1.7948717948718e+04),
+        (2, 8, -1.7948717948718e+04),
+        (22, 24, -1.6826923076923e+04),
+    ] {
+        let got = k[(i - 1) * 24 + j - 1];
+        assert!((got - v).abs() <= 1e-13 * v.abs(), "K({i},{j}) = {got} vs {v}");
     }
-    let names: Vec<_> = KINDS.iter().map(|k| (k.name(), k.calculix_name())).collect();
-    assert_eq!(
-        names,
-        [
-            ("hex8", "C3D8"),
-            ("hex20", "C3D20"),
-            ("hex20r", "C3D20R"),
-            ("tet4", "C3D4"),
-            ("tet10", "C3D10")
-        ]
-    );
-    assert_eq!(ElementKind::from_calculix_name("C3D8R"), None);
+    // job.mas: M(1,1) = 2.9074074074074e-10, M(1,4) = 1.4537037037037e-10
+    assert!((m[0] - 2.9074074074074e-10).abs() < 1e-23);
+    assert!((m[1] - 1.4537037037037e-10).abs() < 1e-23);
 }
 
 #[test]
@@ -987,9 +960,13 @@ fn hex20_cantilever_matches_timoshenko() {
         .iter()
         .flat_map(|&r| free.iter().map(move |&c| k[r * dofs + c]))
         .collect();
-    let u = solve_dense(kff, free.iter().map(|&d| f[d]).collect());
+    let n = free.len();
+    let u = DMatrix::from_row_slice(n, n, &kff)
+        .lu()
+        .solve(&DVector::from_iterator(n, free.iter().map(|&d| f[d])))
+        .expect("regular system");
     let mut full = vec![0.0; dofs];
-    for (&d, &v) in free.iter().zip(&u) {
+    for (&d, &v) in free.iter().zip(u.iter()) {
         full[d] = v;
     }
     let tip_deflection = tip.iter().map(|&i| full[3 * i + 2]).sum::<f64>() / tip.len() as f64;

@@ -1,16 +1,13 @@
 //! 10-node quadratic tetrahedron (CalculiX/Abaqus C3D10 node ordering).
 
 use super::tet4::{BARYCENTRIC_GRAD, barycentric};
+use crate::input::element::{ElementKind, TET10_EDGES};
 
 /// Number of nodes of the element.
-pub const NODE_COUNT: usize = 10;
-
-/// Corner pairs of the midside nodes 5..10: edges 1-2, 2-3, 3-1, 1-4, 2-4,
-/// 3-4 (0-based here).
-pub const EDGES: [(usize, usize); 6] = [(0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3)];
+pub const NODE_COUNT: usize = ElementKind::Tet10.nodes_per_element();
 
 /// Natural coordinates of the nodes in C3D10 order: the corners of C3D4, then
-/// the midpoints of `EDGES`.
+/// the midpoints of the edges `TET10_EDGES`.
 pub const NATURAL_COORDS: [[f64; 3]; NODE_COUNT] = [
     [0.0, 0.0, 0.0],
     [1.0, 0.0, 0.0],
@@ -36,7 +33,7 @@ pub fn shape_functions(xi: [f64; 3], n: &mut [f64], dn: &mut [[f64; 3]]) {
         let f = 4.0 * l[c] - 1.0;
         dn[c] = [f * g[c][0], f * g[c][1], f * g[c][2]];
     }
-    for (m, &(i, j)) in EDGES.iter().enumerate() {
+    for (m, &(i, j)) in TET10_EDGES.iter().enumerate() {
         n[4 + m] = 4.0 * l[i] * l[j];
         dn[4 + m] = [
             4.0 * (l[j] * g[i][0] + l[i] * g[j][0]),

@@ -5,8 +5,10 @@
 //! points of xi, eta, zeta, so that the quadrature points of gauss.rs land on
 //! the same physical points as CalculiX's.
 
+use crate::input::element::ElementKind;
+
 /// Number of nodes of the element.
-pub const NODE_COUNT: usize = 4;
+pub const NODE_COUNT: usize = ElementKind::Tet4.nodes_per_element();
 
 /// Natural coordinates of the nodes in C3D4 order.
 pub const NATURAL_COORDS: [[f64; 3]; NODE_COUNT] = [
