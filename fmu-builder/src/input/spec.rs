@@ -357,10 +357,10 @@ impl Spec {
             }
         }
         self.check_part(path)?;
-        if let Some([lo, hi]) = self.scene.as_ref().and_then(|s| s.band) {
-            if !(hi > lo) {
-                return Err(BuildError::input(path, "scene.band", format!("the band's upper limit {hi} Hz must exceed its lower limit {lo} Hz")));
-            }
+        if let Some([lo, hi]) = self.scene.as_ref().and_then(|s| s.band)
+            && !(hi > lo)
+        {
+            return Err(BuildError::input(path, "scene.band", format!("the band's upper limit {hi} Hz must exceed its lower limit {lo} Hz")));
         }
         for (i, b) in self.geometry.boxes.iter().enumerate() {
             for axis in 0..3 {

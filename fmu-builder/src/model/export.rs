@@ -87,22 +87,6 @@ pub fn abaqus_deck(part: &Part, flanges: &[Flange]) -> String {
     s
 }
 
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn reals_fit_calculix_fields_and_read_back() {
-        for x in [0.0, -5.000000000000001e-3, 0.994, 1.006, 2.1e11, 0.2804878048780488, 1.0000000000000002] {
-            let s = super::real(x);
-            assert!(s.len() <= 20, "{s}");
-            let back: f64 = s.parse().unwrap();
-            assert!((back - x).abs() <= 1e-14 * x.abs(), "{s}");
-        }
-        assert_eq!(super::real(0.994), "9.94e-1");
-        // what does not fit keeps as many digits as fit
-        let s = super::real(-1.2345678901234567e-123);
-        assert!(s.len() <= 20 && (s.parse::<f64>().unwrap() / -1.2345678901234567e-123 - 1.0).abs() < 1e-11, "{s}");
-    }
-}
 
 pub fn write_abaqus_deck(path: &Path, part: &Part, flanges: &[Flange]) -> Result<()> {
     if !part.has_elements() {
@@ -181,4 +165,21 @@ pub fn write_matrix_market(dir: &Path, model: &crate::model::rigid_coupling::Ass
     }
     let path = dir.join("flange_dofs.txt");
     std::fs::write(&path, s).map_err(|e| BuildError::io(&path, e))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn reals_fit_calculix_fields_and_read_back() {
+        for x in [0.0, -5.000000000000001e-3, 0.994, 1.006, 2.1e11, 0.2804878048780488, 1.0000000000000002] {
+            let s = super::real(x);
+            assert!(s.len() <= 20, "{s}");
+            let back: f64 = s.parse().unwrap();
+            assert!((back - x).abs() <= 1e-14 * x.abs(), "{s}");
+        }
+        assert_eq!(super::real(0.994), "9.94e-1");
+        // what does not fit keeps as many digits as fit
+        let s = super::real(-1.2345678901234567e-123);
+        assert!(s.len() <= 20 && (s.parse::<f64>().unwrap() / -1.2345678901234567e-123 - 1.0).abs() < 1e-11, "{s}");
+    }
 }

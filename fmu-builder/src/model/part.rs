@@ -139,7 +139,7 @@ fn mesh_file_part(spec: &Spec, file: &Path, mesh_path: &Path) -> Result<Part> {
             format!("no solid elements (supported: {})", ElementKind::supported_names()),
         ));
     }
-    for (name, _) in &spec.materials {
+    for name in spec.materials.keys() {
         if imported.material(name).is_none() {
             let known: Vec<&str> = imported.materials.iter().map(|m| m.name.as_str()).collect();
             return Err(BuildError::input(
@@ -241,7 +241,7 @@ fn resolve_material(
     let e = e.ok_or_else(|| missing("E"))?;
     let nu = nu.ok_or_else(|| missing("nu"))?;
     let rho = rho.ok_or_else(|| missing("rho"))?;
-    if !(e > 0.0 && e.is_finite()) || !(nu > -1.0 && nu < 0.5) || !(rho > 0.0 && rho.is_finite()) {
+    if !(e > 0.0 && e.is_finite() && nu > -1.0 && nu < 0.5 && rho > 0.0 && rho.is_finite()) {
         return Err(BuildError::input(
             mesh_path,
             "",
