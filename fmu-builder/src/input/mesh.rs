@@ -11,7 +11,6 @@
 
 use crate::input::element::{ElementKind, MAX_NODES_PER_ELEMENT};
 use std::collections::HashMap;
-use std::fmt;
 
 /// Axis-aligned box with the number of elements along each axis.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -103,103 +102,46 @@ impl Mesh {
 pub enum BoxProblem {
     NonFinite,
     /// `min >= max` along the axis.
-    NonPositiveExtent {
-        min: f64,
-        max: f64,
-    },
+    NonPositiveExtent { min: f64, max: f64 },
     ZeroDivisions,
 }
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MeshError {
+    #[error("geometry has no boxes")]
     NoBoxes,
     /// Box `box_index` is unusable along `axis` (0 = x, 1 = y, 2 = z).
-    DegenerateBox {
-        box_index: usize,
-        axis: usize,
-        problem: BoxProblem,
-    },
+    #[error("box {box_index}: {}", box_problem(*.axis, .problem))]
+    DegenerateBox { box_index: usize, axis: usize, problem: BoxProblem },
     /// The interiors of the two boxes intersect.
-    Overlap {
-        first: usize,
-        second: usize,
-    },
+    #[error("boxes {first} and {second} overlap; boxes may only touch")]
+    Overlap { first: usize, second: usize },
     /// A node of box `node_box` at `point` lies on the interface with box
     /// `other_box`, but `other_box` has no node there (hanging node).
-    NonConforming {
-        node_box: usize,
-        other_box: usize,
-        point: [f64; 3],
-    },
+    #[error(
+        "boxes {node_box} and {other_box} touch with non-matching meshes: node of box {node_box} at ({}, {}, {}) has \
+         no counterpart in box {other_box}; adjust the divisions so the grids coincide on the shared face",
+        .point[0], .point[1], .point[2]
+    )]
+    NonConforming { node_box: usize, other_box: usize, point: [f64; 3] },
     /// Node or element count of the box does not fit in memory.
-    TooLarge {
-        box_index: usize,
-    },
+    #[error("box {box_index}: too many elements to mesh")]
+    TooLarge { box_index: usize },
     /// The box mesher builds hexahedra only; tetrahedral meshes are imported.
-    UnsupportedElement {
-        kind: ElementKind,
-    },
+    #[error("the box mesher cannot build {kind} elements (only hex8, hex20 and hex20r)")]
+    UnsupportedElement { kind: ElementKind },
 }
 
 const AXIS_NAMES: [&str; 3] = ["x", "y", "z"];
 
-impl fmt::Display for MeshError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            MeshError::NoBoxes => f.write_str("geometry has no boxes"),
-            MeshError::DegenerateBox {
-                box_index,
-                axis,
-                problem,
-            } => {
-                let a = AXIS_NAMES.get(*axis).copied().unwrap_or("?");
-                match problem {
-                    BoxProblem::NonFinite => {
-                        write!(f, "box {box_index}: {a} bounds are not finite numbers")
-                    }
-                    BoxProblem::NonPositiveExtent { min, max } => {
-                        write!(
-                            f,
-                            "box {box_index}: {a} extent is empty (min {min} >= max {max})"
-                        )
-                    }
-                    BoxProblem::ZeroDivisions => {
-                        write!(
-                            f,
-                            "box {box_index}: number of elements along {a} must be at least 1"
-                        )
-                    }
-                }
-            }
-            MeshError::Overlap { first, second } => {
-                write!(
-                    f,
-                    "boxes {first} and {second} overlap; boxes may only touch"
-                )
-            }
-            MeshError::NonConforming {
-                node_box,
-                other_box,
-                point,
-            } => write!(
-                f,
-                "boxes {node_box} and {other_box} touch with non-matching meshes: node of box \
-                 {node_box} at ({}, {}, {}) has no counterpart in box {other_box}; adjust the \
-                 divisions so the grids coincide on the shared face",
-                point[0], point[1], point[2]
-            ),
-            MeshError::UnsupportedElement { kind } => write!(
-                f,
-                "the box mesher cannot build {kind} elements (only hex8, hex20 and hex20r)"
-            ),
-            MeshError::TooLarge { box_index } => {
-                write!(f, "box {box_index}: too many elements to mesh")
-            }
-        }
+fn box_problem(axis: usize, problem: &BoxProblem) -> String {
+    let a = AXIS_NAMES.get(axis).copied().unwrap_or("?");
+    match problem {
+        BoxProblem::NonFinite => format!("{a} bounds are not finite numbers"),
+        BoxProblem::NonPositiveExtent { min, max } => format!("{a} extent is empty (min {min} >= max {max})"),
+        BoxProblem::ZeroDivisions => format!("number of elements along {a} must be at least 1"),
     }
 }
-
-impl std::error::Error for MeshError {}
 
 /// Meshes the union of `boxes` with elements of `kind`, merging coincident
 /// nodes of touching boxes.

@@ -8,7 +8,6 @@
 
 use crate::input::element::ElementKind;
 use std::collections::BTreeMap;
-use std::fmt;
 use std::path::{Path, PathBuf};
 
 #[cfg(test)]
@@ -74,7 +73,8 @@ impl ImportedMesh {
 
 /// An import error located in a file. `line` is 1-based; 0 means the error
 /// concerns the file as a whole (e.g. it cannot be read).
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{}{}: {message}", .file.display(), line_suffix(*.line))]
 pub struct ImportError {
     pub file: PathBuf,
     pub line: usize,
@@ -91,17 +91,9 @@ impl ImportError {
     }
 }
 
-impl fmt::Display for ImportError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.line > 0 {
-            write!(f, "{}:{}: {}", self.file.display(), self.line, self.message)
-        } else {
-            write!(f, "{}: {}", self.file.display(), self.message)
-        }
-    }
+fn line_suffix(line: usize) -> String {
+    if line > 0 { format!(":{line}") } else { String::new() }
 }
-
-impl std::error::Error for ImportError {}
 
 /// Reads a mesh, choosing the importer from the file extension
 /// (`.inp` -> [`read_inp`], `.msh` -> [`read_msh`]; case-insensitive).

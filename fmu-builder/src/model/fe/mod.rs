@@ -40,7 +40,6 @@ pub mod tet4;
 
 use crate::input::element::{ElementKind, MAX_NODES_PER_ELEMENT};
 use gauss::{GaussOrder, Rule};
-use std::fmt;
 
 /// Quadrature of the stiffness and of the geometric (stress) stiffness,
 /// which CalculiX evaluates at the same points (e_c3d.f, `mint3d`).
@@ -123,76 +122,32 @@ impl Elasticity {
 }
 
 /// Why an element matrix could not be computed.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ElementError {
     /// `coords` does not hold one point per element node.
-    WrongNodeCount {
-        kind: ElementKind,
-        expected: usize,
-        got: usize,
-    },
+    #[error("{kind} element needs {expected} node coordinates, got {got}")]
+    WrongNodeCount { kind: ElementKind, expected: usize, got: usize },
     /// The output buffer has the wrong length.
+    #[error("element matrix buffer must hold {expected} entries, got {got}")]
     WrongOutputSize { expected: usize, got: usize },
     /// A node coordinate is NaN or infinite.
+    #[error("element node {node} has a non-finite coordinate")]
     NonFiniteCoordinate { node: usize },
     /// E <= 0 or nu outside (-1, 0.5).
+    #[error("invalid elastic material (E = {e}, nu = {nu}): need E > 0 and -1 < nu < 0.5")]
     InvalidMaterial { e: f64, nu: f64 },
     /// Density not finite and positive.
+    #[error("invalid density {rho}: must be finite and positive")]
     InvalidDensity { rho: f64 },
     /// Inverted or degenerate element: det J <= 0 at a Gauss point.
-    NonPositiveJacobian {
-        kind: ElementKind,
-        gauss_point: usize,
-        xi: [f64; 3],
-        det: f64,
-    },
+    #[error(
+        "{kind} element is inverted or degenerate: Jacobian determinant {det:e} at Gauss point {gauss_point} \
+         (natural coordinates {:.4}, {:.4}, {:.4})",
+        .xi[0], .xi[1], .xi[2]
+    )]
+    NonPositiveJacobian { kind: ElementKind, gauss_point: usize, xi: [f64; 3], det: f64 },
 }
 
-impl fmt::Display for ElementError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            ElementError::WrongNodeCount {
-                kind,
-                expected,
-                got,
-            } => {
-                write!(
-                    f,
-                    "{kind} element needs {expected} node coordinates, got {got}"
-                )
-            }
-            ElementError::WrongOutputSize { expected, got } => {
-                write!(
-                    f,
-                    "element matrix buffer must hold {expected} entries, got {got}"
-                )
-            }
-            ElementError::NonFiniteCoordinate { node } => {
-                write!(f, "element node {node} has a non-finite coordinate")
-            }
-            ElementError::InvalidMaterial { e, nu } => write!(
-                f,
-                "invalid elastic material (E = {e}, nu = {nu}): need E > 0 and -1 < nu < 0.5"
-            ),
-            ElementError::InvalidDensity { rho } => {
-                write!(f, "invalid density {rho}: must be finite and positive")
-            }
-            ElementError::NonPositiveJacobian {
-                kind,
-                gauss_point,
-                xi,
-                det,
-            } => write!(
-                f,
-                "{kind} element is inverted or degenerate: Jacobian determinant {det:e} at Gauss point \
-                 {gauss_point} (natural coordinates {:.4}, {:.4}, {:.4})",
-                xi[0], xi[1], xi[2]
-            ),
-        }
-    }
-}
-
-impl std::error::Error for ElementError {}
 
 /// Element stiffness matrix (3n x 3n, row-major, node-major DoFs) written to
 /// `out`, which must have exactly `(3n)^2` entries.
