@@ -97,8 +97,9 @@ impl Newmark {
             }
         }
         let k_eff = Sparse::try_new_from_triplets(n, n, &trip).map_err(|e| format!("{e:?}"))?;
-        let symbolic = factorize_symbolic_cholesky(k_eff.symbolic(), Side::Lower, SymmetricOrdering::Amd, Default::default())
-            .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
+        let symbolic =
+            factorize_symbolic_cholesky(k_eff.symbolic(), Side::Lower, SymmetricOrdering::Amd, Default::default())
+                .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
         let mut l_values = vec![0.0; symbolic.len_val()];
         let mut mem = MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()));
         symbolic

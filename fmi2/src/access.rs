@@ -26,20 +26,14 @@ pub fn check_settable(info: &VarInfo, state: ModelState) -> Result<(), String> {
         && info.causality != Causality::Independent
         && match state {
             // Start values: whatever the model does not calculate itself.
-            ModelState::Instantiated => {
-                is_input || matches!(initial, Some(Initial::Exact | Initial::Approx))
-            }
+            ModelState::Instantiated => is_input || matches!(initial, Some(Initial::Exact | Initial::Approx)),
             // Approx values are only guesses for the initialization solver, fixed by now.
             ModelState::InitializationMode => is_input || initial == Some(Initial::Exact),
             ModelState::EventMode | ModelState::StepComplete => {
-                is_input
-                    || (info.causality == Causality::Parameter
-                        && info.variability == Variability::Tunable)
+                is_input || (info.causality == Causality::Parameter && info.variability == Variability::Tunable)
             }
             // Only continuous inputs may change between events.
-            ModelState::ContinuousTimeMode => {
-                is_input && info.variability == Variability::Continuous
-            }
+            ModelState::ContinuousTimeMode => is_input && info.variability == Variability::Continuous,
             _ => false,
         };
     if allowed {
@@ -60,12 +54,7 @@ mod tests {
     use crate::VarType;
 
     fn var(causality: Causality, variability: Variability, initial: Option<Initial>) -> VarInfo {
-        VarInfo {
-            var_type: VarType::Real,
-            causality,
-            variability,
-            initial,
-        }
+        VarInfo { var_type: VarType::Real, causality, variability, initial }
     }
 
     #[test]
@@ -79,11 +68,7 @@ mod tests {
 
     #[test]
     fn tunable_parameter_and_inputs_later_too() {
-        let p = var(
-            Causality::Parameter,
-            Variability::Tunable,
-            Some(Initial::Exact),
-        );
+        let p = var(Causality::Parameter, Variability::Tunable, Some(Initial::Exact));
         assert!(check_settable(&p, ModelState::StepComplete).is_ok());
         assert!(check_settable(&p, ModelState::EventMode).is_ok());
         assert!(check_settable(&p, ModelState::ContinuousTimeMode).is_err());
@@ -105,34 +90,18 @@ mod tests {
     #[test]
     fn calculated_and_constant_never() {
         let y = var(Causality::Output, Variability::Continuous, None);
-        let c = var(
-            Causality::Local,
-            Variability::Constant,
-            Some(Initial::Exact),
-        );
+        let c = var(Causality::Local, Variability::Constant, Some(Initial::Exact));
         let cp = var(Causality::CalculatedParameter, Variability::Fixed, None);
-        for s in [
-            ModelState::Instantiated,
-            ModelState::InitializationMode,
-            ModelState::StepComplete,
-        ] {
+        for s in [ModelState::Instantiated, ModelState::InitializationMode, ModelState::StepComplete] {
             assert!(check_settable(&y, s).is_err());
             assert!(check_settable(&c, s).is_err());
             assert!(check_settable(&cp, s).is_err());
         }
         // A state with a start value may be set before initialization.
-        let x = var(
-            Causality::Output,
-            Variability::Continuous,
-            Some(Initial::Exact),
-        );
+        let x = var(Causality::Output, Variability::Continuous, Some(Initial::Exact));
         assert!(check_settable(&x, ModelState::Instantiated).is_ok());
         assert!(check_settable(&x, ModelState::StepComplete).is_err());
-        let guess = var(
-            Causality::Local,
-            Variability::Continuous,
-            Some(Initial::Approx),
-        );
+        let guess = var(Causality::Local, Variability::Continuous, Some(Initial::Approx));
         assert!(check_settable(&guess, ModelState::Instantiated).is_ok());
         assert!(check_settable(&guess, ModelState::InitializationMode).is_err());
     }

@@ -41,9 +41,7 @@ fn usage(msg: impl Into<String>) -> Failure {
 }
 
 fn not_supported(capability: &str) -> Outcome {
-    Err(usage(format!(
-        "not supported by this FMU (capability flag {capability}=false)"
-    )))
+    Err(usage(format!("not supported by this FMU (capability flag {capability}=false)")))
 }
 
 fn panic_message(payload: &(dyn Any + Send)) -> &str {
@@ -92,11 +90,7 @@ unsafe fn guarded<M: Model>(
             fmi2Error
         }
         Err(payload) => {
-            let msg = format!(
-                "{}: panic in the model: {}",
-                rules.name,
-                panic_message(&*payload)
-            );
+            let msg = format!("{}: panic in the model: {}", rules.name, panic_message(&*payload));
             // A panic while recovering leaves nothing to recover to.
             if rules.name == spec::fmi2Reset.name {
                 inst.state = ModelState::Fatal;
@@ -140,11 +134,7 @@ unsafe fn out_ref<'a, T>(p: *mut T, what: &str) -> Result<&'a mut T, Failure> {
 }
 
 fn check_len(n: usize, expected: usize, what: &str) -> Result<(), Failure> {
-    if n == expected {
-        Ok(())
-    } else {
-        Err(usage(format!("{what} = {n} but the model has {expected}")))
-    }
+    if n == expected { Ok(()) } else { Err(usage(format!("{what} = {n} but the model has {expected}"))) }
 }
 
 /// "value reference 7 (tip.u[1])": users read names, hosts pass numbers.
@@ -156,15 +146,9 @@ fn describe<M: Model>(model: &M, vr: u32) -> String {
 }
 
 fn var_of_type<M: Model>(model: &M, vr: u32, expected: VarType) -> Result<VarInfo, Failure> {
-    let info = model
-        .var_info(vr)
-        .ok_or_else(|| usage(format!("unknown value reference {vr}")))?;
+    let info = model.var_info(vr).ok_or_else(|| usage(format!("unknown value reference {vr}")))?;
     if info.var_type != expected {
-        return Err(usage(format!(
-            "{} is a {:?} variable, not {expected:?}",
-            describe(model, vr),
-            info.var_type
-        )));
+        return Err(usage(format!("{} is a {:?} variable, not {expected:?}", describe(model, vr), info.var_type)));
     }
     Ok(info)
 }
@@ -208,20 +192,10 @@ pub unsafe fn fmi2Instantiate<M: Model>(
     loggingOn: fmi2Boolean,
 ) -> fmi2Component {
     // SAFETY: non-null pointers from the host are valid for the duration of the call.
-    let callbacks = unsafe { functions.as_ref() }
-        .copied()
-        .unwrap_or(fmi2CallbackFunctions::NONE);
-    let name = if instanceName.is_null() {
-        CString::default()
-    } else {
-        unsafe { CStr::from_ptr(instanceName) }.to_owned()
-    };
-    let logger = Logger::new(
-        name,
-        callbacks.logger,
-        callbacks.componentEnvironment,
-        to_bool(loggingOn),
-    );
+    let callbacks = unsafe { functions.as_ref() }.copied().unwrap_or(fmi2CallbackFunctions::NONE);
+    let name =
+        if instanceName.is_null() { CString::default() } else { unsafe { CStr::from_ptr(instanceName) }.to_owned() };
+    let logger = Logger::new(name, callbacks.logger, callbacks.componentEnvironment, to_bool(loggingOn));
 
     let result = catch_unwind(AssertUnwindSafe(|| -> Result<(M, Interface), String> {
         if logger.instance_name().is_empty() {
@@ -236,29 +210,17 @@ pub unsafe fn fmi2Instantiate<M: Model>(
             None
         } else {
             let uri = unsafe { CStr::from_ptr(fmuResourceLocation) };
-            let uri = uri
-                .to_str()
-                .map_err(|_| "fmuResourceLocation is not valid UTF-8".to_string())?;
+            let uri = uri.to_str().map_err(|_| "fmuResourceLocation is not valid UTF-8".to_string())?;
             Some(parse_resource_location(uri)?)
         };
         logger.trace(|| {
-            let dir = resources
-                .as_deref()
-                .map_or("none".into(), |p| p.display().to_string());
+            let dir = resources.as_deref().map_or("none".into(), |p| p.display().to_string());
             format!("fmi2Instantiate: {interface:?}, resources {dir}")
         });
         let model = M::instantiate(resources.as_deref(), interface)?;
-        let guid = if fmuGUID.is_null() {
-            None
-        } else {
-            Some(unsafe { CStr::from_ptr(fmuGUID) }.to_string_lossy())
-        };
+        let guid = if fmuGUID.is_null() { None } else { Some(unsafe { CStr::from_ptr(fmuGUID) }.to_string_lossy()) };
         if guid.as_deref() != Some(model.guid()) {
-            return Err(format!(
-                "GUID mismatch: expected {} got {}",
-                model.guid(),
-                guid.as_deref().unwrap_or("NULL")
-            ));
+            return Err(format!("GUID mismatch: expected {} got {}", model.guid(), guid.as_deref().unwrap_or("NULL")));
         }
         Ok((model, interface))
     }));
@@ -271,10 +233,7 @@ pub unsafe fn fmi2Instantiate<M: Model>(
             std::ptr::null_mut()
         }
         Err(payload) => {
-            logger.error(&format!(
-                "fmi2Instantiate: panic in the model: {}",
-                panic_message(&*payload)
-            ));
+            logger.error(&format!("fmi2Instantiate: panic in the model: {}", panic_message(&*payload)));
             std::ptr::null_mut()
         }
     }
@@ -308,12 +267,8 @@ pub unsafe fn fmi2SetDebugLogging<M: Model>(
                     return Err(usage("argument categories[] contains NULL"));
                 }
                 let name = CStr::from_ptr(name).to_bytes();
-                let category = Category::from_name(name).ok_or_else(|| {
-                    usage(format!(
-                        "unknown log category \"{}\"",
-                        String::from_utf8_lossy(name)
-                    ))
-                })?;
+                let category = Category::from_name(name)
+                    .ok_or_else(|| usage(format!("unknown log category \"{}\"", String::from_utf8_lossy(name))))?;
                 list.push(category);
             }
             inst.logger.set_debug_logging(to_bool(loggingOn), &list);
@@ -333,12 +288,9 @@ pub unsafe fn fmi2SetupExperiment<M: Model>(
     unsafe {
         guarded::<M>(c, &spec::fmi2SetupExperiment, |inst| {
             if !startTime.is_finite() {
-                return Err(usage(format!(
-                    "startTime must be finite but is {startTime}"
-                )));
+                return Err(usage(format!("startTime must be finite but is {startTime}")));
             }
-            inst.logger
-                .trace(|| format!("fmi2SetupExperiment: startTime {startTime}"));
+            inst.logger.trace(|| format!("fmi2SetupExperiment: startTime {startTime}"));
             inst.tolerance = to_bool(toleranceDefined).then_some(tolerance);
             inst.start_time = startTime;
             inst.time = startTime;
@@ -352,9 +304,7 @@ pub unsafe fn fmi2EnterInitializationMode<M: Model>(c: fmi2Component) -> fmi2Sta
     unsafe {
         guarded::<M>(c, &spec::fmi2EnterInitializationMode, |inst| {
             inst.logger.trace(|| "fmi2EnterInitializationMode".into());
-            inst.model
-                .enter_initialization(inst.start_time)
-                .map_err(Failure::Model)?;
+            inst.model.enter_initialization(inst.start_time).map_err(Failure::Model)?;
             inst.state = ModelState::InitializationMode;
             Ok(fmi2OK)
         })
@@ -472,9 +422,8 @@ pub unsafe fn fmi2GetString<M: Model>(
             for (&r, v) in vrs.iter().zip(values) {
                 var_of_type(&inst.model, r, VarType::String)?;
                 let s = inst.model.get_string(r).map_err(model_err(r))?;
-                let s = CString::new(s).map_err(|_| {
-                    Failure::Model(format!("value reference {r}: string contains NUL"))
-                })?;
+                let s =
+                    CString::new(s).map_err(|_| Failure::Model(format!("value reference {r}: string contains NUL")))?;
                 // The CString's heap buffer does not move when the Vec grows.
                 *v = s.as_ptr();
                 inst.string_buffer.push(s);
@@ -534,9 +483,7 @@ pub unsafe fn fmi2SetBoolean<M: Model>(
             let values = in_slice(value, nvr, "value[]")?;
             for (&r, &v) in vrs.iter().zip(values) {
                 settable(inst, r, VarType::Boolean)?;
-                inst.model
-                    .set_boolean(r, to_bool(v))
-                    .map_err(model_err(r))?;
+                inst.model.set_boolean(r, to_bool(v)).map_err(model_err(r))?;
             }
             Ok(fmi2OK)
         })
@@ -558,9 +505,9 @@ pub unsafe fn fmi2SetString<M: Model>(
                 if v.is_null() {
                     return Err(usage(format!("value for value reference {r} is NULL")));
                 }
-                let s = CStr::from_ptr(v).to_str().map_err(|_| {
-                    usage(format!("value for value reference {r} is not valid UTF-8"))
-                })?;
+                let s = CStr::from_ptr(v)
+                    .to_str()
+                    .map_err(|_| usage(format!("value for value reference {r} is not valid UTF-8")))?;
                 inst.model.set_string(r, s).map_err(model_err(r))?;
             }
             Ok(fmi2OK)
@@ -572,10 +519,7 @@ pub unsafe fn fmi2SetString<M: Model>(
 // FMU state: an fmi2FMUstate is a Box<Snapshot<M>> (canGetAndSetFMUstate=true)
 // ---------------------------------------------------------------------------
 
-pub unsafe fn fmi2GetFMUstate<M: Model>(
-    c: fmi2Component,
-    FMUstate: *mut fmi2FMUstate,
-) -> fmi2Status {
+pub unsafe fn fmi2GetFMUstate<M: Model>(c: fmi2Component, FMUstate: *mut fmi2FMUstate) -> fmi2Status {
     unsafe {
         guarded::<M>(c, &spec::fmi2GetFMUstate, |inst| {
             let slot = out_ref(FMUstate, "FMUstate")?;
@@ -602,17 +546,13 @@ pub unsafe fn fmi2SetFMUstate<M: Model>(c: fmi2Component, FMUstate: fmi2FMUstate
                 )));
             }
             inst.restore(snapshot);
-            inst.logger
-                .trace(|| format!("fmi2SetFMUstate: time {}", inst.time));
+            inst.logger.trace(|| format!("fmi2SetFMUstate: time {}", inst.time));
             Ok(fmi2OK)
         })
     }
 }
 
-pub unsafe fn fmi2FreeFMUstate<M: Model>(
-    c: fmi2Component,
-    FMUstate: *mut fmi2FMUstate,
-) -> fmi2Status {
+pub unsafe fn fmi2FreeFMUstate<M: Model>(c: fmi2Component, FMUstate: *mut fmi2FMUstate) -> fmi2Status {
     unsafe {
         guarded::<M>(c, &spec::fmi2FreeFMUstate, |_inst| {
             let slot = out_ref(FMUstate, "FMUstate")?;
@@ -632,8 +572,7 @@ pub unsafe fn fmi2FreeFMUstate<M: Model>(
 
 unsafe fn snapshot_ref<'a, M>(FMUstate: fmi2FMUstate) -> Result<&'a Snapshot<M>, Failure> {
     // SAFETY: a non-null fmi2FMUstate is one we returned from fmi2GetFMUstate/fmi2DeSerializeFMUstate.
-    unsafe { FMUstate.cast::<Snapshot<M>>().as_ref() }
-        .ok_or_else(|| usage("argument FMUstate must not be NULL"))
+    unsafe { FMUstate.cast::<Snapshot<M>>().as_ref() }.ok_or_else(|| usage("argument FMUstate must not be NULL"))
 }
 
 pub unsafe fn fmi2SerializedFMUstateSize<M: Model>(
@@ -668,8 +607,7 @@ pub unsafe fn fmi2SerializeFMUstate<M: Model>(
                 )));
             }
             out_slice(serializedState.cast::<u8>(), size, "serializedState[]")?.copy_from_slice(&bytes);
-            inst.logger
-                .trace(|| format!("fmi2SerializeFMUstate: {size} bytes, time {}", snapshot.time));
+            inst.logger.trace(|| format!("fmi2SerializeFMUstate: {size} bytes, time {}", snapshot.time));
             Ok(fmi2OK)
         })
     }
@@ -686,9 +624,7 @@ pub unsafe fn fmi2DeSerializeFMUstate<M: Model>(
             let bytes = in_slice(serializedState.cast::<u8>(), size, "serializedState[]")?;
             let slot = out_ref(FMUstate, "FMUstate")?;
             let snapshot = serial::deserialize(bytes, &inst.model, inst.interface).map_err(usage)?;
-            inst.logger.trace(|| {
-                format!("fmi2DeSerializeFMUstate: {size} bytes, time {}", snapshot.time)
-            });
+            inst.logger.trace(|| format!("fmi2DeSerializeFMUstate: {size} bytes, time {}", snapshot.time));
             if slot.is_null() {
                 *slot = Box::into_raw(Box::new(snapshot)).cast();
             } else {
@@ -723,11 +659,7 @@ fn check_unknown<M: Model>(model: &M, vr: u32, interface: Interface) -> Result<(
     } else {
         "an output"
     };
-    Err(usage(format!(
-        "unknown {} has causality {:?}; expected {expected}",
-        describe(model, vr),
-        info.causality
-    )))
+    Err(usage(format!("unknown {} has causality {:?}; expected {expected}", describe(model, vr), info.causality)))
 }
 
 /// Why `vr` cannot be a known of a directional derivative, if it cannot.
@@ -744,11 +676,7 @@ fn check_known<M: Model>(model: &M, vr: u32, interface: Interface) -> Result<(),
     } else {
         "an input"
     };
-    Err(usage(format!(
-        "known {} has causality {:?}; expected {expected}",
-        describe(model, vr),
-        info.causality
-    )))
+    Err(usage(format!("known {} has causality {:?}; expected {expected}", describe(model, vr), info.causality)))
 }
 
 /// The Jacobian of outputs (and, in Model Exchange, state derivatives) with respect to inputs
@@ -795,12 +723,8 @@ pub unsafe fn fmi2GetDirectionalDerivative<M: Model>(
                     )));
                 }
             }
-            inst.logger.trace(|| {
-                format!("fmi2GetDirectionalDerivative: {nUnknown} unknowns, {nKnown} knowns")
-            });
-            inst.model
-                .directional_derivative(unknowns, knowns, seed, result)
-                .map_err(Failure::Model)?;
+            inst.logger.trace(|| format!("fmi2GetDirectionalDerivative: {nUnknown} unknowns, {nKnown} knowns"));
+            inst.model.directional_derivative(unknowns, knowns, seed, result).map_err(Failure::Model)?;
             Ok(fmi2OK)
         })
     }
@@ -820,10 +744,7 @@ pub unsafe fn fmi2EnterEventMode<M: Model>(c: fmi2Component) -> fmi2Status {
 }
 
 /// The trait has no discrete states or time events yet, so event iteration ends at once.
-pub unsafe fn fmi2NewDiscreteStates<M: Model>(
-    c: fmi2Component,
-    eventInfo: *mut fmi2EventInfo,
-) -> fmi2Status {
+pub unsafe fn fmi2NewDiscreteStates<M: Model>(c: fmi2Component, eventInfo: *mut fmi2EventInfo) -> fmi2Status {
     unsafe {
         guarded::<M>(c, &spec::fmi2NewDiscreteStates, |_inst| {
             *out_ref(eventInfo, "eventInfo")? = fmi2EventInfo {
@@ -875,11 +796,7 @@ pub unsafe fn fmi2SetTime<M: Model>(c: fmi2Component, time: fmi2Real) -> fmi2Sta
     }
 }
 
-pub unsafe fn fmi2SetContinuousStates<M: Model>(
-    c: fmi2Component,
-    x: *const fmi2Real,
-    nx: usize,
-) -> fmi2Status {
+pub unsafe fn fmi2SetContinuousStates<M: Model>(c: fmi2Component, x: *const fmi2Real, nx: usize) -> fmi2Status {
     unsafe {
         guarded::<M>(c, &spec::fmi2SetContinuousStates, |inst| {
             check_len(nx, inst.model.n_states(), "nx")?;
@@ -889,11 +806,7 @@ pub unsafe fn fmi2SetContinuousStates<M: Model>(
     }
 }
 
-pub unsafe fn fmi2GetDerivatives<M: Model>(
-    c: fmi2Component,
-    derivatives: *mut fmi2Real,
-    nx: usize,
-) -> fmi2Status {
+pub unsafe fn fmi2GetDerivatives<M: Model>(c: fmi2Component, derivatives: *mut fmi2Real, nx: usize) -> fmi2Status {
     unsafe {
         guarded::<M>(c, &spec::fmi2GetDerivatives, |inst| {
             check_len(nx, inst.model.n_states(), "nx")?;
@@ -919,11 +832,7 @@ pub unsafe fn fmi2GetEventIndicators<M: Model>(
     }
 }
 
-pub unsafe fn fmi2GetContinuousStates<M: Model>(
-    c: fmi2Component,
-    x: *mut fmi2Real,
-    nx: usize,
-) -> fmi2Status {
+pub unsafe fn fmi2GetContinuousStates<M: Model>(c: fmi2Component, x: *mut fmi2Real, nx: usize) -> fmi2Status {
     unsafe {
         guarded::<M>(c, &spec::fmi2GetContinuousStates, |inst| {
             check_len(nx, inst.model.n_states(), "nx")?;
@@ -941,8 +850,7 @@ pub unsafe fn fmi2GetNominalsOfContinuousStates<M: Model>(
     unsafe {
         guarded::<M>(c, &spec::fmi2GetNominalsOfContinuousStates, |inst| {
             check_len(nx, inst.model.n_states(), "nx")?;
-            inst.model
-                .get_nominals(out_slice(x_nominal, nx, "x_nominal[]")?);
+            inst.model.get_nominals(out_slice(x_nominal, nx, "x_nominal[]")?);
             Ok(fmi2OK)
         })
     }
@@ -1024,13 +932,9 @@ pub unsafe fn fmi2GetRealOutputDerivatives<M: Model>(
                     )));
                 }
             }
-            inst.logger
-                .trace(|| format!("fmi2GetRealOutputDerivatives: {nvr} values"));
+            inst.logger.trace(|| format!("fmi2GetRealOutputDerivatives: {nvr} values"));
             for ((&r, &k), v) in vrs.iter().zip(orders).zip(values) {
-                *v = inst
-                    .model
-                    .get_real_output_derivative(r, k)
-                    .map_err(model_err(r))?;
+                *v = inst.model.get_real_output_derivative(r, k).map_err(model_err(r))?;
             }
             Ok(fmi2OK)
         })
@@ -1052,25 +956,14 @@ pub unsafe fn fmi2DoStep<M: Model>(
         guarded::<M>(c, &spec::fmi2DoStep, |inst| {
             // Also rejects NaN.
             if !(h > 0.0 && h.is_finite()) {
-                return Err(usage(format!(
-                    "communicationStepSize must be > 0 but is {h}"
-                )));
+                return Err(usage(format!("communicationStepSize must be > 0 but is {h}")));
             }
             // Scale by every magnitude involved so the check stays relative near t = 0.
-            let scale = inst
-                .time
-                .abs()
-                .max(t.abs())
-                .max(inst.start_time.abs())
-                .max(h);
+            let scale = inst.time.abs().max(t.abs()).max(inst.start_time.abs()).max(h);
             if !t.is_finite() || (t - inst.time).abs() > TIME_TOLERANCE * scale {
-                return Err(usage(format!(
-                    "currentCommunicationPoint = {t} but the FMU is at time {}",
-                    inst.time
-                )));
+                return Err(usage(format!("currentCommunicationPoint = {t} but the FMU is at time {}", inst.time)));
             }
-            inst.logger
-                .trace(|| format!("fmi2DoStep: t = {t}, h = {h}"));
+            inst.logger.trace(|| format!("fmi2DoStep: t = {t}, h = {h}"));
             let result = inst.model.do_step(inst.time, h);
             inst.last_do_step_status = if result.is_ok() { fmi2OK } else { fmi2Error };
             result.map_err(Failure::Model)?;
@@ -1091,25 +984,15 @@ pub unsafe fn fmi2CancelStep<M: Model>(c: fmi2Component) -> fmi2Status {
 }
 
 /// fmi2Discard is the standard's answer for a status kind the slave cannot provide.
-fn status_unavailable<M: Model>(
-    inst: &Instance<M>,
-    function: &str,
-    kind: fmi2StatusKind,
-) -> Outcome {
+fn status_unavailable<M: Model>(inst: &Instance<M>, function: &str, kind: fmi2StatusKind) -> Outcome {
     inst.logger.warning(
         fmi2Discard,
-        &format!(
-            "{function}: status kind {kind} is not available (fmi2DoStep is never asynchronous)"
-        ),
+        &format!("{function}: status kind {kind} is not available (fmi2DoStep is never asynchronous)"),
     );
     Ok(fmi2Discard)
 }
 
-pub unsafe fn fmi2GetStatus<M: Model>(
-    c: fmi2Component,
-    s: fmi2StatusKind,
-    value: *mut fmi2Status,
-) -> fmi2Status {
+pub unsafe fn fmi2GetStatus<M: Model>(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2Status) -> fmi2Status {
     unsafe {
         guarded::<M>(c, &spec::fmi2GetStatus, |inst| {
             let value = out_ref(value, "value")?;
@@ -1123,11 +1006,7 @@ pub unsafe fn fmi2GetStatus<M: Model>(
     }
 }
 
-pub unsafe fn fmi2GetRealStatus<M: Model>(
-    c: fmi2Component,
-    s: fmi2StatusKind,
-    value: *mut fmi2Real,
-) -> fmi2Status {
+pub unsafe fn fmi2GetRealStatus<M: Model>(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2Real) -> fmi2Status {
     unsafe {
         guarded::<M>(c, &spec::fmi2GetRealStatus, |inst| {
             let value = out_ref(value, "value")?;
@@ -1173,11 +1052,7 @@ pub unsafe fn fmi2GetBooleanStatus<M: Model>(
     }
 }
 
-pub unsafe fn fmi2GetStringStatus<M: Model>(
-    c: fmi2Component,
-    s: fmi2StatusKind,
-    value: *mut fmi2String,
-) -> fmi2Status {
+pub unsafe fn fmi2GetStringStatus<M: Model>(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2String) -> fmi2Status {
     unsafe {
         guarded::<M>(c, &spec::fmi2GetStringStatus, |inst| {
             out_ref(value, "value")?;

@@ -37,14 +37,7 @@ macro_rules! export_fmi2 {
             nCategories: usize,
             categories: *const $crate::types::fmi2String,
         ) -> $crate::types::fmi2Status {
-            unsafe {
-                $crate::api::fmi2SetDebugLogging::<$model>(
-                    c,
-                    loggingOn,
-                    nCategories,
-                    categories,
-                )
-            }
+            unsafe { $crate::api::fmi2SetDebugLogging::<$model>(c, loggingOn, nCategories, categories) }
         }
 
         #[unsafe(no_mangle)]
@@ -117,17 +110,13 @@ macro_rules! export_fmi2 {
 
         #[unsafe(no_mangle)]
         #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2Terminate(
-            c: $crate::types::fmi2Component,
-        ) -> $crate::types::fmi2Status {
+        pub unsafe extern "C" fn fmi2Terminate(c: $crate::types::fmi2Component) -> $crate::types::fmi2Status {
             unsafe { $crate::api::fmi2Terminate::<$model>(c) }
         }
 
         #[unsafe(no_mangle)]
         #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2Reset(
-            c: $crate::types::fmi2Component,
-        ) -> $crate::types::fmi2Status {
+        pub unsafe extern "C" fn fmi2Reset(c: $crate::types::fmi2Component) -> $crate::types::fmi2Status {
             unsafe { $crate::api::fmi2Reset::<$model>(c) }
         }
 
@@ -264,14 +253,7 @@ macro_rules! export_fmi2 {
             serializedState: *mut $crate::types::fmi2Byte,
             size: usize,
         ) -> $crate::types::fmi2Status {
-            unsafe {
-                $crate::api::fmi2SerializeFMUstate::<$model>(
-                    c,
-                    FMUstate,
-                    serializedState,
-                    size,
-                )
-            }
+            unsafe { $crate::api::fmi2SerializeFMUstate::<$model>(c, FMUstate, serializedState, size) }
         }
 
         #[unsafe(no_mangle)]
@@ -282,14 +264,7 @@ macro_rules! export_fmi2 {
             size: usize,
             FMUstate: *mut $crate::types::fmi2FMUstate,
         ) -> $crate::types::fmi2Status {
-            unsafe {
-                $crate::api::fmi2DeSerializeFMUstate::<$model>(
-                    c,
-                    serializedState,
-                    size,
-                    FMUstate,
-                )
-            }
+            unsafe { $crate::api::fmi2DeSerializeFMUstate::<$model>(c, serializedState, size, FMUstate) }
         }
 
         #[unsafe(no_mangle)]
@@ -318,9 +293,7 @@ macro_rules! export_fmi2 {
 
         #[unsafe(no_mangle)]
         #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2EnterEventMode(
-            c: $crate::types::fmi2Component,
-        ) -> $crate::types::fmi2Status {
+        pub unsafe extern "C" fn fmi2EnterEventMode(c: $crate::types::fmi2Component) -> $crate::types::fmi2Status {
             unsafe { $crate::api::fmi2EnterEventMode::<$model>(c) }
         }
 
@@ -415,9 +388,7 @@ macro_rules! export_fmi2 {
             x_nominal: *mut $crate::types::fmi2Real,
             nx: usize,
         ) -> $crate::types::fmi2Status {
-            unsafe {
-                $crate::api::fmi2GetNominalsOfContinuousStates::<$model>(c, x_nominal, nx)
-            }
+            unsafe { $crate::api::fmi2GetNominalsOfContinuousStates::<$model>(c, x_nominal, nx) }
         }
 
         #[unsafe(no_mangle)]
@@ -429,9 +400,7 @@ macro_rules! export_fmi2 {
             order: *const $crate::types::fmi2Integer,
             value: *const $crate::types::fmi2Real,
         ) -> $crate::types::fmi2Status {
-            unsafe {
-                $crate::api::fmi2SetRealInputDerivatives::<$model>(c, vr, nvr, order, value)
-            }
+            unsafe { $crate::api::fmi2SetRealInputDerivatives::<$model>(c, vr, nvr, order, value) }
         }
 
         #[unsafe(no_mangle)]
@@ -443,9 +412,7 @@ macro_rules! export_fmi2 {
             order: *const $crate::types::fmi2Integer,
             value: *mut $crate::types::fmi2Real,
         ) -> $crate::types::fmi2Status {
-            unsafe {
-                $crate::api::fmi2GetRealOutputDerivatives::<$model>(c, vr, nvr, order, value)
-            }
+            unsafe { $crate::api::fmi2GetRealOutputDerivatives::<$model>(c, vr, nvr, order, value) }
         }
 
         #[unsafe(no_mangle)]
@@ -468,9 +435,7 @@ macro_rules! export_fmi2 {
 
         #[unsafe(no_mangle)]
         #[allow(non_snake_case, clippy::missing_safety_doc)]
-        pub unsafe extern "C" fn fmi2CancelStep(
-            c: $crate::types::fmi2Component,
-        ) -> $crate::types::fmi2Status {
+        pub unsafe extern "C" fn fmi2CancelStep(c: $crate::types::fmi2Component) -> $crate::types::fmi2Status {
             unsafe { $crate::api::fmi2CancelStep::<$model>(c) }
         }
 

@@ -27,12 +27,7 @@ pub struct Instance<M> {
 }
 
 impl<M: Model> Instance<M> {
-    pub fn new(
-        model: M,
-        interface: Interface,
-        logger: Logger,
-        callbacks: fmi2CallbackFunctions,
-    ) -> Self {
+    pub fn new(model: M, interface: Interface, logger: Logger, callbacks: fmi2CallbackFunctions) -> Self {
         Instance {
             model,
             interface,

@@ -84,10 +84,7 @@ pub enum Interface {
 /// (`load_state` is the exception: its `Err` refuses the bytes and changes nothing.)
 pub trait Model: Sized + Clone {
     /// Load the model from the FMU's resources folder (None: host gave no resource location).
-    fn instantiate(
-        resources: Option<&std::path::Path>,
-        interface: Interface,
-    ) -> Result<Self, String>;
+    fn instantiate(resources: Option<&std::path::Path>, interface: Interface) -> Result<Self, String>;
     /// GUID the model was built with; the layer compares it with the host's fmuGUID and refuses a mismatch.
     fn guid(&self) -> &str;
     /// Called on every get/set of every value reference: keep it a table lookup.

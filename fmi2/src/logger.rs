@@ -18,11 +18,7 @@ pub enum Category {
 }
 
 impl Category {
-    pub const ALL: [Category; 3] = [
-        Category::LogAll,
-        Category::LogStatusWarning,
-        Category::LogStatusError,
-    ];
+    pub const ALL: [Category; 3] = [Category::LogAll, Category::LogStatusWarning, Category::LogStatusError];
 
     pub fn name(self) -> &'static CStr {
         match self {
@@ -57,12 +53,7 @@ impl Logger {
         environment: fmi2ComponentEnvironment,
         logging_on: bool,
     ) -> Self {
-        let mut logger = Logger {
-            instance_name,
-            callback,
-            environment,
-            enabled: 0,
-        };
+        let mut logger = Logger { instance_name, callback, environment, enabled: 0 };
         logger.set_debug_logging(logging_on, &Category::ALL);
         logger
     }
@@ -75,11 +66,7 @@ impl Logger {
     pub fn set_debug_logging(&mut self, on: bool, categories: &[Category]) {
         self.enabled = 0;
         if on {
-            let list = if categories.is_empty() {
-                &Category::ALL[..]
-            } else {
-                categories
-            };
+            let list = if categories.is_empty() { &Category::ALL[..] } else { categories };
             for c in list {
                 self.enabled |= c.bit();
             }
@@ -89,8 +76,7 @@ impl Logger {
     /// Cheap pre-check so hot paths only format a message when someone will read it.
     #[inline]
     pub fn is_enabled(&self, category: Category) -> bool {
-        self.callback.is_some()
-            && (category == Category::LogStatusError || self.enabled & category.bit() != 0)
+        self.callback.is_some() && (category == Category::LogStatusError || self.enabled & category.bit() != 0)
     }
 
     pub fn log(&self, status: fmi2Status, category: Category, text: &str) {

@@ -34,11 +34,7 @@ pub fn parse_resource_location(uri: &str) -> Result<PathBuf, String> {
     let mut bytes: Vec<u8> = percent_decode_str(path).collect();
     if cfg!(windows) {
         // "/C:/dir" names the drive path "C:/dir".
-        if bytes.len() >= 3
-            && bytes[0] == b'/'
-            && bytes[1].is_ascii_alphabetic()
-            && bytes[2] == b':'
-        {
+        if bytes.len() >= 3 && bytes[0] == b'/' && bytes[1].is_ascii_alphabetic() && bytes[2] == b':' {
             bytes.remove(0);
         }
     } else {
@@ -69,11 +65,7 @@ mod tests {
     use super::*;
 
     fn ok(uri: &str) -> String {
-        parse_resource_location(uri)
-            .unwrap()
-            .to_str()
-            .unwrap()
-            .to_owned()
+        parse_resource_location(uri).unwrap().to_str().unwrap().to_owned()
     }
 
     #[test]

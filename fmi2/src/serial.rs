@@ -131,10 +131,7 @@ pub fn deserialize<M: Model>(bytes: &[u8], current: &M, interface: Interface) ->
         ));
     }
     if bytes.len() > expected {
-        return Err(format!(
-            "the serialized FMU state has {} bytes but its header says {expected}",
-            bytes.len()
-        ));
+        return Err(format!("the serialized FMU state has {} bytes but its header says {expected}", bytes.len()));
     }
     let end = expected - CRC;
     let mut stored = [0u8; 4];

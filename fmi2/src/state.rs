@@ -68,14 +68,9 @@ impl ModelState {
     /// StepInProgress (never entered).
     pub fn can_be_saved_in(self, interface: Interface) -> bool {
         let states = match interface {
-            Interface::ModelExchange => StateMask::of(&[
-                Instantiated,
-                InitializationMode,
-                EventMode,
-                ContinuousTimeMode,
-                Terminated,
-                Error,
-            ]),
+            Interface::ModelExchange => {
+                StateMask::of(&[Instantiated, InitializationMode, EventMode, ContinuousTimeMode, Terminated, Error])
+            }
             Interface::CoSimulation => StateMask::of(&[
                 Instantiated,
                 InitializationMode,
@@ -157,43 +152,22 @@ impl FnSpec {
             Some((states, why)) if states.contains(state) => format!(" ({why})"),
             _ => String::new(),
         };
-        Some(format!(
-            "{} called in state {state:?}; allowed in: {}{hint}",
-            self.name, self.allowed
-        ))
+        Some(format!("{} called in state {state:?}; allowed in: {}{hint}", self.name, self.allowed))
     }
 
     const fn with_hint(self, states: StateMask, why: &'static str) -> FnSpec {
-        FnSpec {
-            hint: Some((states, why)),
-            ..self
-        }
+        FnSpec { hint: Some((states, why)), ..self }
     }
 }
 
 const fn common(name: &'static str, allowed: StateMask) -> FnSpec {
-    FnSpec {
-        name,
-        allowed,
-        interface: None,
-        hint: None,
-    }
+    FnSpec { name, allowed, interface: None, hint: None }
 }
 const fn me(name: &'static str, allowed: StateMask) -> FnSpec {
-    FnSpec {
-        name,
-        allowed,
-        interface: Some(Interface::ModelExchange),
-        hint: None,
-    }
+    FnSpec { name, allowed, interface: Some(Interface::ModelExchange), hint: None }
 }
 const fn cs(name: &'static str, allowed: StateMask) -> FnSpec {
-    FnSpec {
-        name,
-        allowed,
-        interface: Some(Interface::CoSimulation),
-        hint: None,
-    }
+    FnSpec { name, allowed, interface: Some(Interface::CoSimulation), hint: None }
 }
 
 /// Every state in which the instance is alive and not corrupted.
@@ -225,36 +199,20 @@ const GETTERS: StateMask = StateMask::of(&[
 /// [`Model::directional_derivative`](super::Model::directional_derivative) offers only that of
 /// outputs and state derivatives with respect to inputs and states, which exists once
 /// initialization has ended.
-const AFTER_INITIALIZATION: StateMask = StateMask::of(&[
-    EventMode,
-    ContinuousTimeMode,
-    StepComplete,
-    StepFailed,
-    StepCanceled,
-    Terminated,
-    Error,
-]);
+const AFTER_INITIALIZATION: StateMask =
+    StateMask::of(&[EventMode, ContinuousTimeMode, StepComplete, StepFailed, StepCanceled, Terminated, Error]);
 /// Discrete variables cannot change during continuous-time integration.
-const SET_DISCRETE: StateMask =
-    StateMask::of(&[Instantiated, InitializationMode, EventMode, StepComplete]);
+const SET_DISCRETE: StateMask = StateMask::of(&[Instantiated, InitializationMode, EventMode, StepComplete]);
 const CS_STATUS: StateMask = StateMask::of(&[StepComplete, StepInProgress, StepFailed, Terminated]);
 
 // Common functions.
 pub const fmi2SetDebugLogging: FnSpec = common("fmi2SetDebugLogging", ANY_BUT_FATAL);
-pub const fmi2SetupExperiment: FnSpec =
-    common("fmi2SetupExperiment", StateMask::of(&[Instantiated]));
-pub const fmi2EnterInitializationMode: FnSpec = common(
-    "fmi2EnterInitializationMode",
-    StateMask::of(&[Instantiated]),
-);
-pub const fmi2ExitInitializationMode: FnSpec = common(
-    "fmi2ExitInitializationMode",
-    StateMask::of(&[InitializationMode]),
-);
-pub const fmi2Terminate: FnSpec = common(
-    "fmi2Terminate",
-    StateMask::of(&[EventMode, ContinuousTimeMode, StepComplete, StepFailed]),
-);
+pub const fmi2SetupExperiment: FnSpec = common("fmi2SetupExperiment", StateMask::of(&[Instantiated]));
+pub const fmi2EnterInitializationMode: FnSpec = common("fmi2EnterInitializationMode", StateMask::of(&[Instantiated]));
+pub const fmi2ExitInitializationMode: FnSpec =
+    common("fmi2ExitInitializationMode", StateMask::of(&[InitializationMode]));
+pub const fmi2Terminate: FnSpec =
+    common("fmi2Terminate", StateMask::of(&[EventMode, ContinuousTimeMode, StepComplete, StepFailed]));
 pub const fmi2Reset: FnSpec = common("fmi2Reset", ANY_BUT_FATAL);
 pub const fmi2GetReal: FnSpec = common("fmi2GetReal", GETTERS);
 pub const fmi2GetInteger: FnSpec = common("fmi2GetInteger", GETTERS);
@@ -262,13 +220,7 @@ pub const fmi2GetBoolean: FnSpec = common("fmi2GetBoolean", GETTERS);
 pub const fmi2GetString: FnSpec = common("fmi2GetString", GETTERS);
 pub const fmi2SetReal: FnSpec = common(
     "fmi2SetReal",
-    StateMask::of(&[
-        Instantiated,
-        InitializationMode,
-        EventMode,
-        ContinuousTimeMode,
-        StepComplete,
-    ]),
+    StateMask::of(&[Instantiated, InitializationMode, EventMode, ContinuousTimeMode, StepComplete]),
 );
 pub const fmi2SetInteger: FnSpec = common("fmi2SetInteger", SET_DISCRETE);
 pub const fmi2SetBoolean: FnSpec = common("fmi2SetBoolean", SET_DISCRETE);
@@ -279,76 +231,39 @@ pub const fmi2FreeFMUstate: FnSpec = common("fmi2FreeFMUstate", ANY_BUT_FATAL);
 pub const fmi2SerializedFMUstateSize: FnSpec = common("fmi2SerializedFMUstateSize", ANY_BUT_FATAL);
 pub const fmi2SerializeFMUstate: FnSpec = common("fmi2SerializeFMUstate", ANY_BUT_FATAL);
 pub const fmi2DeSerializeFMUstate: FnSpec = common("fmi2DeSerializeFMUstate", ANY_BUT_FATAL);
-pub const fmi2GetDirectionalDerivative: FnSpec =
-    common("fmi2GetDirectionalDerivative", AFTER_INITIALIZATION).with_hint(
+pub const fmi2GetDirectionalDerivative: FnSpec = common("fmi2GetDirectionalDerivative", AFTER_INITIALIZATION)
+    .with_hint(
         StateMask::of(&[Instantiated, InitializationMode]),
         "directional derivatives are available after fmi2ExitInitializationMode",
     );
 
 // Model Exchange.
-pub const fmi2EnterEventMode: FnSpec = me(
-    "fmi2EnterEventMode",
-    StateMask::of(&[EventMode, ContinuousTimeMode]),
-);
+pub const fmi2EnterEventMode: FnSpec = me("fmi2EnterEventMode", StateMask::of(&[EventMode, ContinuousTimeMode]));
 pub const fmi2NewDiscreteStates: FnSpec = me("fmi2NewDiscreteStates", StateMask::of(&[EventMode]));
-pub const fmi2EnterContinuousTimeMode: FnSpec =
-    me("fmi2EnterContinuousTimeMode", StateMask::of(&[EventMode]));
-pub const fmi2CompletedIntegratorStep: FnSpec = me(
-    "fmi2CompletedIntegratorStep",
-    StateMask::of(&[ContinuousTimeMode]),
-);
-pub const fmi2SetTime: FnSpec = me(
-    "fmi2SetTime",
-    StateMask::of(&[EventMode, ContinuousTimeMode]),
-);
-pub const fmi2SetContinuousStates: FnSpec = me(
-    "fmi2SetContinuousStates",
-    StateMask::of(&[ContinuousTimeMode]),
-);
-pub const fmi2GetDerivatives: FnSpec = me(
-    "fmi2GetDerivatives",
-    StateMask::of(&[EventMode, ContinuousTimeMode, Terminated, Error]),
-);
+pub const fmi2EnterContinuousTimeMode: FnSpec = me("fmi2EnterContinuousTimeMode", StateMask::of(&[EventMode]));
+pub const fmi2CompletedIntegratorStep: FnSpec = me("fmi2CompletedIntegratorStep", StateMask::of(&[ContinuousTimeMode]));
+pub const fmi2SetTime: FnSpec = me("fmi2SetTime", StateMask::of(&[EventMode, ContinuousTimeMode]));
+pub const fmi2SetContinuousStates: FnSpec = me("fmi2SetContinuousStates", StateMask::of(&[ContinuousTimeMode]));
+pub const fmi2GetDerivatives: FnSpec =
+    me("fmi2GetDerivatives", StateMask::of(&[EventMode, ContinuousTimeMode, Terminated, Error]));
 pub const fmi2GetEventIndicators: FnSpec = me(
     "fmi2GetEventIndicators",
-    StateMask::of(&[
-        InitializationMode,
-        EventMode,
-        ContinuousTimeMode,
-        Terminated,
-        Error,
-    ]),
+    StateMask::of(&[InitializationMode, EventMode, ContinuousTimeMode, Terminated, Error]),
 );
 pub const fmi2GetContinuousStates: FnSpec = me(
     "fmi2GetContinuousStates",
-    StateMask::of(&[
-        InitializationMode,
-        EventMode,
-        ContinuousTimeMode,
-        Terminated,
-        Error,
-    ]),
+    StateMask::of(&[InitializationMode, EventMode, ContinuousTimeMode, Terminated, Error]),
 );
 pub const fmi2GetNominalsOfContinuousStates: FnSpec = me(
     "fmi2GetNominalsOfContinuousStates",
-    StateMask::of(&[
-        Instantiated,
-        EventMode,
-        ContinuousTimeMode,
-        Terminated,
-        Error,
-    ]),
+    StateMask::of(&[Instantiated, EventMode, ContinuousTimeMode, Terminated, Error]),
 );
 
 // Co-Simulation.
-pub const fmi2SetRealInputDerivatives: FnSpec = cs(
-    "fmi2SetRealInputDerivatives",
-    StateMask::of(&[Instantiated, InitializationMode, StepComplete]),
-);
-pub const fmi2GetRealOutputDerivatives: FnSpec = cs(
-    "fmi2GetRealOutputDerivatives",
-    StateMask::of(&[StepComplete, StepFailed, StepCanceled, Terminated, Error]),
-);
+pub const fmi2SetRealInputDerivatives: FnSpec =
+    cs("fmi2SetRealInputDerivatives", StateMask::of(&[Instantiated, InitializationMode, StepComplete]));
+pub const fmi2GetRealOutputDerivatives: FnSpec =
+    cs("fmi2GetRealOutputDerivatives", StateMask::of(&[StepComplete, StepFailed, StepCanceled, Terminated, Error]));
 pub const fmi2DoStep: FnSpec = cs("fmi2DoStep", StateMask::of(&[StepComplete]));
 pub const fmi2CancelStep: FnSpec = cs("fmi2CancelStep", StateMask::of(&[StepInProgress]));
 pub const fmi2GetStatus: FnSpec = cs("fmi2GetStatus", CS_STATUS);
@@ -363,28 +278,11 @@ mod tests {
 
     #[test]
     fn refusal_names_state_and_allowed_states() {
-        let msg = fmi2DoStep
-            .refuse(Instantiated, Interface::CoSimulation)
-            .unwrap();
-        assert_eq!(
-            msg,
-            "fmi2DoStep called in state Instantiated; allowed in: StepComplete"
-        );
-        assert!(
-            fmi2DoStep
-                .refuse(StepComplete, Interface::CoSimulation)
-                .is_none()
-        );
-        assert!(
-            fmi2DoStep
-                .refuse(StepComplete, Interface::ModelExchange)
-                .is_some()
-        );
-        assert!(
-            fmi2GetReal
-                .refuse(Error, Interface::ModelExchange)
-                .is_none()
-        );
+        let msg = fmi2DoStep.refuse(Instantiated, Interface::CoSimulation).unwrap();
+        assert_eq!(msg, "fmi2DoStep called in state Instantiated; allowed in: StepComplete");
+        assert!(fmi2DoStep.refuse(StepComplete, Interface::CoSimulation).is_none());
+        assert!(fmi2DoStep.refuse(StepComplete, Interface::ModelExchange).is_some());
+        assert!(fmi2GetReal.refuse(Error, Interface::ModelExchange).is_none());
         assert!(fmi2Reset.refuse(Fatal, Interface::ModelExchange).is_some());
     }
 
@@ -406,9 +304,7 @@ mod tests {
     #[test]
     fn directional_derivative_refusal_before_initialization_ends_says_when() {
         for s in [Instantiated, InitializationMode] {
-            let msg = fmi2GetDirectionalDerivative
-                .refuse(s, Interface::CoSimulation)
-                .unwrap();
+            let msg = fmi2GetDirectionalDerivative.refuse(s, Interface::CoSimulation).unwrap();
             assert_eq!(
                 msg,
                 format!(
@@ -418,9 +314,7 @@ mod tests {
                 )
             );
         }
-        let msg = fmi2GetDirectionalDerivative
-            .refuse(Fatal, Interface::ModelExchange)
-            .unwrap();
+        let msg = fmi2GetDirectionalDerivative.refuse(Fatal, Interface::ModelExchange).unwrap();
         assert!(!msg.contains("fmi2ExitInitializationMode"), "{msg}");
         for s in [EventMode, ContinuousTimeMode, Terminated, Error] {
             assert!(fmi2GetDirectionalDerivative.refuse(s, Interface::ModelExchange).is_none());

@@ -53,8 +53,7 @@ pub type fmi2CallbackLogger = unsafe extern "C" fn(
 );
 pub type fmi2CallbackAllocateMemory = unsafe extern "C" fn(nobj: usize, size: usize) -> *mut c_void;
 pub type fmi2CallbackFreeMemory = unsafe extern "C" fn(obj: *mut c_void);
-pub type fmi2StepFinished =
-    unsafe extern "C" fn(componentEnvironment: fmi2ComponentEnvironment, status: fmi2Status);
+pub type fmi2StepFinished = unsafe extern "C" fn(componentEnvironment: fmi2ComponentEnvironment, status: fmi2Status);
 
 /// `Option<fn>` has the layout of a nullable C function pointer, so NULL members are representable.
 #[repr(C)]

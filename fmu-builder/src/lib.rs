@@ -20,10 +20,10 @@
 pub mod error;
 pub mod linalg;
 
+pub mod ffrf;
 pub mod input;
 pub mod model;
-pub mod reduce;
-pub mod ffrf;
 pub mod output;
+pub mod reduce;
 
 pub mod build;

@@ -122,7 +122,8 @@ fn stage_of(file: &str) -> usize {
 #[test]
 fn the_path_parser_expands_groups() {
     let paths = crate_paths("use crate::a::{self, b::{C, d}, E};\nlet x = crate::f::g(); // crate::comment");
-    let expected: Vec<Vec<&str>> = vec![vec!["a", "self"], vec!["a", "b", "C"], vec!["a", "b", "d"], vec!["a", "E"], vec!["f", "g"]];
+    let expected: Vec<Vec<&str>> =
+        vec![vec!["a", "self"], vec!["a", "b", "C"], vec!["a", "b", "d"], vec!["a", "E"], vec!["f", "g"]];
     assert_eq!(paths.len(), expected.len(), "{paths:?}");
     for (p, e) in paths.iter().zip(&expected) {
         assert_eq!(p, e);

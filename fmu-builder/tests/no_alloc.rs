@@ -5,9 +5,9 @@
 //! Model-Exchange derivative evaluations. Counted per thread by a counting global allocator.
 //! fmu-runtime's tests/no_alloc.rs covers the exported C functions and free-floating bodies.
 
+use fmi2::Model;
 use fmu_builder::build::reduce_spec;
 use fmu_builder::input::spec::Spec;
-use fmi2::Model;
 use fmu_runtime::fmu::BodyFmu;
 use fmu_runtime::interface::VariableTable;
 use std::path::Path;
@@ -34,7 +34,9 @@ fn a_built_beam_steps_without_allocating() {
     let built = reduce_spec(spec, Path::new("beam.json")).unwrap();
     let reduced = built.reduced;
     let st = reduced.stiffening.as_ref().expect("stiffening terms");
-    assert!(reduced.rotation.is_some() && st.centrifugal.is_some() && st.translation.is_some() && !st.flanges[0].is_empty());
+    assert!(
+        reduced.rotation.is_some() && st.centrifugal.is_some() && st.translation.is_some() && !st.flanges[0].is_empty()
+    );
     let table = VariableTable::new(&reduced);
     let force: Vec<u32> = (1..=3).map(|i| table.value_reference(&format!("tip.f[{i}]")).unwrap()).collect();
     let torque = table.value_reference("tip.t[1]").unwrap();
@@ -61,7 +63,11 @@ fn a_built_beam_steps_without_allocating() {
             let rot = [c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0];
             for i in 0..3 {
                 for j in 0..3 {
-                    fmu.set_real(table.value_reference(&format!("base.R[{},{}]", i + 1, j + 1)).unwrap(), rot[3 * i + j]).unwrap();
+                    fmu.set_real(
+                        table.value_reference(&format!("base.R[{},{}]", i + 1, j + 1)).unwrap(),
+                        rot[3 * i + j],
+                    )
+                    .unwrap();
                 }
             }
             fmu.set_real(table.value_reference("base.w[3]").unwrap(), 10.0).unwrap();

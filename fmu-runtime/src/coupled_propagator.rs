@@ -147,16 +147,10 @@ impl CoupledPropagator {
             a[row * m + i] -= h * omega[i];
             a[row * m + n + i] -= h * (alpha + beta * omega[i] * omega[i] + extra[i]);
         }
-        let norm = (0..m)
-            .map(|j| (0..m).map(|i| a[i * m + j].abs()).sum::<f64>())
-            .fold(0.0, f64::max);
+        let norm = (0..m).map(|j| (0..m).map(|i| a[i * m + j].abs()).sum::<f64>()).fold(0.0, f64::max);
         // the load blocks have norm h, like A h's time scale: scale them alike
         let norm = norm.max(h);
-        let s = if norm > SCALED_NORM {
-            (norm / SCALED_NORM).log2().ceil() as i32
-        } else {
-            0
-        };
+        let s = if norm > SCALED_NORM { (norm / SCALED_NORM).log2().ceil() as i32 } else { 0 };
         let tau = h * 0.5f64.powi(s);
         let scale = 0.5f64.powi(s);
         for v in a.iter_mut() {
@@ -217,14 +211,7 @@ impl CoupledPropagator {
     }
 
     /// Advance q, q' by the prepared step under the load p0 + t p1 (t from the step's start).
-    pub fn advance(
-        &mut self,
-        omega: &[f64],
-        p0: &[f64],
-        p1: &[f64],
-        q: &mut [f64],
-        qd: &mut [f64],
-    ) {
+    pub fn advance(&mut self, omega: &[f64], p0: &[f64], p1: &[f64], q: &mut [f64], qd: &mut [f64]) {
         let n = self.n;
         let m = 4 * n;
         for i in 0..n {
@@ -360,18 +347,8 @@ mod tests {
             for k in 0..3 {
                 // the two agree to the exponential's round-off, 1e-12 of each mode's amplitude scale
                 let qs = q2[k].abs().max(qd2[k].abs() / omega[k]).max(1e-9);
-                assert!(
-                    (q[k] - q2[k]).abs() <= 1e-10 * qs,
-                    "h {h} mode {k}: q {} vs {}",
-                    q[k],
-                    q2[k]
-                );
-                assert!(
-                    (qd[k] - qd2[k]).abs() <= 1e-10 * qs * omega[k],
-                    "h {h} mode {k}: qd {} vs {}",
-                    qd[k],
-                    qd2[k]
-                );
+                assert!((q[k] - q2[k]).abs() <= 1e-10 * qs, "h {h} mode {k}: q {} vs {}", q[k], q2[k]);
+                assert!((qd[k] - qd2[k]).abs() <= 1e-10 * qs * omega[k], "h {h} mode {k}: qd {} vs {}", qd[k], qd2[k]);
             }
         }
     }
@@ -389,9 +366,7 @@ mod tests {
             p.prepare(&omega, 0.0, 0.0, &[0.0; 3], &c_d, &zero, h);
             let (mut q, mut qd) = ([0.01, 0.0, 1e-4], [0.0, 0.2, 0.0]);
             let energy = |q: &[f64; 3], qd: &[f64; 3]| {
-                (0..3)
-                    .map(|k| 0.5 * qd[k] * qd[k] + 0.5 * omega[k] * omega[k] * q[k] * q[k])
-                    .sum::<f64>()
+                (0..3).map(|k| 0.5 * qd[k] * qd[k] + 0.5 * omega[k] * omega[k] * q[k] * q[k]).sum::<f64>()
             };
             let e0 = energy(&q, &qd);
             for _ in 0..100_000 {
@@ -409,15 +384,7 @@ mod tests {
         let omega = [10.0, 20.0];
         let mut p = CoupledPropagator::with_modes(2);
         let mut definite_at = |softening: f64| {
-            p.prepare(
-                &omega,
-                0.0,
-                0.0,
-                &[0.0; 2],
-                &[0.0; 4],
-                &[-softening, 0.0, 0.0, -softening],
-                1e-3,
-            );
+            p.prepare(&omega, 0.0, 0.0, &[0.0; 2], &[0.0; 4], &[-softening, 0.0, 0.0, -softening], 1e-3);
             p.definite()
         };
         assert!(definite_at(50.0));

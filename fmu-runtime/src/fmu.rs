@@ -1,14 +1,17 @@
 //! The body as an FMI model: maps value references onto the mechanics layer and the FMI calls
 //! (initialise, step, derivatives) onto its equations. Knows the `fmi2::Model` trait, not C.
 
-use crate::body::{BodyState, CouplingReference, FlangeLoad, FlexibleBody, FrameState, InitialFrame, InputRates, MountMotion, Parameters};
-use fmi2::bytes::{Reader, Writer};
-use fmi2::{Interface, Model, VarInfo};
+use crate::body::{
+    BodyState, CouplingReference, FlangeLoad, FlexibleBody, FrameState, InitialFrame, InputRates, MountMotion,
+    Parameters,
+};
 use crate::format::RESOURCE_FILE;
 use crate::interface::{FlangeOutput, Quantity, VariableTable};
-use crate::reduced::ReducedBody;
 use crate::kinematics as k3;
+use crate::reduced::ReducedBody;
 use crate::scalar::{Scalar, c};
+use fmi2::bytes::{Reader, Writer};
+use fmi2::{Interface, Model, VarInfo};
 use std::sync::Arc;
 
 /// Capabilities the model implements; the builder writes them into modelDescription.xml.
@@ -52,7 +55,8 @@ const FRAME_STATES: usize = 13;
 
 impl Model for BodyFmu {
     fn instantiate(resources: Option<&std::path::Path>, _interface: Interface) -> Result<Self, String> {
-        let dir = resources.ok_or("no resource location given: the reduced body lives in the FMU's resources folder")?;
+        let dir =
+            resources.ok_or("no resource location given: the reduced body lives in the FMU's resources folder")?;
         let path = dir.join(RESOURCE_FILE);
         let bytes = std::fs::read(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
         let reduced = ReducedBody::from_bytes(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -90,7 +94,13 @@ impl Model for BodyFmu {
 
     /// dv_unknown = (d unknowns / d knowns) dv_known at the present state and inputs, exact:
     /// the body's equations in dual numbers along the direction dv_known.
-    fn directional_derivative(&mut self, unknowns: &[u32], knowns: &[u32], dv_known: &[f64], dv_unknown: &mut [f64]) -> Result<(), String> {
+    fn directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        dv_known: &[f64],
+        dv_unknown: &mut [f64],
+    ) -> Result<(), String> {
         let mut d = self.body.to_dual();
         for (&vr, &dv) in knowns.iter().zip(dv_known) {
             let quantity = self.quantity(vr)?;
@@ -161,7 +171,11 @@ impl Model for BodyFmu {
         self.quantity(vr).is_ok_and(|q| {
             matches!(
                 q,
-                Q::ModalCoordinate(_) | Q::ModalVelocity(_) | Q::FramePosition(_) | Q::FrameQuaternion(_) | Q::FrameVelocity(_)
+                Q::ModalCoordinate(_)
+                    | Q::ModalVelocity(_)
+                    | Q::FramePosition(_)
+                    | Q::FrameQuaternion(_)
+                    | Q::FrameVelocity(_)
                     | Q::FrameAngularVelocity(_)
             )
         })
@@ -173,8 +187,12 @@ impl Model for BodyFmu {
         self.quantity(vr).is_ok_and(|q| {
             matches!(
                 q,
-                Q::ModalVelocity(_) | Q::ModalAcceleration(_) | Q::FrameVelocity(_) | Q::FrameQuaternionRate(_)
-                    | Q::FrameAcceleration(_) | Q::FrameAngularAcceleration(_)
+                Q::ModalVelocity(_)
+                    | Q::ModalAcceleration(_)
+                    | Q::FrameVelocity(_)
+                    | Q::FrameQuaternionRate(_)
+                    | Q::FrameAcceleration(_)
+                    | Q::FrameAngularAcceleration(_)
             )
         })
     }
@@ -460,7 +478,8 @@ impl Model for BodyFmu {
             rate_loads.push(FlangeLoad { f: r.f64_array("flange force rate")?, t: r.f64_array("flange torque rate")? });
         }
         let coupling_reference = if version >= 2 && r.bool("coupling reference flag")? {
-            let (h, alpha, beta) = (r.f64("coupling reference h")?, r.f64("coupling reference alpha")?, r.f64("coupling reference beta")?);
+            let (h, alpha, beta) =
+                (r.f64("coupling reference h")?, r.f64("coupling reference alpha")?, r.f64("coupling reference beta")?);
             let mut c_d = vec![0.0; n * n];
             r.f64s_into(&mut c_d, "coupling reference C_d")?;
             let mut c_k = vec![0.0; n * n];
@@ -590,7 +609,6 @@ fn read_frame_state(r: &mut Reader) -> Result<FrameState, String> {
         w_body: r.f64_array("frame W")?,
     })
 }
-
 
 fn write_frame(x: &mut [f64], f: &FrameState) {
     x[..3].copy_from_slice(&f.r);

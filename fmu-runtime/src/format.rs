@@ -46,16 +46,14 @@ impl fmt::Display for FormatError {
                 f,
                 "reduced-model file has format version {v}; this runtime reads version {FORMAT_VERSION} (rebuild the FMU with a matching builder)"
             ),
-            FormatError::ChecksumMismatch { stored, computed } => write!(
-                f,
-                "reduced-model file is corrupt: CRC-32 stored {stored:#010x}, computed {computed:#010x}"
-            ),
+            FormatError::ChecksumMismatch { stored, computed } => {
+                write!(f, "reduced-model file is corrupt: CRC-32 stored {stored:#010x}, computed {computed:#010x}")
+            }
             FormatError::Malformed(m) => write!(f, "reduced-model file is malformed: {m}"),
             FormatError::Missing(n) => write!(f, "reduced-model file lacks the entry '{n}'"),
-            FormatError::Shape { name, found, expected } => write!(
-                f,
-                "reduced-model entry '{name}' has shape {found:?}, expected {expected:?}"
-            ),
+            FormatError::Shape { name, found, expected } => {
+                write!(f, "reduced-model entry '{name}' has shape {found:?}, expected {expected:?}")
+            }
             FormatError::WrongKind { name, expected } => {
                 write!(f, "reduced-model entry '{name}' is not {expected}")
             }
@@ -78,10 +76,7 @@ impl Container {
 
     pub fn put_array(&mut self, name: &str, dims: &[usize], values: &[f64]) {
         debug_assert_eq!(dims.iter().product::<usize>(), values.len());
-        self.entries.insert(
-            name.to_owned(),
-            Entry::Array { dims: dims.to_vec(), values: values.to_vec() },
-        );
+        self.entries.insert(name.to_owned(), Entry::Array { dims: dims.to_vec(), values: values.to_vec() });
     }
 
     pub fn put_text(&mut self, name: &str, text: &str) {
@@ -174,12 +169,10 @@ impl Container {
         if version != FORMAT_VERSION {
             return Err(FormatError::UnsupportedVersion(version));
         }
-        let len = usize::try_from(r.u64()?)
-            .map_err(|_| FormatError::Malformed("payload length overflows".into()))?;
+        let len = usize::try_from(r.u64()?).map_err(|_| FormatError::Malformed("payload length overflows".into()))?;
         let payload_start = r.pos;
-        let payload_end = payload_start
-            .checked_add(len)
-            .ok_or_else(|| FormatError::Malformed("payload length overflows".into()))?;
+        let payload_end =
+            payload_start.checked_add(len).ok_or_else(|| FormatError::Malformed("payload length overflows".into()))?;
         if payload_end + 4 > bytes.len() {
             return Err(FormatError::Truncated { at: bytes.len(), needed: payload_end + 4 - bytes.len() });
         }
@@ -219,10 +212,8 @@ impl Container {
                         .checked_mul(8)
                         .ok_or_else(|| FormatError::Malformed(format!("size of '{name}' overflows")))?;
                     let raw = r.take(nbytes)?;
-                    let values = raw
-                        .chunks_exact(8)
-                        .map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
-                        .collect();
+                    let values =
+                        raw.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8]))).collect();
                     Entry::Array { dims, values }
                 }
                 1 => {
@@ -252,9 +243,11 @@ struct Reader<'a> {
 
 impl<'a> Reader<'a> {
     fn take(&mut self, n: usize) -> Result<&'a [u8], FormatError> {
-        let end = self.pos.checked_add(n).filter(|&e| e <= self.bytes.len()).ok_or(
-            FormatError::Truncated { at: self.pos, needed: n.saturating_sub(self.bytes.len() - self.pos) },
-        )?;
+        let end = self
+            .pos
+            .checked_add(n)
+            .filter(|&e| e <= self.bytes.len())
+            .ok_or(FormatError::Truncated { at: self.pos, needed: n.saturating_sub(self.bytes.len() - self.pos) })?;
         let s = &self.bytes[self.pos..end];
         self.pos = end;
         Ok(s)

@@ -2,8 +2,8 @@
 //! writes modelDescription.xml and through which the runtime answers fmi2Get/Set. Names follow
 //! Naming: flange `tip` has inputs `tip.f[i]`, `tip.t[i]`, outputs `tip.r[i]`, `tip.R[i,j]`, ...
 
-use fmi2::{Causality, Initial, VarType, Variability};
 use crate::reduced::ReducedBody;
+use fmi2::{Causality, Initial, VarType, Variability};
 
 /// Per-flange output quantities.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -199,20 +199,26 @@ impl VariableTable {
         let mut b = Builder { variables: Vec::new() };
         let m = body.mount.as_str();
         if !body.free_floating {
-        b.input3(&format!("{m}.r"), "Mount position", "m", Quantity::MountPosition);
-        b.matrix(&format!("{m}.R"), "Mount orientation", Causality::Input, Quantity::MountRotation);
-        b.input3(&format!("{m}.v"), "Mount velocity", "m/s", Quantity::MountVelocity);
-        b.input3(&format!("{m}.w"), "Mount angular velocity", "rad/s", Quantity::MountAngularVelocity);
-        b.input3(&format!("{m}.a"), "Mount acceleration", "m/s2", Quantity::MountAcceleration);
-        b.input3(&format!("{m}.z"), "Mount angular acceleration", "rad/s2", Quantity::MountAngularAcceleration);
-        b.output3(&format!("{m}.f"), "Force the mount applies to the body", "world frame", "N", Quantity::MountForce);
-        b.output3(
-            &format!("{m}.t"),
-            "Torque the mount applies to the body about the mount point",
-            "world frame",
-            "N.m",
-            Quantity::MountTorque,
-        );
+            b.input3(&format!("{m}.r"), "Mount position", "m", Quantity::MountPosition);
+            b.matrix(&format!("{m}.R"), "Mount orientation", Causality::Input, Quantity::MountRotation);
+            b.input3(&format!("{m}.v"), "Mount velocity", "m/s", Quantity::MountVelocity);
+            b.input3(&format!("{m}.w"), "Mount angular velocity", "rad/s", Quantity::MountAngularVelocity);
+            b.input3(&format!("{m}.a"), "Mount acceleration", "m/s2", Quantity::MountAcceleration);
+            b.input3(&format!("{m}.z"), "Mount angular acceleration", "rad/s2", Quantity::MountAngularAcceleration);
+            b.output3(
+                &format!("{m}.f"),
+                "Force the mount applies to the body",
+                "world frame",
+                "N",
+                Quantity::MountForce,
+            );
+            b.output3(
+                &format!("{m}.t"),
+                "Torque the mount applies to the body about the mount point",
+                "world frame",
+                "N.m",
+                Quantity::MountTorque,
+            );
         }
         for (k, flange) in body.flanges.iter().enumerate() {
             let n = flange.name.as_str();
@@ -238,9 +244,13 @@ impl VariableTable {
             b.output3(&format!("{n}.u"), "Flange displacement relative to the mount", "body frame", "m", |i| {
                 out(FlangeOutput::Displacement(i))
             });
-            b.output3(&format!("{n}.phi"), "Flange rotation relative to the mount (rotation vector)", "body frame", "rad", |i| {
-                out(FlangeOutput::RotationVector(i))
-            });
+            b.output3(
+                &format!("{n}.phi"),
+                "Flange rotation relative to the mount (rotation vector)",
+                "body frame",
+                "rad",
+                |i| out(FlangeOutput::RotationVector(i)),
+            );
         }
         for (i, axis) in AXES.iter().enumerate() {
             b.push(
@@ -275,7 +285,7 @@ impl VariableTable {
             Quantity::RayleighBeta,
         );
         if !body.free_floating {
-        b.push(
+            b.push(
             "static_start".into(),
             "Start in static equilibrium under the initial inputs (q' = 0, q = K^-1 p) instead of at the start values of q, qd".into(),
             Causality::Parameter,
@@ -343,7 +353,12 @@ impl VariableTable {
         type VectorParameter = (&'static str, &'static str, &'static str, fn(usize) -> Quantity);
         let params: [VectorParameter; 4] = [
             ("initial.r", "Initial position of the centre of mass", "m", Quantity::InitialPosition),
-            ("initial.phi", "Initial orientation as a rotation vector (from the axes as meshed)", "rad", Quantity::InitialRotation),
+            (
+                "initial.phi",
+                "Initial orientation as a rotation vector (from the axes as meshed)",
+                "rad",
+                Quantity::InitialRotation,
+            ),
             ("initial.v", "Initial velocity of the centre of mass", "m/s", Quantity::InitialVelocity),
             ("initial.w", "Initial angular velocity", "rad/s", Quantity::InitialAngularVelocity),
         ];
@@ -374,51 +389,133 @@ impl VariableTable {
         let mut quat_vr = [0; 4];
         let mut w_vr = [0; 3];
         for i in 0..3 {
-            r_vr[i] = state(b, format!("frame.r[{}]", i + 1), format!("Centre-of-mass position, {}, world (state)", AXES[i]), Some("m"), Quantity::FramePosition(i));
+            r_vr[i] = state(
+                b,
+                format!("frame.r[{}]", i + 1),
+                format!("Centre-of-mass position, {}, world (state)", AXES[i]),
+                Some("m"),
+                Quantity::FramePosition(i),
+            );
         }
         for (i, vr) in quat_vr.iter_mut().enumerate() {
-            *vr = state(b, format!("frame.Q[{}]", i + 1), format!("Orientation quaternion component {} (w, x, y, z; state)", i + 1), Some("1"), Quantity::FrameQuaternion(i));
+            *vr = state(
+                b,
+                format!("frame.Q[{}]", i + 1),
+                format!("Orientation quaternion component {} (w, x, y, z; state)", i + 1),
+                Some("1"),
+                Quantity::FrameQuaternion(i),
+            );
         }
         for i in 0..3 {
-            v_vr[i] = state(b, format!("frame.v[{}]", i + 1), format!("Centre-of-mass velocity, {}, world (state)", AXES[i]), Some("m/s"), Quantity::FrameVelocity(i));
+            v_vr[i] = state(
+                b,
+                format!("frame.v[{}]", i + 1),
+                format!("Centre-of-mass velocity, {}, world (state)", AXES[i]),
+                Some("m/s"),
+                Quantity::FrameVelocity(i),
+            );
             b.variables[v_vr[i] as usize - 1].derivative_of = Some(r_vr[i]);
         }
         for i in 0..3 {
-            w_vr[i] = state(b, format!("frame.W[{}]", i + 1), format!("Angular velocity, {}, body frame (state)", AXES[i]), Some("rad/s"), Quantity::FrameAngularVelocity(i));
+            w_vr[i] = state(
+                b,
+                format!("frame.W[{}]", i + 1),
+                format!("Angular velocity, {}, body frame (state)", AXES[i]),
+                Some("rad/s"),
+                Quantity::FrameAngularVelocity(i),
+            );
         }
-        let derivative = |b: &mut Builder, name: String, what: String, unit: Option<&'static str>, q: Quantity, of: u32| {
-            let vr = b.push(name, what, Causality::Local, Variability::Continuous, None, None, unit, q);
-            b.variables[vr as usize - 1].derivative_of = Some(of);
-        };
+        let derivative =
+            |b: &mut Builder, name: String, what: String, unit: Option<&'static str>, q: Quantity, of: u32| {
+                let vr = b.push(name, what, Causality::Local, Variability::Continuous, None, None, unit, q);
+                b.variables[vr as usize - 1].derivative_of = Some(of);
+            };
         for (i, &of) in quat_vr.iter().enumerate() {
-            derivative(b, format!("der(frame.Q[{}])", i + 1), format!("Quaternion rate {}", i + 1), Some("1/s"), Quantity::FrameQuaternionRate(i), of);
+            derivative(
+                b,
+                format!("der(frame.Q[{}])", i + 1),
+                format!("Quaternion rate {}", i + 1),
+                Some("1/s"),
+                Quantity::FrameQuaternionRate(i),
+                of,
+            );
         }
         for i in 0..3 {
-            derivative(b, format!("der(frame.v[{}])", i + 1), format!("Centre-of-mass acceleration, {}, world", AXES[i]), Some("m/s2"), Quantity::FrameAcceleration(i), v_vr[i]);
+            derivative(
+                b,
+                format!("der(frame.v[{}])", i + 1),
+                format!("Centre-of-mass acceleration, {}, world", AXES[i]),
+                Some("m/s2"),
+                Quantity::FrameAcceleration(i),
+                v_vr[i],
+            );
         }
         for i in 0..3 {
-            derivative(b, format!("der(frame.W[{}])", i + 1), format!("Angular acceleration, {}, body frame", AXES[i]), Some("rad/s2"), Quantity::FrameAngularAcceleration(i), w_vr[i]);
+            derivative(
+                b,
+                format!("der(frame.W[{}])", i + 1),
+                format!("Angular acceleration, {}, body frame", AXES[i]),
+                Some("rad/s2"),
+                Quantity::FrameAngularAcceleration(i),
+                w_vr[i],
+            );
         }
         let out = |b: &mut Builder, name: String, what: String, unit: &'static str, q: Quantity| {
             b.push(name, what, Causality::Output, Variability::Continuous, None, None, Some(unit), q);
         };
         for i in 0..3 {
             for j in 0..3 {
-                out(b, format!("body.R[{},{}]", i + 1, j + 1), format!("Body orientation, row {} column {} (columns: body axes in world)", i + 1, j + 1), "1", Quantity::BodyRotation(i, j));
+                out(
+                    b,
+                    format!("body.R[{},{}]", i + 1, j + 1),
+                    format!("Body orientation, row {} column {} (columns: body axes in world)", i + 1, j + 1),
+                    "1",
+                    Quantity::BodyRotation(i, j),
+                );
             }
         }
         for (i, axis) in AXES.iter().enumerate() {
-            out(b, format!("body.w[{}]", i + 1), format!("Body angular velocity, {axis}, world frame"), "rad/s", Quantity::BodyAngularVelocity(i));
+            out(
+                b,
+                format!("body.w[{}]", i + 1),
+                format!("Body angular velocity, {axis}, world frame"),
+                "rad/s",
+                Quantity::BodyAngularVelocity(i),
+            );
         }
         for (i, axis) in AXES.iter().enumerate() {
-            out(b, format!("body.z[{}]", i + 1), format!("Body angular acceleration, {axis}, world frame"), "rad/s2", Quantity::BodyAngularAcceleration(i));
+            out(
+                b,
+                format!("body.z[{}]", i + 1),
+                format!("Body angular acceleration, {axis}, world frame"),
+                "rad/s2",
+                Quantity::BodyAngularAcceleration(i),
+            );
         }
-        out(b, "body.energy".into(), "Total energy: kinetic, elastic and gravitational".into(), "J", Quantity::BodyEnergy);
+        out(
+            b,
+            "body.energy".into(),
+            "Total energy: kinetic, elastic and gravitational".into(),
+            "J",
+            Quantity::BodyEnergy,
+        );
         for (i, axis) in AXES.iter().enumerate() {
-            out(b, format!("body.p[{}]", i + 1), format!("Linear momentum, {axis}, world frame"), "N.s", Quantity::BodyMomentum(i));
+            out(
+                b,
+                format!("body.p[{}]", i + 1),
+                format!("Linear momentum, {axis}, world frame"),
+                "N.s",
+                Quantity::BodyMomentum(i),
+            );
         }
         for (i, axis) in AXES.iter().enumerate() {
-            out(b, format!("body.h[{}]", i + 1), format!("Angular momentum about the world origin, {axis}, world frame"), "J.s", Quantity::BodyAngularMomentum(i));
+            out(
+                b,
+                format!("body.h[{}]", i + 1),
+                format!("Angular momentum about the world origin, {axis}, world frame"),
+                "J.s",
+                Quantity::BodyAngularMomentum(i),
+            );
         }
     }
 
@@ -452,24 +549,27 @@ impl VariableTable {
     fn is_frame_state(q: &Quantity) -> bool {
         matches!(
             q,
-            Quantity::FramePosition(_) | Quantity::FrameQuaternion(_) | Quantity::FrameVelocity(_) | Quantity::FrameAngularVelocity(_)
+            Quantity::FramePosition(_)
+                | Quantity::FrameQuaternion(_)
+                | Quantity::FrameVelocity(_)
+                | Quantity::FrameAngularVelocity(_)
         )
     }
 
     /// Derivative value references in state order: qd[1..n] (= der(q)) then der(qd[1..n]).
     pub fn derivatives(&self) -> Vec<u32> {
-        let mut d: Vec<u32> = self
-            .variables
-            .iter()
-            .filter(|v| matches!(v.quantity, Quantity::ModalVelocity(_)))
-            .map(|v| v.vr)
-            .collect();
+        let mut d: Vec<u32> =
+            self.variables.iter().filter(|v| matches!(v.quantity, Quantity::ModalVelocity(_))).map(|v| v.vr).collect();
         d.extend(self.variables.iter().filter(|v| matches!(v.quantity, Quantity::ModalAcceleration(_))).map(|v| v.vr));
         // frame: d/dt r = v (the state frame.v), then the quaternion, velocity and spin rates
         d.extend(self.variables.iter().filter(|v| matches!(v.quantity, Quantity::FrameVelocity(_))).map(|v| v.vr));
-        d.extend(self.variables.iter().filter(|v| matches!(v.quantity, Quantity::FrameQuaternionRate(_))).map(|v| v.vr));
+        d.extend(
+            self.variables.iter().filter(|v| matches!(v.quantity, Quantity::FrameQuaternionRate(_))).map(|v| v.vr),
+        );
         d.extend(self.variables.iter().filter(|v| matches!(v.quantity, Quantity::FrameAcceleration(_))).map(|v| v.vr));
-        d.extend(self.variables.iter().filter(|v| matches!(v.quantity, Quantity::FrameAngularAcceleration(_))).map(|v| v.vr));
+        d.extend(
+            self.variables.iter().filter(|v| matches!(v.quantity, Quantity::FrameAngularAcceleration(_))).map(|v| v.vr),
+        );
         d
     }
 
@@ -495,7 +595,10 @@ impl VariableTable {
             // free-floating: every output and derivative may depend on every state and load
             let mut deps = self.select(|q| {
                 Self::is_frame_state(q)
-                    || matches!(q, Q::ModalCoordinate(_) | Q::ModalVelocity(_) | Q::FlangeForce(..) | Q::FlangeTorque(..))
+                    || matches!(
+                        q,
+                        Q::ModalCoordinate(_) | Q::ModalVelocity(_) | Q::FlangeForce(..) | Q::FlangeTorque(..)
+                    )
             });
             deps.sort_unstable();
             return deps;
@@ -530,7 +633,9 @@ impl VariableTable {
         use Quantity as Q;
         if self.variables.iter().any(|v| Self::is_frame_state(&v.quantity)) {
             // free-floating: states start from parameters; the rest follows the loads
-            if Self::is_frame_state(&var.quantity) || matches!(var.quantity, Q::ModalCoordinate(_) | Q::ModalVelocity(_)) {
+            if Self::is_frame_state(&var.quantity)
+                || matches!(var.quantity, Q::ModalCoordinate(_) | Q::ModalVelocity(_))
+            {
                 return Vec::new();
             }
             return self.select(|q| matches!(q, Q::FlangeForce(..) | Q::FlangeTorque(..)));
@@ -538,8 +643,12 @@ impl VariableTable {
         let static_loads = |q: &Q| {
             matches!(
                 q,
-                Q::MountAcceleration(_) | Q::MountRotation(..) | Q::MountAngularVelocity(_) | Q::MountAngularAcceleration(_)
-                    | Q::FlangeForce(..) | Q::FlangeTorque(..)
+                Q::MountAcceleration(_)
+                    | Q::MountRotation(..)
+                    | Q::MountAngularVelocity(_)
+                    | Q::MountAngularAcceleration(_)
+                    | Q::FlangeForce(..)
+                    | Q::FlangeTorque(..)
             )
         };
         let direct = match var.quantity {

@@ -137,7 +137,8 @@ pub fn quaternion_multiply(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
 pub fn nearest_rotation<T: Scalar>(a: &Mat3<T>) -> Mat3<T> {
     let mut x = *a;
     for _ in 0..8 {
-        let det = x[0] * (x[4] * x[8] - x[5] * x[7]) - x[1] * (x[3] * x[8] - x[5] * x[6]) + x[2] * (x[3] * x[7] - x[4] * x[6]);
+        let det = x[0] * (x[4] * x[8] - x[5] * x[7]) - x[1] * (x[3] * x[8] - x[5] * x[6])
+            + x[2] * (x[3] * x[7] - x[4] * x[6]);
         // X^-T = cof(X) / det
         let cof = [
             x[4] * x[8] - x[5] * x[7],
@@ -171,8 +172,8 @@ pub fn rotation_defect(a: &Mat3) -> f64 {
             worst = worst.max((dot - if i == j { 1.0 } else { 0.0 }).abs());
         }
     }
-    let det = a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6])
-        + a[2] * (a[3] * a[7] - a[4] * a[6]);
+    let det =
+        a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6]) + a[2] * (a[3] * a[7] - a[4] * a[6]);
     if det <= 0.0 { f64::INFINITY } else { worst }
 }
 

@@ -6,12 +6,12 @@
 
 pub mod body;
 pub mod coupled_propagator;
+pub mod fmu;
 pub mod format;
+pub mod interface;
 pub mod kinematics;
 pub mod propagator;
 pub mod reduced;
 pub mod scalar;
-pub mod fmu;
-pub mod interface;
 
 fmi2::export_fmi2!(crate::fmu::BodyFmu);

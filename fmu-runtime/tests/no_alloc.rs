@@ -8,9 +8,9 @@
 //! allocation does not depend on the numbers. fmu-builder's tests/no_alloc.rs does the same with
 //! a beam built by the builder.
 
-use fmu_runtime::body::FlexibleBody;
-use fmi2::types::*;
 use fmi2::Model;
+use fmi2::types::*;
+use fmu_runtime::body::FlexibleBody;
 use fmu_runtime::fmu::BodyFmu;
 use fmu_runtime::interface::VariableTable;
 use fmu_runtime::reduced::{FlangeShapes, ReducedBody, RotationTerms, Stiffening, two_mode_body};
@@ -187,7 +187,8 @@ fn outputs(table: &VariableTable, reduced: &ReducedBody) -> Vec<u32> {
             }
         }
     }
-    let extra: &[&str] = if reduced.free_floating { &["body.energy", "body.h[3]", "frame.r[1]"] } else { &["base.f[3]", "base.t[2]"] };
+    let extra: &[&str] =
+        if reduced.free_floating { &["body.energy", "body.h[3]", "frame.r[1]"] } else { &["base.f[3]", "base.t[2]"] };
     names.extend(extra.iter().map(|s| s.to_string()));
     names.iter().map(|n| table.value_reference(n).unwrap()).collect()
 }
@@ -203,7 +204,12 @@ fn mount_inputs(table: &VariableTable) -> (Vec<u32>, Vec<f64>) {
             values.push(rot[3 * i + j]);
         }
     }
-    for (name, v) in [("base.w", [0.0, 1.0, 10.0]), ("base.r", [0.2, 0.0, 0.0]), ("base.v", [0.0, 2.0, 0.0]), ("base.a", [-20.0, 0.0, 0.0])] {
+    for (name, v) in [
+        ("base.w", [0.0, 1.0, 10.0]),
+        ("base.r", [0.2, 0.0, 0.0]),
+        ("base.v", [0.0, 2.0, 0.0]),
+        ("base.a", [-20.0, 0.0, 0.0]),
+    ] {
         for (i, x) in v.into_iter().enumerate() {
             vrs.push(table.value_reference(&format!("{name}[{}]", i + 1)).unwrap());
             values.push(x);
@@ -264,14 +270,29 @@ fn fmi_model_calls_allocate_nothing() {
 
 // --- the exported C functions, as the FMU's binary runs them ---------------------------------
 
-unsafe extern "C" fn quiet_logger(_: *mut c_void, _: *const c_char, _: fmi2Status, _: *const c_char, _: *const c_char, _: *const c_char) {}
+unsafe extern "C" fn quiet_logger(
+    _: *mut c_void,
+    _: *const c_char,
+    _: fmi2Status,
+    _: *const c_char,
+    _: *const c_char,
+    _: *const c_char,
+) {
+}
 
 fn callbacks() -> fmi2CallbackFunctions {
-    type Fixed = unsafe extern "C" fn(*mut c_void, *const c_char, fmi2Status, *const c_char, *const c_char, *const c_char);
+    type Fixed =
+        unsafe extern "C" fn(*mut c_void, *const c_char, fmi2Status, *const c_char, *const c_char, *const c_char);
     // Stable Rust cannot define a C-variadic function; on x86-64 SysV the fixed and variadic
     // pointer arguments travel alike (as in the FMI layer's own tests).
     let logger: fmi2CallbackLogger = unsafe { std::mem::transmute(quiet_logger as Fixed) };
-    fmi2CallbackFunctions { logger: Some(logger), allocateMemory: None, freeMemory: None, stepFinished: None, componentEnvironment: std::ptr::null_mut() }
+    fmi2CallbackFunctions {
+        logger: Some(logger),
+        allocateMemory: None,
+        freeMemory: None,
+        stepFinished: None,
+        componentEnvironment: std::ptr::null_mut(),
+    }
 }
 
 struct Resources(std::path::PathBuf);
@@ -310,7 +331,15 @@ fn exported_c_functions_allocate_nothing() {
         for kind in [fmi2CoSimulation, fmi2ModelExchange] {
             let name = format!("{tag} {}", if kind == fmi2CoSimulation { "CS" } else { "ME" });
             unsafe {
-                let c = fmu_runtime::fmi2Instantiate(c"no-alloc".as_ptr(), kind, guid.as_ptr(), uri.as_ptr(), &cb, fmi2False, fmi2False);
+                let c = fmu_runtime::fmi2Instantiate(
+                    c"no-alloc".as_ptr(),
+                    kind,
+                    guid.as_ptr(),
+                    uri.as_ptr(),
+                    &cb,
+                    fmi2False,
+                    fmi2False,
+                );
                 assert!(!c.is_null(), "{name}: fmi2Instantiate");
                 ok("fmi2SetupExperiment", fmu_runtime::fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0));
                 if let Motion::Rotating = motion {
@@ -329,7 +358,10 @@ fn exported_c_functions_allocate_nothing() {
                             ok("fmi2SetReal", fmu_runtime::fmi2SetReal(c, force.as_ptr(), 3, f.as_ptr()));
                             ok("fmi2DoStep", fmu_runtime::fmi2DoStep(c, t, 1e-3, fmi2True));
                             t += 1e-3;
-                            ok("fmi2GetReal", fmu_runtime::fmi2GetReal(c, out.as_ptr(), out.len(), values.as_mut_ptr()));
+                            ok(
+                                "fmi2GetReal",
+                                fmu_runtime::fmi2GetReal(c, out.as_ptr(), out.len(), values.as_mut_ptr()),
+                            );
                             sink += values[2];
                         }
                     });
@@ -341,16 +373,22 @@ fn exported_c_functions_allocate_nothing() {
                     let mut x = vec![0.0; nx];
                     let mut dx = vec![0.0; nx];
                     ok("fmi2GetContinuousStates", fmu_runtime::fmi2GetContinuousStates(c, x.as_mut_ptr(), nx));
-                    assert_no_allocation(&format!("{name}: fmi2SetTime, fmi2SetContinuousStates, fmi2GetDerivatives, fmi2GetReal"), || {
-                        for k in 0..1000 {
-                            x[k % nx] += 1e-7;
-                            ok("fmi2SetTime", fmu_runtime::fmi2SetTime(c, k as f64 * 1e-4));
-                            ok("fmi2SetContinuousStates", fmu_runtime::fmi2SetContinuousStates(c, x.as_ptr(), nx));
-                            ok("fmi2GetDerivatives", fmu_runtime::fmi2GetDerivatives(c, dx.as_mut_ptr(), nx));
-                            ok("fmi2GetReal", fmu_runtime::fmi2GetReal(c, out.as_ptr(), out.len(), values.as_mut_ptr()));
-                            sink += dx[nx - 1] + values[0];
-                        }
-                    });
+                    assert_no_allocation(
+                        &format!("{name}: fmi2SetTime, fmi2SetContinuousStates, fmi2GetDerivatives, fmi2GetReal"),
+                        || {
+                            for k in 0..1000 {
+                                x[k % nx] += 1e-7;
+                                ok("fmi2SetTime", fmu_runtime::fmi2SetTime(c, k as f64 * 1e-4));
+                                ok("fmi2SetContinuousStates", fmu_runtime::fmi2SetContinuousStates(c, x.as_ptr(), nx));
+                                ok("fmi2GetDerivatives", fmu_runtime::fmi2GetDerivatives(c, dx.as_mut_ptr(), nx));
+                                ok(
+                                    "fmi2GetReal",
+                                    fmu_runtime::fmi2GetReal(c, out.as_ptr(), out.len(), values.as_mut_ptr()),
+                                );
+                                sink += dx[nx - 1] + values[0];
+                            }
+                        },
+                    );
                 }
                 assert!(sink.is_finite(), "{name}: {sink}");
                 fmu_runtime::fmi2FreeInstance(c);

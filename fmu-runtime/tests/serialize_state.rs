@@ -15,8 +15,8 @@ use fmi2::state::ModelState;
 use fmi2::types::fmi2Status::{fmi2Error, fmi2OK};
 use fmi2::types::*;
 use fmi2::{Causality, Interface, Model, VarType};
-use fmu_runtime::format::RESOURCE_FILE;
 use fmu_runtime::fmu::BodyFmu;
+use fmu_runtime::format::RESOURCE_FILE;
 use fmu_runtime::interface::VariableTable;
 use fmu_runtime::reduced::{ReducedBody, RotationTerms, Stiffening, two_mode_body};
 
@@ -141,7 +141,15 @@ fn free() -> Case {
 impl Case {
     fn instantiate(&self, kind: fmi2Type) -> fmi2Component {
         let c = unsafe {
-            api::fmi2Instantiate::<BodyFmu>(c"serialize".as_ptr(), kind, self.guid.as_ptr(), self.uri.as_ptr(), null(), 0, 0)
+            api::fmi2Instantiate::<BodyFmu>(
+                c"serialize".as_ptr(),
+                kind,
+                self.guid.as_ptr(),
+                self.uri.as_ptr(),
+                null(),
+                0,
+                0,
+            )
         };
         assert!(!c.is_null());
         c
@@ -418,7 +426,9 @@ fn damaged_and_foreign_states_are_refused_with_a_reason() {
     let mut free_same_guid = cases[2].body.clone();
     free_same_guid.guid = case.body.guid.clone();
     let free_model = BodyFmu::from_reduced(free_same_guid);
-    let e = serial::deserialize(&serial::serialize(&snapshot(case, model)), &free_model, Interface::CoSimulation).map(|s| s.time).unwrap_err();
+    let e = serial::deserialize(&serial::serialize(&snapshot(case, model)), &free_model, Interface::CoSimulation)
+        .map(|s| s.time)
+        .unwrap_err();
     assert!(e.contains("free-floating"), "{e}");
 
     // Through the C API: refused, and the instance carries on.

@@ -150,7 +150,11 @@ impl Model for Spring {
         Ok(if vr == CRASH { self.crash } else { self.fail })
     }
     fn set_boolean(&mut self, vr: u32, value: bool) -> Result<(), String> {
-        if vr == CRASH { self.crash = value } else { self.fail = value }
+        if vr == CRASH {
+            self.crash = value
+        } else {
+            self.fail = value
+        }
         Ok(())
     }
     fn get_string(&mut self, vr: u32) -> Result<String, String> {
@@ -202,7 +206,13 @@ impl Model for Spring {
     fn is_state_derivative(&self, vr: u32) -> bool {
         matches!(vr, V_ | A)
     }
-    fn directional_derivative(&mut self, unknowns: &[u32], knowns: &[u32], dv_known: &[f64], dv_unknown: &mut [f64]) -> Result<(), String> {
+    fn directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        dv_known: &[f64],
+        dv_unknown: &mut [f64],
+    ) -> Result<(), String> {
         if self.fail {
             return Err("Jacobian failed".into());
         }
@@ -275,7 +285,8 @@ impl Model for Spring {
         let fail = r.bool("fail")?;
         let label = r.str("label")?.to_owned();
         r.finish("spring state")?;
-        *self = Spring { resources: std::mem::take(&mut self.resources), time, x, v, k, d, u, steps, crash, fail, label };
+        *self =
+            Spring { resources: std::mem::take(&mut self.resources), time, x, v, k, d, u, steps, crash, fail, label };
         Ok(())
     }
 }

@@ -6,10 +6,10 @@ use std::cell::RefCell;
 use std::ffi::{CStr, CString, c_char, c_void};
 use std::ptr::{null, null_mut};
 
+use crate::api;
 use crate::types::fmi2Status::*;
 use crate::types::*;
 use mock::*;
-use crate::api;
 
 #[derive(Debug, Clone)]
 struct Entry {
@@ -62,7 +62,8 @@ unsafe extern "C" fn record(
 }
 
 fn callbacks(log: &Log) -> fmi2CallbackFunctions {
-    type Fixed = unsafe extern "C" fn(*mut c_void, *const c_char, fmi2Status, *const c_char, *const c_char, *const c_char);
+    type Fixed =
+        unsafe extern "C" fn(*mut c_void, *const c_char, fmi2Status, *const c_char, *const c_char, *const c_char);
     let logger: fmi2CallbackLogger = unsafe { std::mem::transmute(record as Fixed) };
     fmi2CallbackFunctions {
         logger: Some(logger),
@@ -166,7 +167,9 @@ fn instantiate_checks_guid_and_type() {
     // No callbacks at all: still works, just silent.
     let name = c"silent";
     let guid = CString::new(GUID).unwrap();
-    let c = unsafe { api::fmi2Instantiate::<Spring>(name.as_ptr(), fmi2ModelExchange, guid.as_ptr(), null(), null(), 0, 1) };
+    let c = unsafe {
+        api::fmi2Instantiate::<Spring>(name.as_ptr(), fmi2ModelExchange, guid.as_ptr(), null(), null(), 0, 1)
+    };
     assert!(!c.is_null());
     assert_eq!(unsafe { api::fmi2DoStep::<Spring>(c, 0.0, 1.0, 0) }, fmi2Error);
     unsafe { api::fmi2FreeInstance::<Spring>(c) };
@@ -785,20 +788,34 @@ fn bad_serialized_states_are_refused_with_a_reason() {
         assert_eq!(api::fmi2SerializedFMUstateSize::<Spring>(c, state, null_mut()), fmi2Error);
         let mut buf = vec![0 as fmi2Byte; bytes.len() + 1];
         assert_eq!(api::fmi2SerializeFMUstate::<Spring>(c, state, buf.as_mut_ptr(), bytes.len() + 1), fmi2Error);
-        assert!(log.last().contains(&format!("size = {} but the serialized FMU state has {} bytes", bytes.len() + 1, bytes.len())), "{}", log.last());
+        assert!(
+            log.last().contains(&format!(
+                "size = {} but the serialized FMU state has {} bytes",
+                bytes.len() + 1,
+                bytes.len()
+            )),
+            "{}",
+            log.last()
+        );
         assert!(buf.iter().all(|&b| b == 0), "nothing written on a refused call");
         assert_eq!(api::fmi2SerializeFMUstate::<Spring>(c, state, buf.as_mut_ptr(), bytes.len() - 1), fmi2Error);
         assert_eq!(api::fmi2SerializeFMUstate::<Spring>(c, state, null_mut(), bytes.len()), fmi2Error);
         assert_eq!(log.last(), "fmi2SerializeFMUstate: argument serializedState[] must not be NULL");
         assert_eq!(api::fmi2SerializeFMUstate::<Spring>(c, null_mut(), buf.as_mut_ptr(), bytes.len()), fmi2Error);
         assert_eq!(api::fmi2DeSerializeFMUstate::<Spring>(c, null(), bytes.len(), &mut null_mut()), fmi2Error);
-        assert_eq!(api::fmi2DeSerializeFMUstate::<Spring>(c, bytes.as_ptr().cast(), bytes.len(), null_mut()), fmi2Error);
+        assert_eq!(
+            api::fmi2DeSerializeFMUstate::<Spring>(c, bytes.as_ptr().cast(), bytes.len(), null_mut()),
+            fmi2Error
+        );
         assert_eq!(log.last(), "fmi2DeSerializeFMUstate: argument FMUstate must not be NULL");
 
         // A refused state leaves the handle handed in as it was.
         let mut reused = get_state(c);
         let before = serialize(c, reused);
-        assert_eq!(api::fmi2DeSerializeFMUstate::<Spring>(c, me_bytes.as_ptr().cast(), me_bytes.len(), &mut reused), fmi2Error);
+        assert_eq!(
+            api::fmi2DeSerializeFMUstate::<Spring>(c, me_bytes.as_ptr().cast(), me_bytes.len(), &mut reused),
+            fmi2Error
+        );
         assert_eq!(serialize(c, reused), before);
         free_state(c, reused);
     }
@@ -849,7 +866,15 @@ fn directional(c: fmi2Component, unknowns: &[u32], knowns: &[u32], seed: &[f64])
     assert_eq!(knowns.len(), seed.len());
     let mut out = vec![f64::NAN; unknowns.len()];
     let status = unsafe {
-        api::fmi2GetDirectionalDerivative::<Spring>(c, unknowns.as_ptr(), unknowns.len(), knowns.as_ptr(), knowns.len(), seed.as_ptr(), out.as_mut_ptr())
+        api::fmi2GetDirectionalDerivative::<Spring>(
+            c,
+            unknowns.as_ptr(),
+            unknowns.len(),
+            knowns.as_ptr(),
+            knowns.len(),
+            seed.as_ptr(),
+            out.as_mut_ptr(),
+        )
     };
     (status, out)
 }
@@ -857,7 +882,9 @@ fn directional(c: fmi2Component, unknowns: &[u32], knowns: &[u32], seed: &[f64])
 fn output_derivatives(c: fmi2Component, vrs: &[u32], orders: &[i32]) -> (fmi2Status, Vec<f64>) {
     assert_eq!(vrs.len(), orders.len());
     let mut out = vec![f64::NAN; vrs.len()];
-    let status = unsafe { api::fmi2GetRealOutputDerivatives::<Spring>(c, vrs.as_ptr(), vrs.len(), orders.as_ptr(), out.as_mut_ptr()) };
+    let status = unsafe {
+        api::fmi2GetRealOutputDerivatives::<Spring>(c, vrs.as_ptr(), vrs.len(), orders.as_ptr(), out.as_mut_ptr())
+    };
     (status, out)
 }
 
@@ -924,7 +951,18 @@ fn directional_derivatives_model_exchange() {
         // The seed in the result buffer, as a C host may pass it: read before written.
         let mut buf = [1.0, 10.0, 100.0];
         let (u, kn) = ([X, A, ACC], [X, V_, U]);
-        assert_eq!(api::fmi2GetDirectionalDerivative::<Spring>(c, u.as_ptr(), 3, kn.as_ptr(), 3, buf.as_ptr(), buf.as_mut_ptr()), fmi2OK);
+        assert_eq!(
+            api::fmi2GetDirectionalDerivative::<Spring>(
+                c,
+                u.as_ptr(),
+                3,
+                kn.as_ptr(),
+                3,
+                buf.as_ptr(),
+                buf.as_mut_ptr()
+            ),
+            fmi2OK
+        );
         assert_eq!(buf, [1.0, -k - 10.0 * d + 100.0, -k - 10.0 * d + 100.0]);
         // Overlapping by one element.
         let mut buf = [1.0, 10.0, 100.0];
@@ -989,28 +1027,52 @@ fn directional_derivative_refusals_leave_the_instance_usable() {
         works();
 
         // Unknowns: Real outputs, and in Model Exchange state derivatives.
-        refused(directional(c, &[U], &[U], &[1.0]), &format!("{F}unknown value reference 3 (u) has causality Input; expected an output"));
+        refused(
+            directional(c, &[U], &[U], &[1.0]),
+            &format!("{F}unknown value reference 3 (u) has causality Input; expected an output"),
+        );
         refused(directional(c, &[ACC, K], &[U], &[1.0]), "unknown value reference 2 (k) has causality Parameter");
         refused(directional(c, &[ACC, 99], &[U], &[1.0]), &format!("{F}unknown value reference 99"));
-        refused(directional(c, &[STEPS], &[U], &[1.0]), &format!("{F}value reference 6 (steps) is a Integer variable, not Real"));
+        refused(
+            directional(c, &[STEPS], &[U], &[1.0]),
+            &format!("{F}value reference 6 (steps) is a Integer variable, not Real"),
+        );
         // Knowns: Real inputs, and in Model Exchange continuous states.
-        refused(directional(c, &[ACC], &[ACC], &[1.0]), "known value reference 11 (acc) has causality Output; expected an input");
+        refused(
+            directional(c, &[ACC], &[ACC], &[1.0]),
+            "known value reference 11 (acc) has causality Output; expected an input",
+        );
         refused(directional(c, &[ACC], &[D], &[1.0]), "known value reference 5 (d) has causality Parameter");
         refused(directional(c, &[ACC], &[U, 99], &[1.0, 1.0]), &format!("{F}unknown value reference 99"));
         refused(directional(c, &[ACC], &[CRASH], &[1.0]), "value reference 7 (crash) is a Boolean variable, not Real");
         if kind == fmi2CoSimulation {
-            refused(directional(c, &[A], &[U], &[1.0]), "unknown value reference 4 (a) has causality Local; expected an output (state derivatives are unknowns in Model Exchange only)");
-            refused(directional(c, &[ACC], &[V_], &[1.0]), "known value reference 1 (v) has causality Local; expected an input (continuous states are knowns in Model Exchange only)");
-            refused(directional(c, &[ACC], &[X], &[1.0]), "known value reference 0 (x) has causality Output; expected an input (continuous states are knowns in Model Exchange only)");
+            refused(
+                directional(c, &[A], &[U], &[1.0]),
+                "unknown value reference 4 (a) has causality Local; expected an output (state derivatives are unknowns in Model Exchange only)",
+            );
+            refused(
+                directional(c, &[ACC], &[V_], &[1.0]),
+                "known value reference 1 (v) has causality Local; expected an input (continuous states are knowns in Model Exchange only)",
+            );
+            refused(
+                directional(c, &[ACC], &[X], &[1.0]),
+                "known value reference 0 (x) has causality Output; expected an input (continuous states are knowns in Model Exchange only)",
+            );
         } else {
             refused(directional(c, &[U], &[U], &[1.0]), "expected an output or the derivative of a continuous state");
-            refused(directional(c, &[ACC], &[ACC], &[1.0]), "known value reference 11 (acc) has causality Output; expected an input or a continuous state");
+            refused(
+                directional(c, &[ACC], &[ACC], &[1.0]),
+                "known value reference 11 (acc) has causality Output; expected an input or a continuous state",
+            );
             let (status, dv) = directional(c, &[A], &[V_], &[1.0]);
             assert_eq!((status, dv), (fmi2OK, vec![0.0]), "{}", log.last());
         }
         // Seeds must be numbers.
         for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
-            refused(directional(c, &[ACC], &[U, U], &[1.0, bad]), &format!("{F}dvKnown[1] = {bad} for known value reference 3 (u) is not finite"));
+            refused(
+                directional(c, &[ACC], &[U, U], &[1.0, bad]),
+                &format!("{F}dvKnown[1] = {bad} for known value reference 3 (u) is not finite"),
+            );
         }
         // NULL arrays with a count.
         unsafe {
@@ -1057,12 +1119,20 @@ fn output_derivatives_co_simulation() {
     for order in [0, 2, -1] {
         refused(
             output_derivatives(c, &[X, ACC], &[1, order]),
-            &format!("{F}value reference 11 (acc): derivative order {order} requested; this FMU provides orders 1 to 1 (maxOutputDerivativeOrder 1)"),
+            &format!(
+                "{F}value reference 11 (acc): derivative order {order} requested; this FMU provides orders 1 to 1 (maxOutputDerivativeOrder 1)"
+            ),
         );
     }
-    refused(output_derivatives(c, &[U], &[1]), &format!("{F}value reference 3 (u) has causality Input; output derivatives are for outputs only"));
+    refused(
+        output_derivatives(c, &[U], &[1]),
+        &format!("{F}value reference 3 (u) has causality Input; output derivatives are for outputs only"),
+    );
     refused(output_derivatives(c, &[X, V_], &[1, 1]), "value reference 1 (v) has causality Local");
-    refused(output_derivatives(c, &[STEPS], &[1]), &format!("{F}value reference 6 (steps) is a Integer variable, not Real"));
+    refused(
+        output_derivatives(c, &[STEPS], &[1]),
+        &format!("{F}value reference 6 (steps) is a Integer variable, not Real"),
+    );
     refused(output_derivatives(c, &[99], &[1]), &format!("{F}unknown value reference 99"));
     unsafe {
         let (vr, order, mut out) = ([X], [1], [f64::NAN]);
@@ -1083,15 +1153,33 @@ fn output_derivatives_co_simulation() {
 
     // Only between steps, and only in Co-Simulation.
     let c = instantiate(&log, fmi2CoSimulation);
-    assert_refused(c, &log, output_derivatives(c, &[X], &[1]).0, "fmi2GetRealOutputDerivatives called in state Instantiated", "allowed in: StepComplete, StepFailed, StepCanceled, Terminated, Error");
+    assert_refused(
+        c,
+        &log,
+        output_derivatives(c, &[X], &[1]).0,
+        "fmi2GetRealOutputDerivatives called in state Instantiated",
+        "allowed in: StepComplete, StepFailed, StepCanceled, Terminated, Error",
+    );
     unsafe {
         assert_eq!(api::fmi2EnterInitializationMode::<Spring>(c), fmi2OK);
-        assert_refused(c, &log, output_derivatives(c, &[X], &[1]).0, "fmi2GetRealOutputDerivatives called in state InitializationMode", "allowed in: StepComplete");
+        assert_refused(
+            c,
+            &log,
+            output_derivatives(c, &[X], &[1]).0,
+            "fmi2GetRealOutputDerivatives called in state InitializationMode",
+            "allowed in: StepComplete",
+        );
         api::fmi2FreeInstance::<Spring>(c);
     }
     let c = instantiate(&log, fmi2ModelExchange);
     initialize(c, 0.0);
-    assert_refused(c, &log, output_derivatives(c, &[X], &[1]).0, "fmi2GetRealOutputDerivatives is a CoSimulation function", "instantiated for ModelExchange");
+    assert_refused(
+        c,
+        &log,
+        output_derivatives(c, &[X], &[1]).0,
+        "fmi2GetRealOutputDerivatives is a CoSimulation function",
+        "instantiated for ModelExchange",
+    );
     unsafe { api::fmi2FreeInstance::<Spring>(c) };
 }
 
@@ -1104,11 +1192,23 @@ fn derivatives_need_the_capability() {
         assert!(!c.is_null(), "{}", log.last());
         initialize(c, 0.0);
         let (status, out) = directional(c, &[ACC], &[U], &[1.0]);
-        assert_refused(c, &log, status, "fmi2GetDirectionalDerivative", "fmi2GetDirectionalDerivative: not supported by this FMU (capability flag providesDirectionalDerivative=false)");
+        assert_refused(
+            c,
+            &log,
+            status,
+            "fmi2GetDirectionalDerivative",
+            "fmi2GetDirectionalDerivative: not supported by this FMU (capability flag providesDirectionalDerivative=false)",
+        );
         assert!(out[0].is_nan());
         if kind == fmi2CoSimulation {
             let (status, out) = output_derivatives(c, &[X], &[1]);
-            assert_refused(c, &log, status, "fmi2GetRealOutputDerivatives", "fmi2GetRealOutputDerivatives: not supported by this FMU (capability flag maxOutputDerivativeOrder>0=false)");
+            assert_refused(
+                c,
+                &log,
+                status,
+                "fmi2GetRealOutputDerivatives",
+                "fmi2GetRealOutputDerivatives: not supported by this FMU (capability flag maxOutputDerivativeOrder>0=false)",
+            );
             assert!(out[0].is_nan());
             run_cs(c, 0.0, 0.2, 0.1);
         }
@@ -1143,7 +1243,11 @@ fn derivative_failures_of_the_model_enter_the_error_state() {
     // A panic in the model is contained the same way.
     assert_eq!(set_bool(c, CRASH, true), fmi2OK);
     assert_eq!(output_derivatives(c, &[ACC], &[1]).0, fmi2Error);
-    assert!(log.last().starts_with("fmi2GetRealOutputDerivatives: panic in the model: crash requested"), "{}", log.last());
+    assert!(
+        log.last().starts_with("fmi2GetRealOutputDerivatives: panic in the model: crash requested"),
+        "{}",
+        log.last()
+    );
     assert_eq!(model_state_of(c), ModelState::Error);
     unsafe { api::fmi2FreeInstance::<Spring>(c) };
 }

@@ -2,9 +2,9 @@
 //! reduced body and the report.
 
 use crate::input::spec::Spec;
-use crate::model::rigid_coupling::Assembled;
 use crate::model::flange::Flange;
 use crate::model::part::Part;
+use crate::model::rigid_coupling::Assembled;
 use crate::output::report::Report;
 use crate::reduce::basis::Basis;
 use fmu_runtime::reduced::ReducedBody;

@@ -12,9 +12,9 @@ use crate::input::spec::{Role, Spec};
 use crate::linalg::eigen::Deflation;
 use crate::linalg::sparse::{Sparse, SpdSolver, mul_new};
 use crate::model::assembly::{MassProperties, Uncoupled};
-use crate::model::rigid_coupling::{self, Assembled};
 use crate::model::flange::Flange;
 use crate::model::part::Part;
+use crate::model::rigid_coupling::{self, Assembled};
 use crate::output::fmu::guid::guid;
 use crate::output::report::report_of;
 use crate::reduce::accuracy::{enforce, free_free_accuracy};
@@ -120,7 +120,16 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
     let accuracy = free_free_accuracy(&model, &solver, shift, &rigid, &basis)?;
     enforce(&accuracy)?;
     let statics = basis.omega.len() - basis.n_normal;
-    let report = report_of(&spec, &part, &flanges, &model, &basis, &reduced, "free-interface modes + inertia-relief attachment shapes", statics, accuracy);
+    let report = report_of(
+        &spec,
+        &part,
+        &flanges,
+        &model,
+        &basis,
+        &reduced,
+        "free-interface modes + inertia-relief attachment shapes",
+        statics,
+        accuracy,
+    );
     Ok(Built { spec, part, flanges, model, basis, reduced, report })
 }
-

@@ -70,4 +70,3 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
     };
     mounted::reduce(spec, part, free, flanges, modes, mount)
 }
-

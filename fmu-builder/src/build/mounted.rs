@@ -12,9 +12,9 @@ use crate::input::spec::{Method, Role, SceneLoad, Spec};
 use crate::linalg::eigen;
 use crate::linalg::sparse::{self, SpdSolver};
 use crate::model::assembly::{SolidMaterial, Uncoupled};
-use crate::model::rigid_coupling::{self, Assembled};
 use crate::model::flange::Flange;
 use crate::model::part::Part;
+use crate::model::rigid_coupling::{self, Assembled};
 use crate::output::fmu::guid::guid;
 use crate::output::report::report_of;
 use crate::reduce::accuracy;
@@ -24,7 +24,6 @@ use crate::reduce::frf;
 use crate::reduce::order;
 use faer::{Mat, MatRef};
 use fmu_runtime::reduced::{FlangeShapes, ReducedBody, RotationTerms, Stiffening};
-
 
 /// Reduced geometric stiffness of every unit prestress the scene can apply: centrifugal and
 /// angular-acceleration loads if it rotates, translational ones if it has gravity or
@@ -116,7 +115,10 @@ fn solver_of(solver: &Option<SpdSolver>) -> Result<&SpdSolver> {
 
 /// The band of the scene, or 0 to the tenth eigenfrequency of the mounted body.
 fn band_of(spec: &Spec, full_hz: &[f64]) -> [f64; 2] {
-    spec.scene.as_ref().and_then(|s| s.band).unwrap_or_else(|| [0.0, full_hz.get(9).or(full_hz.last()).copied().unwrap_or(1.0)])
+    spec.scene
+        .as_ref()
+        .and_then(|s| s.band)
+        .unwrap_or_else(|| [0.0, full_hz.get(9).or(full_hz.last()).copied().unwrap_or(1.0)])
 }
 
 /// The smallest dominant selection of the candidate basis meeting the scene's tolerance.
@@ -174,7 +176,12 @@ fn choose_order(
         best = best.min(err);
         if err <= tol {
             let phi = &rich.phi * &sel.y;
-            return Ok(Basis { phi, omega: sel.omega, n_normal: sel.kept_modes, fixed_interface_omega: rich.fixed_interface_omega });
+            return Ok(Basis {
+                phi,
+                omega: sel.omega,
+                n_normal: sel.kept_modes,
+                fixed_interface_omega: rich.fixed_interface_omega,
+            });
         }
     }
     Err(BuildError::Input {
@@ -190,7 +197,14 @@ fn choose_order(
 }
 
 /// The reduced body of a part held at its mount flange `mount`.
-pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, modes: ModeCount, mount: usize) -> Result<Built> {
+pub fn reduce(
+    spec: Spec,
+    part: Part,
+    free: Uncoupled,
+    flanges: Vec<Flange>,
+    modes: ModeCount,
+    mount: usize,
+) -> Result<Built> {
     let origin = flanges[mount].reference;
     let model = rigid_coupling::rigid_coupling(&free, &part.mesh.nodes, &flanges, origin)?;
     drop(free);
@@ -236,7 +250,8 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
             let points = spec.reduction.expansion_points.clone().unwrap_or_default();
             let moments = spec.reduction.moments.unwrap_or(2);
             let real = spec.reduction.real_expansion_points.clone().unwrap_or_default();
-            let name = format!("second-order Krylov, {moments} block moments at s = 0, 2 pi i {points:?} Hz, {real:?} 1/s");
+            let name =
+                format!("second-order Krylov, {moments} block moments at s = 0, 2 pi i {points:?} Hz, {real:?} 1/s");
             (basis::krylov(&model, solver_of(&solver)?, &points, &real, moments, load_shapes.as_ref())?, name)
         }
     };
@@ -257,7 +272,18 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
         RotationTerms { g: r.g, o_mat: r.o_mat, o_vec: r.o_vec }
     });
     let stiffening = if spec.stiffening() {
-        Some(stiffening_terms(&spec, mesh, &flanges, &model, &solver, origin, &part.materials, &cases, load_shapes.as_ref(), phi_mesh.as_ref())?)
+        Some(stiffening_terms(
+            &spec,
+            mesh,
+            &flanges,
+            &model,
+            &solver,
+            origin,
+            &part.materials,
+            &cases,
+            load_shapes.as_ref(),
+            phi_mesh.as_ref(),
+        )?)
     } else {
         None
     };
@@ -318,7 +344,8 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
                 LoadCase::Euler(a) => format!("angular acceleration {}", axis[*a]),
                 LoadCase::Centrifugal(a, b) => format!("centrifugal {}{}", axis[*a], axis[*b]),
             });
-            let response = force_dofs.iter().flat_map(|(_, first)| (0..6).map(move |i| shapes[(first + i, c)])).collect();
+            let response =
+                force_dofs.iter().flat_map(|(_, first)| (0..6).map(move |i| shapes[(first + i, c)])).collect();
             accuracy.inertial_flange_response_full.push(response);
         }
     }

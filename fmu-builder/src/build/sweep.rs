@@ -3,8 +3,8 @@
 //! co-simulation step (the runtime stepped in process), and its build time, side by side in one
 //! run so the ratios mean something on a noisy machine.
 
-use crate::error::Result;
 use super::{Built, reduce_spec};
+use crate::error::Result;
 use crate::input::spec::{Method, Reduction, Scene, Spec};
 use fmu_runtime::body::FlexibleBody;
 use std::path::Path;
@@ -120,7 +120,15 @@ pub fn sweep(spec: &Spec, file: &Path) -> Result<Vec<SweepRow>> {
         let frf_error = built.report.accuracy.frequency_response.as_ref().map_or(f64::NAN, |f| f.max_relative_error);
         let step_ns = step_cost(&built, 0.0);
         let step_ns_rotating = built.reduced.rotation.is_some().then(|| step_cost(&built, 10.0));
-        rows.push(SweepRow { method, setting, order: built.reduced.n_modes(), frf_error, step_ns, step_ns_rotating, build_s });
+        rows.push(SweepRow {
+            method,
+            setting,
+            order: built.reduced.n_modes(),
+            frf_error,
+            step_ns,
+            step_ns_rotating,
+            build_s,
+        });
     }
     Ok(rows)
 }
@@ -140,7 +148,10 @@ fn cb(modes: usize) -> Reduction {
 pub fn table(rows: &[SweepRow], band: Option<[f64; 2]>) -> String {
     let mut s = String::new();
     if let Some(b) = band {
-        s.push_str(&format!("flange transfer-function error over {:.4}..{:.4} Hz; step cost: h = 1 ms, in process\n", b[0], b[1]));
+        s.push_str(&format!(
+            "flange transfer-function error over {:.4}..{:.4} Hz; step cost: h = 1 ms, in process\n",
+            b[0], b[1]
+        ));
     }
     s.push_str("| method | setting | order | FRF error in band | ns/step (fixed mount) | ns/step (spinning 10 rad/s) | build [s] |\n");
     s.push_str("|---|---|---:|---:|---:|---:|---:|\n");
@@ -157,11 +168,17 @@ pub fn table(rows: &[SweepRow], band: Option<[f64; 2]>) -> String {
 /// Error in band against cost per step, one line per method (log-log), as a standalone SVG.
 pub fn plot(rows: &[SweepRow]) -> String {
     use crate::output::plot::{PALETTE, PlotSpec, Series, Stroke, line_plot};
-    let mut spec = PlotSpec::new("Speed against error", "cost per step [ns] (fixed mount, h = 1 ms)", "flange FRF error in band", true);
+    let mut spec = PlotSpec::new(
+        "Speed against error",
+        "cost per step [ns] (fixed mount, h = 1 ms)",
+        "flange FRF error in band",
+        true,
+    );
     spec.log_x = true;
     let mut series = Vec::new();
     for (i, method) in ["craig_bampton", "modal", "krylov"].iter().enumerate() {
-        let pts: Vec<&SweepRow> = rows.iter().filter(|r| r.method == *method && !r.setting.ends_with("declared")).collect();
+        let pts: Vec<&SweepRow> =
+            rows.iter().filter(|r| r.method == *method && !r.setting.ends_with("declared")).collect();
         if pts.is_empty() {
             continue;
         }

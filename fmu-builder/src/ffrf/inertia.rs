@@ -4,9 +4,9 @@
 //! consistent mass M = M_s (x) I3 they commute with M, so every invariant is a product of the
 //! nodal mass with per-node cross products of the basis and the positions.
 
-use crate::model::rigid_coupling::{Assembled, NodeDofs};
-use crate::model::flange::Flange;
 use crate::linalg::sparse::mul_new;
+use crate::model::flange::Flange;
+use crate::model::rigid_coupling::{Assembled, NodeDofs};
 use faer::{Mat, MatRef};
 
 /// A unit inertial load case of the frame's motion (loads on the body, in the body frame).
@@ -175,7 +175,12 @@ pub struct RotationInvariants {
     pub o_vec: Vec<f64>,
 }
 
-pub fn rotation_invariants(model: &Assembled, nodes: &[[f64; 3]], origin: [f64; 3], phi: MatRef<'_, f64>) -> RotationInvariants {
+pub fn rotation_invariants(
+    model: &Assembled,
+    nodes: &[[f64; 3]],
+    origin: [f64; 3],
+    phi: MatRef<'_, f64>,
+) -> RotationInvariants {
     let r = phi.ncols();
     let m_phi = mass_times(model, phi);
     let x = positions(nodes, origin);

@@ -2,10 +2,10 @@
 //! needs to couple the elastic coordinates to the body frame's rigid motion. All are projections
 //! of the consistent mass onto rigid-body fields and the basis, computed once here.
 
-use crate::model::rigid_coupling::{Assembled, NodeDofs};
-use crate::model::flange::Flange;
-use crate::reduce::basis::Basis;
 use crate::linalg::sparse::mul_new;
+use crate::model::flange::Flange;
+use crate::model::rigid_coupling::{Assembled, NodeDofs};
+use crate::reduce::basis::Basis;
 use faer::Mat;
 
 pub struct Invariants {
@@ -52,7 +52,13 @@ pub fn rigid_fields(model: &Assembled, nodes: &[[f64; 3]], flanges: &[Flange], o
     r
 }
 
-pub fn invariants(model: &Assembled, nodes: &[[f64; 3]], flanges: &[Flange], origin: [f64; 3], basis: &Basis) -> Invariants {
+pub fn invariants(
+    model: &Assembled,
+    nodes: &[[f64; 3]],
+    flanges: &[Flange],
+    origin: [f64; 3],
+    basis: &Basis,
+) -> Invariants {
     let d = &model.dofs;
     let nc = d.n_clamped();
     let rb = basis.phi.ncols();

@@ -3,15 +3,20 @@
 //! never assembled. Linear in the load: the runtime scales each case by its present load.
 
 use crate::error::{BuildError, Result};
-use crate::model::assembly::SolidMaterial;
 use crate::input::element::{ElementKind, MAX_NODES_PER_ELEMENT};
-use crate::model::fe::geometric::element_geometric_stiffness;
 use crate::input::mesh::Mesh;
+use crate::model::assembly::SolidMaterial;
+use crate::model::fe::geometric::element_geometric_stiffness;
 use faer::{Mat, MatRef};
 
 /// Phi^T K_sigma(u) Phi (r x r, symmetric) for the mesh-level prestress displacement `u` (3N) and
 /// mesh-level basis `phi` (3N x r).
-pub fn reduced_geometric_stiffness(mesh: &Mesh, materials: &[SolidMaterial], u: &[f64], phi: MatRef<'_, f64>) -> Result<Mat<f64>> {
+pub fn reduced_geometric_stiffness(
+    mesh: &Mesh,
+    materials: &[SolidMaterial],
+    u: &[f64],
+    phi: MatRef<'_, f64>,
+) -> Result<Mat<f64>> {
     let r = phi.ncols();
     let mut out = Mat::<f64>::zeros(r, r);
     let mut coords_buf = [[0.0; 3]; MAX_NODES_PER_ELEMENT];

@@ -34,16 +34,8 @@ pub enum ElementKind {
 
 /// Natural coordinates of the C3D8 nodes: nodes 1-4 counterclockwise on the
 /// face zeta = -1, nodes 5-8 above them on zeta = +1.
-pub const HEX8_NATURAL_COORDS: [[i8; 3]; 8] = [
-    [-1, -1, -1],
-    [1, -1, -1],
-    [1, 1, -1],
-    [-1, 1, -1],
-    [-1, -1, 1],
-    [1, -1, 1],
-    [1, 1, 1],
-    [-1, 1, 1],
-];
+pub const HEX8_NATURAL_COORDS: [[i8; 3]; 8] =
+    [[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1], [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]];
 
 /// Natural coordinates of the C3D20 nodes: corners as in C3D8, then midside
 /// nodes of the bottom edges (1-2, 2-3, 3-4, 4-1), of the top edges (5-6, 6-7,
@@ -76,30 +68,13 @@ pub const HEX20_NATURAL_COORDS: [[i8; 3]; 20] = [
 pub const TET10_EDGES: [(usize, usize); 6] = [(0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3)];
 
 /// Corner pairs of the C3D20 midside nodes 9..20 (0-based positions 8..19).
-pub const HEX20_EDGES: [(usize, usize); 12] = [
-    (0, 1),
-    (1, 2),
-    (2, 3),
-    (3, 0),
-    (4, 5),
-    (5, 6),
-    (6, 7),
-    (7, 4),
-    (0, 4),
-    (1, 5),
-    (2, 6),
-    (3, 7),
-];
+pub const HEX20_EDGES: [(usize, usize); 12] =
+    [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4), (1, 5), (2, 6), (3, 7)];
 
 impl ElementKind {
     /// Every kind, in declaration order.
-    pub const ALL: [ElementKind; 5] = [
-        ElementKind::Hex8,
-        ElementKind::Hex20,
-        ElementKind::Hex20R,
-        ElementKind::Tet4,
-        ElementKind::Tet10,
-    ];
+    pub const ALL: [ElementKind; 5] =
+        [ElementKind::Hex8, ElementKind::Hex20, ElementKind::Hex20R, ElementKind::Tet4, ElementKind::Tet10];
 
     /// Number of nodes of the element.
     pub const fn nodes_per_element(self) -> usize {
@@ -156,18 +131,14 @@ impl ElementKind {
     /// case-insensitive, as CalculiX reads keywords and parameters).
     pub fn from_calculix_name(name: &str) -> Option<Self> {
         let name = name.trim();
-        Self::ALL
-            .into_iter()
-            .find(|k| k.calculix_name().eq_ignore_ascii_case(name))
+        Self::ALL.into_iter().find(|k| k.calculix_name().eq_ignore_ascii_case(name))
     }
 
     /// Comma-separated CalculiX names of every kind, for error messages:
     /// tetrahedra first, then hexahedra, each by node count.
     pub fn supported_names() -> String {
         use ElementKind::*;
-        [Tet4, Tet10, Hex8, Hex20, Hex20R]
-            .map(|k| k.calculix_name())
-            .join(", ")
+        [Tet4, Tet10, Hex8, Hex20, Hex20R].map(|k| k.calculix_name()).join(", ")
     }
 
     /// Natural coordinates (each -1, 0 or +1) of the nodes of the hexahedral
@@ -197,10 +168,7 @@ mod tests {
     #[test]
     fn names_round_trip() {
         for kind in ElementKind::ALL {
-            assert_eq!(
-                ElementKind::from_calculix_name(kind.calculix_name()),
-                Some(kind)
-            );
+            assert_eq!(ElementKind::from_calculix_name(kind.calculix_name()), Some(kind));
             let lower = kind.calculix_name().to_ascii_lowercase();
             assert_eq!(ElementKind::from_calculix_name(&lower), Some(kind));
             let quoted = format!("\"{}\"", kind.name());
@@ -210,25 +178,13 @@ mod tests {
         let names = ElementKind::ALL.map(|k| (k.name(), k.calculix_name()));
         assert_eq!(
             names,
-            [
-                ("hex8", "C3D8"),
-                ("hex20", "C3D20"),
-                ("hex20r", "C3D20R"),
-                ("tet4", "C3D4"),
-                ("tet10", "C3D10")
-            ]
+            [("hex8", "C3D8"), ("hex20", "C3D20"), ("hex20r", "C3D20R"), ("tet4", "C3D4"), ("tet10", "C3D10")]
         );
-        assert_eq!(
-            ElementKind::from_calculix_name(" c3d20r "),
-            Some(ElementKind::Hex20R)
-        );
+        assert_eq!(ElementKind::from_calculix_name(" c3d20r "), Some(ElementKind::Hex20R));
         assert_eq!(ElementKind::from_calculix_name("C3D8R"), None);
         assert!(serde_json::from_str::<ElementKind>("\"C3D8\"").is_err());
         assert_eq!(ElementKind::default(), ElementKind::Hex20);
-        assert_eq!(
-            ElementKind::supported_names(),
-            "C3D4, C3D10, C3D8, C3D20, C3D20R"
-        );
+        assert_eq!(ElementKind::supported_names(), "C3D4, C3D10, C3D8, C3D20, C3D20R");
     }
 
     #[test]
@@ -236,11 +192,7 @@ mod tests {
         for kind in ElementKind::ALL {
             let n = kind.nodes_per_element();
             assert!(n <= MAX_NODES_PER_ELEMENT);
-            assert_eq!(
-                kind.corner_nodes() + kind.midside_edges().len(),
-                n,
-                "{kind}"
-            );
+            assert_eq!(kind.corner_nodes() + kind.midside_edges().len(), n, "{kind}");
             if let Some(natural) = kind.natural_node_coords() {
                 assert_eq!(natural.len(), n, "{kind}");
             }

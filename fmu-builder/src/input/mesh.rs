@@ -84,11 +84,7 @@ impl Mesh {
 
     /// Coordinates of the nodes of element `i`, written into a stack buffer
     /// so assembly loops need not allocate; returns the filled prefix.
-    pub fn element_coords<'a>(
-        &self,
-        i: usize,
-        buf: &'a mut [[f64; 3]; MAX_NODES_PER_ELEMENT],
-    ) -> &'a [[f64; 3]] {
+    pub fn element_coords<'a>(&self, i: usize, buf: &'a mut [[f64; 3]; MAX_NODES_PER_ELEMENT]) -> &'a [[f64; 3]] {
         let conn = self.element(i);
         for (slot, &node) in buf.iter_mut().zip(conn) {
             *slot = self.nodes[node];
@@ -102,7 +98,10 @@ impl Mesh {
 pub enum BoxProblem {
     NonFinite,
     /// `min >= max` along the axis.
-    NonPositiveExtent { min: f64, max: f64 },
+    NonPositiveExtent {
+        min: f64,
+        max: f64,
+    },
     ZeroDivisions,
 }
 
@@ -172,14 +171,7 @@ pub fn mesh_boxes(boxes: &[BoxRegion], kind: ElementKind) -> Result<Mesh, MeshEr
     let mut mesh = Mesh::empty();
     let mut interface_nodes = NodeHash::new(tol);
     for (box_index, lattice) in lattices.iter().enumerate() {
-        add_box(
-            &mut mesh,
-            kind,
-            box_index,
-            lattice,
-            &boxes[box_index],
-            &mut interface_nodes,
-        )?;
+        add_box(&mut mesh, kind, box_index, lattice, &boxes[box_index], &mut interface_nodes)?;
     }
     Ok(mesh)
 }
@@ -196,11 +188,7 @@ fn validate_box(box_index: usize, b: &BoxRegion) -> Result<(), MeshError> {
         } else {
             continue;
         };
-        return Err(MeshError::DegenerateBox {
-            box_index,
-            axis,
-            problem,
-        });
+        return Err(MeshError::DegenerateBox { box_index, axis, problem });
     }
     Ok(())
 }
@@ -212,9 +200,7 @@ const MAX_LATTICE_POINTS: usize = 1 << 31;
 
 fn check_size(box_index: usize, b: &BoxRegion, step: usize) -> Result<(), MeshError> {
     let points = b.divisions.iter().try_fold(1usize, |acc, &d| {
-        d.checked_mul(step)
-            .and_then(|m| m.checked_add(1))
-            .and_then(|p| acc.checked_mul(p))
+        d.checked_mul(step).and_then(|m| m.checked_add(1)).and_then(|p| acc.checked_mul(p))
     });
     match points {
         Some(p) if p <= MAX_LATTICE_POINTS => Ok(()),
@@ -257,11 +243,7 @@ impl Lattice {
         let m = self.intervals[axis];
         // The last point is set exactly so that touching boxes agree bit for
         // bit on their shared plane.
-        if i == m {
-            self.max[axis]
-        } else {
-            self.min[axis] + (self.max[axis] - self.min[axis]) * (i as f64 / m as f64)
-        }
+        if i == m { self.max[axis] } else { self.min[axis] + (self.max[axis] - self.min[axis]) * (i as f64 / m as f64) }
     }
 
     fn is_node(&self, idx: [usize; 3]) -> bool {
@@ -307,10 +289,7 @@ fn check_pair(i: usize, j: usize, a: &Lattice, b: &Lattice, tol: f64) -> Result<
         }
     }
     if (0..3).all(|axis| hi[axis] - lo[axis] > tol) {
-        return Err(MeshError::Overlap {
-            first: i,
-            second: j,
-        });
+        return Err(MeshError::Overlap { first: i, second: j });
     }
     check_nodes_matched((i, a), (j, b), lo, hi, tol)?;
     check_nodes_matched((j, b), (i, a), lo, hi, tol)
@@ -325,8 +304,7 @@ fn check_nodes_matched(
     hi: [f64; 3],
     tol: f64,
 ) -> Result<(), MeshError> {
-    let candidates: [Vec<usize>; 3] =
-        [0, 1, 2].map(|axis| own.indices_within(axis, lo[axis], hi[axis], tol));
+    let candidates: [Vec<usize>; 3] = [0, 1, 2].map(|axis| own.indices_within(axis, lo[axis], hi[axis], tol));
     for &i in &candidates[0] {
         for &j in &candidates[1] {
             for &k in &candidates[2] {
@@ -341,11 +319,7 @@ fn check_nodes_matched(
                     _ => false,
                 };
                 if !coincides {
-                    return Err(MeshError::NonConforming {
-                        node_box: own_index,
-                        other_box: other_index,
-                        point,
-                    });
+                    return Err(MeshError::NonConforming { node_box: own_index, other_box: other_index, point });
                 }
             }
         }
@@ -363,10 +337,7 @@ struct NodeHash {
 
 impl NodeHash {
     fn new(tol: f64) -> Self {
-        NodeHash {
-            tol,
-            cells: HashMap::new(),
-        }
+        NodeHash { tol, cells: HashMap::new() }
     }
 
     fn cell(&self, p: [f64; 3]) -> [i64; 3] {
@@ -379,11 +350,7 @@ impl NodeHash {
         for dz in -1..=1 {
             for dy in -1..=1 {
                 for dx in -1..=1 {
-                    let key = [
-                        c[0].saturating_add(dx),
-                        c[1].saturating_add(dy),
-                        c[2].saturating_add(dz),
-                    ];
+                    let key = [c[0].saturating_add(dx), c[1].saturating_add(dy), c[2].saturating_add(dz)];
                     if let Some(&id) = self.cells.get(&key) {
                         let q = nodes[id];
                         if (0..3).all(|a| (q[a] - p[a]).abs() <= self.tol) {
@@ -414,24 +381,16 @@ fn add_box(
     let [mx, my, mz] = lattice.intervals;
     let points = [mx, my, mz]
         .iter()
-        .try_fold(1usize, |acc, &m| {
-            m.checked_add(1).and_then(|p| acc.checked_mul(p))
-        })
+        .try_fold(1usize, |acc, &m| m.checked_add(1).and_then(|p| acc.checked_mul(p)))
         .ok_or_else(too_large)?;
     let npe = kind.nodes_per_element();
-    let element_entries = region
-        .divisions
-        .iter()
-        .try_fold(npe, |acc, &d| acc.checked_mul(d))
-        .ok_or_else(too_large)?;
+    let element_entries = region.divisions.iter().try_fold(npe, |acc, &d| acc.checked_mul(d)).ok_or_else(too_large)?;
 
     // Lattice point -> global node id (usize::MAX for face/body centres).
     let mut local = Vec::new();
     local.try_reserve_exact(points).map_err(|_| too_large())?;
     mesh.nodes.try_reserve(points).map_err(|_| too_large())?;
-    mesh.elements
-        .try_reserve(element_entries)
-        .map_err(|_| too_large())?;
+    mesh.elements.try_reserve(element_entries).map_err(|_| too_large())?;
 
     for k in 0..=mz {
         for j in 0..=my {
@@ -441,20 +400,9 @@ fn add_box(
                     local.push(usize::MAX);
                     continue;
                 }
-                let p = [
-                    lattice.coord(0, i),
-                    lattice.coord(1, j),
-                    lattice.coord(2, k),
-                ];
-                let on_boundary = idx
-                    .iter()
-                    .zip(lattice.intervals)
-                    .any(|(&v, m)| v == 0 || v == m);
-                let existing = if on_boundary {
-                    interface_nodes.find(p, &mesh.nodes)
-                } else {
-                    None
-                };
+                let p = [lattice.coord(0, i), lattice.coord(1, j), lattice.coord(2, k)];
+                let on_boundary = idx.iter().zip(lattice.intervals).any(|(&v, m)| v == 0 || v == m);
+                let existing = if on_boundary { interface_nodes.find(p, &mesh.nodes) } else { None };
                 let id = match existing {
                     Some(id) => id,
                     None => {
@@ -490,8 +438,7 @@ fn add_box(
                                 _ => step,
                             }
                     };
-                    mesh.elements
-                        .push(local[flat(off(ex, c[0]), off(ey, c[1]), off(ez, c[2]))]);
+                    mesh.elements.push(local[flat(off(ex, c[0]), off(ey, c[1]), off(ez, c[2]))]);
                 }
                 mesh.offsets.push(mesh.elements.len());
                 mesh.kinds.push(kind);
@@ -507,20 +454,13 @@ mod tests {
     use super::*;
 
     fn cube(min: [f64; 3], max: [f64; 3], divisions: [usize; 3]) -> BoxRegion {
-        BoxRegion {
-            min,
-            max,
-            divisions,
-        }
+        BoxRegion { min, max, divisions }
     }
 
     /// Corner grid plus one midpoint per element edge.
     fn hex20_node_count(n: [usize; 3]) -> usize {
         let [x, y, z] = n;
-        (x + 1) * (y + 1) * (z + 1)
-            + x * (y + 1) * (z + 1)
-            + (x + 1) * y * (z + 1)
-            + (x + 1) * (y + 1) * z
+        (x + 1) * (y + 1) * (z + 1) + x * (y + 1) * (z + 1) + (x + 1) * y * (z + 1) + (x + 1) * (y + 1) * z
     }
 
     /// Sum of element volumes. Fails unless every element is an axis-aligned
@@ -571,8 +511,7 @@ mod tests {
         assert_eq!(hex20.n_nodes(), hex20_node_count(n));
         // Same count via the lattice: (2n+1)^3 minus face centres and body centres.
         let full: usize = n.iter().map(|&d| 2 * d + 1).product();
-        let face_centres =
-            n[0] * n[1] * (n[2] + 1) + n[1] * n[2] * (n[0] + 1) + n[2] * n[0] * (n[1] + 1);
+        let face_centres = n[0] * n[1] * (n[2] + 1) + n[1] * n[2] * (n[0] + 1) + n[2] * n[0] * (n[1] + 1);
         assert_eq!(hex20.n_nodes(), full - face_centres - n[0] * n[1] * n[2]);
         assert_eq!(hex20.n_elements(), 24);
         for mesh in [&hex8, &hex20] {
@@ -583,11 +522,7 @@ mod tests {
 
     #[test]
     fn hex20_midside_nodes_sit_between_their_corners() {
-        let mesh = mesh_boxes(
-            &[cube([0.0; 3], [2.0, 1.0, 1.0], [2, 1, 1])],
-            ElementKind::Hex20,
-        )
-        .unwrap();
+        let mesh = mesh_boxes(&[cube([0.0; 3], [2.0, 1.0, 1.0], [2, 1, 1])], ElementKind::Hex20).unwrap();
         // (midside, corner a, corner b) in 0-based C3D20 numbering.
         let edges = [
             (8, 0, 1),
@@ -608,10 +543,7 @@ mod tests {
             for &(m, a, b) in &edges {
                 let (pm, pa, pb) = (mesh.nodes[c[m]], mesh.nodes[c[a]], mesh.nodes[c[b]]);
                 for axis in 0..3 {
-                    assert!(
-                        (pm[axis] - 0.5 * (pa[axis] + pb[axis])).abs() < 1e-12,
-                        "element {e} edge {m}"
-                    );
+                    assert!((pm[axis] - 0.5 * (pa[axis] + pb[axis])).abs() < 1e-12, "element {e} edge {m}");
                 }
             }
         }
@@ -620,27 +552,17 @@ mod tests {
     #[test]
     fn l_shape_shares_interface_nodes() {
         // Box 1 sits on top of the left half of box 0; shared face y = 1, x in [0, 1].
-        let boxes = [
-            cube([0.0; 3], [2.0, 1.0, 1.0], [2, 1, 1]),
-            cube([0.0, 1.0, 0.0], [1.0, 2.0, 1.0], [1, 1, 1]),
-        ];
+        let boxes = [cube([0.0; 3], [2.0, 1.0, 1.0], [2, 1, 1]), cube([0.0, 1.0, 0.0], [1.0, 2.0, 1.0], [1, 1, 1])];
         let hex8 = mesh_boxes(&boxes, ElementKind::Hex8).unwrap();
         assert_eq!(hex8.n_nodes(), 12 + 8 - 4);
         let hex20 = mesh_boxes(&boxes, ElementKind::Hex20).unwrap();
-        assert_eq!(
-            hex20.n_nodes(),
-            hex20_node_count([2, 1, 1]) + hex20_node_count([1, 1, 1]) - 8
-        );
+        assert_eq!(hex20.n_nodes(), hex20_node_count([2, 1, 1]) + hex20_node_count([1, 1, 1]) - 8);
         for mesh in [&hex8, &hex20] {
             assert_eq!(mesh.n_elements(), 3);
             assert_elements_well_formed(mesh);
             assert!((mesh_volume(mesh) - 3.0).abs() < 1e-12);
             // No two nodes coincide after merging.
-            let mut keys: Vec<[i64; 3]> = mesh
-                .nodes
-                .iter()
-                .map(|p| p.map(|x| (x * 1e6).round() as i64))
-                .collect();
+            let mut keys: Vec<[i64; 3]> = mesh.nodes.iter().map(|p| p.map(|x| (x * 1e6).round() as i64)).collect();
             keys.sort_unstable();
             keys.dedup();
             assert_eq!(keys.len(), mesh.n_nodes());
@@ -670,30 +592,16 @@ mod tests {
             // Finer grid on one side of the shared face x = 1.
             let finer = cube([1.0, 0.0, 0.0], [2.0, 1.0, 1.0], [1, 2, 1]);
             match mesh_boxes(&[base, finer], kind) {
-                Err(MeshError::NonConforming {
-                    node_box: 1,
-                    other_box: 0,
-                    point,
-                }) => {
-                    assert!(
-                        (point[0] - 1.0).abs() < 1e-12 && point[1] > 0.0 && point[1] < 1.0,
-                        "{point:?}"
-                    );
+                Err(MeshError::NonConforming { node_box: 1, other_box: 0, point }) => {
+                    assert!((point[0] - 1.0).abs() < 1e-12 && point[1] > 0.0 && point[1] < 1.0, "{point:?}");
                 }
                 other => panic!("{kind}: expected NonConforming, got {other:?}"),
             }
             // Shifted box: its corner lands inside the face of box 0.
             let shifted = cube([1.0, 0.5, 0.0], [2.0, 1.5, 1.0], [1, 1, 1]);
             let err = mesh_boxes(&[base, shifted], kind).unwrap_err();
-            assert!(
-                matches!(err, MeshError::NonConforming { .. }),
-                "{kind}: {err}"
-            );
-            assert!(
-                err.to_string().contains("boxes 0 and 1")
-                    || err.to_string().contains("boxes 1 and 0"),
-                "{err}"
-            );
+            assert!(matches!(err, MeshError::NonConforming { .. }), "{kind}: {err}");
+            assert!(err.to_string().contains("boxes 0 and 1") || err.to_string().contains("boxes 1 and 0"), "{err}");
         }
     }
 
@@ -713,20 +621,8 @@ mod tests {
         let b = cube([0.5, 0.5, 0.5], [1.5, 1.5, 1.5], [2, 2, 2]);
         let separate = cube([5.0; 3], [6.0; 3], [1, 1, 1]);
         let inner = cube([0.25; 3], [0.75; 3], [1, 1, 1]);
-        assert_eq!(
-            mesh_boxes(&[separate, a, b], ElementKind::Hex8),
-            Err(MeshError::Overlap {
-                first: 1,
-                second: 2
-            })
-        );
-        assert_eq!(
-            mesh_boxes(&[a, inner], ElementKind::Hex20),
-            Err(MeshError::Overlap {
-                first: 0,
-                second: 1
-            })
-        );
+        assert_eq!(mesh_boxes(&[separate, a, b], ElementKind::Hex8), Err(MeshError::Overlap { first: 1, second: 2 }));
+        assert_eq!(mesh_boxes(&[a, inner], ElementKind::Hex20), Err(MeshError::Overlap { first: 0, second: 1 }));
         // Disjoint boxes are fine and share nothing.
         let mesh = mesh_boxes(&[a, separate], ElementKind::Hex8).unwrap();
         assert_eq!(mesh.n_nodes(), 27 + 8);
@@ -740,41 +636,23 @@ mod tests {
         let nan = cube([0.0, 0.0, f64::NAN], [1.0; 3], [1, 1, 1]);
         assert!(matches!(
             mesh_boxes(&[good, flat], ElementKind::Hex8),
-            Err(MeshError::DegenerateBox {
-                box_index: 1,
-                axis: 1,
-                problem: BoxProblem::NonPositiveExtent { .. }
-            })
+            Err(MeshError::DegenerateBox { box_index: 1, axis: 1, problem: BoxProblem::NonPositiveExtent { .. } })
         ));
         assert!(matches!(
             mesh_boxes(&[no_div], ElementKind::Hex20),
-            Err(MeshError::DegenerateBox {
-                box_index: 0,
-                axis: 2,
-                problem: BoxProblem::ZeroDivisions
-            })
+            Err(MeshError::DegenerateBox { box_index: 0, axis: 2, problem: BoxProblem::ZeroDivisions })
         ));
         assert!(matches!(
             mesh_boxes(&[good, good, nan], ElementKind::Hex8),
-            Err(MeshError::DegenerateBox {
-                box_index: 2,
-                axis: 2,
-                problem: BoxProblem::NonFinite
-            })
+            Err(MeshError::DegenerateBox { box_index: 2, axis: 2, problem: BoxProblem::NonFinite })
         ));
         assert_eq!(mesh_boxes(&[], ElementKind::Hex8), Err(MeshError::NoBoxes));
         let huge = cube([0.0; 3], [1.0; 3], [usize::MAX, 2, 2]);
-        assert!(matches!(
-            mesh_boxes(&[huge], ElementKind::Hex20),
-            Err(MeshError::TooLarge { box_index: 0 })
-        ));
+        assert!(matches!(mesh_boxes(&[huge], ElementKind::Hex20), Err(MeshError::TooLarge { box_index: 0 })));
         // Large but not overflowing, touching another box: refused before the
         // interface check would enumerate its face.
         let big = cube([1.0, 0.0, 0.0], [2.0, 1.0, 1.0], [1, 1 << 20, 1 << 20]);
-        assert!(matches!(
-            mesh_boxes(&[good, big], ElementKind::Hex8),
-            Err(MeshError::TooLarge { box_index: 1 })
-        ));
+        assert!(matches!(mesh_boxes(&[good, big], ElementKind::Hex8), Err(MeshError::TooLarge { box_index: 1 })));
     }
 
     /// Tetrahedra come from imported meshes only; hex20r shares hex20's nodes.
@@ -800,10 +678,6 @@ mod tests {
         let start = std::time::Instant::now();
         let mesh = mesh_boxes(&[a, b], ElementKind::Hex8).unwrap();
         assert_eq!(mesh.n_nodes(), 2 * 51 * 51 * 201 - 51 * 201);
-        assert!(
-            start.elapsed().as_secs_f64() < 10.0,
-            "took {:?}",
-            start.elapsed()
-        );
+        assert!(start.elapsed().as_secs_f64() < 10.0, "took {:?}", start.elapsed());
     }
 }

@@ -149,10 +149,7 @@ impl Damping {
         if let Some(r) = self.modal_ratio {
             return r;
         }
-        self.modal_bands
-            .as_ref()
-            .and_then(|bands| bands.iter().find(|b| hz < b.below).map(|b| b.ratio))
-            .unwrap_or(0.0)
+        self.modal_bands.as_ref().and_then(|bands| bands.iter().find(|b| hz < b.below).map(|b| b.ratio)).unwrap_or(0.0)
     }
 }
 
@@ -176,12 +173,33 @@ pub struct FlangeSpec {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum NodeSelector {
-    BoxFace { #[serde(rename = "box")] box_index: usize, face: Face },
-    Plane { point: [f64; 3], normal: [f64; 3], #[serde(default)] tolerance: Option<f64> },
+    BoxFace {
+        #[serde(rename = "box")]
+        box_index: usize,
+        face: Face,
+    },
+    Plane {
+        point: [f64; 3],
+        normal: [f64; 3],
+        #[serde(default)]
+        tolerance: Option<f64>,
+    },
     NodeSet(String),
-    Box { min: [f64; 3], max: [f64; 3] },
-    Sphere { center: [f64; 3], radius: f64 },
-    Cylinder { point: [f64; 3], axis: [f64; 3], radius: f64, #[serde(default)] length: Option<f64> },
+    Box {
+        min: [f64; 3],
+        max: [f64; 3],
+    },
+    Sphere {
+        center: [f64; 3],
+        radius: f64,
+    },
+    Cylinder {
+        point: [f64; 3],
+        axis: [f64; 3],
+        radius: f64,
+        #[serde(default)]
+        length: Option<f64>,
+    },
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
@@ -280,7 +298,8 @@ impl Spec {
             // the deepest path is the most specific complaint (oneOf reports at the parent too)
             problems.sort_by_key(|(f, _)| std::cmp::Reverse(f.matches(['.', '[']).count()));
             let (field, message) = problems.remove(0);
-            let more = if problems.is_empty() { String::new() } else { format!(" (and {} more problems)", problems.len()) };
+            let more =
+                if problems.is_empty() { String::new() } else { format!(" (and {} more problems)", problems.len()) };
             return Err(BuildError::input(
                 path,
                 if field.is_empty() { "(top level)".to_string() } else { field },
@@ -313,7 +332,10 @@ impl Spec {
                 return Err(BuildError::input(
                     path,
                     format!("flanges[{}].role", mounts[1]),
-                    format!("a second \"motion\" flange; only one mount is supported (flanges[{}] is the mount)", mounts[0]),
+                    format!(
+                        "a second \"motion\" flange; only one mount is supported (flanges[{}] is the mount)",
+                        mounts[0]
+                    ),
                 ));
             }
         }
@@ -330,7 +352,10 @@ impl Spec {
                     return Err(BuildError::input(
                         path,
                         format!("flanges[{i}].nodes.box_face.box"),
-                        format!("box {box_index} does not exist: geometry.boxes has {} boxes (indices from 0)", self.geometry.boxes.len()),
+                        format!(
+                            "box {box_index} does not exist: geometry.boxes has {} boxes (indices from 0)",
+                            self.geometry.boxes.len()
+                        ),
                     ));
                 }
                 NodeSelector::BoxFace { .. } if self.geometry.boxes.is_empty() => {
@@ -341,10 +366,18 @@ impl Spec {
                     ));
                 }
                 NodeSelector::Plane { normal, .. } if normal.iter().map(|c| c * c).sum::<f64>() == 0.0 => {
-                    return Err(BuildError::input(path, format!("flanges[{i}].nodes.plane.normal"), "the normal is the zero vector"));
+                    return Err(BuildError::input(
+                        path,
+                        format!("flanges[{i}].nodes.plane.normal"),
+                        "the normal is the zero vector",
+                    ));
                 }
                 NodeSelector::Cylinder { axis, .. } if axis.iter().map(|c| c * c).sum::<f64>() == 0.0 => {
-                    return Err(BuildError::input(path, format!("flanges[{i}].nodes.cylinder.axis"), "the axis is the zero vector"));
+                    return Err(BuildError::input(
+                        path,
+                        format!("flanges[{i}].nodes.cylinder.axis"),
+                        "the axis is the zero vector",
+                    ));
                 }
                 NodeSelector::Box { min, max } if (0..3).any(|a| !(max[a] > min[a])) => {
                     return Err(BuildError::input(
@@ -360,7 +393,11 @@ impl Spec {
         if let Some([lo, hi]) = self.scene.as_ref().and_then(|s| s.band)
             && !(hi > lo)
         {
-            return Err(BuildError::input(path, "scene.band", format!("the band's upper limit {hi} Hz must exceed its lower limit {lo} Hz")));
+            return Err(BuildError::input(
+                path,
+                "scene.band",
+                format!("the band's upper limit {hi} Hz must exceed its lower limit {lo} Hz"),
+            ));
         }
         for (i, b) in self.geometry.boxes.iter().enumerate() {
             for axis in 0..3 {
@@ -397,7 +434,11 @@ impl Spec {
                 }
             }
             if !self.materials.is_empty() {
-                return Err(BuildError::input(path, "materials", "named materials apply to mesh files; the box mesh has one material: use material"));
+                return Err(BuildError::input(
+                    path,
+                    "materials",
+                    "named materials apply to mesh files; the box mesh has one material: use material",
+                ));
             }
         }
         if g.matrices.is_some() {
@@ -436,11 +477,18 @@ impl Spec {
                     return Err(BuildError::input(
                         path,
                         format!("scene.connected[{i}]"),
-                        format!("no flange is named \"{name}\" (flanges: {})", self.flanges.iter().map(|f| f.name.as_str()).collect::<Vec<_>>().join(", ")),
+                        format!(
+                            "no flange is named \"{name}\" (flanges: {})",
+                            self.flanges.iter().map(|f| f.name.as_str()).collect::<Vec<_>>().join(", ")
+                        ),
                     ));
                 }
                 Some(f) if f.role == Role::Motion => {
-                    return Err(BuildError::input(path, format!("scene.connected[{i}]"), format!("\"{name}\" is the mount; list force flanges only")));
+                    return Err(BuildError::input(
+                        path,
+                        format!("scene.connected[{i}]"),
+                        format!("\"{name}\" is the mount; list force flanges only"),
+                    ));
                 }
                 _ => {}
             }

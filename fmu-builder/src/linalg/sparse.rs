@@ -2,9 +2,9 @@
 
 use crate::error::{BuildError, Result};
 use faer::linalg::solvers::Solve;
+use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::solvers::Llt;
 use faer::sparse::{SparseColMat, Triplet};
-use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{Mat, MatMut, MatRef, Par, Side};
 
 pub type Sparse = SparseColMat<usize, f64>;
@@ -84,7 +84,6 @@ pub fn mul_compensated(c: Option<MatRef<'_, f64>>, sign: f64, a: &Sparse, x: Mat
     }
     out
 }
-
 
 /// The rounding error of p = a * b (exactly a * b - p), by Dekker's splitting: `f64::mul_add`
 /// would do it in one instruction, but without the FMA target feature it becomes a call into

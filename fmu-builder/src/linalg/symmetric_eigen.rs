@@ -29,23 +29,15 @@ fn accepted_backward_error(n: usize) -> f64 {
 pub fn symmetric_eigen(a: &Mat<f64>, what: &str) -> Result<SymmetricEigen> {
     let n = a.nrows();
     if a.ncols() != n {
-        return Err(BuildError::Numerical(format!(
-            "{what}: not a square matrix ({n} x {})",
-            a.ncols()
-        )));
+        return Err(BuildError::Numerical(format!("{what}: not a square matrix ({n} x {})", a.ncols())));
     }
     if n == 0 {
-        return Ok(SymmetricEigen {
-            values: Vec::new(),
-            vectors: Mat::zeros(0, 0),
-        });
+        return Ok(SymmetricEigen { values: Vec::new(), vectors: Mat::zeros(0, 0) });
     }
     let sym = nalgebra::DMatrix::<f64>::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
     let scale = sym.amax();
     if !sym.iter().all(|v| v.is_finite()) {
-        return Err(BuildError::Numerical(format!(
-            "{what}: the matrix has non-finite entries"
-        )));
+        return Err(BuildError::Numerical(format!("{what}: the matrix has non-finite entries")));
     }
     let evd = sym.clone().symmetric_eigen();
     let mut order: Vec<usize> = (0..n).collect();
@@ -53,12 +45,11 @@ pub fn symmetric_eigen(a: &Mat<f64>, what: &str) -> Result<SymmetricEigen> {
     let values: Vec<f64> = order.iter().map(|&i| evd.eigenvalues[i]).collect();
     let vectors = Mat::<f64>::from_fn(n, n, |i, c| evd.eigenvectors[(i, order[c])]);
     if scale > 0.0 {
-        let residual = &sym * &evd.eigenvectors
-            - &evd.eigenvectors * nalgebra::DMatrix::from_diagonal(&evd.eigenvalues);
+        let residual =
+            &sym * &evd.eigenvectors - &evd.eigenvectors * nalgebra::DMatrix::from_diagonal(&evd.eigenvalues);
         let backward = residual.amax() / scale;
-        let orthogonality = (evd.eigenvectors.transpose() * &evd.eigenvectors
-            - nalgebra::DMatrix::<f64>::identity(n, n))
-        .amax();
+        let orthogonality =
+            (evd.eigenvectors.transpose() * &evd.eigenvectors - nalgebra::DMatrix::<f64>::identity(n, n)).amax();
         let limit = accepted_backward_error(n);
         if !(backward <= limit && orthogonality <= limit) {
             return Err(BuildError::Numerical(format!(
@@ -86,10 +77,7 @@ const GRADE: f64 = 1e-6;
 pub fn graded_spd_eigen(c: &Mat<f64>, what: &str) -> Result<SymmetricEigen> {
     let n = c.nrows();
     if n == 0 {
-        return Ok(SymmetricEigen {
-            values: Vec::new(),
-            vectors: Mat::zeros(0, 0),
-        });
+        return Ok(SymmetricEigen { values: Vec::new(), vectors: Mat::zeros(0, 0) });
     }
     let sym = nalgebra::DMatrix::<f64>::from_fn(n, n, |i, j| 0.5 * (c[(i, j)] + c[(j, i)]));
     let chol = nalgebra::Cholesky::new(sym)
@@ -104,18 +92,10 @@ pub fn graded_spd_eigen(c: &Mat<f64>, what: &str) -> Result<SymmetricEigen> {
     // descending flexibility = ascending stiffness
     let mu_max = e.values[n - 1];
     if !(mu_max > 0.0) {
-        return Err(BuildError::Numerical(format!(
-            "{what} is not positive definite"
-        )));
+        return Err(BuildError::Numerical(format!("{what} is not positive definite")));
     }
-    let soft: Vec<usize> = (0..n)
-        .rev()
-        .filter(|&k| e.values[k] >= GRADE * mu_max)
-        .collect();
-    let stiff: Vec<usize> = (0..n)
-        .rev()
-        .filter(|&k| e.values[k] < GRADE * mu_max)
-        .collect();
+    let soft: Vec<usize> = (0..n).rev().filter(|&k| e.values[k] >= GRADE * mu_max).collect();
+    let stiff: Vec<usize> = (0..n).rev().filter(|&k| e.values[k] < GRADE * mu_max).collect();
     let mut values: Vec<f64> = soft.iter().map(|&k| 1.0 / e.values[k]).collect();
     let mut vectors = Mat::<f64>::zeros(n, n);
     for (col, &k) in soft.iter().enumerate() {
@@ -126,10 +106,7 @@ pub fn graded_spd_eigen(c: &Mat<f64>, what: &str) -> Result<SymmetricEigen> {
         let c_stiff = u.transpose() * c * &u;
         let inner = graded_spd_eigen(&c_stiff, what)?;
         let v = &u * &inner.vectors;
-        vectors
-            .as_mut()
-            .subcols_mut(soft.len(), stiff.len())
-            .copy_from(&v);
+        vectors.as_mut().subcols_mut(soft.len(), stiff.len()).copy_from(&v);
         values.extend(inner.values);
     }
     Ok(SymmetricEigen { values, vectors })
@@ -154,19 +131,14 @@ mod tests {
         };
         let g = Mat::<f64>::from_fn(n, n, |_, _| rnd());
         let q = g.qr().compute_Q();
-        let exact: Vec<f64> = (0..n)
-            .map(|i| 10f64.powf(12.0 * i as f64 / (n - 1) as f64))
-            .collect();
+        let exact: Vec<f64> = (0..n).map(|i| 10f64.powf(12.0 * i as f64 / (n - 1) as f64)).collect();
         let d = Mat::<f64>::from_fn(n, n, |i, j| if i == j { exact[i] } else { 0.0 });
         let a = &q * &d * q.transpose();
         let e = symmetric_eigen(&a, "test").unwrap();
         assert_eq!(e.values.len(), exact.len());
         for (found, want) in e.values.iter().zip(&exact) {
             // absolute accuracy eps |A| = 2e-4 here, plus the error of forming A itself (same size)
-            assert!(
-                (found - want).abs() <= 1e-3 + 1e-13 * want,
-                "{found} vs {want}"
-            );
+            assert!((found - want).abs() <= 1e-3 + 1e-13 * want, "{found} vs {want}");
         }
     }
 
@@ -177,9 +149,7 @@ mod tests {
     #[test]
     fn graded_solver_resolves_each_eigenvalue_relatively() {
         let n = 60;
-        let exact: Vec<f64> = (0..n)
-            .map(|i| 10f64.powf(14.0 * i as f64 / (n - 1) as f64))
-            .collect();
+        let exact: Vec<f64> = (0..n).map(|i| 10f64.powf(14.0 * i as f64 / (n - 1) as f64)).collect();
         let mut a = Mat::<f64>::from_fn(n, n, |i, j| if i == j { exact[i] } else { 0.0 });
         let (c, s) = (0.3f64.cos(), 0.3f64.sin());
         for first in [0usize, 1] {
@@ -198,10 +168,7 @@ mod tests {
         assert_eq!(e.values.len(), exact.len());
         for (k, (found, want)) in e.values.iter().zip(&exact).enumerate() {
             // relative round-off of the graded matrix's entries, times its modest scaled condition
-            assert!(
-                (found - want).abs() <= 1e-12 * want,
-                "eigenvalue {k}: {found:e} vs {want:e}"
-            );
+            assert!((found - want).abs() <= 1e-12 * want, "eigenvalue {k}: {found:e} vs {want:e}");
         }
         let o = e.vectors.transpose() * &e.vectors;
         for i in 0..n {
@@ -215,13 +182,7 @@ mod tests {
     fn non_finite_input_is_refused_with_the_reason() {
         let mut a = Mat::<f64>::identity(3, 3);
         a[(1, 1)] = f64::NAN;
-        let err = symmetric_eigen(&a, "the test matrix")
-            .err()
-            .unwrap()
-            .to_string();
-        assert!(
-            err.contains("the test matrix") && err.contains("non-finite"),
-            "{err}"
-        );
+        let err = symmetric_eigen(&a, "the test matrix").err().unwrap().to_string();
+        assert!(err.contains("the test matrix") && err.contains("non-finite"), "{err}");
     }
 }

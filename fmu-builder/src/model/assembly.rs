@@ -5,8 +5,8 @@
 
 use crate::error::{BuildError, Result};
 use crate::input::element::{ElementKind, MAX_NODES_PER_ELEMENT};
-use crate::model::fe::{self, Elasticity};
 use crate::input::mesh::Mesh;
+use crate::model::fe::{self, Elasticity};
 use faer::sparse::{SparseColMat, Triplet};
 
 /// Rigid-body mass properties of the mesh about an origin, from the consistent mass (exact for
@@ -112,12 +112,18 @@ pub(crate) fn symmetric(n: usize, trip: &[Triplet<usize, usize, f64>], what: &st
             both.push(Triplet::new(j, i, 0.5 * v));
         }
     }
-    SparseColMat::try_new_from_triplets(n, n, &both).map_err(|e| BuildError::Numerical(format!("assembling the {what}: {e:?}")))
+    SparseColMat::try_new_from_triplets(n, n, &both)
+        .map_err(|e| BuildError::Numerical(format!("assembling the {what}: {e:?}")))
 }
 
 /// Rigid-body mass properties from the scalar nodal mass: exact for the FE interpolation, since
 /// positions are linear in the nodal coordinates.
-pub fn mass_properties(nodal: &SparseColMat<usize, f64>, nodes: &[[f64; 3]], o: [f64; 3], volume: Option<f64>) -> MassProperties {
+pub fn mass_properties(
+    nodal: &SparseColMat<usize, f64>,
+    nodes: &[[f64; 3]],
+    o: [f64; 3],
+    volume: Option<f64>,
+) -> MassProperties {
     let mut p = MassProperties { volume, ..Default::default() };
     let x: Vec<[f64; 3]> = nodes.iter().map(|c| [c[0] - o[0], c[1] - o[1], c[2] - o[2]]).collect();
     for b in 0..nodal.ncols() {

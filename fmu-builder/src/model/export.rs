@@ -87,10 +87,12 @@ pub fn abaqus_deck(part: &Part, flanges: &[Flange]) -> String {
     s
 }
 
-
 pub fn write_abaqus_deck(path: &Path, part: &Part, flanges: &[Flange]) -> Result<()> {
     if !part.has_elements() {
-        return Err(BuildError::io(path, "--export-inp needs a part with elements (this one is given by its matrices)"));
+        return Err(BuildError::io(
+            path,
+            "--export-inp needs a part with elements (this one is given by its matrices)",
+        ));
     }
     std::fs::write(path, abaqus_deck(part, flanges)).map_err(|e| BuildError::io(path, e))
 }
@@ -121,7 +123,10 @@ fn matrix_market(a: &faer::sparse::SparseColMat<usize, f64>, what: &str) -> Stri
 /// the very model the mesh gives.
 pub fn write_free_free_matrices(dir: &Path, part: &Part) -> Result<()> {
     if !part.has_elements() {
-        return Err(BuildError::io(dir, "--export-free-free needs a part with elements (this one is given by its matrices)"));
+        return Err(BuildError::io(
+            dir,
+            "--export-free-free needs a part with elements (this one is given by its matrices)",
+        ));
     }
     std::fs::create_dir_all(dir).map_err(|e| BuildError::io(dir, e))?;
     let free = crate::model::assembly::uncoupled(&part.mesh, &part.materials)?;
@@ -152,10 +157,13 @@ pub fn write_matrix_market(dir: &Path, model: &crate::model::rigid_coupling::Ass
     for (name, a) in [("K.mtx", &model.stiffness), ("M.mtx", &model.mass)] {
         let b = crate::linalg::sparse::block(a, 0..nc, 0..nc)?;
         let path = dir.join(name);
-        std::fs::write(&path, matrix_market(&b, &format!("{name} of the mounted body (mount held)"))).map_err(|e| BuildError::io(&path, e))?;
+        std::fs::write(&path, matrix_market(&b, &format!("{name} of the mounted body (mount held)")))
+            .map_err(|e| BuildError::io(&path, e))?;
     }
     let d = &model.dofs;
-    let mut s = String::from("# 0-based DoF of each unit flange load: 6 per force flange (u_x u_y u_z theta_x theta_y theta_z)\n");
+    let mut s = String::from(
+        "# 0-based DoF of each unit flange load: 6 per force flange (u_x u_y u_z theta_x theta_y theta_z)\n",
+    );
     for (k, first) in d.flange_first.iter().enumerate() {
         if Some(k) != d.mount {
             for i in 0..6 {

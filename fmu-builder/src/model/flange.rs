@@ -4,8 +4,8 @@
 
 use crate::error::{BuildError, Result};
 use crate::input::mesh::Mesh;
-use crate::model::part::Part;
 use crate::input::spec::{NodeSelector, Role, Spec};
+use crate::model::part::Part;
 use nalgebra::{Matrix3, Vector3};
 use std::path::Path;
 
@@ -51,20 +51,27 @@ fn select(selector: &NodeSelector, part: &Part, size: f64) -> std::result::Resul
                 let known: Vec<&str> = part.node_sets.keys().map(|k| k.as_str()).collect();
                 return Err(format!(
                     "there is no node set \"{name}\" ({})",
-                    if known.is_empty() { "the part has no node sets".to_string() } else { format!("node sets: {}", known.join(", ")) }
+                    if known.is_empty() {
+                        "the part has no node sets".to_string()
+                    } else {
+                        format!("node sets: {}", known.join(", "))
+                    }
                 ));
             }
         },
         NodeSelector::Box { min, max } => {
             within(&|p| (0..3).all(|a| p[a] >= min[a] - tol_default && p[a] <= max[a] + tol_default))
         }
-        NodeSelector::Sphere { center, radius } => within(&|p| (p - Vector3::from(*center)).norm() <= radius + tol_default),
+        NodeSelector::Sphere { center, radius } => {
+            within(&|p| (p - Vector3::from(*center)).norm() <= radius + tol_default)
+        }
         NodeSelector::Cylinder { point, axis, radius, length } => {
             let n = Vector3::from(*axis).normalize();
             within(&|p| {
                 let d = p - Vector3::from(*point);
                 let along = d.dot(&n);
-                (d - n * along).norm() <= radius + tol_default && length.is_none_or(|l| along.abs() <= 0.5 * l + tol_default)
+                (d - n * along).norm() <= radius + tol_default
+                    && length.is_none_or(|l| along.abs() <= 0.5 * l + tol_default)
             })
         }
         NodeSelector::BoxFace { box_index, face } => {
@@ -75,7 +82,9 @@ fn select(selector: &NodeSelector, part: &Part, size: f64) -> std::result::Resul
             let level = if upper { b.max[axis] } else { b.min[axis] };
             within(&|p| {
                 (p[axis] - level).abs() <= tol_default
-                    && (0..3).filter(|&a| a != axis).all(|a| p[a] >= b.min[a] - tol_default && p[a] <= b.max[a] + tol_default)
+                    && (0..3)
+                        .filter(|&a| a != axis)
+                        .all(|a| p[a] >= b.min[a] - tol_default && p[a] <= b.max[a] + tol_default)
             })
         }
         NodeSelector::Plane { point, normal, tolerance } => {
@@ -110,7 +119,8 @@ pub fn select_flanges(spec: &Spec, file: &Path, part: &Part) -> Result<Vec<Flang
     let mut flanges = Vec::with_capacity(spec.flanges.len());
     for (k, fs) in spec.flanges.iter().enumerate() {
         let field = format!("flanges[{k}].nodes");
-        let slaves = select(&fs.nodes, part, size).map_err(|m| BuildError::input(file, format!("{field}.node_set"), m))?;
+        let slaves =
+            select(&fs.nodes, part, size).map_err(|m| BuildError::input(file, format!("{field}.node_set"), m))?;
         if slaves.is_empty() {
             let (lo, hi) = bounds(mesh);
             return Err(BuildError::input(
@@ -200,7 +210,8 @@ mod tests {
         assert_eq!(nodes.len(), 5 * 5);
         // with a length, only the cross-sections within length/2 of the point
         let nodes =
-            selected(&part, r#"{"cylinder": {"point": [4, 1, 1], "axis": [-1, 0, 0], "radius": 1, "length": 1}}"#).unwrap();
+            selected(&part, r#"{"cylinder": {"point": [4, 1, 1], "axis": [-1, 0, 0], "radius": 1, "length": 1}}"#)
+                .unwrap();
         assert_eq!(nodes.len(), 5);
         let e = selected(&part, r#"{"node_set": "ROOT"}"#).unwrap_err();
         assert!(e.contains("ROOT") && e.contains("TIP"), "{e}");

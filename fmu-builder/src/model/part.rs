@@ -3,13 +3,13 @@
 //! material (the input's `materials` over `material` over the mesh file) and keeps the node sets
 //! flanges may name. Everything downstream sees one `Part`.
 
-use crate::model::assembly::{self, SolidMaterial, Uncoupled};
 use crate::error::{BuildError, Result};
-use crate::model::fe::Elasticity;
 use crate::input::element::ElementKind;
 use crate::input::import::{self, ImportError, ImportedMesh};
 use crate::input::mesh::{self, BoxRegion, Mesh, MeshError};
 use crate::input::spec::{MaterialSpec, Spec};
+use crate::model::assembly::{self, SolidMaterial, Uncoupled};
+use crate::model::fe::Elasticity;
 use faer::sparse::{SparseColMat, Triplet};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -75,12 +75,8 @@ pub fn part_of(spec: &Spec, file: &Path) -> Result<Part> {
 
 fn box_part(spec: &Spec, file: &Path) -> Result<Part> {
     let kind = spec.geometry.element;
-    let boxes: Vec<BoxRegion> = spec
-        .geometry
-        .boxes
-        .iter()
-        .map(|b| BoxRegion { min: b.min, max: b.max, divisions: b.elements })
-        .collect();
+    let boxes: Vec<BoxRegion> =
+        spec.geometry.boxes.iter().map(|b| BoxRegion { min: b.min, max: b.max, divisions: b.elements }).collect();
     let mesh = mesh::mesh_boxes(&boxes, kind).map_err(|e| {
         let field = match &e {
             MeshError::DegenerateBox { box_index, .. } | MeshError::TooLarge { box_index } => {
@@ -157,10 +153,18 @@ fn mesh_file_part(spec: &Spec, file: &Path, mesh_path: &Path) -> Result<Part> {
     let mut section_of: Vec<Option<&str>> = vec![None; imported.connectivity.len()];
     for (elset, material) in &imported.sections {
         let Some(members) = imported.element_sets.get(elset) else {
-            return Err(BuildError::input(mesh_path, "", format!("*SOLID SECTION names element set {elset}, which is not defined")));
+            return Err(BuildError::input(
+                mesh_path,
+                "",
+                format!("*SOLID SECTION names element set {elset}, which is not defined"),
+            ));
         };
         if imported.material(material).is_none() {
-            return Err(BuildError::input(mesh_path, "", format!("*SOLID SECTION, ELSET={elset} names material {material}, which is not defined")));
+            return Err(BuildError::input(
+                mesh_path,
+                "",
+                format!("*SOLID SECTION, ELSET={elset} names material {material}, which is not defined"),
+            ));
         }
         for &e in members {
             section_of[e].get_or_insert(material.as_str());
@@ -245,7 +249,9 @@ fn resolve_material(
         return Err(BuildError::input(
             mesh_path,
             "",
-            format!("{what}: E = {e} Pa, nu = {nu}, rho = {rho} kg/m^3 is not a valid material (E > 0, -1 < nu < 0.5, rho > 0)"),
+            format!(
+                "{what}: E = {e} Pa, nu = {nu}, rho = {rho} kg/m^3 is not a valid material (E > 0, -1 < nu < 0.5, rho > 0)"
+            ),
         ));
     }
     Ok(SolidMaterial { name: section.unwrap_or("material").to_string(), elasticity: Elasticity { e, nu }, rho })
@@ -253,7 +259,8 @@ fn resolve_material(
 
 fn matrix_part(_spec: &Spec, file: &Path, m: &crate::input::spec::MatrixSpec) -> Result<Part> {
     let path = |name: &str| -> PathBuf { Spec::resolve(file, name) };
-    let (k, mm, d, dofs, nodes) = (path(&m.stiffness), path(&m.mass), m.damping.as_deref().map(path), path(&m.dofs), path(&m.nodes));
+    let (k, mm, d, dofs, nodes) =
+        (path(&m.stiffness), path(&m.mass), m.damping.as_deref().map(path), path(&m.dofs), path(&m.nodes));
     let files = import::matrices::MatrixFiles {
         stiffness: &k,
         mass: &mm,
@@ -270,7 +277,13 @@ fn matrix_part(_spec: &Spec, file: &Path, m: &crate::input::spec::MatrixSpec) ->
         boxes: Vec::new(),
         materials: Vec::new(),
         node_sets: model.node_sets,
-        matrices: Some(Uncoupled { stiffness: model.stiffness, mass: model.mass, damping: model.damping, nodal_mass, volume: None }),
+        matrices: Some(Uncoupled {
+            stiffness: model.stiffness,
+            mass: model.mass,
+            damping: model.damping,
+            nodal_mass,
+            volume: None,
+        }),
         rigid_body_residual: Some(model.rigid_body_residual),
         from_matrices: true,
     })
@@ -305,7 +318,12 @@ fn nodal_mass(mass: &SparseColMat<usize, f64>, file: &Path) -> Result<SparseColM
                         format!(
                             "the mass matrix is not of the form m_ab delta_ij: between DoFs {}{} and {}{} (dense DoF order) \
                              it has {:e} where {:e} is expected; only solid (translational) models are supported",
-                            a, dir[i], b, dir[j], m[i][j], if i == j { m[0][0] } else { 0.0 }
+                            a,
+                            dir[i],
+                            b,
+                            dir[j],
+                            m[i][j],
+                            if i == j { m[0][0] } else { 0.0 }
                         ),
                     ));
                 }
@@ -352,11 +370,14 @@ mod tests {
         // the input's material overrides the file's STEEL property by property
         assert_eq!((a.elasticity.e, a.elasticity.nu, a.rho), (1e9, 0.25, 1000.0));
         assert_eq!((b.elasticity.e, b.rho), (1e9, 1000.0));
-        let p = part(&dir, r#""material": {"E": 1e9, "nu": 0.25, "rho": 1000}, "materials": {"steel": {"rho": 7000}},"#).unwrap();
+        let p =
+            part(&dir, r#""material": {"E": 1e9, "nu": 0.25, "rho": 1000}, "materials": {"steel": {"rho": 7000}},"#)
+                .unwrap();
         let a = &p.materials[p.mesh.material[0]];
         assert_eq!((a.elasticity.e, a.rho), (1e9, 7000.0));
         // what the input leaves open comes from the file
-        let p = part(&dir, r#""material": {"nu": 0.2, "E": 3e9, "rho": 10}, "materials": {"STEEL": {"nu": 0.1}},"#).unwrap();
+        let p = part(&dir, r#""material": {"nu": 0.2, "E": 3e9, "rho": 10}, "materials": {"STEEL": {"nu": 0.1}},"#)
+            .unwrap();
         let a = &p.materials[p.mesh.material[0]];
         assert_eq!((a.elasticity.e, a.elasticity.nu), (3e9, 0.1));
         let e = part(&dir, r#""material": {"E": 1e9, "nu": 0.25, "rho": 1000}, "materials": {"alu": {"E": 7e10}},"#)
@@ -391,7 +412,20 @@ mod tests {
 
     #[test]
     fn nodal_mass_needs_the_isotropic_form() {
-        let iso = [(0, 0, 2.0), (1, 1, 2.0), (2, 2, 2.0), (0, 3, 0.5), (3, 0, 0.5), (1, 4, 0.5), (4, 1, 0.5), (2, 5, 0.5), (5, 2, 0.5), (3, 3, 1.0), (4, 4, 1.0), (5, 5, 1.0)];
+        let iso = [
+            (0, 0, 2.0),
+            (1, 1, 2.0),
+            (2, 2, 2.0),
+            (0, 3, 0.5),
+            (3, 0, 0.5),
+            (1, 4, 0.5),
+            (4, 1, 0.5),
+            (2, 5, 0.5),
+            (5, 2, 0.5),
+            (3, 3, 1.0),
+            (4, 4, 1.0),
+            (5, 5, 1.0),
+        ];
         let trip: Vec<_> = iso.iter().map(|&(i, j, v)| Triplet::new(i, j, v)).collect();
         let m = SparseColMat::try_new_from_triplets(6, 6, &trip).unwrap();
         let nodal = nodal_mass(&m, Path::new("M.mtx")).unwrap();

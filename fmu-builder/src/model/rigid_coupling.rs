@@ -82,11 +82,7 @@ pub struct Assembled {
 
 /// 3x6 block mapping master (u, theta) to a slave's displacement: [I | S], S theta = theta x d.
 fn coupling_block(d: [f64; 3]) -> [[f64; 6]; 3] {
-    [
-        [1.0, 0.0, 0.0, 0.0, d[2], -d[1]],
-        [0.0, 1.0, 0.0, -d[2], 0.0, d[0]],
-        [0.0, 0.0, 1.0, d[1], -d[0], 0.0],
-    ]
+    [[1.0, 0.0, 0.0, 0.0, d[2], -d[1]], [0.0, 1.0, 0.0, -d[2], 0.0, d[0]], [0.0, 0.0, 1.0, d[1], -d[0], 0.0]]
 }
 
 /// Where a DoF of the free-free model goes in the constrained model: at most three
@@ -154,4 +150,3 @@ pub fn rigid_coupling(part: &Uncoupled, nodes: &[[f64; 3]], flanges: &[Flange], 
     let mass_properties = mass_properties(&part.nodal_mass, nodes, origin, part.volume);
     Ok(Assembled { dofs, stiffness, mass, nodal_mass: part.nodal_mass.clone(), mass_properties, damping })
 }
-

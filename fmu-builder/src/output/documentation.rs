@@ -3,11 +3,10 @@
 //! external files) drawn by `output::plot`: [`frequency_response_plot`] and
 //! [`relative_error_plot`].
 
-use crate::reduce::frf::{ComparisonDamping, FrequencyResponse};
-use crate::output::report::Report;
 use crate::output::plot::{Annotation, PALETTE, PlotSpec, Series, Stroke, esc, line_plot};
+use crate::output::report::Report;
+use crate::reduce::frf::{ComparisonDamping, FrequencyResponse};
 use std::fmt::Write;
-
 
 pub fn index_html(r: &Report) -> String {
     let mut h = String::new();
@@ -31,7 +30,11 @@ td,th{{border:1px solid #bbb;padding:0.2em 0.6em;text-align:right}}th{{backgroun
         "<h2>Rigid body</h2>\n<table><tr><th>mass [kg]</th><td>{:.6e}</td></tr><tr><th>volume [m^3]</th><td>{}</td></tr>\
 <tr><th>centre of mass [m] (body frame)</th><td>{:.6e}, {:.6e}, {:.6e}</td></tr></table>\n\
 <p>Body frame: origin at the mount flange's reference point, axes of the undeformed part.</p>\n",
-        r.mass, r.volume.map_or("(matrix input)".to_string(), |v| format!("{v:.6e}")), c[0], c[1], c[2]
+        r.mass,
+        r.volume.map_or("(matrix input)".to_string(), |v| format!("{v:.6e}")),
+        c[0],
+        c[1],
+        c[2]
     );
     h.push_str("<h2>Flanges</h2>\n<table><tr><th>name</th><th>role</th><th>reference point [m]</th><th>slave nodes</th></tr>\n");
     for f in &r.flanges {
@@ -84,10 +87,7 @@ compliance (relative to its largest entry): {:.2e}. Constraint modes make it exa
 fn accuracy_over_band_html(fr: &FrequencyResponse, flanges: &[String]) -> String {
     let mut h = String::new();
     let (argmax, _) = arg_max(&fr.relative_error);
-    let at = argmax
-        .and_then(|i| fr.frequencies_hz.get(i))
-        .map(|f| format!(" (at {})", fmt_hz(*f)))
-        .unwrap_or_default();
+    let at = argmax.and_then(|i| fr.frequencies_hz.get(i)).map(|f| format!(" (at {})", fmt_hz(*f))).unwrap_or_default();
     let _ = write!(
         h,
         "<h2>Accuracy over the band</h2>\n<p>Flange-to-flange transfer functions H(&omega;) (unit loads at the force \
@@ -117,7 +117,11 @@ fn damping_html(d: &ComparisonDamping) -> String {
         parts.push(format!("Rayleigh &alpha; = {:.4e} 1/s, &beta; = {:.4e} s (the input's)", d.alpha, d.beta));
     }
     if d.loss_factor != 0.0 {
-        let why = if parts.is_empty() { " (the input has no damping; undamped responses are infinite at the eigenfrequencies)" } else { "" };
+        let why = if parts.is_empty() {
+            " (the input has no damping; undamped responses are infinite at the eigenfrequencies)"
+        } else {
+            ""
+        };
         parts.push(format!("structural loss factor &eta; = {}{why}", fmt_num(d.loss_factor)));
     }
     if parts.is_empty() { "none".to_string() } else { parts.join("; ") }
@@ -170,7 +174,9 @@ pub fn dof_label(flanges: &[String], d: usize) -> String {
 pub fn significant_dofs(per_frequency: &[Vec<f64>]) -> Vec<usize> {
     let n = per_frequency.iter().map(Vec::len).max().unwrap_or(0);
     let peak: Vec<f64> = (0..n)
-        .map(|d| per_frequency.iter().filter_map(|r| r.get(d)).filter(|v| v.is_finite()).fold(0.0f64, |a, v| a.max(v.abs())))
+        .map(|d| {
+            per_frequency.iter().filter_map(|r| r.get(d)).filter(|v| v.is_finite()).fold(0.0f64, |a, v| a.max(v.abs()))
+        })
         .collect();
     let kind_max = |translation: bool| {
         peak.iter().enumerate().filter(|(d, _)| (d % 6 < 3) == translation).fold(0.0f64, |a, (_, p)| a.max(*p))
@@ -186,10 +192,8 @@ fn column(per_frequency: &[Vec<f64>], d: usize) -> Vec<f64> {
 /// Plot (a): driving-point magnitudes |H_ii| of the significant flange DoFs over the band, full
 /// model as a broad light line, reduced model dashed on top in the same colour.
 pub fn frequency_response_plot(fr: &FrequencyResponse, flanges: &[String]) -> String {
-    let mut series = vec![
-        Series::key("full FE model", "#555", Stroke::Solid),
-        Series::key("reduced model", "#555", Stroke::Dashed),
-    ];
+    let mut series =
+        vec![Series::key("full FE model", "#555", Stroke::Solid), Series::key("reduced model", "#555", Stroke::Dashed)];
     for (k, d) in significant_dofs(&fr.driving_point_full).into_iter().enumerate() {
         let color = PALETTE[k % PALETTE.len()];
         series.push(Series {
@@ -207,7 +211,12 @@ pub fn frequency_response_plot(fr: &FrequencyResponse, flanges: &[String]) -> St
             stroke: Stroke::Dashed,
         });
     }
-    let mut spec = PlotSpec::new("Driving-point response |H_ii|: full FE vs reduced", "frequency [Hz]", "|H_ii|  [m/N, rad/(N m)]", true);
+    let mut spec = PlotSpec::new(
+        "Driving-point response |H_ii|: full FE vs reduced",
+        "frequency [Hz]",
+        "|H_ii|  [m/N, rad/(N m)]",
+        true,
+    );
     spec.x_range = Some(fr.band_hz);
     line_plot(&spec, &series, &[])
 }
@@ -224,7 +233,11 @@ pub fn relative_error_plot(fr: &FrequencyResponse) -> String {
     let mut annotations = Vec::new();
     let (argmax, max) = arg_max(&fr.relative_error);
     if let Some(f) = argmax.and_then(|i| fr.frequencies_hz.get(i)) {
-        annotations.push(Annotation { x: *f, y: max, text: format!("max {:.2e} at {}", fr.max_relative_error, fmt_hz(*f)) });
+        annotations.push(Annotation {
+            x: *f,
+            y: max,
+            text: format!("max {:.2e} at {}", fr.max_relative_error, fmt_hz(*f)),
+        });
     }
     let mut spec = PlotSpec::new(
         &format!("Relative error of the flange FRF, reduced vs full (max {:.2e})", fr.max_relative_error),
@@ -239,9 +252,9 @@ pub fn relative_error_plot(fr: &FrequencyResponse) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::output::plot::tests::check_svg;
     use crate::output::report::FlangeReport;
     use crate::reduce::accuracy::Accuracy;
-    use crate::output::plot::tests::check_svg;
 
     fn frf(freqs: Vec<f64>, err: Vec<f64>, full: Vec<Vec<f64>>, red: Vec<Vec<f64>>) -> FrequencyResponse {
         let max = err.iter().copied().fold(0.0, f64::max);
@@ -264,10 +277,8 @@ mod tests {
             let h = |fn_: f64| 1.0 / ((fn_ * fn_ - f * f).powi(2) + (0.02 * fn_ * f).powi(2)).sqrt();
             scale * (h(300.0) + 0.3 * h(1500.0))
         };
-        let full: Vec<Vec<f64>> = freqs
-            .iter()
-            .map(|&f| vec![1e-12, resp(f, 1e2), resp(f, 3e2), 0.0, resp(f, 5e2), resp(f, 2e2)])
-            .collect();
+        let full: Vec<Vec<f64>> =
+            freqs.iter().map(|&f| vec![1e-12, resp(f, 1e2), resp(f, 3e2), 0.0, resp(f, 5e2), resp(f, 2e2)]).collect();
         let red: Vec<Vec<f64>> = full.iter().map(|r| r.iter().map(|v| v * 1.01).collect()).collect();
         let err = freqs.iter().map(|f| 1e-6 * (1.0 + f / 100.0)).collect();
         frf(freqs, err, full, red)
@@ -291,7 +302,12 @@ mod tests {
             fixed_interface_modes: 4,
             constraint_modes: 6,
             order: 10,
-            flanges: vec![FlangeReport { name: "tip".into(), role: "force".into(), reference_point: [1.0, 0.0, 0.0], slave_nodes: 9 }],
+            flanges: vec![FlangeReport {
+                name: "tip".into(),
+                role: "force".into(),
+                reference_point: [1.0, 0.0, 0.0],
+                slave_nodes: 9,
+            }],
             accuracy: Accuracy {
                 reduced_hz: vec![300.0, 1500.0],
                 full_hz: vec![299.0, 1490.0],
@@ -331,7 +347,14 @@ mod tests {
             assert!(check_svg(svg) > 20);
         }
         // the existing content stays
-        for s in ["Rigid body", "Flanges", "Reduction", "Eigenfrequencies", "Static compliance", "Beam &lt;test&gt; &amp; co"] {
+        for s in [
+            "Rigid body",
+            "Flanges",
+            "Reduction",
+            "Eigenfrequencies",
+            "Static compliance",
+            "Beam &lt;test&gt; &amp; co",
+        ] {
             assert!(html.contains(s), "{s}");
         }
     }
@@ -383,5 +406,4 @@ mod tests {
             }
         }
     }
-
 }

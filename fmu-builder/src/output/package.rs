@@ -1,10 +1,10 @@
 //! The FMU of a reduced body: modelDescription.xml, binary, resources and documentation.
 
-use crate::output::documentation;
 use crate::error::{BuildError, Result};
+use crate::input::spec::Spec;
+use crate::output::documentation;
 use crate::output::fmu;
 use crate::output::report::Report;
-use crate::input::spec::Spec;
 use fmu_runtime::format::RESOURCE_FILE;
 use fmu_runtime::interface::VariableTable;
 use fmu_runtime::reduced::ReducedBody;
@@ -36,8 +36,8 @@ pub fn write_fmu(spec: &Spec, reduced: &ReducedBody, report: &Report, output: &P
         },
     };
     let xml = fmu::model_description_xml(&info, &table).map_err(|e| BuildError::Numerical(e.to_string()))?;
-    let report_json = serde_json::to_vec_pretty(report)
-        .map_err(|e| BuildError::Numerical(format!("serialising the report: {e}")))?;
+    let report_json =
+        serde_json::to_vec_pretty(report).map_err(|e| BuildError::Numerical(format!("serialising the report: {e}")))?;
     let archive = fmu::FmuArchive {
         model_description: xml,
         model_identifier: &id,
@@ -64,10 +64,7 @@ fn generation_time() -> Result<String> {
                 "the environment variable SOURCE_DATE_EPOCH is {text:?}: expected whole seconds since 1970-01-01 UTC"
             ))
         })?,
-        Err(_) => std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map(|d| d.as_secs())
-            .unwrap_or(0),
+        Err(_) => std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs()).unwrap_or(0),
     };
     Ok(fmu::xs_date_time(secs))
 }

@@ -147,7 +147,13 @@ fn axis_range(values: &[f64], log: bool, explicit: Option<[f64; 2]>) -> (f64, f6
             return (0.0, 1.0);
         }
         let span = max - min;
-        let pad = if span > 0.0 { 0.05 * span } else if min != 0.0 { 0.1 * min.abs() } else { 1.0 };
+        let pad = if span > 0.0 {
+            0.05 * span
+        } else if min != 0.0 {
+            0.1 * min.abs()
+        } else {
+            1.0
+        };
         let (lo, hi) = (min - pad, max + pad);
         if lo < hi && lo.is_finite() && hi.is_finite() { (lo, hi) } else { (0.0, 1.0) }
     }
@@ -232,7 +238,9 @@ fn axis_ticks(lo: f64, hi: f64, log: bool) -> Vec<(f64, Option<String>)> {
 fn stroke_attrs(color: &str, stroke: Stroke) -> String {
     let c = esc(color);
     match stroke {
-        Stroke::Solid => format!("fill=\"none\" stroke=\"{c}\" stroke-width=\"3\" stroke-opacity=\"0.45\" stroke-linejoin=\"round\""),
+        Stroke::Solid => {
+            format!("fill=\"none\" stroke=\"{c}\" stroke-width=\"3\" stroke-opacity=\"0.45\" stroke-linejoin=\"round\"")
+        }
         Stroke::Dashed => format!("fill=\"none\" stroke=\"{c}\" stroke-width=\"1.4\" stroke-dasharray=\"5 3\""),
         Stroke::Line => format!("fill=\"none\" stroke=\"{c}\" stroke-width=\"1.6\" stroke-linejoin=\"round\""),
         Stroke::Markers => format!("fill=\"{c}\" stroke=\"none\""),
@@ -240,7 +248,11 @@ fn stroke_attrs(color: &str, stroke: Stroke) -> String {
 }
 
 fn truncate(s: &str, n: usize) -> String {
-    if s.chars().count() <= n { s.to_string() } else { s.chars().take(n - 1).chain(std::iter::once('\u{2026}')).collect() }
+    if s.chars().count() <= n {
+        s.to_string()
+    } else {
+        s.chars().take(n - 1).chain(std::iter::once('\u{2026}')).collect()
+    }
 }
 
 /// An SVG line plot: `series` on linear or log axes (decades on log axes, 5-8 nice ticks on linear
@@ -257,8 +269,16 @@ pub fn line_plot(spec: &PlotSpec, series: &[Series], annotations: &[Annotation])
     let height = min_height.max(top + 10.0 + ROW * legend.len() as f64 + 20.0);
     let bottom = height - 48.0;
 
-    let xs: Vec<f64> = series.iter().flat_map(|s| s.x.iter().take(s.y.len()).copied()).chain(annotations.iter().map(|a| a.x)).collect();
-    let ys: Vec<f64> = series.iter().flat_map(|s| s.y.iter().take(s.x.len()).copied()).chain(annotations.iter().map(|a| a.y)).collect();
+    let xs: Vec<f64> = series
+        .iter()
+        .flat_map(|s| s.x.iter().take(s.y.len()).copied())
+        .chain(annotations.iter().map(|a| a.x))
+        .collect();
+    let ys: Vec<f64> = series
+        .iter()
+        .flat_map(|s| s.y.iter().take(s.x.len()).copied())
+        .chain(annotations.iter().map(|a| a.y))
+        .collect();
     let (xlo, xhi) = axis_range(&xs, spec.log_x, spec.x_range);
     let (ylo, yhi) = axis_range(&ys, spec.log_y, spec.y_range);
     let sx = Scale { lo: xlo, hi: xhi, log: spec.log_x, p0: left, p1: right };
@@ -279,9 +299,16 @@ font-family=\"sans-serif\" font-size=\"11\" role=\"img\" aria-label=\"{t}\">\n<t
         let x = sx.at(t);
         let len = if label.is_some() { 5.0 } else { 3.0 };
         if label.is_some() {
-            let _ = writeln!(s, "<line x1=\"{x:.1}\" y1=\"{top:.1}\" x2=\"{x:.1}\" y2=\"{bottom:.1}\" stroke=\"#e4e4e4\"/>");
+            let _ = writeln!(
+                s,
+                "<line x1=\"{x:.1}\" y1=\"{top:.1}\" x2=\"{x:.1}\" y2=\"{bottom:.1}\" stroke=\"#e4e4e4\"/>"
+            );
         }
-        let _ = writeln!(s, "<line x1=\"{x:.1}\" y1=\"{bottom:.1}\" x2=\"{x:.1}\" y2=\"{:.1}\" stroke=\"#444\"/>", bottom + len);
+        let _ = writeln!(
+            s,
+            "<line x1=\"{x:.1}\" y1=\"{bottom:.1}\" x2=\"{x:.1}\" y2=\"{:.1}\" stroke=\"#444\"/>",
+            bottom + len
+        );
         if let Some(l) = label {
             let _ = writeln!(s, "<text x=\"{x:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{l}</text>", bottom + 18.0);
         }
@@ -290,9 +317,16 @@ font-family=\"sans-serif\" font-size=\"11\" role=\"img\" aria-label=\"{t}\">\n<t
         let y = sy.at(t);
         let len = if label.is_some() { 5.0 } else { 3.0 };
         if label.is_some() {
-            let _ = writeln!(s, "<line x1=\"{left:.1}\" y1=\"{y:.1}\" x2=\"{right:.1}\" y2=\"{y:.1}\" stroke=\"#e4e4e4\"/>");
+            let _ = writeln!(
+                s,
+                "<line x1=\"{left:.1}\" y1=\"{y:.1}\" x2=\"{right:.1}\" y2=\"{y:.1}\" stroke=\"#e4e4e4\"/>"
+            );
         }
-        let _ = writeln!(s, "<line x1=\"{:.1}\" y1=\"{y:.1}\" x2=\"{left:.1}\" y2=\"{y:.1}\" stroke=\"#444\"/>", left - len);
+        let _ = writeln!(
+            s,
+            "<line x1=\"{:.1}\" y1=\"{y:.1}\" x2=\"{left:.1}\" y2=\"{y:.1}\" stroke=\"#444\"/>",
+            left - len
+        );
         if let Some(l) = label {
             let _ = writeln!(s, "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">{l}</text>", left - 8.0, y + 4.0);
         }
@@ -337,10 +371,17 @@ font-family=\"sans-serif\" font-size=\"11\" role=\"img\" aria-label=\"{t}\">\n<t
     // annotations
     for a in annotations {
         let (Some(x), Some(y)) = (sx.px(a.x), sy.px(a.y)) else { continue };
-        let _ = writeln!(s, "<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"5\" fill=\"none\" stroke=\"#c00\" stroke-width=\"1.5\"/>");
+        let _ = writeln!(
+            s,
+            "<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"5\" fill=\"none\" stroke=\"#c00\" stroke-width=\"1.5\"/>"
+        );
         let (tx, anchor) = if x < (left + right) / 2.0 { (x + 8.0, "start") } else { (x - 8.0, "end") };
         let ty = if y - 8.0 < top + 12.0 { y + 16.0 } else { y - 8.0 };
-        let _ = writeln!(s, "<text x=\"{tx:.1}\" y=\"{ty:.1}\" text-anchor=\"{anchor}\" fill=\"#c00\">{}</text>", esc(&a.text));
+        let _ = writeln!(
+            s,
+            "<text x=\"{tx:.1}\" y=\"{ty:.1}\" text-anchor=\"{anchor}\" fill=\"#c00\">{}</text>",
+            esc(&a.text)
+        );
     }
     // legend
     for (i, se) in legend.iter().enumerate() {
@@ -349,7 +390,12 @@ font-family=\"sans-serif\" font-size=\"11\" role=\"img\" aria-label=\"{t}\">\n<t
         if se.stroke == Stroke::Markers {
             let _ = writeln!(s, "<circle cx=\"{:.1}\" cy=\"{y:.1}\" r=\"2.5\" fill=\"{}\"/>", x + 11.0, esc(&se.color));
         } else {
-            let _ = writeln!(s, "<line x1=\"{x:.1}\" y1=\"{y:.1}\" x2=\"{:.1}\" y2=\"{y:.1}\" {}/>", x + 22.0, stroke_attrs(&se.color, se.stroke));
+            let _ = writeln!(
+                s,
+                "<line x1=\"{x:.1}\" y1=\"{y:.1}\" x2=\"{:.1}\" y2=\"{y:.1}\" {}/>",
+                x + 22.0,
+                stroke_attrs(&se.color, se.stroke)
+            );
         }
         let label = se.label.as_deref().unwrap_or_default();
         let _ = writeln!(s, "<text x=\"{:.1}\" y=\"{:.1}\">{}</text>", x + 28.0, y + 4.0, esc(&truncate(label, 20)));
@@ -367,11 +413,14 @@ pub(crate) mod tests {
     /// Reads the SVG through quick_xml (matching end tags, attributes) and checks that every
     /// numeric attribute and path coordinate is finite. Returns the element count.
     pub(crate) fn check_svg(svg: &str) -> usize {
-        let numeric = ["x", "y", "x1", "y1", "x2", "y2", "cx", "cy", "r", "width", "height", "dy", "stroke-width", "font-size"];
+        let numeric =
+            ["x", "y", "x1", "y1", "x2", "y2", "cx", "cy", "r", "width", "height", "dy", "stroke-width", "font-size"];
         let mut reader = Reader::from_str(svg);
         let (mut depth, mut elements) = (0i64, 0usize);
         loop {
-            let ev = reader.read_event().unwrap_or_else(|e| panic!("SVG is not well-formed at {}: {e}", reader.buffer_position()));
+            let ev = reader
+                .read_event()
+                .unwrap_or_else(|e| panic!("SVG is not well-formed at {}: {e}", reader.buffer_position()));
             let attrs = match &ev {
                 Event::Start(e) => {
                     depth += 1;
@@ -397,7 +446,10 @@ pub(crate) mod tests {
                     assert!(val.parse::<f64>().is_ok_and(f64::is_finite), "{key}=\"{val}\"");
                 }
                 if key == "d" || key == "viewBox" || key == "transform" || key == "stroke-dasharray" {
-                    for tok in val.split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-' || c == 'e')).filter(|t| t.contains(|c: char| c.is_ascii_digit())) {
+                    for tok in val
+                        .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-' || c == 'e'))
+                        .filter(|t| t.contains(|c: char| c.is_ascii_digit()))
+                    {
                         assert!(tok.parse::<f64>().is_ok_and(f64::is_finite), "{key}: {tok}");
                     }
                 }
@@ -435,7 +487,16 @@ pub(crate) mod tests {
 
     #[test]
     fn linear_ticks_are_nice() {
-        for (lo, hi) in [(0.0, 2000.0), (10.0, 1234.0), (0.0, 1.0), (0.3, 0.7), (-5.0, 5.0), (95.0, 105.0), (0.0, 3e7), (1e-6, 3e-6)] {
+        for (lo, hi) in [
+            (0.0, 2000.0),
+            (10.0, 1234.0),
+            (0.0, 1.0),
+            (0.3, 0.7),
+            (-5.0, 5.0),
+            (95.0, 105.0),
+            (0.0, 3e7),
+            (1e-6, 3e-6),
+        ] {
             let (t, step) = linear_ticks(lo, hi);
             assert!((5..=8).contains(&t.len()), "{lo}..{hi}: {t:?}");
             assert!(t.iter().all(|v| *v >= lo - 1e-9 * step && *v <= hi + 1e-9 * step), "{t:?}");
@@ -452,8 +513,20 @@ pub(crate) mod tests {
         let mut spec = PlotSpec::new("error vs cost", "reduced order", "max relative error", true);
         spec.log_x = true;
         let series = [
-            Series { label: Some("Craig-Bampton".into()), x: vec![6.0, 10.0, 20.0, 40.0], y: vec![1e-1, 1e-2, 1e-4, 1e-7], color: PALETTE[0].into(), stroke: Stroke::Dashed },
-            Series { label: Some("modal \"x\" <y>".into()), x: vec![6.0, 12.0], y: vec![3e-2, 2e-3], color: PALETTE[1].into(), stroke: Stroke::Markers },
+            Series {
+                label: Some("Craig-Bampton".into()),
+                x: vec![6.0, 10.0, 20.0, 40.0],
+                y: vec![1e-1, 1e-2, 1e-4, 1e-7],
+                color: PALETTE[0].into(),
+                stroke: Stroke::Dashed,
+            },
+            Series {
+                label: Some("modal \"x\" <y>".into()),
+                x: vec![6.0, 12.0],
+                y: vec![3e-2, 2e-3],
+                color: PALETTE[1].into(),
+                stroke: Stroke::Markers,
+            },
         ];
         let svg = line_plot(&spec, &series, &[Annotation { x: 40.0, y: 1e-7, text: "chosen".into() }]);
         check_svg(&svg);

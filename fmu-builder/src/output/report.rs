@@ -2,9 +2,9 @@
 //! what the reduction costs in accuracy. Written into the FMU's documentation as JSON.
 
 use crate::input::spec::{Role, Spec};
-use crate::model::rigid_coupling::Assembled;
 use crate::model::flange::Flange;
 use crate::model::part::Part;
+use crate::model::rigid_coupling::Assembled;
 use crate::reduce::accuracy::Accuracy;
 use crate::reduce::basis::Basis;
 use fmu_runtime::reduced::ReducedBody;

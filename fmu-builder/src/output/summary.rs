@@ -6,11 +6,23 @@ use std::fmt::Write;
 pub fn text(r: &Report) -> String {
     let mut s = String::new();
     let c = r.center_of_mass;
-    let _ = writeln!(s, "{}: {} mesh, {} nodes, {} elements, {} constrained DoFs", r.model_name, r.element, r.nodes, r.elements, r.dofs_constrained);
-    let _ = writeln!(s, "  mass {:.6e} kg, centre of mass ({:.6}, {:.6}, {:.6}) m from the mount", r.mass, c[0], c[1], c[2]);
+    let _ = writeln!(
+        s,
+        "{}: {} mesh, {} nodes, {} elements, {} constrained DoFs",
+        r.model_name, r.element, r.nodes, r.elements, r.dofs_constrained
+    );
+    let _ = writeln!(
+        s,
+        "  mass {:.6e} kg, centre of mass ({:.6}, {:.6}, {:.6}) m from the mount",
+        r.mass, c[0], c[1], c[2]
+    );
     for f in &r.flanges {
         let p = f.reference_point;
-        let _ = writeln!(s, "  flange {:<12} {:<6} at ({:.6}, {:.6}, {:.6}) m, {} slave nodes", f.name, f.role, p[0], p[1], p[2], f.slave_nodes);
+        let _ = writeln!(
+            s,
+            "  flange {:<12} {:<6} at ({:.6}, {:.6}, {:.6}) m, {} slave nodes",
+            f.name, f.role, p[0], p[1], p[2], f.slave_nodes
+        );
     }
     let _ = writeln!(
         s,
@@ -20,7 +32,12 @@ pub fn text(r: &Report) -> String {
     let a = &r.accuracy;
     let shown = a.reduced_hz.len().min(8);
     let freqs: Vec<String> = a.reduced_hz[..shown].iter().map(|f| format!("{f:.4}")).collect();
-    let _ = writeln!(s, "  lowest frequencies [Hz]: {}{}", freqs.join(", "), if a.reduced_hz.len() > shown { ", ..." } else { "" });
+    let _ = writeln!(
+        s,
+        "  lowest frequencies [Hz]: {}{}",
+        freqs.join(", "),
+        if a.reduced_hz.len() > shown { ", ..." } else { "" }
+    );
     // how far up the spectrum the reduced model is good to a given accuracy
     let good_up_to = |tol: f64| -> Option<(usize, f64)> {
         let n = a.relative_error.iter().take_while(|e| e.abs() <= tol).count();

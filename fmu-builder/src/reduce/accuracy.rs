@@ -35,7 +35,13 @@ pub struct Accuracy {
 
 /// Full-vs-reduced comparison. `n_full` eigenfrequencies of the full clamped model are computed.
 /// `solver` factors the stiffness of the mounted body (mount held).
-pub fn accuracy(model: &Assembled, solver: &SpdSolver, basis: &Basis, force_flanges: &[(String, usize)], n_full: usize) -> Result<Accuracy> {
+pub fn accuracy(
+    model: &Assembled,
+    solver: &SpdSolver,
+    basis: &Basis,
+    force_flanges: &[(String, usize)],
+    n_full: usize,
+) -> Result<Accuracy> {
     let nc = model.dofs.n_clamped();
     let m = block(&model.mass, 0..nc, 0..nc)?;
     let full = eigen::lowest(solver, &m, n_full, EIGEN_TOL)?;
@@ -78,7 +84,9 @@ pub fn compare_compliance(rows: &[usize], x: &Mat<f64>, basis: &Basis) -> (Vec<V
         .iter()
         .map(|&r| {
             rows.iter()
-                .map(|&c| (0..basis.omega.len()).map(|j| basis.phi[(r, j)] * basis.phi[(c, j)] / basis.omega[j].powi(2)).sum())
+                .map(|&c| {
+                    (0..basis.omega.len()).map(|j| basis.phi[(r, j)] * basis.phi[(c, j)] / basis.omega[j].powi(2)).sum()
+                })
                 .collect()
         })
         .collect();
@@ -105,9 +113,8 @@ pub const COMPLIANCE_TOL: f64 = 1e-8;
 /// an error with the figures, never a wrong FMU.
 pub fn enforce(accuracy: &Accuracy) -> Result<()> {
     let n = accuracy.reduced_hz.len().min(accuracy.full_hz.len());
-    let below: Vec<usize> = (0..n)
-        .filter(|&i| accuracy.reduced_hz[i] < accuracy.full_hz[i] * (1.0 - RAYLEIGH_RITZ_TOL))
-        .collect();
+    let below: Vec<usize> =
+        (0..n).filter(|&i| accuracy.reduced_hz[i] < accuracy.full_hz[i] * (1.0 - RAYLEIGH_RITZ_TOL)).collect();
     if let Some(&i) = below.first() {
         return Err(BuildError::Numerical(format!(
             "the reduced model is not a valid projection of the FE model: {} of its {n} lowest frequencies lie below the full model's (mode {}: {:.6} Hz reduced vs {:.6} Hz full); the reduction basis lost accuracy, no FMU was written",
@@ -127,7 +134,13 @@ pub fn enforce(accuracy: &Accuracy) -> Result<()> {
 }
 
 /// Free-free elastic frequencies and inertia-relief flange compliance, full vs reduced.
-pub fn free_free_accuracy(model: &Assembled, solver: &SpdSolver, shift: f64, rigid: &Deflation, basis: &Basis) -> Result<Accuracy> {
+pub fn free_free_accuracy(
+    model: &Assembled,
+    solver: &SpdSolver,
+    shift: f64,
+    rigid: &Deflation,
+    basis: &Basis,
+) -> Result<Accuracy> {
     let full = eigen::lowest_shifted(solver, &model.mass, basis.omega.len(), EIGEN_TOL, shift, Some(rigid))?;
     let two_pi = 2.0 * std::f64::consts::PI;
     let full_hz: Vec<f64> = full.values.iter().map(|l| l.max(0.0).sqrt() / two_pi).collect();

@@ -4,11 +4,11 @@
 //! fixed-interface normal modes (all flanges held) cover the dynamics. The basis is finally
 //! orthonormalised so the reduced mass is I and the reduced stiffness diag(omega^2).
 
-use crate::model::rigid_coupling::Assembled;
-use crate::linalg::eigen;
 use crate::error::{BuildError, Result};
+use crate::linalg::eigen;
 use crate::linalg::sparse::{SpdSolver, block, mul_compensated, mul_new};
 use crate::linalg::symmetric_eigen::graded_spd_eigen;
+use crate::model::rigid_coupling::Assembled;
 use faer::Mat;
 
 #[derive(Debug, Clone, Copy)]
@@ -80,12 +80,7 @@ pub fn craig_bampton(model: &Assembled, modes: ModeCount, static_shapes: Option<
     }
     v.as_mut().submatrix_mut(0, nb + ns, ni, nm).copy_from(&normal.vectors);
     let (phi, omega) = orthonormalise(model, v)?;
-    Ok(Basis {
-        phi,
-        omega,
-        n_normal: nm,
-        fixed_interface_omega: normal.values.iter().map(|l| l.sqrt()).collect(),
-    })
+    Ok(Basis { phi, omega, n_normal: nm, fixed_interface_omega: normal.values.iter().map(|l| l.sqrt()).collect() })
 }
 
 /// Rayleigh-Ritz on span(V): an M-orthonormal basis W of the span first (twice, dropping
@@ -159,7 +154,9 @@ pub fn orthonormalise(model: &Assembled, v: Mat<f64>) -> Result<(Mat<f64>, Vec<f
     let kr = w.transpose() * &kw;
     let c = Mat::<f64>::from_fn(r, r, |i, j| 0.5 * (kr[(i, j)] + kr[(j, i)]));
     let evd = graded_spd_eigen(&c, "the reduced stiffness").map_err(|_| {
-        BuildError::Numerical("the reduced stiffness is not positive definite: the part is not held by its mount".into())
+        BuildError::Numerical(
+            "the reduced stiffness is not positive definite: the part is not held by its mount".into(),
+        )
     })?;
     let s = &evd.values;
     let mut omega = Vec::with_capacity(r);
@@ -216,14 +213,25 @@ pub fn free_free(
     v.as_mut().subcols_mut(0, nb).copy_from(&attachments);
     v.as_mut().subcols_mut(nb, nm).copy_from(&normal.vectors);
     let (phi, omega) = orthonormalise(model, v)?;
-    Ok(Basis { phi, omega, n_normal: nm, fixed_interface_omega: normal.values.iter().map(|l| l.max(0.0).sqrt()).collect() })
+    Ok(Basis {
+        phi,
+        omega,
+        n_normal: nm,
+        fixed_interface_omega: normal.values.iter().map(|l| l.max(0.0).sqrt()).collect(),
+    })
 }
 
 /// Static response of a free body to loads `f` with inertia relief: the self-equilibrated part
 /// f - M Y Y^T f (Y: M-orthonormal rigid fields) solved with the singular K, the answer taken
 /// M-orthogonal to the rigid fields. Solved as u <- (K + s M)^-1 (f_eq + s M u), which converges
 /// by the factor s / (lambda_1 + s) per sweep on the elastic part.
-pub fn inertia_relief_solve(k_shifted: &SpdSolver, m: &crate::linalg::sparse::Sparse, shift: f64, rigid: &eigen::Deflation, f: &Mat<f64>) -> Mat<f64> {
+pub fn inertia_relief_solve(
+    k_shifted: &SpdSolver,
+    m: &crate::linalg::sparse::Sparse,
+    shift: f64,
+    rigid: &eigen::Deflation,
+    f: &Mat<f64>,
+) -> Mat<f64> {
     let c = rigid.vectors.transpose() * f;
     let f_eq = f - &rigid.m_vectors * &c;
     let mut u = Mat::<f64>::zeros(f.nrows(), f.ncols());
@@ -246,7 +254,8 @@ pub fn inertia_relief_solve(k_shifted: &SpdSolver, m: &crate::linalg::sparse::Sp
 pub fn flange_unit_loads(model: &Assembled) -> Mat<f64> {
     let d = &model.dofs;
     let nc = d.n_clamped();
-    let firsts: Vec<usize> = (0..d.flange_first.len()).filter(|&k| Some(k) != d.mount).map(|k| d.flange_first[k]).collect();
+    let firsts: Vec<usize> =
+        (0..d.flange_first.len()).filter(|&k| Some(k) != d.mount).map(|k| d.flange_first[k]).collect();
     let mut b = Mat::<f64>::zeros(nc, 6 * firsts.len());
     for (f, first) in firsts.iter().enumerate() {
         for i in 0..6 {
@@ -259,7 +268,12 @@ pub fn flange_unit_loads(model: &Assembled) -> Mat<f64> {
 /// Modal reduction with residual flexibility (static correction): the normal modes of the
 /// mounted body (force flanges free) plus the static shapes of unit flange loads, so the static
 /// response is exact and the modes carry the dynamics.
-pub fn modal(model: &Assembled, solver: &SpdSolver, modes: ModeCount, static_shapes: Option<&Mat<f64>>) -> Result<Basis> {
+pub fn modal(
+    model: &Assembled,
+    solver: &SpdSolver,
+    modes: ModeCount,
+    static_shapes: Option<&Mat<f64>>,
+) -> Result<Basis> {
     let nc = model.dofs.n_clamped();
     let m = block(&model.mass, 0..nc, 0..nc)?;
     let normal = match modes {
@@ -325,7 +339,10 @@ pub fn krylov(
         } else {
             let a = crate::linalg::sparse::add_scaled(&k, shift, &m)?;
             let what = if shift < 0.0 {
-                format!("K - w^2 M at the expansion point {} Hz (an eigenfrequency?)", (-shift).sqrt() / (2.0 * std::f64::consts::PI))
+                format!(
+                    "K - w^2 M at the expansion point {} Hz (an eigenfrequency?)",
+                    (-shift).sqrt() / (2.0 * std::f64::consts::PI)
+                )
             } else {
                 format!("K + s^2 M at the real expansion point s = {}", shift.sqrt())
             };
@@ -360,7 +377,12 @@ pub fn krylov(
 /// of the column's M-norm is mostly round-off of the solves, and kept it would only add a
 /// spurious stiff direction that costs the reduced eigenproblem its conditioning. Returns how
 /// many were kept.
-fn m_orthogonal_extend(basis: &mut Mat<f64>, m_basis: &mut Mat<f64>, new: &Mat<f64>, m: &crate::linalg::sparse::Sparse) -> usize {
+fn m_orthogonal_extend(
+    basis: &mut Mat<f64>,
+    m_basis: &mut Mat<f64>,
+    new: &Mat<f64>,
+    m: &crate::linalg::sparse::Sparse,
+) -> usize {
     let n = new.nrows();
     let mut kept = 0;
     for j in 0..new.ncols() {

@@ -27,4 +27,3 @@ pub fn with_user_damping(mut modal: Vec<f64>, model: &Assembled, basis: &Basis) 
     }
     Ok(modal)
 }
-

@@ -3,14 +3,14 @@
 //! B the unit loads at the force flanges, by a complex sparse LU of the full model per sampled
 //! frequency, and in closed form for the reduced model (its matrices are diagonal).
 
-use crate::model::rigid_coupling::Assembled;
 use crate::error::{BuildError, Result};
-use crate::reduce::basis::{Basis, flange_unit_loads};
 use crate::linalg::sparse::{block, mul_compensated};
+use crate::model::rigid_coupling::Assembled;
+use crate::reduce::basis::{Basis, flange_unit_loads};
+use faer::Mat;
 use faer::c64;
 use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, Triplet};
-use faer::Mat;
 use serde::Serialize;
 
 /// The damping both models are compared with: the input's Rayleigh damping, or a 1 % structural
@@ -24,7 +24,11 @@ pub struct ComparisonDamping {
 
 impl ComparisonDamping {
     pub fn new(alpha: f64, beta: f64) -> Self {
-        if alpha == 0.0 && beta == 0.0 { Self { alpha, beta, loss_factor: 0.01 } } else { Self { alpha, beta, loss_factor: 0.0 } }
+        if alpha == 0.0 && beta == 0.0 {
+            Self { alpha, beta, loss_factor: 0.01 }
+        } else {
+            Self { alpha, beta, loss_factor: 0.0 }
+        }
     }
 }
 
@@ -48,7 +52,8 @@ pub struct FrequencyResponse {
 /// Sample frequencies: an even grid over the band plus every full-model eigenfrequency in it and
 /// its close neighbours, where responses peak and errors hide.
 pub fn grid(band: [f64; 2], eigen_hz: &[f64], points: usize) -> Vec<f64> {
-    let mut f: Vec<f64> = (0..points).map(|i| band[0] + (band[1] - band[0]) * (i as f64 + 0.5) / points as f64).collect();
+    let mut f: Vec<f64> =
+        (0..points).map(|i| band[0] + (band[1] - band[0]) * (i as f64 + 0.5) / points as f64).collect();
     for &e in eigen_hz {
         for x in [0.995 * e, e, 1.005 * e] {
             if x >= band[0] && x <= band[1] {
@@ -95,7 +100,8 @@ impl FullResponse {
         }
         let union = SparseColMat::<usize, f64>::try_new_from_triplets(nc, nc, &trip)
             .map_err(|e| BuildError::Numerical(format!("pattern of K + M: {e:?}")))?;
-        let pattern = union.symbolic().to_owned().map_err(|e| BuildError::Numerical(format!("pattern of K + M: {e:?}")))?;
+        let pattern =
+            union.symbolic().to_owned().map_err(|e| BuildError::Numerical(format!("pattern of K + M: {e:?}")))?;
         let slots = |a: &crate::linalg::sparse::Sparse| -> Vec<usize> {
             let mut out = Vec::with_capacity(a.val().len());
             for j in 0..nc {
@@ -110,7 +116,13 @@ impl FullResponse {
         let (k_slot, m_slot) = (slots(&k), slots(&m));
         let scale = (0..nc)
             .map(|j| {
-                let d: f64 = k.row_idx_of_col_raw(j).iter().zip(k.val_of_col(j)).filter(|(i, _)| **i == j).map(|(_, v)| *v).sum();
+                let d: f64 = k
+                    .row_idx_of_col_raw(j)
+                    .iter()
+                    .zip(k.val_of_col(j))
+                    .filter(|(i, _)| **i == j)
+                    .map(|(_, v)| *v)
+                    .sum();
                 1.0 / d.abs().sqrt().max(1e-300)
             })
             .collect();
@@ -159,8 +171,10 @@ impl FullResponse {
         for _ in 0..2 {
             let re = Mat::<f64>::from_fn(nc, x.ncols(), |i, j| x[(i, j)].re);
             let im = Mat::<f64>::from_fn(nc, x.ncols(), |i, j| x[(i, j)].im);
-            let (kr, ki) = (mul_compensated(None, 1.0, &self.k, re.as_ref()), mul_compensated(None, 1.0, &self.k, im.as_ref()));
-            let (mr, mi) = (mul_compensated(None, 1.0, &self.m, re.as_ref()), mul_compensated(None, 1.0, &self.m, im.as_ref()));
+            let (kr, ki) =
+                (mul_compensated(None, 1.0, &self.k, re.as_ref()), mul_compensated(None, 1.0, &self.k, im.as_ref()));
+            let (mr, mi) =
+                (mul_compensated(None, 1.0, &self.m, re.as_ref()), mul_compensated(None, 1.0, &self.m, im.as_ref()));
             let mut r = Mat::<c64>::from_fn(nc, x.ncols(), |i, j| {
                 let kx = c64::new(kr[(i, j)], ki[(i, j)]);
                 let mx = c64::new(mr[(i, j)], mi[(i, j)]);
@@ -213,9 +227,17 @@ pub fn reduced_response(model: &Assembled, basis: &Basis, damping: ComparisonDam
 }
 
 /// Full vs reduced over the band.
-pub fn compare(model: &Assembled, basis: &Basis, damping: ComparisonDamping, band: [f64; 2], eigen_hz: &[f64], static_compliance: &[Vec<f64>]) -> Result<FrequencyResponse> {
+pub fn compare(
+    model: &Assembled,
+    basis: &Basis,
+    damping: ComparisonDamping,
+    band: [f64; 2],
+    eigen_hz: &[f64],
+    static_compliance: &[Vec<f64>],
+) -> Result<FrequencyResponse> {
     let frequencies = grid(band, eigen_hz, 60);
-    let scale: Vec<f64> = (0..static_compliance.len()).map(|i| 1.0 / static_compliance[i][i].abs().sqrt().max(1e-300)).collect();
+    let scale: Vec<f64> =
+        (0..static_compliance.len()).map(|i| 1.0 / static_compliance[i][i].abs().sqrt().max(1e-300)).collect();
     let mut relative_error = Vec::with_capacity(frequencies.len());
     let mut driving_point_full = Vec::new();
     let mut driving_point_reduced = Vec::new();
@@ -235,10 +257,14 @@ pub fn compare(model: &Assembled, basis: &Basis, damping: ComparisonDamping, ban
         relative_error.push(if den > 0.0 { (num / den).sqrt() } else { 0.0 });
         driving_point_full.push((0..full.nrows()).map(|i| full[(i, i)].norm()).collect());
         driving_point_reduced.push((0..red.nrows()).map(|i| red[(i, i)].norm()).collect());
-        full_matrices.push((0..full.nrows() * full.ncols()).map(|e| {
-            let z = full[(e / full.ncols(), e % full.ncols())];
-            [z.re, z.im]
-        }).collect());
+        full_matrices.push(
+            (0..full.nrows() * full.ncols())
+                .map(|e| {
+                    let z = full[(e / full.ncols(), e % full.ncols())];
+                    [z.re, z.im]
+                })
+                .collect(),
+        );
     }
     let max_relative_error = relative_error.iter().copied().fold(0.0, f64::max);
     Ok(FrequencyResponse {

@@ -3,8 +3,8 @@
 //! models (`frf`), the choice of reduced order (`order`), and the accuracy comparison against
 //! the full model that every build must pass (`accuracy`).
 
+pub mod accuracy;
 pub mod basis;
+pub mod damping;
 pub mod frf;
 pub mod order;
-pub mod accuracy;
-pub mod damping;

@@ -7,8 +7,8 @@
 //! tolerance over the band wins. All of it happens in the rich model's coordinates: no sparse
 //! work beyond the full-model responses computed once.
 
-use crate::reduce::frf::ComparisonDamping;
 use crate::linalg::symmetric_eigen::symmetric_eigen;
+use crate::reduce::frf::ComparisonDamping;
 use faer::{Mat, c64};
 
 /// A selection in the rich model's coordinates: columns Y (r_rich x r_sel, orthonormal) and the
@@ -109,7 +109,14 @@ pub fn select(omega: &[f64], kept: &[usize], loads: &Mat<f64>) -> Selection {
 
 /// Flange FRF error of a selection against full-model responses `full` at `freqs_hz`
 /// (same unit-free scaling as the report).
-pub fn frf_error(sel: &Selection, phi_b: &Mat<f64>, damping: ComparisonDamping, freqs_hz: &[f64], full: &[Mat<c64>], scale: &[f64]) -> f64 {
+pub fn frf_error(
+    sel: &Selection,
+    phi_b: &Mat<f64>,
+    damping: ComparisonDamping,
+    freqs_hz: &[f64],
+    full: &[Mat<c64>],
+    scale: &[f64],
+) -> f64 {
     let shapes = phi_b * &sel.y; // nb x r_sel
     let mut worst = 0.0f64;
     for (f, h) in freqs_hz.iter().zip(full) {

@@ -3,10 +3,7 @@
 //! the coupling's drift from the transition's) and the free body's substeps.
 
 use super::mounted::fill_coupling;
-use super::{
-    Coupling, FlangeLoad, FlexibleBody, FrameState, FreeWork, InputRates, MountMotion,
-    UNSTABLE_STIFFNESS,
-};
+use super::{Coupling, FlangeLoad, FlexibleBody, FrameState, FreeWork, InputRates, MountMotion, UNSTABLE_STIFFNESS};
 use crate::coupled_propagator::Prepared;
 use crate::kinematics::{self as k3, Mat3, Vec3};
 
@@ -25,12 +22,7 @@ fn coupling_drift(c: &Coupling<f64>, reference: (&[f64], &[f64]), omega: &[f64])
     let mut worst = 0.0f64;
     for i in 0..n {
         let r = i * n..(i + 1) * n;
-        let (cd, ck, rd, rk) = (
-            &c.c_d[r.clone()],
-            &c.c_k[r.clone()],
-            &reference.0[r.clone()],
-            &reference.1[r],
-        );
+        let (cd, ck, rd, rk) = (&c.c_d[r.clone()], &c.c_k[r.clone()], &reference.0[r.clone()], &reference.1[r]);
         let mut sum = 0.0;
         for j in 0..n {
             sum += (cd[j] - rd[j]).abs() + (ck[j] - rk[j]).abs() / omega[j];
@@ -41,21 +33,10 @@ fn coupling_drift(c: &Coupling<f64>, reference: (&[f64], &[f64]), omega: &[f64])
 }
 
 /// ((C_d - R_d) q' + (C_k - R_k) q)_i: the coupling's force beyond the reference transition's.
-fn residual_coupling_force(
-    c: &Coupling<f64>,
-    reference: (&[f64], &[f64]),
-    i: usize,
-    q: &[f64],
-    qd: &[f64],
-) -> f64 {
+fn residual_coupling_force(c: &Coupling<f64>, reference: (&[f64], &[f64]), i: usize, q: &[f64], qd: &[f64]) -> f64 {
     let n = q.len();
     let r = i * n..(i + 1) * n;
-    let (cd, ck, rd, rk) = (
-        &c.c_d[r.clone()],
-        &c.c_k[r.clone()],
-        &reference.0[r.clone()],
-        &reference.1[r],
-    );
+    let (cd, ck, rd, rk) = (&c.c_d[r.clone()], &c.c_k[r.clone()], &reference.0[r.clone()], &reference.1[r]);
     let mut s = 0.0;
     for j in 0..n {
         s += (cd[j] - rd[j]) * qd[j] + (ck[j] - rk[j]) * q[j];
@@ -115,50 +96,22 @@ impl FlexibleBody {
             for i in 0..9 {
                 end.rot[i] += h * r.rot[i];
             }
-            for ((e, l), rate) in work
-                .loads_end
-                .iter_mut()
-                .zip(&self.loads)
-                .zip(&self.rates.loads)
-            {
-                *e = FlangeLoad {
-                    f: k3::add(l.f, k3::scale(h, rate.f)),
-                    t: k3::add(l.t, k3::scale(h, rate.t)),
-                };
+            for ((e, l), rate) in work.loads_end.iter_mut().zip(&self.loads).zip(&self.rates.loads) {
+                *e = FlangeLoad { f: k3::add(l.f, k3::scale(h, rate.f)), t: k3::add(l.t, k3::scale(h, rate.t)) };
             }
             let end_rot = k3::nearest_rotation(&end.rot);
-            fill_coupling(
-                &self.body,
-                &end_rot,
-                &end,
-                &work.loads_end,
-                self.params.g,
-                &mut work.coupling_end,
-            );
+            fill_coupling(&self.body, &end_rot, &end, &work.loads_end, self.params.g, &mut work.coupling_end);
         }
         // a coupling that starts at zero (spin-up from rest) still couples within the step
         let coupled = self.coupling.active || (ramp && work.coupling_end.active);
         if !coupled {
             self.coupled_work = work;
-            self.propagator.prepare(
-                &self.body.omega,
-                self.params.alpha,
-                self.params.beta,
-                &self.body.modal_damping,
-                h,
-            );
+            self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, h);
             if ramp {
-                self.propagator.advance_ramp(
-                    &self.body.omega,
-                    &self.load,
-                    &self.load_rate,
-                    &mut self.q,
-                    &mut self.qd,
-                );
+                self.propagator.advance_ramp(&self.body.omega, &self.load, &self.load_rate, &mut self.q, &mut self.qd);
                 self.extrapolate_inputs(h);
             } else {
-                self.propagator
-                    .advance(&self.body.omega, &self.load, &mut self.q, &mut self.qd);
+                self.propagator.advance(&self.body.omega, &self.load, &mut self.q, &mut self.qd);
             }
             self.eval.valid = false;
             return Ok(());
@@ -169,32 +122,19 @@ impl FlexibleBody {
         // top of the exact coupled transition; the reference is renewed (one matrix exponential,
         // at the step's midpoint coupling) when h |dC| exceeds REFERENCE_DRIFT. A steady spin
         // runs on one exponential.
-        let prepared = self
-            .coupled
-            .is_prepared(h, self.params.alpha, self.params.beta);
+        let prepared = self.coupled.is_prepared(h, self.params.alpha, self.params.beta);
         // a steady spin meets its own transition again: compared first, cheaper than the drift
-        let held_exactly = !ramp
-            && prepared
-            && self.coupled.reference() == (&self.coupling.c_d[..], &self.coupling.c_k[..]);
-        let drift_ok = |c: &Coupling<f64>| {
-            h * coupling_drift(c, self.coupled.reference(), &self.body.omega) <= REFERENCE_DRIFT
-        };
-        let current = held_exactly
-            || prepared && drift_ok(&self.coupling) && (!ramp || drift_ok(&work.coupling_end));
+        let held_exactly =
+            !ramp && prepared && self.coupled.reference() == (&self.coupling.c_d[..], &self.coupling.c_k[..]);
+        let drift_ok =
+            |c: &Coupling<f64>| h * coupling_drift(c, self.coupled.reference(), &self.body.omega) <= REFERENCE_DRIFT;
+        let current = held_exactly || prepared && drift_ok(&self.coupling) && (!ramp || drift_ok(&work.coupling_end));
         if !current {
             let (c_d, c_k): (&[f64], &[f64]) = if ramp {
-                for (m, (a, b)) in work
-                    .c_d_mid
-                    .iter_mut()
-                    .zip(self.coupling.c_d.iter().zip(&work.coupling_end.c_d))
-                {
+                for (m, (a, b)) in work.c_d_mid.iter_mut().zip(self.coupling.c_d.iter().zip(&work.coupling_end.c_d)) {
                     *m = 0.5 * (a + b);
                 }
-                for (m, (a, b)) in work
-                    .c_k_mid
-                    .iter_mut()
-                    .zip(self.coupling.c_k.iter().zip(&work.coupling_end.c_k))
-                {
+                for (m, (a, b)) in work.c_k_mid.iter_mut().zip(self.coupling.c_k.iter().zip(&work.coupling_end.c_k)) {
                     *m = 0.5 * (a + b);
                 }
                 (&work.c_d_mid, &work.c_k_mid)
@@ -215,22 +155,12 @@ impl FlexibleBody {
                 self.warning = Some(UNSTABLE_STIFFNESS);
             }
         }
-        let end = if ramp {
-            &work.coupling_end
-        } else {
-            &self.coupling
-        };
+        let end = if ramp { &work.coupling_end } else { &self.coupling };
         // a transition made for this step (held or midpoint coupling) needs no correction
         let exact = held_exactly || !current;
         let rate: &[f64] = if ramp { &self.load_rate } else { &work.zeros };
         if exact {
-            self.coupled.advance(
-                &self.body.omega,
-                &self.load,
-                rate,
-                &mut self.q,
-                &mut self.qd,
-            );
+            self.coupled.advance(&self.body.omega, &self.load, rate, &mut self.q, &mut self.qd);
         } else {
             // Heun: the residual coupling force held at its start value, then ramped to its
             // value at the predicted end
@@ -239,16 +169,9 @@ impl FlexibleBody {
             work.qd0.copy_from_slice(&self.qd);
             for i in 0..n {
                 work.f0[i] = self.load[i]
-                    - residual_coupling_force(
-                        &self.coupling,
-                        self.coupled.reference(),
-                        i,
-                        &work.q0,
-                        &work.qd0,
-                    );
+                    - residual_coupling_force(&self.coupling, self.coupled.reference(), i, &work.q0, &work.qd0);
             }
-            self.coupled
-                .advance(&self.body.omega, &work.f0, rate, &mut self.q, &mut self.qd);
+            self.coupled.advance(&self.body.omega, &work.f0, rate, &mut self.q, &mut self.qd);
             for (i, rate) in rate.iter().enumerate() {
                 let f_end = self.load[i] + h * rate
                     - residual_coupling_force(end, self.coupled.reference(), i, &self.q, &self.qd);
@@ -256,13 +179,7 @@ impl FlexibleBody {
             }
             self.q.copy_from_slice(&work.q0);
             self.qd.copy_from_slice(&work.qd0);
-            self.coupled.advance(
-                &self.body.omega,
-                &work.f0,
-                &work.f1,
-                &mut self.q,
-                &mut self.qd,
-            );
+            self.coupled.advance(&self.body.omega, &work.f0, &work.f1, &mut self.q, &mut self.qd);
         }
         self.coupled_work = work;
         if ramp {
@@ -295,9 +212,7 @@ impl FlexibleBody {
         let m = {
             let at_rdot: Mat3 = std::array::from_fn(|ij| {
                 let (i, j) = (ij / 3, ij % 3);
-                a[i] * r.mount.rot[j]
-                    + a[3 + i] * r.mount.rot[3 + j]
-                    + a[6 + i] * r.mount.rot[6 + j]
+                a[i] * r.mount.rot[j] + a[3 + i] * r.mount.rot[3 + j] + a[6 + i] * r.mount.rot[6 + j]
             });
             let skew: Mat3 = std::array::from_fn(|ij| {
                 let (i, j) = (ij / 3, ij % 3);
@@ -308,9 +223,8 @@ impl FlexibleBody {
         let body_rate = |x: Vec3, rate: Vec3| k3::add(k3::mul_t(a, rate), k3::mul_t(&m, x));
         let a_b = body_rate(k3::sub(self.mount.a, self.params.g), r.mount.a);
         for j in 0..n {
-            self.load_rate[j] = -(self.body.c_t[j] * a_b[0]
-                + self.body.c_t[n + j] * a_b[1]
-                + self.body.c_t[2 * n + j] * a_b[2]);
+            self.load_rate[j] =
+                -(self.body.c_t[j] * a_b[0] + self.body.c_t[n + j] * a_b[1] + self.body.c_t[2 * n + j] * a_b[2]);
         }
         if let Some(rot) = &self.body.rotation {
             let w = k3::mul_t(a, self.mount.w);
@@ -370,10 +284,7 @@ impl FlexibleBody {
                 load.t[i] += h * rate.t[i];
             }
         }
-        r.mount = MountMotion {
-            rot: [0.0; 9],
-            ..MountMotion::default()
-        };
+        r.mount = MountMotion { rot: [0.0; 9], ..MountMotion::default() };
         for rate in r.loads.iter_mut() {
             *rate = FlangeLoad::default();
         }
@@ -389,18 +300,10 @@ impl FlexibleBody {
     /// the coupling load (trapezoidal in time), the rigid motion by the averaged rates, the
     /// attitude by the exact rotation of the mean angular velocity.
     fn step_free(&mut self, h: f64) -> Result<(), String> {
-        let spin = self
-            .frame
-            .map_or(0.0, |f| k3::dot(f.w_body, f.w_body).sqrt());
+        let spin = self.frame.map_or(0.0, |f| k3::dot(f.w_body, f.w_body).sqrt());
         let substeps = ((h * spin / 0.005).ceil() as usize).clamp(1, 1_000_000);
         let hs = h / substeps as f64;
-        self.propagator.prepare(
-            &self.body.omega,
-            self.params.alpha,
-            self.params.beta,
-            &self.body.modal_damping,
-            hs,
-        );
+        self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, hs);
         // the preallocated workspace, taken out for the substeps (leaves an empty Vec: no allocation)
         let mut work = std::mem::take(&mut self.free_work);
         let result = self.free_substeps(&mut work, substeps, hs);
@@ -440,9 +343,7 @@ impl FlexibleBody {
         let (alpha, beta) = (self.params.alpha, self.params.beta);
         for (j, out) in out.iter_mut().enumerate() {
             let w2 = self.body.omega[j] * self.body.omega[j];
-            *out = self.eval.qdd[j]
-                + (alpha + beta * w2 + self.body.modal_damping[j]) * self.qd[j]
-                + w2 * self.q[j];
+            *out = self.eval.qdd[j] + (alpha + beta * w2 + self.body.modal_damping[j]) * self.qd[j] + w2 * self.q[j];
         }
     }
 
@@ -456,8 +357,7 @@ impl FlexibleBody {
         load: &[f64],
         hs: f64,
     ) -> Result<(), String> {
-        self.propagator
-            .advance(&self.body.omega, load, &mut self.q, &mut self.qd);
+        self.propagator.advance(&self.body.omega, load, &mut self.q, &mut self.qd);
         let w_dot = k3::scale(0.5, k3::add(a.w_body, b.w_body));
         let accel = k3::scale(0.5, k3::add(a.v, b.v));
         let f = self.frame.as_mut().ok_or("not a free-floating body")?;
@@ -465,10 +365,7 @@ impl FlexibleBody {
         f.w_body = k3::add(start.w_body, k3::scale(hs, w_dot));
         f.v = k3::add(start.v, k3::scale(hs, accel));
         f.r = k3::add(start.r, k3::scale(0.5 * hs, k3::add(start.v, f.v)));
-        f.quat = k3::quaternion_multiply(
-            start.quat,
-            k3::quaternion_of(&k3::rotation_of(k3::scale(hs, w_mid))),
-        );
+        f.quat = k3::quaternion_multiply(start.quat, k3::quaternion_of(&k3::rotation_of(k3::scale(hs, w_mid))));
         Ok(())
     }
 }

@@ -30,14 +30,8 @@ pub(super) fn dot<T: Scalar>(a: &[T], b: &[T]) -> T {
 pub(super) fn solve_dense<T: Scalar>(a: &mut [T], b: &mut [T], n: usize) -> Result<(), ()> {
     let scale = a.iter().fold(0.0f64, |m, v| m.max(v.value().abs()));
     for col in 0..n {
-        let piv = (col..n)
-            .max_by(|&i, &j| {
-                a[i * n + col]
-                    .value()
-                    .abs()
-                    .total_cmp(&a[j * n + col].value().abs())
-            })
-            .ok_or(())?;
+        let piv =
+            (col..n).max_by(|&i, &j| a[i * n + col].value().abs().total_cmp(&a[j * n + col].value().abs())).ok_or(())?;
         // a NaN pivot is singular too (scale, a max ignoring NaN, is never NaN)
         let pivot = a[piv * n + col].value().abs();
         if pivot.is_nan() || pivot <= 1e-14 * scale {

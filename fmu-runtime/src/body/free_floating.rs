@@ -12,12 +12,7 @@ impl FlexibleBody {
         if let Some(f) = self.frame.as_mut() {
             let i = self.initial_frame;
             let rot = k3::rotation_of(i.phi);
-            *f = FrameState {
-                r: i.r,
-                quat: k3::quaternion_of(&rot),
-                v: i.v,
-                w_body: k3::mul_t(&rot, i.w),
-            };
+            *f = FrameState { r: i.r, quat: k3::quaternion_of(&rot), v: i.v, w_body: k3::mul_t(&rot, i.w) };
             self.eval.valid = false;
         }
     }
@@ -40,34 +35,18 @@ impl<T: Scalar> FlexibleBody<T> {
         let n = self.q.len();
         let nn = n * n;
         let b = self.body.clone();
-        let rot_terms = b
-            .rotation
-            .as_ref()
-            .ok_or("a free-floating body needs its rotation invariants")?;
+        let rot_terms = b.rotation.as_ref().ok_or("a free-floating body needs its rotation invariants")?;
         let [q0, q1, q2, q3] = frame.quat;
         let norm = (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3).sqrt();
         if !(norm.value() > 0.5 && norm.value() < 2.0) {
-            return Err(format!(
-                "the orientation quaternion has drifted to norm {}",
-                norm.value()
-            ));
+            return Err(format!("the orientation quaternion has drifted to norm {}", norm.value()));
         }
         let quat = frame.quat.map(|x| x / norm);
         let a = k3::rotation_of_quaternion(quat);
         let w = frame.w_body;
-        let total_force: Vec3<T> = self
-            .loads
-            .iter()
-            .fold([T::zero(); 3], |acc, l| k3::add(acc, l.f));
+        let total_force: Vec3<T> = self.loads.iter().fold([T::zero(); 3], |acc, l| k3::add(acc, l.f));
         let accel = k3::add(k3::scale(c(1.0 / b.mass), total_force), self.gravity());
-        self.mount = MountMotion {
-            r: frame.r,
-            rot: a,
-            v: frame.v,
-            w: k3::mul(&a, w),
-            a: accel,
-            z: [T::zero(); 3],
-        };
+        self.mount = MountMotion { r: frame.r, rot: a, v: frame.v, w: k3::mul(&a, w), a: accel, z: [T::zero(); 3] };
         self.rot = a;
         // modal load of the flange loads and the centrifugal o_ab terms (C_t = 0, c_a = 0 here)
         self.modal_load();
@@ -75,9 +54,7 @@ impl<T: Scalar> FlexibleBody<T> {
         let rhs_q = &mut self.eval.qdd;
         for (j, rhs) in rhs_q.iter_mut().enumerate() {
             let w2 = b.omega[j] * b.omega[j];
-            *rhs = self.load[j]
-                - self.qd[j] * (alpha + beta * w2 + b.modal_damping[j])
-                - self.q[j] * w2;
+            *rhs = self.load[j] - self.qd[j] * (alpha + beta * w2 + b.modal_damping[j]) - self.q[j] * w2;
         }
         for i in 0..3 {
             let g = &rot_terms.g[i * nn..(i + 1) * nn];
@@ -111,13 +88,10 @@ impl<T: Scalar> FlexibleBody<T> {
         let mut j_rate = [T::zero(); 9];
         for p in 0..3 {
             for q_ in 0..3 {
-                let (o_pq, o_qp) = (
-                    &rot_terms.o_vec[(3 * p + q_) * n..][..n],
-                    &rot_terms.o_vec[(3 * q_ + p) * n..][..n],
-                );
+                let (o_pq, o_qp) =
+                    (&rot_terms.o_vec[(3 * p + q_) * n..][..n], &rot_terms.o_vec[(3 * q_ + p) * n..][..n]);
                 let o_mat = &rot_terms.o_mat[(3 * p + q_) * nn..(3 * p + q_ + 1) * nn];
-                let (mut lin, mut lin_rate, mut quad, mut quad_rate) =
-                    (T::zero(), T::zero(), T::zero(), T::zero());
+                let (mut lin, mut lin_rate, mut quad, mut quad_rate) = (T::zero(), T::zero(), T::zero(), T::zero());
                 for r in 0..n {
                     lin += self.q[r] * (o_pq[r] + o_qp[r]);
                     lin_rate += self.qd[r] * (o_pq[r] + o_qp[r]);
@@ -135,16 +109,10 @@ impl<T: Scalar> FlexibleBody<T> {
         // torque of the flange loads about the centre of mass, body frame
         let mut torque = [T::zero(); 3];
         for (flange, load) in b.flanges.iter().zip(&self.loads) {
-            let u: Vec3<T> =
-                [0, 1, 2].map(|r| shape_dot(&flange.shapes[r * n..(r + 1) * n], &self.q));
+            let u: Vec3<T> = [0, 1, 2].map(|r| shape_dot(&flange.shapes[r * n..(r + 1) * n], &self.q));
             let f_b = k3::mul_t(&a, load.f);
-            torque = k3::add(
-                torque,
-                k3::add(
-                    k3::cross(k3::add(flange.position.map(c), u), f_b),
-                    k3::mul_t(&a, load.t),
-                ),
-            );
+            torque =
+                k3::add(torque, k3::add(k3::cross(k3::add(flange.position.map(c), u), f_b), k3::mul_t(&a, load.t)));
         }
         let rhs_w = k3::sub(k3::sub(torque, k3::cross(w, h)), k3::mul(&j_rate, w));
         // Schur complement: (J - C_r C_r^T) W' = rhs_w - C_r rhs_q
@@ -159,12 +127,9 @@ impl<T: Scalar> FlexibleBody<T> {
             }
         }
         let mut w_dot = rhs;
-        solve_dense(&mut s, &mut w_dot, 3)
-            .map_err(|_| "the body's inertia matrix became singular".to_string())?;
+        solve_dense(&mut s, &mut w_dot, 3).map_err(|_| "the body's inertia matrix became singular".to_string())?;
         for r in 0..n {
-            let f = self.cr_q[r] * w_dot[0]
-                + self.cr_q[n + r] * w_dot[1]
-                + self.cr_q[2 * n + r] * w_dot[2];
+            let f = self.cr_q[r] * w_dot[0] + self.cr_q[n + r] * w_dot[1] + self.cr_q[2 * n + r] * w_dot[2];
             self.eval.qdd[r] -= f;
         }
         self.mount.z = k3::mul(&a, w_dot);
@@ -178,21 +143,14 @@ impl<T: Scalar> FlexibleBody<T> {
             q0 * half[1] + q3 * half[0] - q1 * half[2],
             q0 * half[2] + q1 * half[1] - q2 * half[0],
         ];
-        self.frame_rate = FrameState {
-            r: frame.v,
-            quat: quat_rate,
-            v: accel,
-            w_body: w_dot,
-        };
+        self.frame_rate = FrameState { r: frame.v, quat: quat_rate, v: accel, w_body: w_dot };
         Ok(())
     }
 
     /// Energy and momenta of a free-floating body (gravity's potential included).
     pub fn invariants(&mut self) -> Result<Invariants<T>, String> {
         self.evaluate()?;
-        let frame = self
-            .frame
-            .ok_or("energy and momenta are outputs of free-floating bodies")?;
+        let frame = self.frame.ok_or("energy and momenta are outputs of free-floating bodies")?;
         let n = self.q.len();
         let b = &self.body;
         let rot_terms = b.rotation.as_ref().ok_or("missing rotation invariants")?;
@@ -200,10 +158,8 @@ impl<T: Scalar> FlexibleBody<T> {
         let mut j: Mat3<T> = b.inertia.map(c);
         for p in 0..3 {
             for q_ in 0..3 {
-                let (o_pq, o_qp) = (
-                    &rot_terms.o_vec[(3 * p + q_) * n..][..n],
-                    &rot_terms.o_vec[(3 * q_ + p) * n..][..n],
-                );
+                let (o_pq, o_qp) =
+                    (&rot_terms.o_vec[(3 * p + q_) * n..][..n], &rot_terms.o_vec[(3 * q_ + p) * n..][..n]);
                 let o_mat = &rot_terms.o_mat[(3 * p + q_) * nn..(3 * p + q_ + 1) * nn];
                 let mut v = T::zero();
                 for r in 0..n {
@@ -220,16 +176,11 @@ impl<T: Scalar> FlexibleBody<T> {
         let v2 = k3::dot(frame.v, frame.v);
         let mut energy = v2 * (0.5 * b.mass) + k3::dot(w, jw) * 0.5 + k3::dot(w, cr_qd);
         for r in 0..n {
-            energy += self.qd[r] * 0.5 * self.qd[r]
-                + self.q[r] * (0.5 * b.omega[r] * b.omega[r]) * self.q[r];
+            energy += self.qd[r] * 0.5 * self.qd[r] + self.q[r] * (0.5 * b.omega[r] * b.omega[r]) * self.q[r];
         }
         energy -= k3::dot(self.gravity(), frame.r) * b.mass;
         let momentum = k3::scale(c(b.mass), frame.v);
         let angular_momentum = k3::add(k3::cross(frame.r, momentum), k3::mul(&self.mount.rot, h));
-        Ok(Invariants {
-            energy,
-            momentum,
-            angular_momentum,
-        })
+        Ok(Invariants { energy, momentum, angular_momentum })
     }
 }

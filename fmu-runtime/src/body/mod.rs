@@ -59,14 +59,7 @@ impl<T: Copy> MountMotion<T> {
 impl<T: Scalar> Default for MountMotion<T> {
     fn default() -> Self {
         let o = [T::zero(); 3];
-        Self {
-            r: o,
-            rot: k3::IDENTITY.map(c),
-            v: o,
-            w: o,
-            a: o,
-            z: o,
-        }
+        Self { r: o, rot: k3::IDENTITY.map(c), v: o, w: o, a: o, z: o }
     }
 }
 
@@ -122,24 +115,14 @@ pub struct FrameState<T = f64> {
 
 impl<T: Copy> FrameState<T> {
     pub fn map<U>(&self, f: impl Fn(T) -> U) -> FrameState<U> {
-        FrameState {
-            r: self.r.map(&f),
-            quat: self.quat.map(&f),
-            v: self.v.map(&f),
-            w_body: self.w_body.map(&f),
-        }
+        FrameState { r: self.r.map(&f), quat: self.quat.map(&f), v: self.v.map(&f), w_body: self.w_body.map(&f) }
     }
 }
 
 impl<T: Scalar> Default for FrameState<T> {
     fn default() -> Self {
         let o = [T::zero(); 3];
-        Self {
-            r: o,
-            quat: [c(1.0), T::zero(), T::zero(), T::zero()],
-            v: o,
-            w_body: o,
-        }
+        Self { r: o, quat: [c(1.0), T::zero(), T::zero(), T::zero()], v: o, w_body: o }
     }
 }
 
@@ -282,11 +265,7 @@ impl FlexibleBody {
     pub fn new(body: Arc<ReducedBody>) -> Self {
         let n = body.n_modes();
         let nf = body.flanges.len();
-        let params = Parameters {
-            g: [0.0; 3],
-            alpha: body.alpha,
-            beta: body.beta,
-        };
+        let params = Parameters { g: [0.0; 3], alpha: body.alpha, beta: body.beta };
         Self {
             mount: MountMotion::default(),
             loads: vec![FlangeLoad::default(); nf],
@@ -302,11 +281,7 @@ impl FlexibleBody {
                 mount_force: [0.0; 3],
                 mount_torque: [0.0; 3],
             },
-            coupling: Coupling {
-                c_d: vec![0.0; n * n],
-                c_k: vec![0.0; n * n],
-                ..Coupling::default()
-            },
+            coupling: Coupling { c_d: vec![0.0; n * n], c_k: vec![0.0; n * n], ..Coupling::default() },
             rot: k3::IDENTITY,
             frame: body.free_floating.then(FrameState::default),
             initial_frame: InitialFrame::default(),
@@ -324,36 +299,23 @@ impl FlexibleBody {
                     c_k_mid: vec![0.0; n * n],
                     zeros: vec![0.0; n],
                     loads_end: vec![FlangeLoad::default(); nf],
-                    coupling_end: Coupling {
-                        c_d: vec![0.0; n * n],
-                        c_k: vec![0.0; n * n],
-                        ..Coupling::default()
-                    },
+                    coupling_end: Coupling { c_d: vec![0.0; n * n], c_k: vec![0.0; n * n], ..Coupling::default() },
                 }
             },
             free_work: if body.free_floating {
-                FreeWork {
-                    q0: vec![0.0; n],
-                    qd0: vec![0.0; n],
-                    load0: vec![0.0; n],
-                    load1: vec![0.0; n],
-                }
+                FreeWork { q0: vec![0.0; n], qd0: vec![0.0; n], load0: vec![0.0; n], load1: vec![0.0; n] }
             } else {
                 FreeWork::default()
             },
             propagator: ModalPropagator::with_modes(n),
-            coupled: if body.free_floating || (body.rotation.is_none() && body.stiffening.is_none())
-            {
+            coupled: if body.free_floating || (body.rotation.is_none() && body.stiffening.is_none()) {
                 CoupledPropagator::default()
             } else {
                 CoupledPropagator::with_modes(n)
             },
             warning: None,
             rates: InputRates {
-                mount: MountMotion {
-                    rot: [0.0; 9],
-                    ..MountMotion::default()
-                },
+                mount: MountMotion { rot: [0.0; 9], ..MountMotion::default() },
                 loads: vec![FlangeLoad::default(); nf],
                 any: false,
             },
@@ -371,14 +333,7 @@ impl FlexibleBody {
         FlexibleBody {
             body: Arc::clone(&self.body),
             mount: self.mount.map(Dual::from),
-            loads: self
-                .loads
-                .iter()
-                .map(|l| FlangeLoad {
-                    f: l.f.map(Dual::from),
-                    t: l.t.map(Dual::from),
-                })
-                .collect(),
+            loads: self.loads.iter().map(|l| FlangeLoad { f: l.f.map(Dual::from), t: l.t.map(Dual::from) }).collect(),
             params: self.params,
             q: self.q.iter().map(|&x| Dual::from(x)).collect(),
             qd: self.qd.iter().map(|&x| Dual::from(x)).collect(),
@@ -391,11 +346,7 @@ impl FlexibleBody {
                 mount_force: [Dual::default(); 3],
                 mount_torque: [Dual::default(); 3],
             },
-            coupling: Coupling {
-                c_d: zeros(n * n),
-                c_k: zeros(n * n),
-                ..Coupling::default()
-            },
+            coupling: Coupling { c_d: zeros(n * n), c_k: zeros(n * n), ..Coupling::default() },
             rot: k3::IDENTITY.map(Dual::from),
             frame: self.frame.map(|f| f.map(Dual::from)),
             initial_frame: self.initial_frame,
@@ -424,13 +375,7 @@ impl FlexibleBody {
             rates: self.rates.clone(),
             coupling_reference: self.coupled.key().map(|(h, alpha, beta)| {
                 let (c_d, c_k) = self.coupled.reference();
-                CouplingReference {
-                    h,
-                    alpha,
-                    beta,
-                    c_d: c_d.to_vec(),
-                    c_k: c_k.to_vec(),
-                }
+                CouplingReference { h, alpha, beta, c_d: c_d.to_vec(), c_k: c_k.to_vec() }
             }),
         }
     }
@@ -447,10 +392,7 @@ impl FlexibleBody {
             ));
         }
         if state.loads.len() != nf || state.rates.loads.len() != nf {
-            return Err(format!(
-                "the state has loads on {} flanges, the body {nf} force flanges",
-                state.loads.len()
-            ));
+            return Err(format!("the state has loads on {} flanges, the body {nf} force flanges", state.loads.len()));
         }
         if state.frame.is_some() != self.frame.is_some() {
             let kind = |free: bool| if free { "free-floating" } else { "mounted" };
@@ -479,25 +421,11 @@ impl FlexibleBody {
                     r.c_k.len()
                 ));
             }
-            if !(r
-                .c_d
-                .iter()
-                .chain(&r.c_k)
-                .chain([&r.alpha, &r.beta])
-                .all(|v| v.is_finite()))
-            {
+            if !(r.c_d.iter().chain(&r.c_k).chain([&r.alpha, &r.beta]).all(|v| v.is_finite())) {
                 return Err("the state's coupling reference has non-finite values".into());
             }
             let body = Arc::clone(&b.body);
-            b.coupled.prepare(
-                &body.omega,
-                r.alpha,
-                r.beta,
-                &body.modal_damping,
-                &r.c_d,
-                &r.c_k,
-                r.h,
-            );
+            b.coupled.prepare(&body.omega, r.alpha, r.beta, &body.modal_damping, &r.c_d, &r.c_k, r.h);
         }
         Ok(b)
     }
@@ -595,16 +523,8 @@ impl<T: Scalar> FlexibleBody<T> {
             let phi = [row(3, &self.q), row(4, &self.q), row(5, &self.q)];
             let ud = [row(0, &self.qd), row(1, &self.qd), row(2, &self.qd)];
             let phid = [row(3, &self.qd), row(4, &self.qd), row(5, &self.qd)];
-            let udd = [
-                row(0, &self.eval.qdd),
-                row(1, &self.eval.qdd),
-                row(2, &self.eval.qdd),
-            ];
-            let phidd = [
-                row(3, &self.eval.qdd),
-                row(4, &self.eval.qdd),
-                row(5, &self.eval.qdd),
-            ];
+            let udd = [row(0, &self.eval.qdd), row(1, &self.eval.qdd), row(2, &self.eval.qdd)];
+            let phidd = [row(3, &self.eval.qdd), row(4, &self.eval.qdd), row(5, &self.eval.qdd)];
             let rho = k3::mul(a, k3::add(flange.position.map(c), u));
             let ud_w = k3::mul(a, ud);
             let phid_w = k3::mul(a, phid);
@@ -618,10 +538,7 @@ impl<T: Scalar> FlexibleBody<T> {
             out.a = k3::add(
                 k3::add(m.a, k3::cross(m.z, rho)),
                 k3::add(
-                    k3::add(
-                        k3::cross(m.w, k3::cross(m.w, rho)),
-                        k3::scale(c(2.0), k3::cross(m.w, ud_w)),
-                    ),
+                    k3::add(k3::cross(m.w, k3::cross(m.w, rho)), k3::scale(c(2.0), k3::cross(m.w, ud_w))),
                     k3::mul(a, udd),
                 ),
             );

@@ -30,12 +30,7 @@ impl<T: Scalar> FlexibleBody<T> {
         } else {
             self.mount.rot
         };
-        let spinning = self
-            .mount
-            .w
-            .iter()
-            .chain(&self.mount.z)
-            .any(|x| x.value() != 0.0);
+        let spinning = self.mount.w.iter().chain(&self.mount.z).any(|x| x.value() != 0.0);
         if self.body.rotation.is_none() && spinning {
             return Err(format!(
                 "{m}.w and {m}.z must be zero: this FMU was built for a scene without rotation \
@@ -51,14 +46,7 @@ impl<T: Scalar> FlexibleBody<T> {
         if self.coupling.valid {
             return;
         }
-        fill_coupling(
-            &self.body,
-            &self.rot,
-            &self.mount,
-            &self.loads,
-            self.params.g,
-            &mut self.coupling,
-        );
+        fill_coupling(&self.body, &self.rot, &self.mount, &self.loads, self.params.g, &mut self.coupling);
     }
 
     /// (C_d q' + C_k q)_i: the coupling terms' force on mode i.
@@ -120,9 +108,8 @@ impl<T: Scalar> FlexibleBody<T> {
         let (alpha, beta) = (self.params.alpha, self.params.beta);
         for j in 0..n {
             let w2 = self.body.omega[j] * self.body.omega[j];
-            self.eval.qdd[j] = self.load[j]
-                - self.qd[j] * (alpha + beta * w2 + self.body.modal_damping[j])
-                - self.q[j] * w2;
+            self.eval.qdd[j] =
+                self.load[j] - self.qd[j] * (alpha + beta * w2 + self.body.modal_damping[j]) - self.q[j] * w2;
         }
         if self.coupling.active {
             for i in 0..n {
@@ -166,11 +153,7 @@ pub(super) fn fill_coupling<T: Scalar>(
             add(&mut c.c_d, c.w[i] * 2.0, &rot.g[i * nn..(i + 1) * nn]);
             add(&mut c.c_k, c.z[i], &rot.g[i * nn..(i + 1) * nn]);
             for j in 0..3 {
-                add(
-                    &mut c.c_k,
-                    c.w[i] * c.w[j],
-                    &rot.o_mat[(3 * i + j) * nn..(3 * i + j + 1) * nn],
-                );
+                add(&mut c.c_k, c.w[i] * c.w[j], &rot.o_mat[(3 * i + j) * nn..(3 * i + j + 1) * nn]);
             }
         }
     }
@@ -178,11 +161,7 @@ pub(super) fn fill_coupling<T: Scalar>(
         if let Some(k) = &st.centrifugal {
             for i in 0..3 {
                 for j in 0..3 {
-                    add(
-                        &mut c.c_k,
-                        c.w[i] * c.w[j],
-                        &k[(3 * i + j) * nn..(3 * i + j + 1) * nn],
-                    );
+                    add(&mut c.c_k, c.w[i] * c.w[j], &k[(3 * i + j) * nn..(3 * i + j + 1) * nn]);
                 }
             }
         }

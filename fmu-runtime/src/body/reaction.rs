@@ -24,28 +24,20 @@ impl<T: Scalar> FlexibleBody<T> {
         let mut torque_b = [T::zero(); 3];
         let mut force = [T::zero(); 3];
         for (i, flange) in self.body.flanges.iter().enumerate() {
-            let u: Vec3<T> =
-                [0, 1, 2].map(|r| shape_dot(&flange.shapes[r * n..(r + 1) * n], &self.q));
+            let u: Vec3<T> = [0, 1, 2].map(|r| shape_dot(&flange.shapes[r * n..(r + 1) * n], &self.q));
             // loads the host applies, moved to the mount point, in B
             let load = &self.loads[i];
             let f_b = k3::mul_t(a, load.f);
             force = k3::add(force, load.f);
-            torque_b = k3::add(
-                torque_b,
-                k3::add(
-                    k3::cross(k3::add(flange.position.map(c), u), f_b),
-                    k3::mul_t(a, load.t),
-                ),
-            );
+            torque_b =
+                k3::add(torque_b, k3::add(k3::cross(k3::add(flange.position.map(c), u), f_b), k3::mul_t(a, load.t)));
         }
         // Momentum balance of the whole body about the mount point, in B: the mount supplies what
         // the inertia needs beyond gravity and the flange loads (terms of second order in q, q'
         // dropped, except where they come for free).
         let (w, z, a_b) = (self.coupling.w, self.coupling.z, self.coupling.a);
         let b = &*self.body;
-        let row3 = |mat: &[f64], x: &[T]| -> Vec3<T> {
-            [0, 1, 2].map(|r| shape_dot(&mat[r * n..(r + 1) * n], x))
-        };
+        let row3 = |mat: &[f64], x: &[T]| -> Vec3<T> { [0, 1, 2].map(|r| shape_dot(&mat[r * n..(r + 1) * n], x)) };
         let qdd = &self.eval.qdd;
         let ct_qdd = row3(&b.c_t, qdd);
         let ct_qd = row3(&b.c_t, &self.qd);
@@ -64,10 +56,7 @@ impl<T: Scalar> FlexibleBody<T> {
         if let Some(rot) = &b.rotation {
             for p_ in 0..3 {
                 for q_ in 0..3 {
-                    let (o_pq, o_qp) = (
-                        &rot.o_vec[(3 * p_ + q_) * n..][..n],
-                        &rot.o_vec[(3 * q_ + p_) * n..][..n],
-                    );
+                    let (o_pq, o_qp) = (&rot.o_vec[(3 * p_ + q_) * n..][..n], &rot.o_vec[(3 * q_ + p_) * n..][..n]);
                     let mut s = T::zero();
                     let mut sd = T::zero();
                     for k in 0..n {
@@ -119,8 +108,7 @@ mod tests {
         // static: the elastic deflection changes the torque through C_t q only
         assert!((f[2] - m * 9.81).abs() < 1e-12, "{f:?}");
         assert!(f[0].abs() < 1e-12 && f[1].abs() < 1e-12);
-        let ct_q: Vec3 =
-            [0, 1, 2].map(|r| (0..2).map(|j| b.reduced().c_t[r * 2 + j] * b.q()[j]).sum());
+        let ct_q: Vec3 = [0, 1, 2].map(|r| (0..2).map(|j| b.reduced().c_t[r * 2 + j] * b.q()[j]).sum());
         let c = k3::add(b.reduced().first_moment, ct_q);
         let expected = k3::cross(c, [0.0, 0.0, 9.81]);
         for i in 0..3 {

@@ -65,4 +65,3 @@ pub fn assert_no_allocation<R>(what: &str, f: impl FnOnce() -> R) -> R {
     assert_eq!(n, 0, "{what}: {n} heap allocations (first one's stack on stderr)");
     r
 }
-

@@ -49,8 +49,7 @@ fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 }
 
 fn det3(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
-    a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-        + a[2] * (b[0] * c[1] - b[1] * c[0])
+    a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0])
 }
 
 /// Distance of `p` from the base hole axis (through (0.055, 0.020, z), along z).
@@ -81,10 +80,7 @@ fn on_fillet(p: [f64; 3]) -> bool {
 
 /// Node ids of each element in connectivity order.
 fn element_id_tuples(mesh: &ImportedMesh) -> Vec<Vec<u64>> {
-    mesh.connectivity
-        .iter()
-        .map(|c| c.iter().map(|&i| mesh.node_ids[i]).collect())
-        .collect()
+    mesh.connectivity.iter().map(|c| c.iter().map(|&i| mesh.node_ids[i]).collect()).collect()
 }
 
 /// Sorted node ids of an element -> its node ids in connectivity order.
@@ -93,10 +89,7 @@ fn elements_by_node_set(mesh: &ImportedMesh) -> BTreeMap<Vec<u64>, Vec<u64>> {
     for ids in element_id_tuples(mesh) {
         let mut key = ids.clone();
         key.sort_unstable();
-        assert!(
-            map.insert(key, ids).is_none(),
-            "two elements on the same nodes"
-        );
+        assert!(map.insert(key, ids).is_none(), "two elements on the same nodes");
     }
     map
 }
@@ -104,12 +97,7 @@ fn elements_by_node_set(mesh: &ImportedMesh) -> BTreeMap<Vec<u64>, Vec<u64>> {
 fn node_set_ids(mesh: &ImportedMesh, name: &str) -> BTreeSet<u64> {
     mesh.node_sets
         .get(name)
-        .unwrap_or_else(|| {
-            panic!(
-                "node set {name} missing (have {:?})",
-                mesh.node_sets.keys().collect::<Vec<_>>()
-            )
-        })
+        .unwrap_or_else(|| panic!("node set {name} missing (have {:?})", mesh.node_sets.keys().collect::<Vec<_>>()))
         .iter()
         .map(|&i| mesh.node_ids[i])
         .collect()
@@ -187,61 +175,31 @@ fn bracket_msh_and_inp_describe_the_same_tet10_mesh() {
     // Element types.
     for (name, m) in [("msh", &msh), ("inp", &inp)] {
         assert!(m.num_elements() > 0, "{name}: no elements");
-        assert!(
-            m.element_types.iter().all(|&t| t == ElementKind::Tet10),
-            "{name}: not all elements are C3D10"
-        );
+        assert!(m.element_types.iter().all(|&t| t == ElementKind::Tet10), "{name}: not all elements are C3D10");
     }
     assert_eq!(msh.num_elements(), inp.num_elements());
-    assert!(
-        (2000..=6000).contains(&msh.num_nodes()),
-        "{} nodes",
-        msh.num_nodes()
-    );
+    assert!((2000..=6000).contains(&msh.num_nodes()), "{} nodes", msh.num_nodes());
 
     // Nodes: same ids, same coordinates (to the .inp print precision).
     assert_eq!(msh.num_nodes(), inp.num_nodes());
-    let inp_index: HashMap<u64, usize> = inp
-        .node_ids
-        .iter()
-        .enumerate()
-        .map(|(i, &id)| (id, i))
-        .collect();
+    let inp_index: HashMap<u64, usize> = inp.node_ids.iter().enumerate().map(|(i, &id)| (id, i)).collect();
     assert_eq!(inp_index.len(), inp.num_nodes());
     let mut max_diff: f64 = 0.0;
     for (i, id) in msh.node_ids.iter().enumerate() {
-        let j = *inp_index
-            .get(id)
-            .unwrap_or_else(|| panic!("node {id} of the .msh is not in the .inp"));
+        let j = *inp_index.get(id).unwrap_or_else(|| panic!("node {id} of the .msh is not in the .inp"));
         for d in 0..3 {
             max_diff = max_diff.max((msh.nodes[i][d] - inp.nodes[j][d]).abs());
         }
     }
-    assert!(
-        max_diff <= COORD_TOL,
-        "node coordinates differ by {max_diff}"
-    );
+    assert!(max_diff <= COORD_TOL, "node coordinates differ by {max_diff}");
 
     // Elements: same node-id tuples in the same (CalculiX) node order.
     let by_nodes_msh = elements_by_node_set(&msh);
     let by_nodes_inp = elements_by_node_set(&inp);
-    assert!(
-        by_nodes_msh == by_nodes_inp,
-        "element connectivities differ between .msh and .inp"
-    );
+    assert!(by_nodes_msh == by_nodes_inp, "element connectivities differ between .msh and .inp");
     // Gmsh writes the same element tags to both files.
-    let msh_elements: BTreeMap<u64, Vec<u64>> = msh
-        .element_ids
-        .iter()
-        .copied()
-        .zip(element_id_tuples(&msh))
-        .collect();
-    let inp_elements: BTreeMap<u64, Vec<u64>> = inp
-        .element_ids
-        .iter()
-        .copied()
-        .zip(element_id_tuples(&inp))
-        .collect();
+    let msh_elements: BTreeMap<u64, Vec<u64>> = msh.element_ids.iter().copied().zip(element_id_tuples(&msh)).collect();
+    let inp_elements: BTreeMap<u64, Vec<u64>> = inp.element_ids.iter().copied().zip(element_id_tuples(&inp)).collect();
     assert!(msh_elements == inp_elements, "element ids differ");
 
     // Every node is used by an element.
@@ -251,40 +209,23 @@ fn bracket_msh_and_inp_describe_the_same_tet10_mesh() {
     // Node sets: the .msh importer keeps the physical names as written (upper
     // case in bracket.geo), the .inp importer upper-cases.
     for name in ["BOLT_BASE", "BOLT_ARM", "BRACKET"] {
-        assert_eq!(
-            node_set_ids(&msh, name),
-            node_set_ids(&inp, name),
-            "node set {name} differs"
-        );
+        assert_eq!(node_set_ids(&msh, name), node_set_ids(&inp, name), "node set {name} differs");
     }
     assert_eq!(node_set_ids(&msh, "BRACKET").len(), msh.num_nodes());
     for (name, on_hole, other) in [
-        (
-            "BOLT_BASE",
-            on_base_hole as fn([f64; 3]) -> bool,
-            on_arm_hole as fn([f64; 3]) -> bool,
-        ),
+        ("BOLT_BASE", on_base_hole as fn([f64; 3]) -> bool, on_arm_hole as fn([f64; 3]) -> bool),
         ("BOLT_ARM", on_arm_hole, on_base_hole),
     ] {
         let set = &msh.node_sets[name];
         assert!(set.len() > 50, "{name}: {} nodes", set.len());
         for &n in set {
             let p = msh.nodes[n];
-            assert!(
-                on_hole(p),
-                "{name}: node {} at {p:?} is not on its hole",
-                msh.node_ids[n]
-            );
+            assert!(on_hole(p), "{name}: node {} at {p:?} is not on its hole", msh.node_ids[n]);
             assert!(!other(p));
         }
         // Conversely, every node on the hole cylinder is in the set.
-        let on: Vec<usize> = (0..msh.num_nodes())
-            .filter(|&n| on_hole(msh.nodes[n]))
-            .collect();
-        assert_eq!(
-            &on, set,
-            "{name}: set differs from the nodes on the cylinder"
-        );
+        let on: Vec<usize> = (0..msh.num_nodes()).filter(|&n| on_hole(msh.nodes[n])).collect();
+        assert_eq!(&on, set, "{name}: set differs from the nodes on the cylinder");
     }
 
     // Midside nodes: at the edge midpoint, except on the curved CAD faces
@@ -292,19 +233,14 @@ fn bracket_msh_and_inp_describe_the_same_tet10_mesh() {
     // the same cylinder.
     let on_curved: [fn([f64; 3]) -> bool; 3] = [on_base_hole, on_arm_hole, on_fillet];
     let mut curved_edges = 0;
-    let mut straight_only = ImportedMesh {
-        nodes: msh.nodes.clone(),
-        node_ids: msh.node_ids.clone(),
-        ..Default::default()
-    };
+    let mut straight_only =
+        ImportedMesh { nodes: msh.nodes.clone(), node_ids: msh.node_ids.clone(), ..Default::default() };
     for (ty, conn) in msh.element_types.iter().zip(&msh.connectivity) {
         let mut curved = false;
         for (k, &(a, b)) in ty.midside_edges().iter().enumerate() {
             let m = msh.nodes[conn[4 + k]];
             let (pa, pb) = (msh.nodes[conn[a]], msh.nodes[conn[b]]);
-            let dev = (0..3)
-                .map(|d| (m[d] - 0.5 * (pa[d] + pb[d])).abs())
-                .fold(0.0, f64::max);
+            let dev = (0..3).map(|d| (m[d] - 0.5 * (pa[d] + pb[d])).abs()).fold(0.0, f64::max);
             if dev > 1e-12 {
                 curved = true;
                 curved_edges += 1;

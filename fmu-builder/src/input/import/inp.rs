@@ -61,14 +61,7 @@ const SKIPPED: &[&str] = &[
 ];
 
 /// Material options: they do not end the current `*MATERIAL` block.
-const MATERIAL_OPTIONS: &[&str] = &[
-    "ELASTIC",
-    "DENSITY",
-    "EXPANSION",
-    "CONDUCTIVITY",
-    "SPECIFIC HEAT",
-    "PLASTIC",
-];
+const MATERIAL_OPTIONS: &[&str] = &["ELASTIC", "DENSITY", "EXPANSION", "CONDUCTIVITY", "SPECIFIC HEAT", "PLASTIC"];
 
 /// Reads an Abaqus/CalculiX input deck.
 pub fn read_inp(path: &Path) -> Result<ImportedMesh, ImportError> {
@@ -122,20 +115,14 @@ impl Keyword {
     }
 
     fn param(&self, key: &str) -> Option<&str> {
-        self.params
-            .iter()
-            .find(|(k, _)| k == key)
-            .map(|(_, v)| v.as_str())
+        self.params.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str())
     }
 }
 
 /// Upper-cases and collapses internal whitespace ("solid  section" ->
 /// "SOLID SECTION").
 fn normalize(s: &str) -> String {
-    s.split_whitespace()
-        .collect::<Vec<_>>()
-        .join(" ")
-        .to_ascii_uppercase()
+    s.split_whitespace().collect::<Vec<_>>().join(" ").to_ascii_uppercase()
 }
 
 /// Collects the significant lines (no blanks, no `**` comments) of a file,
@@ -172,23 +159,15 @@ fn collect_lines(
                 } else {
                     files[file].parent().unwrap_or(Path::new("")).join(target)
                 };
-                let sub = super::read_text(&target).map_err(|e| {
-                    err(format!(
-                        "cannot read included file {}: {}",
-                        target.display(),
-                        e.message
-                    ))
-                })?;
+                let sub = super::read_text(&target)
+                    .map_err(|e| err(format!("cannot read included file {}: {}", target.display(), e.message)))?;
                 files.push(target);
                 let idx = files.len() - 1;
                 collect_lines(&sub, idx, files, out, depth + 1)?;
                 continue;
             }
         }
-        out.push(Line {
-            loc,
-            text: t.to_string(),
-        });
+        out.push(Line { loc, text: t.to_string() });
     }
     Ok(())
 }
@@ -355,31 +334,19 @@ impl Parser {
                         "*{}: unsupported parameter {} (supported: {})",
                         kw.name,
                         k,
-                        if allowed.is_empty() {
-                            "none".to_string()
-                        } else {
-                            allowed.join(", ")
-                        }
+                        if allowed.is_empty() { "none".to_string() } else { allowed.join(", ") }
                     ),
                 ));
             }
             if v.is_empty() && k != "GENERATE" && k != "INTERNAL" && k != "UNSORTED" {
-                return Err(self.err(
-                    kw.loc,
-                    format!("*{}: parameter {} needs a value", kw.name, k),
-                ));
+                return Err(self.err(kw.loc, format!("*{}: parameter {} needs a value", kw.name, k)));
             }
         }
         Ok(())
     }
 
     fn required<'k>(&self, kw: &'k Keyword, key: &str) -> Res<&'k str> {
-        kw.param(key).ok_or_else(|| {
-            self.err(
-                kw.loc,
-                format!("*{} requires a {}= parameter", kw.name, key),
-            )
-        })
+        kw.param(key).ok_or_else(|| self.err(kw.loc, format!("*{} requires a {}= parameter", kw.name, key)))
     }
 
     fn parse_f64(&self, s: &str, loc: Loc, what: &str) -> Res<f64> {
@@ -393,12 +360,7 @@ impl Parser {
 
     fn parse_id(&self, s: &str, loc: Loc, what: &str) -> Res<u64> {
         let t = s.trim();
-        t.parse::<u64>().map_err(|_| {
-            self.err(
-                loc,
-                format!("malformed {what} '{t}' (expected a non-negative integer)"),
-            )
-        })
+        t.parse::<u64>().map_err(|_| self.err(loc, format!("malformed {what} '{t}' (expected a non-negative integer)")))
     }
 
     /// Splits a data line at commas; a trailing comma does not produce an
@@ -421,9 +383,7 @@ impl Parser {
         {
             return Err(self.err(
                 kw.loc,
-                format!(
-                    "*NODE, SYSTEM={sys} is not supported (only rectangular coordinates, SYSTEM=R)"
-                ),
+                format!("*NODE, SYSTEM={sys} is not supported (only rectangular coordinates, SYSTEM=R)"),
             ));
         }
         let mut members = Vec::new();
@@ -432,25 +392,18 @@ impl Parser {
             if !(2..=4).contains(&f.len()) {
                 return Err(self.err(
                     line.loc,
-                    format!(
-                        "*NODE data line needs a node id and up to 3 coordinates, got {} values",
-                        f.len()
-                    ),
+                    format!("*NODE data line needs a node id and up to 3 coordinates, got {} values", f.len()),
                 ));
             }
             let id = self.parse_id(f[0], line.loc, "node id")?;
             let mut x = [0.0; 3];
             for (d, s) in f[1..].iter().enumerate() {
-                x[d] =
-                    self.parse_f64(s, line.loc, &format!("coordinate {} of node {id}", d + 1))?;
+                x[d] = self.parse_f64(s, line.loc, &format!("coordinate {} of node {id}", d + 1))?;
             }
             if let Some(&first) = self.node_index.get(&id) {
                 return Err(self.err(
                     line.loc,
-                    format!(
-                        "duplicate node id {id} (first defined at {})",
-                        self.where_(self.node_locs[first])
-                    ),
+                    format!("duplicate node id {id} (first defined at {})", self.where_(self.node_locs[first])),
                 ));
             }
             self.node_index.insert(id, self.nodes.len());
@@ -460,11 +413,7 @@ impl Parser {
             members.push((SetItem::Id(id), line.loc));
         }
         if let Some(name) = kw.param("NSET") {
-            self.set_ops.push(SetOp {
-                kind: SetKind::Node,
-                name: name.to_ascii_uppercase(),
-                items: members,
-            });
+            self.set_ops.push(SetOp { kind: SetKind::Node, name: name.to_ascii_uppercase(), items: members });
         }
         Ok(())
     }
@@ -487,11 +436,7 @@ impl Parser {
         let mut k = 0;
         while k < data.len() {
             let first = &data[k];
-            let mut tokens: Vec<(&str, Loc)> = self
-                .fields(first)?
-                .into_iter()
-                .map(|s| (s, first.loc))
-                .collect();
+            let mut tokens: Vec<(&str, Loc)> = self.fields(first)?.into_iter().map(|s| (s, first.loc)).collect();
             let mut last = first;
             k += 1;
             // Continuation: the previous line ends with a comma and the
@@ -523,27 +468,16 @@ impl Parser {
             if let Some(&prev) = self.element_index.get(&id) {
                 return Err(self.err(
                     first.loc,
-                    format!(
-                        "duplicate element id {id} (first defined at {})",
-                        self.where_(self.elements[prev].loc)
-                    ),
+                    format!("duplicate element id {id} (first defined at {})", self.where_(self.elements[prev].loc)),
                 ));
             }
             self.element_index.insert(id, self.elements.len());
-            self.elements.push(PendingElement {
-                id,
-                nodes,
-                loc: first.loc,
-            });
+            self.elements.push(PendingElement { id, nodes, loc: first.loc });
             self.element_types.push(ty);
             members.push((SetItem::Id(id), first.loc));
         }
         if let Some(name) = kw.param("ELSET") {
-            self.set_ops.push(SetOp {
-                kind: SetKind::Element,
-                name: name.to_ascii_uppercase(),
-                items: members,
-            });
+            self.set_ops.push(SetOp { kind: SetKind::Element, name: name.to_ascii_uppercase(), items: members });
         }
         Ok(())
     }
@@ -560,19 +494,12 @@ impl Parser {
                 if !(2..=3).contains(&f.len()) {
                     return Err(self.err(
                         line.loc,
-                        format!(
-                            "*{key}, GENERATE expects 'start, end[, step]', got {} values",
-                            f.len()
-                        ),
+                        format!("*{key}, GENERATE expects 'start, end[, step]', got {} values", f.len()),
                     ));
                 }
                 let a = self.parse_id(f[0], line.loc, "GENERATE start")?;
                 let b = self.parse_id(f[1], line.loc, "GENERATE end")?;
-                let s = if f.len() == 3 {
-                    self.parse_id(f[2], line.loc, "GENERATE step")?
-                } else {
-                    1
-                };
+                let s = if f.len() == 3 { self.parse_id(f[2], line.loc, "GENERATE step")? } else { 1 };
                 if s == 0 || b < a {
                     return Err(self.err(
                         line.loc,
@@ -587,13 +514,8 @@ impl Parser {
                     } else if s.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_') {
                         SetItem::Name(s.to_ascii_uppercase())
                     } else {
-                        return Err(self.err(
-                            line.loc,
-                            format!(
-                                "*{key} {name}: malformed {} id or set name '{s}'",
-                                kind.what()
-                            ),
-                        ));
+                        return Err(self
+                            .err(line.loc, format!("*{key} {name}: malformed {} id or set name '{s}'", kind.what())));
                     };
                     items.push((item, line.loc));
                 }
@@ -612,16 +534,10 @@ impl Parser {
         if let Some(i) = self.materials.iter().position(|m| m.name == name) {
             return Err(self.err(
                 kw.loc,
-                format!(
-                    "duplicate material {name} (first defined at {})",
-                    self.where_(self.material_locs[i])
-                ),
+                format!("duplicate material {name} (first defined at {})", self.where_(self.material_locs[i])),
             ));
         }
-        self.materials.push(ImportedMaterial {
-            name,
-            ..Default::default()
-        });
+        self.materials.push(ImportedMaterial { name, ..Default::default() });
         self.material_locs.push(kw.loc);
         self.elastic_seen.push(false);
         self.density_seen.push(false);
@@ -630,17 +546,9 @@ impl Parser {
 
     /// The single data line of a material option (temperature dependence,
     /// i.e. several lines, is rejected).
-    fn single_data_line<'a>(
-        &self,
-        kw: &Keyword,
-        data: &'a [Line],
-        cur: Option<usize>,
-    ) -> Res<(usize, &'a Line)> {
+    fn single_data_line<'a>(&self, kw: &Keyword, data: &'a [Line], cur: Option<usize>) -> Res<(usize, &'a Line)> {
         let Some(m) = cur else {
-            return Err(self.err(
-                kw.loc,
-                format!("*{} outside of a *MATERIAL definition", kw.name),
-            ));
+            return Err(self.err(kw.loc, format!("*{} outside of a *MATERIAL definition", kw.name)));
         };
         match data {
             [] => Err(self.err(kw.loc, format!("*{} requires a data line", kw.name))),
@@ -661,31 +569,16 @@ impl Parser {
         if let Some(t) = kw.param("TYPE") {
             let t = normalize(t);
             if t != "ISO" && t != "ISOTROPIC" {
-                return Err(self.err(
-                    kw.loc,
-                    format!("*ELASTIC, TYPE={t} is not supported (only TYPE=ISO)"),
-                ));
+                return Err(self.err(kw.loc, format!("*ELASTIC, TYPE={t} is not supported (only TYPE=ISO)")));
             }
         }
         let (m, line) = self.single_data_line(kw, data, cur)?;
         if self.elastic_seen[m] {
-            return Err(self.err(
-                kw.loc,
-                format!(
-                    "material {} has more than one *ELASTIC",
-                    self.materials[m].name
-                ),
-            ));
+            return Err(self.err(kw.loc, format!("material {} has more than one *ELASTIC", self.materials[m].name)));
         }
         let f = self.fields(line)?;
         if !(2..=3).contains(&f.len()) {
-            return Err(self.err(
-                line.loc,
-                format!(
-                    "*ELASTIC expects 'E, nu[, temperature]', got {} values",
-                    f.len()
-                ),
-            ));
+            return Err(self.err(line.loc, format!("*ELASTIC expects 'E, nu[, temperature]', got {} values", f.len())));
         }
         let e = self.parse_f64(f[0], line.loc, "Young's modulus")?;
         let nu = self.parse_f64(f[1], line.loc, "Poisson's ratio")?;
@@ -702,23 +595,11 @@ impl Parser {
         self.check_params(kw, &[])?;
         let (m, line) = self.single_data_line(kw, data, cur)?;
         if self.density_seen[m] {
-            return Err(self.err(
-                kw.loc,
-                format!(
-                    "material {} has more than one *DENSITY",
-                    self.materials[m].name
-                ),
-            ));
+            return Err(self.err(kw.loc, format!("material {} has more than one *DENSITY", self.materials[m].name)));
         }
         let f = self.fields(line)?;
         if !(1..=2).contains(&f.len()) {
-            return Err(self.err(
-                line.loc,
-                format!(
-                    "*DENSITY expects 'rho[, temperature]', got {} values",
-                    f.len()
-                ),
-            ));
+            return Err(self.err(line.loc, format!("*DENSITY expects 'rho[, temperature]', got {} values", f.len())));
         }
         let rho = self.parse_f64(f[0], line.loc, "density")?;
         if f.len() == 2 {
@@ -745,12 +626,10 @@ impl Parser {
                 .nodes
                 .iter()
                 .map(|id| {
-                    self.node_index.get(id).copied().ok_or_else(|| {
-                        self.err(
-                            e.loc,
-                            format!("element {} references undefined node {id}", e.id),
-                        )
-                    })
+                    self.node_index
+                        .get(id)
+                        .copied()
+                        .ok_or_else(|| self.err(e.loc, format!("element {} references undefined node {id}", e.id)))
                 })
                 .collect::<Res<Vec<usize>>>()?;
             connectivity.push(conn);
@@ -766,15 +645,7 @@ impl Parser {
             let mut members = BTreeSet::new();
             let lookup = |id: u64, loc: Loc| {
                 index.get(&id).copied().ok_or_else(|| {
-                    self.err(
-                        loc,
-                        format!(
-                            "*{} {}: {} {id} is not defined",
-                            op.kind.keyword(),
-                            op.name,
-                            op.kind.what()
-                        ),
-                    )
+                    self.err(loc, format!("*{} {}: {} {id} is not defined", op.kind.keyword(), op.name, op.kind.what()))
                 })
             };
             for (item, loc) in &op.items {
@@ -814,16 +685,10 @@ impl Parser {
         let mut sections = Vec::with_capacity(self.sections.len());
         for (elset, material, loc) in &self.sections {
             if !element_sets.contains_key(elset) {
-                return Err(self.err(
-                    *loc,
-                    format!("*SOLID SECTION: element set {elset} is not defined"),
-                ));
+                return Err(self.err(*loc, format!("*SOLID SECTION: element set {elset} is not defined")));
             }
             if !self.materials.iter().any(|m| &m.name == material) {
-                return Err(self.err(
-                    *loc,
-                    format!("*SOLID SECTION: material {material} is not defined"),
-                ));
+                return Err(self.err(*loc, format!("*SOLID SECTION: material {material} is not defined")));
             }
             sections.push((elset.clone(), material.clone()));
         }
@@ -834,14 +699,8 @@ impl Parser {
             element_types: self.element_types,
             connectivity,
             element_ids: self.elements.iter().map(|e| e.id).collect(),
-            node_sets: node_sets
-                .into_iter()
-                .map(|(k, v)| (k, v.into_iter().collect()))
-                .collect(),
-            element_sets: element_sets
-                .into_iter()
-                .map(|(k, v)| (k, v.into_iter().collect()))
-                .collect(),
+            node_sets: node_sets.into_iter().map(|(k, v)| (k, v.into_iter().collect())).collect(),
+            element_sets: element_sets.into_iter().map(|(k, v)| (k, v.into_iter().collect())).collect(),
             materials: self.materials,
             sections,
         })
@@ -861,12 +720,7 @@ mod tests {
             for j in 0..3 {
                 for i in 0..5 {
                     let id = 1 + i + 5 * j + 15 * k;
-                    s += &format!(
-                        "{id}, {}, {}, {}\n",
-                        0.5 * i as f64,
-                        0.5 * j as f64,
-                        0.5 * k as f64
-                    );
+                    s += &format!("{id}, {}, {}, {}\n", 0.5 * i as f64, 0.5 * j as f64, 0.5 * k as f64);
                 }
             }
         }
@@ -921,10 +775,7 @@ U
         assert_eq!(m.nodes.len(), 45);
         assert_eq!(m.node_ids[44], 45);
         assert_eq!(m.nodes[44], [2.0, 1.0, 1.0]);
-        assert_eq!(
-            m.element_types,
-            vec![ElementKind::Hex20, ElementKind::Hex20R]
-        );
+        assert_eq!(m.element_types, vec![ElementKind::Hex20, ElementKind::Hex20R]);
         assert_eq!(m.element_ids, vec![1, 2]);
         assert_eq!(m.connectivity[0].len(), 20);
         assert_eq!(m.connectivity[0][15], 35); // node id 36
@@ -943,12 +794,7 @@ U
         assert_eq!(m.element_sets["ALLEL"], vec![0, 1]);
         assert_eq!(
             m.materials,
-            vec![ImportedMaterial {
-                name: "STEEL".into(),
-                e: Some(210000.0),
-                nu: Some(0.3),
-                rho: Some(7.85e-9)
-            }]
+            vec![ImportedMaterial { name: "STEEL".into(), e: Some(210000.0), nu: Some(0.3), rho: Some(7.85e-9) }]
         );
         assert_eq!(m.sections, vec![("ALLEL".to_string(), "STEEL".to_string())]);
     }
@@ -957,38 +803,19 @@ U
     fn include_is_relative_to_including_file() {
         let dir = std::env::temp_dir().join(format!("inp-include-test-{}", std::process::id()));
         std::fs::create_dir_all(dir.join("sub")).unwrap();
-        std::fs::write(
-            dir.join("sub/nodes.inp"),
-            "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n",
-        )
-        .unwrap();
+        std::fs::write(dir.join("sub/nodes.inp"), "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n").unwrap();
         std::fs::write(dir.join("sub/bad.inp"), "*NODE\n1,0,0,0\n\n1,1,0,0\n").unwrap();
-        std::fs::write(
-            dir.join("main.inp"),
-            "*INCLUDE, INPUT=sub/nodes.inp\n*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n",
-        )
-        .unwrap();
+        std::fs::write(dir.join("main.inp"), "*INCLUDE, INPUT=sub/nodes.inp\n*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n")
+            .unwrap();
         std::fs::write(dir.join("bad.inp"), "**\n*INCLUDE, INPUT=sub/bad.inp\n").unwrap();
-        std::fs::write(
-            dir.join("missing.inp"),
-            "**\n**\n*INCLUDE, INPUT=nope.inp\n",
-        )
-        .unwrap();
+        std::fs::write(dir.join("missing.inp"), "**\n**\n*INCLUDE, INPUT=nope.inp\n").unwrap();
         let m = read_inp(&dir.join("main.inp")).unwrap();
         assert_eq!(m.connectivity, vec![vec![0, 1, 2, 3]]);
 
         let e = read_inp(&dir.join("bad.inp")).unwrap_err();
-        assert_eq!(
-            (e.file.clone(), e.line),
-            (dir.join("sub/bad.inp"), 4),
-            "{e}"
-        );
+        assert_eq!((e.file.clone(), e.line), (dir.join("sub/bad.inp"), 4), "{e}");
         let e = read_inp(&dir.join("missing.inp")).unwrap_err();
-        assert_eq!(
-            (e.file.clone(), e.line),
-            (dir.join("missing.inp"), 3),
-            "{e}"
-        );
+        assert_eq!((e.file.clone(), e.line), (dir.join("missing.inp"), 3), "{e}");
         assert!(e.message.contains("nope.inp"), "{e}");
         std::fs::remove_dir_all(&dir).ok();
     }
@@ -1006,10 +833,7 @@ U
         for p in parts {
             assert!(e.message.contains(p), "message lacks '{p}': {e}");
         }
-        assert!(
-            e.to_string().starts_with(&format!("bad.inp:{line}: ")),
-            "{e}"
-        );
+        assert!(e.to_string().starts_with(&format!("bad.inp:{line}: ")), "{e}");
     }
 
     #[test]
@@ -1032,19 +856,13 @@ U
 
     #[test]
     fn error_duplicate_node() {
-        check(
-            &format!("{TET}\n*NODE\n5, 1, 1, 1\n2, 1, 1, 1\n"),
-            9,
-            &["duplicate node id 2", "bad.inp:3"],
-        );
+        check(&format!("{TET}\n*NODE\n5, 1, 1, 1\n2, 1, 1, 1\n"), 9, &["duplicate node id 2", "bad.inp:3"]);
     }
 
     #[test]
     fn error_duplicate_element() {
         check(
-            &format!(
-                "{TET}*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n*ELEMENT, TYPE=C3D4\n1, 4, 3, 2, 1\n"
-            ),
+            &format!("{TET}*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n*ELEMENT, TYPE=C3D4\n1, 4, 3, 2, 1\n"),
             9,
             &["duplicate element id 1", "bad.inp:7"],
         );
@@ -1052,25 +870,13 @@ U
 
     #[test]
     fn error_set_references_undefined_set() {
-        check(
-            &format!("{TET}*NSET, NSET=A\n1, 2\n*NSET, NSET=B\nA,\nC\n"),
-            10,
-            &["undefined node set C"],
-        );
+        check(&format!("{TET}*NSET, NSET=A\n1, 2\n*NSET, NSET=B\nA,\nC\n"), 10, &["undefined node set C"]);
     }
 
     #[test]
     fn error_set_references_undefined_id() {
-        check(
-            &format!("{TET}*NSET, NSET=A\n1, 2\n3, 7\n"),
-            8,
-            &["node 7 is not defined"],
-        );
-        check(
-            &format!("{TET}*NSET, NSET=A, GENERATE\n1, 5\n"),
-            7,
-            &["node 5 is not defined"],
-        );
+        check(&format!("{TET}*NSET, NSET=A\n1, 2\n3, 7\n"), 8, &["node 7 is not defined"]);
+        check(&format!("{TET}*NSET, NSET=A, GENERATE\n1, 5\n"), 7, &["node 5 is not defined"]);
         check(
             &format!("{TET}*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n*ELSET, ELSET=E\n1,\n2\n"),
             10,
@@ -1080,45 +886,19 @@ U
 
     #[test]
     fn error_malformed_numbers() {
-        check(
-            "*NODE\n1, 0, 0, 0\n2, 1.0.0, 0, 0\n",
-            3,
-            &["malformed number '1.0.0'"],
-        );
-        check(
-            "*NODE\n1, 0, 0, 0\nx2, 1, 0, 0\n",
-            3,
-            &["malformed node id 'x2'"],
-        );
-        check(
-            &format!("{TET}*ELEMENT, TYPE=C3D4\n1, 1, 2, 3.5, 4\n"),
-            7,
-            &["malformed node id in element 1 '3.5'"],
-        );
-        check(
-            "*MATERIAL, NAME=M\n*ELASTIC\n2e5, abc\n",
-            3,
-            &["malformed number 'abc'"],
-        );
+        check("*NODE\n1, 0, 0, 0\n2, 1.0.0, 0, 0\n", 3, &["malformed number '1.0.0'"]);
+        check("*NODE\n1, 0, 0, 0\nx2, 1, 0, 0\n", 3, &["malformed node id 'x2'"]);
+        check(&format!("{TET}*ELEMENT, TYPE=C3D4\n1, 1, 2, 3.5, 4\n"), 7, &["malformed node id in element 1 '3.5'"]);
+        check("*MATERIAL, NAME=M\n*ELASTIC\n2e5, abc\n", 3, &["malformed number 'abc'"]);
     }
 
     #[test]
     fn error_wrong_node_count() {
-        check(
-            &format!("{TET}*ELEMENT, TYPE=C3D10\n1, 1, 2, 3, 4\n"),
-            7,
-            &["C3D10 needs 10 nodes, got 4"],
-        );
-        check(
-            &format!("{TET}*ELEMENT, TYPE=C3D4\n,\n"),
-            7,
-            &["empty element data line"],
-        );
+        check(&format!("{TET}*ELEMENT, TYPE=C3D10\n1, 1, 2, 3, 4\n"), 7, &["C3D10 needs 10 nodes, got 4"]);
+        check(&format!("{TET}*ELEMENT, TYPE=C3D4\n,\n"), 7, &["empty element data line"]);
         // C3D20 record continued over two lines but one node short
         check(
-            &format!(
-                "{TET}*ELEMENT, TYPE=C3D20\n\n7, 1, 2, 3, 4, 1, 2, 3, 4, 1, 2, 3, 4, 1, 2, 3,\n4, 1, 2, 3\n"
-            ),
+            &format!("{TET}*ELEMENT, TYPE=C3D20\n\n7, 1, 2, 3, 4, 1, 2, 3, 4, 1, 2, 3, 4, 1, 2, 3,\n4, 1, 2, 3\n"),
             8,
             &["element 7", "C3D20 needs 20 nodes, got 19"],
         );
@@ -1126,40 +906,18 @@ U
 
     #[test]
     fn error_unsupported_keywords_and_options() {
-        check(
-            &format!("{TET}*TRANSFORM, NSET=A\n1,0,0,0,1,0\n"),
-            6,
-            &["*TRANSFORM"],
-        );
-        check(
-            "*HEADING\nx\n*EQUATION\n2\n1,1,1.,2,1,-1.\n",
-            3,
-            &["unsupported keyword *EQUATION"],
-        );
-        check(
-            "*MATERIAL, NAME=M\n*ELASTIC, TYPE=ORTHO\n1,2,3,4,5,6,7,8,9\n",
-            2,
-            &["TYPE=ORTHO", "ISO"],
-        );
-        check(
-            "*MATERIAL, NAME=M\n*ELASTIC\n2e5, 0.3, 20\n1e5, 0.3, 500\n",
-            4,
-            &["temperature-dependent"],
-        );
+        check(&format!("{TET}*TRANSFORM, NSET=A\n1,0,0,0,1,0\n"), 6, &["*TRANSFORM"]);
+        check("*HEADING\nx\n*EQUATION\n2\n1,1,1.,2,1,-1.\n", 3, &["unsupported keyword *EQUATION"]);
+        check("*MATERIAL, NAME=M\n*ELASTIC, TYPE=ORTHO\n1,2,3,4,5,6,7,8,9\n", 2, &["TYPE=ORTHO", "ISO"]);
+        check("*MATERIAL, NAME=M\n*ELASTIC\n2e5, 0.3, 20\n1e5, 0.3, 500\n", 4, &["temperature-dependent"]);
         check("*NODE, SYSTEM=C\n1, 1, 0, 0\n", 1, &["SYSTEM=C"]);
         check("*ELASTIC\n2e5, 0.3\n", 1, &["outside of a *MATERIAL"]);
         check(
-            &format!(
-                "{TET}*ELEMENT, TYPE=C3D4, ELSET=E\n1,1,2,3,4\n*SOLID SECTION, ELSET=E, MATERIAL=X\n"
-            ),
+            &format!("{TET}*ELEMENT, TYPE=C3D4, ELSET=E\n1,1,2,3,4\n*SOLID SECTION, ELSET=E, MATERIAL=X\n"),
             8,
             &["material X is not defined"],
         );
-        check(
-            "*MATERIAL, NAME=M\n*SOLID SECTION, ELSET=E, MATERIAL=M\n",
-            2,
-            &["element set E is not defined"],
-        );
+        check("*MATERIAL, NAME=M\n*SOLID SECTION, ELSET=E, MATERIAL=M\n", 2, &["element set E is not defined"]);
     }
 
     #[test]

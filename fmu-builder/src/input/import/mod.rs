@@ -65,9 +65,7 @@ impl ImportedMesh {
 
     /// Looks up a material by (case-insensitive) name.
     pub fn material(&self, name: &str) -> Option<&ImportedMaterial> {
-        self.materials
-            .iter()
-            .find(|m| m.name.eq_ignore_ascii_case(name))
+        self.materials.iter().find(|m| m.name.eq_ignore_ascii_case(name))
     }
 }
 
@@ -83,11 +81,7 @@ pub struct ImportError {
 
 impl ImportError {
     pub fn new(file: impl Into<PathBuf>, line: usize, message: impl Into<String>) -> Self {
-        ImportError {
-            file: file.into(),
-            line,
-            message: message.into(),
-        }
+        ImportError { file: file.into(), line, message: message.into() }
     }
 }
 
@@ -98,26 +92,18 @@ fn line_suffix(line: usize) -> String {
 /// Reads a mesh, choosing the importer from the file extension
 /// (`.inp` -> [`read_inp`], `.msh` -> [`read_msh`]; case-insensitive).
 pub fn read_mesh(path: &Path) -> Result<ImportedMesh, ImportError> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase());
+    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
     match ext.as_deref() {
         Some("inp") => read_inp(path),
         Some("msh") => read_msh(path),
-        _ => Err(ImportError::new(
-            path,
-            0,
-            "unknown mesh file extension (expected .inp or .msh)",
-        )),
+        _ => Err(ImportError::new(path, 0, "unknown mesh file extension (expected .inp or .msh)")),
     }
 }
 
 /// Reads a file as text (invalid UTF-8 is replaced, which only matters in
 /// comments). Errors are reported against the file itself (line 0).
 pub(crate) fn read_text(path: &Path) -> Result<String, ImportError> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| ImportError::new(path, 0, format!("cannot read file: {e}")))?;
+    let bytes = std::fs::read(path).map_err(|e| ImportError::new(path, 0, format!("cannot read file: {e}")))?;
     Ok(match String::from_utf8(bytes) {
         Ok(s) => s,
         Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
@@ -131,12 +117,7 @@ pub(crate) mod test_util {
     /// Asserts that every midside node of every element lies at the midpoint
     /// of the two corners its position implies in the Abaqus/CalculiX order.
     pub fn assert_midsides_at_midpoints(mesh: &ImportedMesh) {
-        for (e, (ty, conn)) in mesh
-            .element_types
-            .iter()
-            .zip(&mesh.connectivity)
-            .enumerate()
-        {
+        for (e, (ty, conn)) in mesh.element_types.iter().zip(&mesh.connectivity).enumerate() {
             assert_eq!(conn.len(), ty.nodes_per_element());
             for (k, &(a, b)) in ty.midside_edges().iter().enumerate() {
                 let m = mesh.nodes[conn[ty.corner_nodes() + k]];

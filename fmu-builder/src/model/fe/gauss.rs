@@ -56,12 +56,8 @@ pub fn hex_points(order: GaussOrder) -> impl Iterator<Item = ([f64; 3], f64)> {
 }
 
 const TET1_POINTS: [[f64; 3]; 1] = [[0.25, 0.25, 0.25]];
-const TET4_POINTS: [[f64; 3]; 4] = [
-    [TET4_A, TET4_A, TET4_A],
-    [TET4_B, TET4_A, TET4_A],
-    [TET4_A, TET4_B, TET4_A],
-    [TET4_A, TET4_A, TET4_B],
-];
+const TET4_POINTS: [[f64; 3]; 4] =
+    [[TET4_A, TET4_A, TET4_A], [TET4_B, TET4_A, TET4_A], [TET4_A, TET4_B, TET4_A], [TET4_A, TET4_A, TET4_B]];
 
 /// A quadrature rule on the reference domain of an element.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -125,19 +121,13 @@ mod tests {
     /// Exact integral of x^a y^b z^c over [-1,1]^3.
     fn exact_monomial(a: u32, b: u32, c: u32) -> f64 {
         let line = |p: u32| {
-            if p % 2 == 1 {
-                0.0
-            } else {
-                2.0 / (p as f64 + 1.0)
-            }
+            if p % 2 == 1 { 0.0 } else { 2.0 / (p as f64 + 1.0) }
         };
         line(a) * line(b) * line(c)
     }
 
     fn integrate(order: GaussOrder, a: u32, b: u32, c: u32) -> f64 {
-        hex_points(order)
-            .map(|(x, w)| w * x[0].powi(a as i32) * x[1].powi(b as i32) * x[2].powi(c as i32))
-            .sum()
+        hex_points(order).map(|(x, w)| w * x[0].powi(a as i32) * x[1].powi(b as i32) * x[2].powi(c as i32)).sum()
     }
 
     #[test]
@@ -148,10 +138,7 @@ mod tests {
                     for c in 0..=max_degree {
                         let got = integrate(order, a, b, c);
                         let want = exact_monomial(a, b, c);
-                        assert!(
-                            (got - want).abs() < 1e-14,
-                            "{order:?} x^{a} y^{b} z^{c}: {got} vs {want}"
-                        );
+                        assert!((got - want).abs() < 1e-14, "{order:?} x^{a} y^{b} z^{c}: {got} vs {want}");
                     }
                 }
             }
@@ -166,9 +153,7 @@ mod tests {
     }
 
     fn integrate_rule(rule: Rule, a: u32, b: u32, c: u32) -> f64 {
-        rule.points()
-            .map(|(x, w)| w * x[0].powi(a as i32) * x[1].powi(b as i32) * x[2].powi(c as i32))
-            .sum()
+        rule.points().map(|(x, w)| w * x[0].powi(a as i32) * x[1].powi(b as i32) * x[2].powi(c as i32)).sum()
     }
 
     #[test]
@@ -180,10 +165,7 @@ mod tests {
                     for c in 0..=degree - a - b {
                         let got = integrate_rule(rule, a, b, c);
                         let want = exact_tet_monomial(a, b, c);
-                        assert!(
-                            (got - want).abs() < 1e-15,
-                            "{rule:?} x^{a} y^{b} z^{c}: {got} vs {want}"
-                        );
+                        assert!((got - want).abs() < 1e-15, "{rule:?} x^{a} y^{b} z^{c}: {got} vs {want}");
                     }
                 }
             }

@@ -3,7 +3,7 @@
 //! The prestress is that of a linear static displacement field u_e (stress = D B u_e at each Gauss
 //! point), which is how the builder turns unit load cases into load-proportional stiffness.
 
-use super::{ElementError, Elasticity, for_each_gauss_point, stiffness_rule, strain_displacement};
+use super::{Elasticity, ElementError, for_each_gauss_point, stiffness_rule, strain_displacement};
 use crate::input::element::ElementKind;
 
 /// Scalar geometric stiffness (n x n, row-major): the full 3n x 3n matrix is this Kronecker I3.
@@ -61,7 +61,7 @@ pub fn element_geometric_stiffness(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::fe::{tet10, tet4};
+    use crate::model::fe::{tet4, tet10};
 
     /// A bar under uniform axial stress sigma_xx = s: the geometric stiffness is the "string"
     /// stiffness s A int N_a' N_b' dx for transverse motion; a transverse rigid rotation theta
@@ -80,7 +80,8 @@ mod tests {
                 None if kind == ElementKind::Tet4 => (tet4::NATURAL_COORDS.to_vec(), size[0] * size[1] * size[2] / 6.0),
                 None => (tet10::NATURAL_COORDS.to_vec(), size[0] * size[1] * size[2] / 6.0),
             };
-            let coords: Vec<[f64; 3]> = reference.iter().map(|c| [c[0] * size[0], c[1] * size[1], c[2] * size[2]]).collect();
+            let coords: Vec<[f64; 3]> =
+                reference.iter().map(|c| [c[0] * size[0], c[1] * size[1], c[2] * size[2]]).collect();
             let n = coords.len();
             let mat = Elasticity { e: 1e9, nu: 0.0 };
             let strain = 1e-3; // u_x = strain * x: sigma_xx = E strain (nu = 0)
@@ -89,7 +90,8 @@ mod tests {
             element_geometric_stiffness(kind, &coords, &mat, &u, &mut k).unwrap();
             let theta = 0.01;
             let uy: Vec<f64> = coords.iter().map(|p| theta * p[0]).collect();
-            let energy: f64 = (0..n).map(|a| (0..n).map(|b| uy[a] * k[a * n + b] * uy[b]).sum::<f64>()).sum::<f64>() * 0.5;
+            let energy: f64 =
+                (0..n).map(|a| (0..n).map(|b| uy[a] * k[a * n + b] * uy[b]).sum::<f64>()).sum::<f64>() * 0.5;
             let expected = 0.5 * mat.e * strain * volume * theta * theta;
             assert!((energy - expected).abs() < 1e-10 * expected, "{kind}: {energy} vs {expected}");
             // rigid translation stores nothing

@@ -10,11 +10,7 @@ pub const NODE_COUNT: usize = ElementKind::Hex20.nodes_per_element();
 /// coordinates `dn[node] = [dN/dxi, dN/deta, dN/dzeta]` at `xi`.
 /// Only the first `NODE_COUNT` entries of the slices are written.
 pub fn shape_functions(xi: [f64; 3], n: &mut [f64], dn: &mut [[f64; 3]]) {
-    for ((node, n), dn) in HEX20_NATURAL_COORDS
-        .iter()
-        .zip(n.iter_mut())
-        .zip(dn.iter_mut())
-    {
+    for ((node, n), dn) in HEX20_NATURAL_COORDS.iter().zip(n.iter_mut()).zip(dn.iter_mut()) {
         let s = [f64::from(node[0]), f64::from(node[1]), f64::from(node[2])];
         match node.iter().position(|&c| c == 0) {
             None => corner(xi, s, n, dn),

@@ -85,14 +85,7 @@ impl Elasticity {
     /// Positive-definite strain energy needs E > 0 and -1 < nu < 0.5.
     pub fn validate(&self) -> Result<(), ElementError> {
         let ok = self.e.is_finite() && self.e > 0.0 && self.nu > -1.0 && self.nu < 0.5;
-        if ok {
-            Ok(())
-        } else {
-            Err(ElementError::InvalidMaterial {
-                e: self.e,
-                nu: self.nu,
-            })
-        }
+        if ok { Ok(()) } else { Err(ElementError::InvalidMaterial { e: self.e, nu: self.nu }) }
     }
 
     /// Lame parameters (lambda, mu).
@@ -148,7 +141,6 @@ pub enum ElementError {
     NonPositiveJacobian { kind: ElementKind, gauss_point: usize, xi: [f64; 3], det: f64 },
 }
 
-
 /// Element stiffness matrix (3n x 3n, row-major, node-major DoFs) written to
 /// `out`, which must have exactly `(3n)^2` entries.
 pub fn element_stiffness(
@@ -200,12 +192,7 @@ pub fn element_stiffness(
 /// The full 3n x 3n mass matrix for node-major DoFs is this matrix Kronecker
 /// the 3x3 identity (`M_full[3a+i][3b+j] = M[a][b] * delta_ij`); the caller
 /// expands it, which keeps the element output 9 times smaller.
-pub fn element_mass(
-    kind: ElementKind,
-    coords: &[[f64; 3]],
-    rho: f64,
-    out: &mut [f64],
-) -> Result<(), ElementError> {
+pub fn element_mass(kind: ElementKind, coords: &[[f64; 3]], rho: f64, out: &mut [f64]) -> Result<(), ElementError> {
     if !(rho.is_finite() && rho > 0.0) {
         return Err(ElementError::InvalidDensity { rho });
     }
@@ -224,28 +211,14 @@ pub fn element_mass(
 }
 
 fn check_output(out: &[f64], expected: usize) -> Result<(), ElementError> {
-    if out.len() == expected {
-        Ok(())
-    } else {
-        Err(ElementError::WrongOutputSize {
-            expected,
-            got: out.len(),
-        })
-    }
+    if out.len() == expected { Ok(()) } else { Err(ElementError::WrongOutputSize { expected, got: out.len() }) }
 }
 
 /// Strain-displacement block of one node for engineering strains in Voigt
 /// order xx, yy, zz, xy, yz, zx; `g` is the physical gradient of its shape
 /// function.
 pub(crate) fn strain_displacement(g: &[f64; 3]) -> [[f64; 3]; 6] {
-    [
-        [g[0], 0.0, 0.0],
-        [0.0, g[1], 0.0],
-        [0.0, 0.0, g[2]],
-        [g[1], g[0], 0.0],
-        [0.0, g[2], g[1]],
-        [g[2], 0.0, g[0]],
-    ]
+    [[g[0], 0.0, 0.0], [0.0, g[1], 0.0], [0.0, 0.0, g[2]], [g[1], g[0], 0.0], [0.0, g[2], g[1]], [g[2], 0.0, g[0]]]
 }
 
 /// Copies the upper triangle of the `size` x `size` matrix onto the lower.
@@ -268,11 +241,7 @@ pub(crate) fn for_each_gauss_point(
 ) -> Result<(), ElementError> {
     let n = kind.nodes_per_element();
     if coords.len() != n {
-        return Err(ElementError::WrongNodeCount {
-            kind,
-            expected: n,
-            got: coords.len(),
-        });
+        return Err(ElementError::WrongNodeCount { kind, expected: n, got: coords.len() });
     }
     if let Some(node) = coords.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
         return Err(ElementError::NonFiniteCoordinate { node });
@@ -293,12 +262,7 @@ pub(crate) fn for_each_gauss_point(
         }
         let (det, inv) = invert3(&jac);
         if det.is_nan() || det <= 0.0 {
-            return Err(ElementError::NonPositiveJacobian {
-                kind,
-                gauss_point,
-                xi,
-                det,
-            });
+            return Err(ElementError::NonPositiveJacobian { kind, gauss_point, xi, det });
         }
         // dN/dx = J^-1 dN/dxi.
         for (g, dn_a) in grad.iter_mut().zip(&dn).take(n) {
@@ -320,21 +284,9 @@ fn invert3(m: &[[f64; 3]; 3]) -> (f64, [[f64; 3]; 3]) {
     let det = m[0][0] * c00 + m[0][1] * c01 + m[0][2] * c02;
     let r = 1.0 / det;
     let inv = [
-        [
-            c00 * r,
-            (m[0][2] * m[2][1] - m[0][1] * m[2][2]) * r,
-            (m[0][1] * m[1][2] - m[0][2] * m[1][1]) * r,
-        ],
-        [
-            c01 * r,
-            (m[0][0] * m[2][2] - m[0][2] * m[2][0]) * r,
-            (m[0][2] * m[1][0] - m[0][0] * m[1][2]) * r,
-        ],
-        [
-            c02 * r,
-            (m[0][1] * m[2][0] - m[0][0] * m[2][1]) * r,
-            (m[0][0] * m[1][1] - m[0][1] * m[1][0]) * r,
-        ],
+        [c00 * r, (m[0][2] * m[2][1] - m[0][1] * m[2][2]) * r, (m[0][1] * m[1][2] - m[0][2] * m[1][1]) * r],
+        [c01 * r, (m[0][0] * m[2][2] - m[0][2] * m[2][0]) * r, (m[0][2] * m[1][0] - m[0][0] * m[1][2]) * r],
+        [c02 * r, (m[0][1] * m[2][0] - m[0][0] * m[2][1]) * r, (m[0][0] * m[1][1] - m[0][1] * m[1][0]) * r],
     ];
     (det, inv)
 }

@@ -15,9 +15,7 @@ const TET_KINDS: [ElementKind; 2] = [ElementKind::Tet4, ElementKind::Tet10];
 
 /// Deterministic pseudo-random number in [-1, 1) (no external crates).
 fn jitter(seed: &mut u64) -> f64 {
-    *seed = seed
-        .wrapping_mul(6_364_136_223_846_793_005)
-        .wrapping_add(1_442_695_040_888_963_407);
+    *seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
     ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
 }
 
@@ -39,10 +37,7 @@ fn is_tet(kind: ElementKind) -> bool {
 /// Natural coordinates of the nodes in CalculiX order, for every kind.
 fn reference_coords(kind: ElementKind) -> Vec<[f64; 3]> {
     match kind.natural_node_coords() {
-        Some(lattice) => lattice
-            .iter()
-            .map(|c| [f64::from(c[0]), f64::from(c[1]), f64::from(c[2])])
-            .collect(),
+        Some(lattice) => lattice.iter().map(|c| [f64::from(c[0]), f64::from(c[1]), f64::from(c[2])]).collect(),
         None if kind == ElementKind::Tet4 => tet4::NATURAL_COORDS.to_vec(),
         None => tet10::NATURAL_COORDS.to_vec(),
     }
@@ -68,11 +63,7 @@ fn distorted_element(kind: ElementKind) -> Vec<[f64; 3]> {
 /// the linear kinds), as node indices.
 fn midside_edges(kind: ElementKind) -> Vec<(usize, usize, usize)> {
     let corners = kind.corner_nodes();
-    kind.midside_edges()
-        .iter()
-        .enumerate()
-        .map(|(m, &(i, j))| (corners + m, i, j))
-        .collect()
+    kind.midside_edges().iter().enumerate().map(|(m, &(i, j))| (corners + m, i, j)).collect()
 }
 
 /// Moves every midside node to the middle of its corners: straight edges,
@@ -97,9 +88,7 @@ fn stiffness(kind: ElementKind, coords: &[[f64; 3]]) -> Vec<f64> {
 }
 
 fn mat_vec(m: &[f64], v: &[f64]) -> Vec<f64> {
-    m.chunks(v.len())
-        .map(|row| row.iter().zip(v).map(|(a, b)| a * b).sum())
-        .collect()
+    m.chunks(v.len()).map(|row| row.iter().zip(v).map(|(a, b)| a * b).sum()).collect()
 }
 
 fn norm(v: &[f64]) -> f64 {
@@ -159,8 +148,7 @@ fn assemble(kind: ElementKind, nodes: &[[f64; 3]], elements: &[usize]) -> Vec<f6
             for (b, &gb) in conn.iter().enumerate() {
                 for i in 0..3 {
                     for j in 0..3 {
-                        global[(3 * ga + i) * dofs + 3 * gb + j] +=
-                            ke[(3 * a + i) * 3 * npe + 3 * b + j];
+                        global[(3 * ga + i) * dofs + 3 * gb + j] += ke[(3 * a + i) * 3 * npe + 3 * b + j];
                     }
                 }
             }
@@ -191,25 +179,17 @@ fn d_matrix_reproduces_engineering_constants() {
         for (i, s) in strain.iter_mut().enumerate().take(3) {
             *s = if i == axis { 1e-3 } else { -STEEL.nu * 1e-3 };
         }
-        let stress: Vec<f64> = (0..6)
-            .map(|r| (0..6).map(|c| d[r][c] * strain[c]).sum())
-            .collect();
+        let stress: Vec<f64> = (0..6).map(|r| (0..6).map(|c| d[r][c] * strain[c]).sum()).collect();
         for (i, s) in stress.iter().enumerate() {
             let want = if i == axis { STEEL.e * 1e-3 } else { 0.0 };
-            assert!(
-                (s - want).abs() < 1e-9 * STEEL.e * 1e-3,
-                "axis {axis} component {i}: {s}"
-            );
+            assert!((s - want).abs() < 1e-9 * STEEL.e * 1e-3, "axis {axis} component {i}: {s}");
         }
         let mut shear = [0.0; 6];
         shear[3 + axis] = 2e-3;
         for r in 0..6 {
             let tau: f64 = (0..6).map(|c| d[r][c] * shear[c]).sum();
             let want = if r == 3 + axis { g * 2e-3 } else { 0.0 };
-            assert!(
-                (tau - want).abs() < 1e-9 * g * 2e-3,
-                "shear {axis} row {r}: {tau}"
-            );
+            assert!((tau - want).abs() < 1e-9 * g * 2e-3, "shear {axis} row {r}: {tau}");
         }
     }
 }
@@ -255,11 +235,7 @@ fn shape_derivatives_match_finite_differences() {
             shape_functions(kind, m, &mut sm[..n], &mut scratch[..n]);
             for a in 0..n {
                 let fd = (sp[a] - sm[a]) / (2.0 * h);
-                assert!(
-                    (fd - dn[a][d]).abs() < 1e-8,
-                    "{kind} node {a} axis {d}: {fd} vs {}",
-                    dn[a][d]
-                );
+                assert!((fd - dn[a][d]).abs() < 1e-8, "{kind} node {a} axis {d}: {fd} vs {}", dn[a][d]);
             }
         }
     }
@@ -281,9 +257,8 @@ fn distorted_patch_reproduces_linear_field() {
         // Node lattice with `step` lattice intervals per element edge.
         let step = if kind == ElementKind::Hex8 { 1 } else { 2 };
         let side = 2 * step + 1;
-        let is_node = |i: usize, j: usize, k: usize| {
-            [i, j, k].iter().filter(|&&v| v % 2 == 1).count() <= 1 || step == 1
-        };
+        let is_node =
+            |i: usize, j: usize, k: usize| [i, j, k].iter().filter(|&&v| v % 2 == 1).count() <= 1 || step == 1;
         let mut id = vec![usize::MAX; side * side * side];
         let mut nodes = Vec::new();
         let mut boundary = Vec::new();
@@ -307,9 +282,7 @@ fn distorted_patch_reproduces_linear_field() {
             }
         }
         let mut elements = Vec::new();
-        for (ez, ey, ex) in
-            (0..2).flat_map(|z| (0..2).flat_map(move |y| (0..2).map(move |x| (z, y, x))))
-        {
+        for (ez, ey, ex) in (0..2).flat_map(|z| (0..2).flat_map(move |y| (0..2).map(move |x| (z, y, x)))) {
             for c in kind.natural_node_coords().expect("hexahedron") {
                 let off = |e: usize, c: i8| e * step + ((i32::from(c) + 1) as usize * step) / 2;
                 elements.push(id[off(ex, c[0]) + side * (off(ey, c[1]) + side * off(ez, c[2]))]);
@@ -330,43 +303,22 @@ fn distorted_patch_reproduces_linear_field() {
 
 /// Solves the patch with the linear field prescribed at the `boundary` nodes
 /// and checks that the `free_dofs` interior DoFs reproduce it.
-fn check_patch(
-    kind: ElementKind,
-    nodes: &[[f64; 3]],
-    elements: &[usize],
-    boundary: &[bool],
-    free_dofs: usize,
-) {
+fn check_patch(kind: ElementKind, nodes: &[[f64; 3]], elements: &[usize], boundary: &[bool], free_dofs: usize) {
     let k = assemble(kind, nodes, elements);
     let dofs = 3 * nodes.len();
     let free: Vec<usize> = (0..dofs).filter(|d| !boundary[d / 3]).collect();
     let exact: Vec<f64> = nodes.iter().flat_map(|&x| linear_field(x)).collect();
     let rhs: Vec<f64> = free
         .iter()
-        .map(|&r| {
-            -(0..dofs)
-                .filter(|c| boundary[c / 3])
-                .map(|c| k[r * dofs + c] * exact[c])
-                .sum::<f64>()
-        })
+        .map(|&r| -(0..dofs).filter(|c| boundary[c / 3]).map(|c| k[r * dofs + c] * exact[c]).sum::<f64>())
         .collect();
-    let kff: Vec<f64> = free
-        .iter()
-        .flat_map(|&r| free.iter().map(move |&c| (r, c)))
-        .map(|(r, c)| k[r * dofs + c])
-        .collect();
+    let kff: Vec<f64> =
+        free.iter().flat_map(|&r| free.iter().map(move |&c| (r, c))).map(|(r, c)| k[r * dofs + c]).collect();
     let n = free.len();
-    let u = DMatrix::from_row_slice(n, n, &kff)
-        .lu()
-        .solve(&DVector::from_vec(rhs))
-        .expect("regular system");
+    let u = DMatrix::from_row_slice(n, n, &kff).lu().solve(&DVector::from_vec(rhs)).expect("regular system");
     assert_eq!(n, free_dofs, "{kind}");
     for (&dof, &got) in free.iter().zip(u.iter()) {
-        assert!(
-            (got - exact[dof]).abs() < 1e-12,
-            "{kind} dof {dof}: {got} vs {}",
-            exact[dof]
-        );
+        assert!((got - exact[dof]).abs() < 1e-12, "{kind} dof {dof}: {got} vs {}", exact[dof]);
     }
 }
 
@@ -453,23 +405,11 @@ fn tet_patch_reproduces_linear_field() {
 
 /// Constant stress of `linear_field`.
 fn linear_field_stress() -> [[f64; 3]; 3] {
-    let grad = [
-        [2e-3, -1e-3, 0.5e-3],
-        [0.7e-3, 1.5e-3, -0.8e-3],
-        [-0.3e-3, 0.9e-3, 1.2e-3],
-    ];
-    let strain = [
-        grad[0][0],
-        grad[1][1],
-        grad[2][2],
-        grad[0][1] + grad[1][0],
-        grad[1][2] + grad[2][1],
-        grad[2][0] + grad[0][2],
-    ];
+    let grad = [[2e-3, -1e-3, 0.5e-3], [0.7e-3, 1.5e-3, -0.8e-3], [-0.3e-3, 0.9e-3, 1.2e-3]];
+    let strain =
+        [grad[0][0], grad[1][1], grad[2][2], grad[0][1] + grad[1][0], grad[1][2] + grad[2][1], grad[2][0] + grad[0][2]];
     let d = STEEL.d_matrix();
-    let s: Vec<f64> = (0..6)
-        .map(|r| (0..6).map(|c| d[r][c] * strain[c]).sum())
-        .collect();
+    let s: Vec<f64> = (0..6).map(|r| (0..6).map(|c| d[r][c] * strain[c]).sum()).collect();
     [[s[0], s[3], s[5]], [s[3], s[1], s[4]], [s[5], s[4], s[2]]]
 }
 
@@ -480,11 +420,8 @@ fn linear_field_stress() -> [[f64; 3]; 3] {
 #[test]
 fn single_element_forces_equal_consistent_tractions() {
     for kind in HEX_KINDS {
-        let coords = if kind == ElementKind::Hex20R {
-            straight_distorted_element(kind)
-        } else {
-            distorted_element(kind)
-        };
+        let coords =
+            if kind == ElementKind::Hex20R { straight_distorted_element(kind) } else { distorted_element(kind) };
         let n = kind.nodes_per_element();
         let u: Vec<f64> = coords.iter().flat_map(|&x| linear_field(x)).collect();
         let f = mat_vec(&stiffness(kind, &coords), &u);
@@ -530,10 +467,7 @@ fn single_element_forces_equal_consistent_tractions() {
         }
         let scale = norm(&expected);
         for (i, (got, want)) in f.iter().zip(&expected).enumerate() {
-            assert!(
-                (got - want).abs() < 1e-10 * scale,
-                "{kind} dof {i}: {got} vs {want}"
-            );
+            assert!((got - want).abs() < 1e-10 * scale, "{kind} dof {i}: {got} vs {want}");
         }
     }
 }
@@ -565,9 +499,7 @@ fn tet_forces_equal_consistent_tractions() {
             if (0..3).map(|d| area[d] * inward[d]).sum::<f64>() > 0.0 {
                 area = area.map(|v| -v);
             }
-            let force: Vec<f64> = (0..3)
-                .map(|i| (0..3).map(|j| sigma[i][j] * area[j]).sum())
-                .collect();
+            let force: Vec<f64> = (0..3).map(|i| (0..3).map(|j| sigma[i][j] * area[j]).sum()).collect();
             let loaded: Vec<usize> = if kind == ElementKind::Tet4 {
                 face.clone()
             } else {
@@ -586,10 +518,7 @@ fn tet_forces_equal_consistent_tractions() {
         }
         let scale = norm(&expected);
         for (i, (got, want)) in f.iter().zip(&expected).enumerate() {
-            assert!(
-                (got - want).abs() < 1e-10 * scale,
-                "{kind} dof {i}: {got} vs {want}"
-            );
+            assert!((got - want).abs() < 1e-10 * scale, "{kind} dof {i}: {got} vs {want}");
         }
     }
 }
@@ -603,34 +532,20 @@ fn rigid_body_modes_have_zero_energy() {
         let k = stiffness(kind, &coords);
         let k_norm = norm(&k);
         let mut modes: Vec<Vec<f64>> = (0..3)
-            .map(|d| {
-                coords
-                    .iter()
-                    .flat_map(|_| (0..3).map(move |i| if i == d { 1.0 } else { 0.0 }))
-                    .collect()
-            })
+            .map(|d| coords.iter().flat_map(|_| (0..3).map(move |i| if i == d { 1.0 } else { 0.0 })).collect())
             .collect();
         for w in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] {
             // Infinitesimal rotation u = w x x.
             modes.push(
                 coords
                     .iter()
-                    .flat_map(|x| {
-                        [
-                            w[1] * x[2] - w[2] * x[1],
-                            w[2] * x[0] - w[0] * x[2],
-                            w[0] * x[1] - w[1] * x[0],
-                        ]
-                    })
+                    .flat_map(|x| [w[1] * x[2] - w[2] * x[1], w[2] * x[0] - w[0] * x[2], w[0] * x[1] - w[1] * x[0]])
                     .collect(),
             );
         }
         for (m, r) in modes.iter().enumerate() {
             let kr = norm(&mat_vec(&k, r));
-            assert!(
-                kr <= 1e-10 * k_norm * norm(r),
-                "{kind} rigid mode {m}: |K r| = {kr:e}"
-            );
+            assert!(kr <= 1e-10 * k_norm * norm(r), "{kind} rigid mode {m}: |K r| = {kr:e}");
         }
         // A pure stretch is not rigid: guards against a trivially zero K.
         let stretch: Vec<f64> = coords.iter().flat_map(|x| [x[0], 0.0, 0.0]).collect();
@@ -649,22 +564,10 @@ fn stiffness_has_exactly_six_zero_eigenvalues() {
         // 8 points x 6 strains give rank 48 for 60 DoFs. See
         // `hex20r_hourglass_modes_vanish_in_meshes` for assembled meshes.
         let expected = if kind == ElementKind::Hex20R { 12 } else { 6 };
-        assert_eq!(
-            zeros,
-            expected,
-            "{kind} eigenvalues / max: {:?}",
-            ev.iter().map(|v| v / max).collect::<Vec<_>>()
-        );
+        assert_eq!(zeros, expected, "{kind} eigenvalues / max: {:?}", ev.iter().map(|v| v / max).collect::<Vec<_>>());
         // Clear separation: the softest deformation mode is far from zero.
-        assert!(
-            ev[expected] > 1e-4 * max,
-            "{kind}: first deformation eigenvalue {} too small",
-            ev[expected] / max
-        );
-        assert!(
-            ev.iter().all(|&v| v > -1e-9 * max),
-            "{kind}: negative eigenvalue"
-        );
+        assert!(ev[expected] > 1e-4 * max, "{kind}: first deformation eigenvalue {} too small", ev[expected] / max);
+        assert!(ev.iter().all(|&v| v > -1e-9 * max), "{kind}: negative eigenvalue");
     }
 }
 
@@ -677,15 +580,8 @@ fn stiffness_has_exactly_six_zero_eigenvalues() {
 #[test]
 fn hex20r_hourglass_modes_vanish_in_meshes() {
     for (divisions, expected) in [([1, 1, 1], 12), ([2, 1, 1], 9), ([2, 2, 1], 6), ([2, 2, 2], 6)] {
-        let mesh = mesh_boxes(
-            &[BoxRegion {
-                min: [0.0; 3],
-                max: [1.0, 0.6, 0.5],
-                divisions,
-            }],
-            ElementKind::Hex20R,
-        )
-        .unwrap();
+        let mesh =
+            mesh_boxes(&[BoxRegion { min: [0.0; 3], max: [1.0, 0.6, 0.5], divisions }], ElementKind::Hex20R).unwrap();
         let dofs = 3 * mesh.nodes.len();
         let k = assemble(ElementKind::Hex20R, &mesh.nodes, &mesh.elements);
         let ev = jacobi_eigenvalues(k, dofs);
@@ -746,9 +642,7 @@ fn frustum(kind: ElementKind) -> Vec<[f64; 3]> {
 fn tet_volume(c: &[[f64; 3]]) -> f64 {
     let e = |q: [f64; 3]| [q[0] - c[0][0], q[1] - c[0][1], q[2] - c[0][2]];
     let (u, v, w) = (e(c[1]), e(c[2]), e(c[3]));
-    (u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0])
-        + u[2] * (v[0] * w[1] - v[1] * w[0]))
-        / 6.0
+    (u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0])) / 6.0
 }
 
 #[test]
@@ -768,15 +662,8 @@ fn mass_sums_to_rho_times_volume() {
         let mut m = vec![0.0; n * n];
         element_mass(kind, &coords, rho, &mut m).unwrap();
         let total: f64 = m.iter().sum();
-        assert!(
-            (total - rho * volume).abs() < 1e-12 * rho,
-            "{kind}: {total} vs {}",
-            rho * volume
-        );
-        assert!(
-            (0..n).all(|a| m[a * n + a] > 0.0),
-            "{kind}: non-positive diagonal"
-        );
+        assert!((total - rho * volume).abs() < 1e-12 * rho, "{kind}: {total} vs {}", rho * volume);
+        assert!((0..n).all(|a| m[a * n + a] > 0.0), "{kind}: non-positive diagonal");
     }
 }
 
@@ -810,15 +697,10 @@ fn reduced_masses_have_the_rank_of_their_rule() {
 fn inverted_element_is_refused_with_gauss_point_and_det() {
     for kind in KINDS {
         // Mirroring z turns the element inside out.
-        let coords: Vec<[f64; 3]> = distorted_element(kind)
-            .iter()
-            .map(|x| [x[0], x[1], -x[2]])
-            .collect();
+        let coords: Vec<[f64; 3]> = distorted_element(kind).iter().map(|x| [x[0], x[1], -x[2]]).collect();
         let mut k = vec![0.0; 9 * kind.nodes_per_element().pow(2)];
         match element_stiffness(kind, &coords, &STEEL, &mut k) {
-            Err(ElementError::NonPositiveJacobian {
-                gauss_point, det, ..
-            }) => {
+            Err(ElementError::NonPositiveJacobian { gauss_point, det, .. }) => {
                 assert_eq!(gauss_point, 0);
                 assert!(det < 0.0);
             }
@@ -848,10 +730,7 @@ fn left_handed_and_flat_tets_are_refused() {
         flat[3] = [0, 1, 2].map(|d| (flat[0][d] + flat[1][d] + flat[2][d]) / 3.0);
         straighten(kind, &mut flat);
         let mut m = vec![0.0; n * n];
-        assert!(matches!(
-            element_mass(kind, &flat, 1.0, &mut m),
-            Err(ElementError::NonPositiveJacobian { .. })
-        ));
+        assert!(matches!(element_mass(kind, &flat, 1.0, &mut m), Err(ElementError::NonPositiveJacobian { .. })));
     }
 }
 
@@ -929,37 +808,23 @@ fn bad_inputs_are_errors_not_panics() {
 #[test]
 fn hex20_cantilever_matches_timoshenko() {
     let (l, h) = (1.0, 0.1);
-    let mesh = mesh_boxes(
-        &[BoxRegion {
-            min: [0.0; 3],
-            max: [l, h, h],
-            divisions: [20, 1, 1],
-        }],
-        ElementKind::Hex20,
-    )
-    .unwrap();
+    let mesh =
+        mesh_boxes(&[BoxRegion { min: [0.0; 3], max: [l, h, h], divisions: [20, 1, 1] }], ElementKind::Hex20).unwrap();
     let k = assemble(ElementKind::Hex20, &mesh.nodes, &mesh.elements);
     let dofs = 3 * mesh.nodes.len();
     let load = 1000.0;
     let mut f = vec![0.0; dofs];
-    let tip: Vec<usize> = (0..mesh.nodes.len())
-        .filter(|&i| (mesh.nodes[i][0] - l).abs() < 1e-9)
-        .collect();
+    let tip: Vec<usize> = (0..mesh.nodes.len()).filter(|&i| (mesh.nodes[i][0] - l).abs() < 1e-9).collect();
     assert_eq!(tip.len(), 8);
     for &i in &tip {
         // Consistent load of a uniform traction on an 8-node face:
         // corners -1/12, midsides 1/3 of the resultant.
-        let mid = [1, 2]
-            .iter()
-            .any(|&a| (mesh.nodes[i][a] - 0.5 * h).abs() < 1e-9);
+        let mid = [1, 2].iter().any(|&a| (mesh.nodes[i][a] - 0.5 * h).abs() < 1e-9);
         f[3 * i + 2] = load * if mid { 1.0 / 3.0 } else { -1.0 / 12.0 };
     }
     let free: Vec<usize> = (0..dofs).filter(|d| mesh.nodes[d / 3][0] > 1e-9).collect();
     let k = &k;
-    let kff: Vec<f64> = free
-        .iter()
-        .flat_map(|&r| free.iter().map(move |&c| k[r * dofs + c]))
-        .collect();
+    let kff: Vec<f64> = free.iter().flat_map(|&r| free.iter().map(move |&c| k[r * dofs + c])).collect();
     let n = free.len();
     let u = DMatrix::from_row_slice(n, n, &kff)
         .lu()
@@ -977,13 +842,6 @@ fn hex20_cantilever_matches_timoshenko() {
     let kappa = 10.0 * (1.0 + nu) / (12.0 + 11.0 * nu);
     let theory = load * l.powi(3) / (3.0 * e * inertia) + load * l / (kappa * g * area);
     let rel = (tip_deflection - theory).abs() / theory;
-    println!(
-        "cantilever tip deflection {tip_deflection:e}, Timoshenko {theory:e}, deviation {:.3} %",
-        100.0 * rel
-    );
-    assert!(
-        rel < 0.02,
-        "tip deflection {tip_deflection:e} vs Timoshenko {theory:e} ({:.3} %)",
-        100.0 * rel
-    );
+    println!("cantilever tip deflection {tip_deflection:e}, Timoshenko {theory:e}, deviation {:.3} %", 100.0 * rel);
+    assert!(rel < 0.02, "tip deflection {tip_deflection:e} vs Timoshenko {theory:e} ({:.3} %)", 100.0 * rel);
 }

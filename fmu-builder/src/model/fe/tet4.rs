@@ -11,20 +11,11 @@ use crate::input::element::ElementKind;
 pub const NODE_COUNT: usize = ElementKind::Tet4.nodes_per_element();
 
 /// Natural coordinates of the nodes in C3D4 order.
-pub const NATURAL_COORDS: [[f64; 3]; NODE_COUNT] = [
-    [0.0, 0.0, 0.0],
-    [1.0, 0.0, 0.0],
-    [0.0, 1.0, 0.0],
-    [0.0, 0.0, 1.0],
-];
+pub const NATURAL_COORDS: [[f64; 3]; NODE_COUNT] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
 /// Gradients of the barycentric coordinates with respect to (xi, eta, zeta).
-pub(crate) const BARYCENTRIC_GRAD: [[f64; 3]; NODE_COUNT] = [
-    [-1.0, -1.0, -1.0],
-    [1.0, 0.0, 0.0],
-    [0.0, 1.0, 0.0],
-    [0.0, 0.0, 1.0],
-];
+pub(crate) const BARYCENTRIC_GRAD: [[f64; 3]; NODE_COUNT] =
+    [[-1.0, -1.0, -1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
 /// Barycentric coordinates of the point `xi`, one per corner node.
 pub(crate) fn barycentric(xi: [f64; 3]) -> [f64; NODE_COUNT] {

@@ -30,16 +30,13 @@ pub fn write_fmu(path: &Path, a: &FmuArchive) -> Result<(), FmuError> {
     let fail = |message: String| FmuError::Archive { path: path.to_owned(), message };
     let entries = entries(a).map_err(&fail)?;
 
-    let file_name = path
-        .file_name()
-        .ok_or_else(|| fail("is not a file path".into()))?
-        .to_string_lossy()
-        .into_owned();
+    let file_name = path.file_name().ok_or_else(|| fail("is not a file path".into()))?.to_string_lossy().into_owned();
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
         _ => PathBuf::from("."),
     };
-    let (file, tmp) = create_temp(&dir, &file_name).map_err(|e| fail(format!("cannot create a file in {}: {e}", dir.display())))?;
+    let (file, tmp) =
+        create_temp(&dir, &file_name).map_err(|e| fail(format!("cannot create a file in {}: {e}", dir.display())))?;
     let guard = RemoveOnDrop(Some(tmp.clone()));
 
     write_zip(file, &entries).map_err(&fail)?;
@@ -187,7 +184,12 @@ mod tests {
         files.sort();
         assert_eq!(
             files,
-            ["binaries/linux64/Beam.so", "documentation/index.html", "modelDescription.xml", "resources/reduced_body.bin"]
+            [
+                "binaries/linux64/Beam.so",
+                "documentation/index.html",
+                "modelDescription.xml",
+                "resources/reduced_body.bin"
+            ]
         );
         assert!(names.iter().any(|n| n == "resources/"));
         {

@@ -38,11 +38,51 @@ impl From<FmuError> for BuildError {
 /// C keywords (C11 and the common C23 additions): an identifier equal to one of them could not
 /// be used where importers paste the model identifier into C source (e.g. FMU export wrappers).
 const C_KEYWORDS: &[&str] = &[
-    "auto", "break", "case", "char", "const", "continue", "default", "do", "double", "else", "enum",
-    "extern", "float", "for", "goto", "if", "inline", "int", "long", "register", "restrict", "return",
-    "short", "signed", "sizeof", "static", "struct", "switch", "typedef", "union", "unsigned", "void",
-    "volatile", "while", "bool", "true", "false", "nullptr", "alignas", "alignof", "constexpr",
-    "static_assert", "thread_local", "typeof", "typeof_unqual",
+    "auto",
+    "break",
+    "case",
+    "char",
+    "const",
+    "continue",
+    "default",
+    "do",
+    "double",
+    "else",
+    "enum",
+    "extern",
+    "float",
+    "for",
+    "goto",
+    "if",
+    "inline",
+    "int",
+    "long",
+    "register",
+    "restrict",
+    "return",
+    "short",
+    "signed",
+    "sizeof",
+    "static",
+    "struct",
+    "switch",
+    "typedef",
+    "union",
+    "unsigned",
+    "void",
+    "volatile",
+    "while",
+    "bool",
+    "true",
+    "false",
+    "nullptr",
+    "alignas",
+    "alignof",
+    "constexpr",
+    "static_assert",
+    "thread_local",
+    "typeof",
+    "typeof_unqual",
 ];
 
 /// True if `s` is a C identifier that is not a keyword and not reserved to the implementation
@@ -61,10 +101,7 @@ pub fn is_model_identifier(s: &str) -> bool {
 /// character outside [A-Za-z0-9_] becomes `_`; a leading digit, underscore or an empty result
 /// gets the prefix `m`; a C keyword gets a trailing `_`.
 pub fn model_identifier(name: &str) -> String {
-    let mut id: String = name
-        .chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' })
-        .collect();
+    let mut id: String = name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' }).collect();
     if !id.starts_with(|c: char| c.is_ascii_alphabetic()) {
         id.insert(0, 'm');
     }

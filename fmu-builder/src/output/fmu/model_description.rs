@@ -51,10 +51,8 @@ pub fn model_description_xml(info: &ModelInfo, table: &VariableTable) -> Result<
     check_info(info)?;
     let plan = Plan::new(table)?;
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
-    write_document(&mut w, info, &plan)
-        .map_err(|e| FmuError::Description(format!("writing the XML failed: {e}")))?;
-    String::from_utf8(w.into_inner())
-        .map_err(|e| FmuError::Description(format!("the XML is not UTF-8: {e}")))
+    write_document(&mut w, info, &plan).map_err(|e| FmuError::Description(format!("writing the XML failed: {e}")))?;
+    String::from_utf8(w.into_inner()).map_err(|e| FmuError::Description(format!("the XML is not UTF-8: {e}")))
 }
 
 /// A time as xs:dateTime in UTC (`YYYY-MM-DDThh:mm:ssZ`), from seconds since the Unix epoch
@@ -65,11 +63,9 @@ pub fn xs_date_time(unix_seconds: u64) -> String {
 }
 
 fn check_info(info: &ModelInfo) -> Result<()> {
-    for (field, value) in [
-        ("modelName", &info.model_name),
-        ("guid", &info.guid),
-        ("generationTool", &info.generation_tool),
-    ] {
+    for (field, value) in
+        [("modelName", &info.model_name), ("guid", &info.guid), ("generationTool", &info.generation_tool)]
+    {
         if value.trim().is_empty() {
             return err(format!("{field} is empty"));
         }
@@ -140,11 +136,7 @@ fn is_xs_date_time(s: &str) -> bool {
 /// switches to exponent notation for very large or small magnitudes (Display would write
 /// hundreds of digits); non-finite values have no place in a start value.
 fn xs_double(x: f64, what: &str) -> Result<String> {
-    if x.is_finite() {
-        Ok(format!("{x:?}"))
-    } else {
-        err(format!("{what} is {x}, expected a finite number"))
-    }
+    if x.is_finite() { Ok(format!("{x:?}")) } else { err(format!("{what} is {x}, expected a finite number")) }
 }
 
 fn causality_name(c: Causality) -> &'static str {
@@ -355,9 +347,8 @@ fn write_document(w: &mut W, info: &ModelInfo, plan: &Plan) -> io::Result<()> {
             ("stepSize", format!("{:?}", e.step)),
         ];
         w.create_element("DefaultExperiment").with_attributes(attrs(&experiment)).write_empty()?;
-        w.create_element("ModelVariables").write_inner_content(|w| {
-            plan.rows.iter().try_for_each(|r| write_variable(w, r))
-        })?;
+        w.create_element("ModelVariables")
+            .write_inner_content(|w| plan.rows.iter().try_for_each(|r| write_variable(w, r)))?;
         write_model_structure(w, plan)
     })?;
     Ok(())
@@ -503,7 +494,6 @@ mod tests {
     use fmu_runtime::reduced::two_mode_body;
     use quick_xml::Reader;
 
-
     fn info() -> ModelInfo {
         ModelInfo {
             model_name: "Test".into(),
@@ -555,7 +545,10 @@ mod tests {
                 .attributes()
                 .map(|a| {
                     let a = a.unwrap();
-                    (a.key.as_ref().to_string(), a.normalized_value(quick_xml::XmlVersion::Implicit1_0).unwrap().into_owned())
+                    (
+                        a.key.as_ref().to_string(),
+                        a.normalized_value(quick_xml::XmlVersion::Implicit1_0).unwrap().into_owned(),
+                    )
                 })
                 .collect();
             stack.push(name);
@@ -583,13 +576,15 @@ mod tests {
         let vars: Vec<&Element> = doc.iter().filter(|e| e.name() == "ScalarVariable").collect();
         assert_eq!(vars.len(), table.variables.len());
         // index of a value reference, read from the XML itself
-        let index = vars.iter().enumerate().map(|(i, e)| (e.attr("valueReference").unwrap().parse().unwrap(), i + 1)).collect();
+        let index =
+            vars.iter().enumerate().map(|(i, e)| (e.attr("valueReference").unwrap().parse().unwrap(), i + 1)).collect();
         (table, doc, index)
     }
 
     fn check_unknown(u: &Element, expected_deps: Vec<usize>) {
         let deps = indices(u.attr("dependencies").expect("explicit dependencies"));
-        let kinds: Vec<&str> = u.attr("dependenciesKind").expect("explicit dependenciesKind").split_whitespace().collect();
+        let kinds: Vec<&str> =
+            u.attr("dependenciesKind").expect("explicit dependenciesKind").split_whitespace().collect();
         assert_eq!(deps, expected_deps, "Unknown index {:?}", u.attr("index"));
         assert!(deps.windows(2).all(|w| w[0] < w[1]), "ascending");
         assert_eq!(kinds.len(), deps.len());
@@ -602,7 +597,15 @@ mod tests {
         let top: Vec<&str> = doc.iter().filter(|e| e.path.len() == 2).map(|e| e.name()).collect();
         assert_eq!(
             top,
-            ["ModelExchange", "CoSimulation", "UnitDefinitions", "LogCategories", "DefaultExperiment", "ModelVariables", "ModelStructure"]
+            [
+                "ModelExchange",
+                "CoSimulation",
+                "UnitDefinitions",
+                "LogCategories",
+                "DefaultExperiment",
+                "ModelVariables",
+                "ModelStructure"
+            ]
         );
         let root = &doc[0];
         assert_eq!(root.attr("fmiVersion"), Some("2.0"));
@@ -671,7 +674,8 @@ mod tests {
     fn every_unit_is_defined() {
         let (table, doc, _) = setup();
         let defined: Vec<&str> = doc.iter().filter(|e| e.name() == "Unit").map(|e| e.attr("name").unwrap()).collect();
-        let used: HashSet<&str> = doc.iter().filter_map(|e| if e.name() == "Real" { e.attr("unit") } else { None }).collect();
+        let used: HashSet<&str> =
+            doc.iter().filter_map(|e| if e.name() == "Real" { e.attr("unit") } else { None }).collect();
         assert!(used.contains("1") && used.contains("N.m"));
         for u in &used {
             assert!(defined.contains(u), "unit {u} used but not defined");
@@ -742,7 +746,10 @@ mod tests {
 
         let table = VariableTable::new(&two_mode_body());
         for (f, what) in [
-            ((|i: &mut ModelInfo| i.generation_date_time = "22.11.2026".into()) as fn(&mut ModelInfo), "generationDateAndTime"),
+            (
+                (|i: &mut ModelInfo| i.generation_date_time = "22.11.2026".into()) as fn(&mut ModelInfo),
+                "generationDateAndTime",
+            ),
             (|i| i.model_identifier = "my model".into(), "modelIdentifier"),
             (|i| i.guid.clear(), "guid"),
             (|i| i.default_experiment.step = 0.0, "DefaultExperiment"),
@@ -776,10 +783,22 @@ mod tests {
         assert_eq!(xs_date_time(951_782_400), "2000-02-29T00:00:00Z");
         // `date -u -d @1795000000 +%Y-%m-%dT%H:%M:%SZ` (GNU coreutils)
         assert_eq!(xs_date_time(1_795_000_000), "2026-11-18T11:06:40Z");
-        for ok in ["2026-11-22T07:00:00Z", "2026-11-22T07:00:00", "2026-11-22T07:00:00.25+01:00", "2026-01-31T23:59:59-05:30"] {
+        for ok in
+            ["2026-11-22T07:00:00Z", "2026-11-22T07:00:00", "2026-11-22T07:00:00.25+01:00", "2026-01-31T23:59:59-05:30"]
+        {
             assert!(is_xs_date_time(ok), "{ok}");
         }
-        for bad in ["", "2026-11-22", "2026-13-01T00:00:00Z", "2026-11-22 07:00:00", "2026-11-22T24:00:00Z", "2026-11-22T07:00:00.Z", "2026-11-22T07:00:00+1:00", "2026-11-22T07:00:00é", "2026-11-22T07:00:00+1é:0"] {
+        for bad in [
+            "",
+            "2026-11-22",
+            "2026-13-01T00:00:00Z",
+            "2026-11-22 07:00:00",
+            "2026-11-22T24:00:00Z",
+            "2026-11-22T07:00:00.Z",
+            "2026-11-22T07:00:00+1:00",
+            "2026-11-22T07:00:00é",
+            "2026-11-22T07:00:00+1é:0",
+        ] {
             assert!(!is_xs_date_time(bad), "{bad}");
         }
     }

@@ -14,14 +14,8 @@ pub const FREE_FREE_TOLERANCE: f64 = 1e-6;
 
 /// Names of the six rigid-body motions in the order of
 /// [`rigid_body_residual`].
-pub const RIGID_BODY_MOTIONS: [&str; 6] = [
-    "translation x",
-    "translation y",
-    "translation z",
-    "rotation about x",
-    "rotation about y",
-    "rotation about z",
-];
+pub const RIGID_BODY_MOTIONS: [&str; 6] =
+    ["translation x", "translation y", "translation z", "rotation about x", "rotation about y", "rotation about z"];
 
 /// Refuses a non-positive (or missing) diagonal entry.
 pub(super) fn check_positive_diagonal(
@@ -67,17 +61,13 @@ pub(super) fn check_positive_diagonal(
 }
 
 /// Refuses an indefinite mass.
-pub(super) fn check_mass_semidefinite(
-    mass: &SparseColMat<usize, f64>,
-    path: &Path,
-) -> Result<(), ImportError> {
+pub(super) fn check_mass_semidefinite(mass: &SparseColMat<usize, f64>, path: &Path) -> Result<(), ImportError> {
     // A consistent mass may be singular (CalculiX integrates C3D4, C3D10 and C3D20R masses with
     // their stiffness rules: rank 1, 4 and 8 per element), so the check is for indefiniteness:
     // M + 1e-8 diag(M) must factor. A singular semidefinite M passes, a negative eigenvalue
     // beyond round-off does not.
     let lifted = {
-        let mut t: Vec<faer::sparse::Triplet<usize, usize, f64>> =
-            Vec::with_capacity(mass.val().len() + mass.nrows());
+        let mut t: Vec<faer::sparse::Triplet<usize, usize, f64>> = Vec::with_capacity(mass.val().len() + mass.nrows());
         for j in 0..mass.ncols() {
             for (&i, &v) in mass.row_idx_of_col_raw(j).iter().zip(mass.val_of_col(j)) {
                 t.push(faer::sparse::Triplet::new(i, j, v));
@@ -124,22 +114,14 @@ pub(super) fn check_free_free(
     let rigid_body_residual = check.map(|(r, _)| r);
     if free_free {
         let resisted: Vec<usize> = (0..6)
-            .filter(|&c| {
-                rigid_body_residual[c] > FREE_FREE_TOLERANCE || rigid_body_residual[c].is_nan()
-            })
+            .filter(|&c| rigid_body_residual[c] > FREE_FREE_TOLERANCE || rigid_body_residual[c].is_nan())
             .collect();
-        if let Some(&worst) = resisted
-            .iter()
-            .max_by(|&&a, &&b| rigid_body_residual[a].total_cmp(&rigid_body_residual[b]))
+        if let Some(&worst) =
+            resisted.iter().max_by(|&&a, &&b| rigid_body_residual[a].total_cmp(&rigid_body_residual[b]))
         {
             let list = resisted
                 .iter()
-                .map(|&c| {
-                    format!(
-                        "{} (residual {:.2e})",
-                        RIGID_BODY_MOTIONS[c], rigid_body_residual[c]
-                    )
-                })
+                .map(|&c| format!("{} (residual {:.2e})", RIGID_BODY_MOTIONS[c], rigid_body_residual[c]))
                 .collect::<Vec<_>>()
                 .join(", ");
             let dof = check[worst].1;
@@ -283,18 +265,10 @@ mod tests {
 
     #[test]
     fn rigid_body_residual_edge_cases() {
-        let k = SparseColMat::<usize, f64>::try_new_from_triplets(3, 3, &[Triplet::new(0, 0, 1.0)])
-            .unwrap();
-        assert!(
-            rigid_body_residual(&k, &[[0.0; 3], [1.0; 3]])
-                .iter()
-                .all(|r| r.is_nan())
-        );
+        let k = SparseColMat::<usize, f64>::try_new_from_triplets(3, 3, &[Triplet::new(0, 0, 1.0)]).unwrap();
+        assert!(rigid_body_residual(&k, &[[0.0; 3], [1.0; 3]]).iter().all(|r| r.is_nan()));
         // One node: rotations vanish; a spring on x resists translation x only.
-        assert_eq!(
-            rigid_body_residual(&k, &[[1.0, 2.0, 3.0]]),
-            [1.0, 0.0, 0.0, 0.0, 0.0, 0.0]
-        );
+        assert_eq!(rigid_body_residual(&k, &[[1.0, 2.0, 3.0]]), [1.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
         let zero = SparseColMat::<usize, f64>::try_new_from_triplets(3, 3, &[]).unwrap();
         assert_eq!(rigid_body_residual(&zero, &[[1.0, 2.0, 3.0]]), [0.0; 6]);
     }

@@ -44,9 +44,7 @@ fn direction(tok: &str) -> Direction {
         "1" | "x" | "ux" => Direction::Translation(0),
         "2" | "y" | "uy" => Direction::Translation(1),
         "3" | "z" | "uz" => Direction::Translation(2),
-        "4" | "5" | "6" | "rotx" | "roty" | "rotz" | "rx" | "ry" | "rz" | "urx" | "ury" | "urz" => {
-            Direction::Rotation
-        }
+        "4" | "5" | "6" | "rotx" | "roty" | "rotz" | "rx" | "ry" | "rz" | "urx" | "ury" | "urz" => Direction::Rotation,
         _ => Direction::Unknown,
     }
 }
@@ -68,10 +66,7 @@ pub fn parse_dof_map(text: &str, path: &Path) -> Result<(DofMapFormat, Vec<DofRo
         return Err(err(0, "the DoF map lists no rows".into()));
     };
     let first_fields = split_fields(first);
-    let (format, body) = if first_fields
-        .first()
-        .is_some_and(|t| t.eq_ignore_ascii_case("matrix"))
-    {
+    let (format, body) = if first_fields.first().is_some_and(|t| t.eq_ignore_ascii_case("matrix")) {
         (DofMapFormat::AnsysMapping, &data[1..])
     } else {
         match first_fields.len() {
@@ -96,12 +91,7 @@ pub fn parse_dof_map(text: &str, path: &Path) -> Result<(DofMapFormat, Vec<DofRo
     }
 
     let node_id = |s: &str, line: usize| {
-        s.parse::<u64>().map_err(|_| {
-            err(
-                line,
-                format!("malformed node id '{s}': expected a non-negative integer"),
-            )
-        })
+        s.parse::<u64>().map_err(|_| err(line, format!("malformed node id '{s}': expected a non-negative integer")))
     };
     let dir = |tok: &str, node: u64, line: usize, expected: &str| match direction(tok) {
         Direction::Translation(d) => Ok(d),
@@ -112,10 +102,9 @@ pub fn parse_dof_map(text: &str, path: &Path) -> Result<(DofMapFormat, Vec<DofRo
                  are supported; beam and shell models carry rotations the import cannot represent"
             ),
         )),
-        Direction::Unknown => Err(err(
-            line,
-            format!("node {node}: unsupported direction '{tok}', expected {expected}"),
-        )),
+        Direction::Unknown => {
+            Err(err(line, format!("node {node}: unsupported direction '{tok}', expected {expected}")))
+        }
     };
 
     // Rows in file order, with their 0-based matrix row.
@@ -123,28 +112,15 @@ pub fn parse_dof_map(text: &str, path: &Path) -> Result<(DofMapFormat, Vec<DofRo
     match format {
         DofMapFormat::CalculixDof => {
             for (r, &(line, t)) in body.iter().enumerate() {
-                let Some((ns, ds)) = t
-                    .split_once('.')
-                    .filter(|_| !t.contains(char::is_whitespace))
-                else {
+                let Some((ns, ds)) = t.split_once('.').filter(|_| !t.contains(char::is_whitespace)) else {
                     return Err(err(
                         line,
-                        format!(
-                            "found '{}', expected 'node.direction' like the first line (CalculiX .dof)",
-                            clip(t)
-                        ),
+                        format!("found '{}', expected 'node.direction' like the first line (CalculiX .dof)", clip(t)),
                     ));
                 };
                 let node = node_id(ns, line)?;
                 let d = dir(ds, node, line, "1, 2 or 3")?;
-                listed.push((
-                    r,
-                    DofRow {
-                        node,
-                        direction: d,
-                        line,
-                    },
-                ));
+                listed.push((r, DofRow { node, direction: d, line }));
             }
         }
         DofMapFormat::NodeDirection => {
@@ -153,23 +129,12 @@ pub fn parse_dof_map(text: &str, path: &Path) -> Result<(DofMapFormat, Vec<DofRo
                 if f.len() != 2 {
                     return Err(err(
                         line,
-                        format!(
-                            "found {} values in '{}', expected 'node direction'",
-                            f.len(),
-                            clip(t)
-                        ),
+                        format!("found {} values in '{}', expected 'node direction'", f.len(), clip(t)),
                     ));
                 }
                 let node = node_id(f[0], line)?;
                 let d = dir(f[1], node, line, "1, 2, 3, x, y, z or UX, UY, UZ")?;
-                listed.push((
-                    r,
-                    DofRow {
-                        node,
-                        direction: d,
-                        line,
-                    },
-                ));
+                listed.push((r, DofRow { node, direction: d, line }));
             }
         }
         DofMapFormat::AnsysMapping => {
@@ -180,11 +145,7 @@ pub fn parse_dof_map(text: &str, path: &Path) -> Result<(DofMapFormat, Vec<DofRo
                 if f.len() != 3 {
                     return Err(err(
                         line,
-                        format!(
-                            "found {} values in '{}', expected 'eqn node label' (ANSYS mapping)",
-                            f.len(),
-                            clip(t)
-                        ),
+                        format!("found {} values in '{}', expected 'eqn node label' (ANSYS mapping)", f.len(), clip(t)),
                     ));
                 }
                 let eqn = match f[0].parse::<usize>() {
@@ -192,41 +153,25 @@ pub fn parse_dof_map(text: &str, path: &Path) -> Result<(DofMapFormat, Vec<DofRo
                     _ => {
                         return Err(err(
                             line,
-                            format!(
-                                "malformed equation number '{}': expected a positive integer",
-                                f[0]
-                            ),
+                            format!("malformed equation number '{}': expected a positive integer", f[0]),
                         ));
                     }
                 };
                 if let Some(first) = eqn_line.insert(eqn, line) {
-                    return Err(err(
-                        line,
-                        format!("equation {eqn} is listed twice (first on line {first})"),
-                    ));
+                    return Err(err(line, format!("equation {eqn} is listed twice (first on line {first})")));
                 }
                 if eqn > max_eqn.0 {
                     max_eqn = (eqn, line);
                 }
                 let node = node_id(f[1], line)?;
                 let d = dir(f[2], node, line, "UX, UY or UZ")?;
-                listed.push((
-                    eqn - 1,
-                    DofRow {
-                        node,
-                        direction: d,
-                        line,
-                    },
-                ));
+                listed.push((eqn - 1, DofRow { node, direction: d, line }));
             }
             if max_eqn.0 > body.len() {
                 // The equation numbers are distinct, so at most body.len()
                 // of the first body.len() + 5 are present: the scan is short.
-                let missing: Vec<String> = (1..=max_eqn.0)
-                    .filter(|e| !eqn_line.contains_key(e))
-                    .take(5)
-                    .map(|e| e.to_string())
-                    .collect();
+                let missing: Vec<String> =
+                    (1..=max_eqn.0).filter(|e| !eqn_line.contains_key(e)).take(5).map(|e| e.to_string()).collect();
                 return Err(err(
                     0,
                     format!(
@@ -236,11 +181,7 @@ pub fn parse_dof_map(text: &str, path: &Path) -> Result<(DofMapFormat, Vec<DofRo
                         max_eqn.0,
                         max_eqn.1,
                         missing.join(", "),
-                        if max_eqn.0 - body.len() > missing.len() {
-                            ", ..."
-                        } else {
-                            ""
-                        }
+                        if max_eqn.0 - body.len() > missing.len() { ", ..." } else { "" }
                     ),
                 ));
             }
@@ -270,15 +211,9 @@ pub fn parse_dof_map(text: &str, path: &Path) -> Result<(DofMapFormat, Vec<DofRo
         nodes[k].2[row.direction] = Some(row.line);
     }
     for (node, line, dirs) in &nodes {
-        let missing: Vec<&str> = (0..3)
-            .filter(|&d| dirs[d].is_none())
-            .map(|d| DIRECTIONS[d])
-            .collect();
+        let missing: Vec<&str> = (0..3).filter(|&d| dirs[d].is_none()).map(|d| DIRECTIONS[d]).collect();
         if !missing.is_empty() {
-            let present: Vec<&str> = (0..3)
-                .filter(|&d| dirs[d].is_some())
-                .map(|d| DIRECTIONS[d])
-                .collect();
+            let present: Vec<&str> = (0..3).filter(|&d| dirs[d].is_some()).map(|d| DIRECTIONS[d]).collect();
             return Err(err(
                 *line,
                 format!(
@@ -330,32 +265,24 @@ mod tests {
         let ansys = "Matrix Eqn   Node   DOF\n     3      7    UZ\n     1      7    UX\n     2      7    uy\n     6      2    UZ\n     4      2    UX\n     5      2    UY\n";
         let (f, rows) = dof(ansys).unwrap();
         assert_eq!(f, DofMapFormat::AnsysMapping);
-        assert_eq!(
-            pairs(&rows),
-            vec![(7, 0), (7, 1), (7, 2), (2, 0), (2, 1), (2, 2)]
-        );
+        assert_eq!(pairs(&rows), vec![(7, 0), (7, 1), (7, 2), (2, 0), (2, 1), (2, 2)]);
         assert_eq!(rows[0].line, 3);
 
         let (f, rows) = dof("7.1\n7.2\n7.3\n2.1\n2.2\n2.3\n").unwrap();
         assert_eq!(f, DofMapFormat::CalculixDof);
-        assert_eq!(
-            pairs(&rows),
-            vec![(7, 0), (7, 1), (7, 2), (2, 0), (2, 1), (2, 2)]
-        );
+        assert_eq!(pairs(&rows), vec![(7, 0), (7, 1), (7, 2), (2, 0), (2, 1), (2, 2)]);
 
         let plain = "# node direction\n7 1\n7, y\n\n% z last\n7 UZ\n2 X\n2\t2\n2 uz\n";
         let (f, rows) = dof(plain).unwrap();
         assert_eq!(f, DofMapFormat::NodeDirection);
-        assert_eq!(
-            pairs(&rows),
-            vec![(7, 0), (7, 1), (7, 2), (2, 0), (2, 1), (2, 2)]
-        );
+        assert_eq!(pairs(&rows), vec![(7, 0), (7, 1), (7, 2), (2, 0), (2, 1), (2, 2)]);
         assert_eq!(rows[2].line, 6);
     }
 
     /// The same deck with `*BOUNDARY` on 101,1,3 and 4,2,2 (node 1 renamed
     /// 101): CalculiX leaves the fixed DoFs out.
-    const CCX_DOF_WITH_BC: &str = "2.1\n2.2\n2.3\n3.1\n3.2\n3.3\n4.1\n4.3\n5.1\n5.2\n5.3\n6.1\n6.2\n6.3\n7.1\n7.2\n7.3\n8.1\n8.2\n8.3\n";
+    const CCX_DOF_WITH_BC: &str =
+        "2.1\n2.2\n2.3\n3.1\n3.2\n3.3\n4.1\n4.3\n5.1\n5.2\n5.3\n6.1\n6.2\n6.3\n7.1\n7.2\n7.3\n8.1\n8.2\n8.3\n";
 
     #[test]
     fn calculix_matrixstorage_dof() {
@@ -363,30 +290,16 @@ mod tests {
         assert_eq!(f, DofMapFormat::CalculixDof);
         assert_eq!(rows.len(), 24);
         for (r, row) in rows.iter().enumerate() {
-            assert_eq!(
-                (row.node, row.direction, row.line),
-                (r as u64 / 3 + 1, r % 3, r + 1)
-            );
+            assert_eq!((row.node, row.direction, row.line), (r as u64 / 3 + 1, r % 3, r + 1));
         }
-        dof_err(
-            CCX_DOF_WITH_BC,
-            7,
-            &[
-                "node 4 has rows for x, z but none for y",
-                "boundary conditions",
-            ],
-        );
+        dof_err(CCX_DOF_WITH_BC, 7, &["node 4 has rows for x, z but none for y", "boundary conditions"]);
     }
 
     #[test]
     fn dof_map_errors() {
         dof_err("", 0, &["no rows"]);
         dof_err("# only comments\n", 0, &["no rows"]);
-        dof_err(
-            "Matrix Eqn Node DOF\n1 1 UX\n2 1 UY\n3 1 ROTX\n",
-            4,
-            &["rotational DoF 'ROTX'", "solid"],
-        );
+        dof_err("Matrix Eqn Node DOF\n1 1 UX\n2 1 UY\n3 1 ROTX\n", 4, &["rotational DoF 'ROTX'", "solid"]);
         dof_err("1.1\n1.2\n1.4\n", 3, &["rotational DoF '4'"]);
         dof_err("1 x\n1 y\n1 rotz\n", 3, &["rotational DoF 'rotz'"]);
         dof_err(
@@ -395,39 +308,19 @@ mod tests {
             &["unsupported direction 'TEMP'", "UX, UY or UZ"],
         );
         dof_err("1 x\n1 w\n", 2, &["unsupported direction 'w'"]);
-        dof_err(
-            "1.1\n1.2\n1.3\n1.2\n",
-            4,
-            &["node 1 direction y is listed twice (first on line 2)"],
-        );
-        dof_err(
-            "1 1\n1 2\n1 3\n2 1\n2 2\n2 x\n",
-            6,
-            &["node 2 direction x is listed twice (first on line 4)"],
-        );
-        dof_err(
-            "Matrix Eqn Node DOF\n1 1 UX\n2 1 UY\n2 1 UZ\n",
-            4,
-            &["equation 2 is listed twice (first on line 3)"],
-        );
+        dof_err("1.1\n1.2\n1.3\n1.2\n", 4, &["node 1 direction y is listed twice (first on line 2)"]);
+        dof_err("1 1\n1 2\n1 3\n2 1\n2 2\n2 x\n", 6, &["node 2 direction x is listed twice (first on line 4)"]);
+        dof_err("Matrix Eqn Node DOF\n1 1 UX\n2 1 UY\n2 1 UZ\n", 4, &["equation 2 is listed twice (first on line 3)"]);
         dof_err(
             "Matrix Eqn Node DOF\n1 1 UX\n2 1 UY\n5 1 UZ\n",
             0,
             &["3 rows", "up to 5 (line 4)", "rows 3, 4 have no entry"],
         );
-        dof_err(
-            "Matrix Eqn Node DOF\n0 1 UX\n",
-            2,
-            &["malformed equation number '0'"],
-        );
+        dof_err("Matrix Eqn Node DOF\n0 1 UX\n", 2, &["malformed equation number '0'"]);
         dof_err("1.1\n1.2\n1 3\n", 3, &["expected 'node.direction'"]);
         dof_err("1.1\n1.2\nx.3\n", 3, &["malformed node id 'x'"]);
         dof_err("1 1\n1 2 3\n", 2, &["found 3 values", "node direction"]);
         dof_err("1 2 3 4\n", 1, &["unrecognised DoF map line"]);
-        dof_err(
-            "5 x\n5 z\n6 x\n6 y\n6 z\n",
-            1,
-            &["node 5 has rows for x, z but none for y"],
-        );
+        dof_err("5 x\n5 z\n6 x\n6 y\n6 z\n", 1, &["node 5 has rows for x, z but none for y"]);
     }
 }

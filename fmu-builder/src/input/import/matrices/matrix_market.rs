@@ -31,11 +31,7 @@ pub(super) struct SymMatrix {
 impl SymMatrix {
     /// The full matrix with row/column r moved to perm[r] (a permutation of
     /// 0..n). Explicit zeros are dropped.
-    pub(super) fn to_sparse(
-        &self,
-        perm: &[usize],
-        path: &Path,
-    ) -> Result<SparseColMat<usize, f64>, ImportError> {
+    pub(super) fn to_sparse(&self, perm: &[usize], path: &Path) -> Result<SparseColMat<usize, f64>, ImportError> {
         let mut trip = Vec::with_capacity(2 * self.upper.len());
         for e in &self.upper {
             if e.v == 0.0 {
@@ -50,19 +46,15 @@ impl SymMatrix {
                 trip.push(Triplet::new(b, a, e.v));
             }
         }
-        SparseColMat::try_new_from_triplets(self.n, self.n, &trip).map_err(|e| {
-            ImportError::new(path, 0, format!("cannot build the sparse matrix: {e:?}"))
-        })
+        SparseColMat::try_new_from_triplets(self.n, self.n, &trip)
+            .map_err(|e| ImportError::new(path, 0, format!("cannot build the sparse matrix: {e:?}")))
     }
 }
 
 /// Parses a Matrix Market coordinate file into the full, exactly symmetric
 /// matrix in file numbering (see the module documentation for what is
 /// accepted).
-pub fn parse_matrix_market(
-    text: &str,
-    path: &Path,
-) -> Result<SparseColMat<usize, f64>, ImportError> {
+pub fn parse_matrix_market(text: &str, path: &Path) -> Result<SparseColMat<usize, f64>, ImportError> {
     let m = parse_mm(text, path, None, &|r| format!("row {}", r + 1))?;
     let identity: Vec<usize> = (0..m.n).collect();
     m.to_sparse(&identity, path)
@@ -78,10 +70,7 @@ pub(super) fn read_mm(
 
 /// The next line that is neither blank nor a `%` comment; `last` follows
 /// the lines consumed, for messages about a file that ends early.
-fn next_data<'a>(
-    lines: &mut impl Iterator<Item = (usize, &'a str)>,
-    last: &mut usize,
-) -> Option<(usize, &'a str)> {
+fn next_data<'a>(lines: &mut impl Iterator<Item = (usize, &'a str)>, last: &mut usize) -> Option<(usize, &'a str)> {
     for (k, t) in lines.by_ref() {
         *last = k;
         if !(t.is_empty() || t.starts_with('%')) {
@@ -109,10 +98,7 @@ fn parse_mm(
         ));
     };
     let head: Vec<&str> = first.split_whitespace().collect();
-    if !head
-        .first()
-        .is_some_and(|t| t.eq_ignore_ascii_case("%%MatrixMarket"))
-    {
+    if !head.first().is_some_and(|t| t.eq_ignore_ascii_case("%%MatrixMarket")) {
         let looks_like_triplet = head.len() == 3
             && head[0].parse::<u64>().is_ok()
             && head[1].parse::<u64>().is_ok()
@@ -149,13 +135,7 @@ fn parse_mm(
         head[4].to_ascii_lowercase(),
     );
     if object != "matrix" {
-        return Err(err(
-            1,
-            format!(
-                "Matrix Market object '{}' is not supported: expected 'matrix'",
-                head[1]
-            ),
-        ));
+        return Err(err(1, format!("Matrix Market object '{}' is not supported: expected 'matrix'", head[1])));
     }
     match format.as_str() {
         "coordinate" => {}
@@ -168,13 +148,7 @@ fn parse_mm(
             ));
         }
         _ => {
-            return Err(err(
-                1,
-                format!(
-                    "unknown Matrix Market format '{}': expected 'coordinate'",
-                    head[2]
-                ),
-            ));
+            return Err(err(1, format!("unknown Matrix Market format '{}': expected 'coordinate'", head[2])));
         }
     }
     let integer = match field.as_str() {
@@ -191,13 +165,7 @@ fn parse_mm(
             ));
         }
         _ => {
-            return Err(err(
-                1,
-                format!(
-                    "unknown Matrix Market field '{}': expected 'real' or 'integer'",
-                    head[3]
-                ),
-            ));
+            return Err(err(1, format!("unknown Matrix Market field '{}': expected 'real' or 'integer'", head[3])));
         }
     };
     let symmetric = match symmetry.as_str() {
@@ -216,20 +184,14 @@ fn parse_mm(
         _ => {
             return Err(err(
                 1,
-                format!(
-                    "unknown Matrix Market symmetry '{}': expected 'general' or 'symmetric'",
-                    head[4]
-                ),
+                format!("unknown Matrix Market symmetry '{}': expected 'general' or 'symmetric'", head[4]),
             ));
         }
     };
 
     let mut last = 1;
     let Some((size_line, size_text)) = next_data(&mut lines, &mut last) else {
-        return Err(err(
-            last,
-            "missing size line 'rows columns entries' after the header".into(),
-        ));
+        return Err(err(last, "missing size line 'rows columns entries' after the header".into()));
     };
     let size: Vec<&str> = size_text.split_whitespace().collect();
     if size.len() != 3 {
@@ -245,24 +207,15 @@ fn parse_mm(
     let mut dims = [0usize; 3];
     for (d, s) in dims.iter_mut().zip(&size) {
         *d = s.parse().map_err(|_| {
-            err(
-                size_line,
-                format!("malformed size '{s}' on the size line: expected a non-negative integer"),
-            )
+            err(size_line, format!("malformed size '{s}' on the size line: expected a non-negative integer"))
         })?;
     }
     let [n, cols, nnz] = dims;
     if n != cols {
-        return Err(err(
-            size_line,
-            format!("matrix is {n} x {cols}: stiffness, mass and damping must be square"),
-        ));
+        return Err(err(size_line, format!("matrix is {n} x {cols}: stiffness, mass and damping must be square")));
     }
     if n > u32::MAX as usize {
-        return Err(err(
-            size_line,
-            format!("matrix size {n} is too large (at most {})", u32::MAX),
-        ));
+        return Err(err(size_line, format!("matrix size {n} is too large (at most {})", u32::MAX)));
     }
     if let Some((rows, map)) = expect
         && n != rows
@@ -291,15 +244,10 @@ fn parse_mm(
             ));
         }
         let mut it = t.split_whitespace();
-        let (Some(si), Some(sj), Some(sv), None) = (it.next(), it.next(), it.next(), it.next())
-        else {
+        let (Some(si), Some(sj), Some(sv), None) = (it.next(), it.next(), it.next(), it.next()) else {
             return Err(err(
                 k,
-                format!(
-                    "entry '{}' has {} values, expected 'row column value'",
-                    clip(t),
-                    t.split_whitespace().count()
-                ),
+                format!("entry '{}' has {} values, expected 'row column value'", clip(t), t.split_whitespace().count()),
             ));
         };
         let index = |s: &str, what: &str| -> Result<u32, ImportError> {
@@ -307,44 +255,29 @@ fn parse_mm(
                 Ok(v) if (1..=n).contains(&v) => Ok((v - 1) as u32),
                 Ok(v) => Err(err(
                     k,
-                    format!(
-                        "{what} index {v} out of range: the matrix is {n} x {n} and indices are 1-based"
-                    ),
+                    format!("{what} index {v} out of range: the matrix is {n} x {n} and indices are 1-based"),
                 )),
-                Err(_) => Err(err(
-                    k,
-                    format!("malformed {what} index '{s}': expected a positive integer"),
-                )),
+                Err(_) => Err(err(k, format!("malformed {what} index '{s}': expected a positive integer"))),
             }
         };
         let i = index(si, "row")?;
         let j = index(sj, "column")?;
         let v = if integer {
-            sv.parse::<i64>().map(|v| v as f64).map_err(|_| {
-                err(
-                    k,
-                    format!("malformed value '{sv}': the header declares 'integer' entries"),
-                )
-            })?
+            sv.parse::<i64>()
+                .map(|v| v as f64)
+                .map_err(|_| err(k, format!("malformed value '{sv}': the header declares 'integer' entries")))?
         } else {
-            parse_f64(sv)
-                .ok_or_else(|| err(k, format!("malformed number '{sv}': expected a real value")))?
+            parse_f64(sv).ok_or_else(|| err(k, format!("malformed number '{sv}': expected a real value")))?
         };
         if !v.is_finite() {
-            return Err(err(
-                k,
-                format!("value '{sv}' is not finite (NaN or infinity)"),
-            ));
+            return Err(err(k, format!("value '{sv}' is not finite (NaN or infinity)")));
         }
         entries.push(Entry { i, j, v, line: k });
     }
     if entries.len() != nnz {
         return Err(err(
             size_line,
-            format!(
-                "the size line announces {nnz} entries but the file contains {}",
-                entries.len()
-            ),
+            format!("the size line announces {nnz} entries but the file contains {}", entries.len()),
         ));
     }
 
@@ -363,12 +296,7 @@ fn parse_mm(
             _ => merged.push(e),
         }
     }
-    let find = |i: u32, j: u32| {
-        merged
-            .binary_search_by_key(&(i, j), |e| (e.i, e.j))
-            .ok()
-            .map(|p| merged[p])
-    };
+    let find = |i: u32, j: u32| merged.binary_search_by_key(&(i, j), |e| (e.i, e.j)).ok().map(|p| merged[p]);
 
     let mut upper = Vec::with_capacity(merged.len());
     if symmetric {
@@ -395,10 +323,7 @@ fn parse_mm(
             upper.push(Entry { i, j, ..*e });
         }
     } else {
-        let max_diag = merged
-            .iter()
-            .filter(|e| e.i == e.j)
-            .fold(0.0f64, |m, e| m.max(e.v.abs()));
+        let max_diag = merged.iter().filter(|e| e.i == e.j).fold(0.0f64, |m, e| m.max(e.v.abs()));
         let tol = SYMMETRY_TOLERANCE * max_diag;
         // (difference, entry, value of the mirror, line of the mirror)
         let mut worst: Option<(f64, Entry, f64, Option<usize>)> = None;
@@ -418,12 +343,7 @@ fn parse_mm(
             }
             let (i, j) = (e.i.min(e.j), e.i.max(e.j));
             // Halves first: the sum of two large values may overflow.
-            upper.push(Entry {
-                i,
-                j,
-                v: 0.5 * e.v + 0.5 * mv,
-                line: e.line,
-            });
+            upper.push(Entry { i, j, v: 0.5 * e.v + 0.5 * mv, line: e.line });
         }
         if let Some((diff, e, mv, mline)) = worst {
             let mirror = match mline {
@@ -471,11 +391,7 @@ mod tests {
     fn symmetric_file_either_triangle() {
         let upper = "%%MatrixMarket matrix coordinate real symmetric\n% comment\n%\n3 3 4\n1 1 2.0\n1 3 -1\n2 2 3e0\n3 3 4.0D0\n";
         let lower = "%%matrixmarket MATRIX Coordinate REAL Symmetric\n3 3 4\n1 1 2.0\n3 1 -1\n2 2 3e0\n\n3 3 4\n";
-        let want = vec![
-            vec![2.0, 0.0, -1.0],
-            vec![0.0, 3.0, 0.0],
-            vec![-1.0, 0.0, 4.0],
-        ];
+        let want = vec![vec![2.0, 0.0, -1.0], vec![0.0, 3.0, 0.0], vec![-1.0, 0.0, 4.0]];
         assert_eq!(dense(&mm(upper).unwrap()), want);
         assert_eq!(dense(&mm(lower).unwrap()), want);
         // Mixed triangles without a mirrored pair are harmless.
@@ -496,10 +412,7 @@ mod tests {
     #[test]
     fn duplicates_are_summed() {
         let t = "%%MatrixMarket matrix coordinate real symmetric\n2 2 5\n1 1 1\n2 1 0.5\n1 1 2\n2 2 4\n2 1 0.25\n";
-        assert_eq!(
-            dense(&mm(t).unwrap()),
-            vec![vec![3.0, 0.75], vec![0.75, 4.0]]
-        );
+        assert_eq!(dense(&mm(t).unwrap()), vec![vec![3.0, 0.75], vec![0.75, 4.0]]);
         let g = "%%MatrixMarket matrix coordinate real general\n2 2 5\n1 2 1\n2 1 0.5\n1 2 -0.5\n1 1 1\n2 2 1\n";
         assert_eq!(dense(&mm(g).unwrap()), vec![vec![1.0, 0.5], vec![0.5, 1.0]]);
     }
@@ -508,82 +421,26 @@ mod tests {
     fn matrix_market_errors() {
         let h = "%%MatrixMarket matrix coordinate real symmetric\n";
         mm_err("", 0, &["empty file"]);
-        mm_err(
-            "%%MatrixMarket matrix array real general\n2 2\n1\n2\n3\n4\n",
-            1,
-            &["'array'", "coordinate"],
-        );
-        mm_err(
-            "%%MatrixMarket matrix coordinate complex general\n1 1 1\n1 1 1 0\n",
-            1,
-            &["'complex'", "real"],
-        );
-        mm_err(
-            "%%MatrixMarket matrix coordinate pattern symmetric\n1 1 1\n1 1\n",
-            1,
-            &["'pattern'"],
-        );
-        mm_err(
-            "%%MatrixMarket matrix coordinate real hermitian\n1 1 1\n1 1 1\n",
-            1,
-            &["'hermitian'"],
-        );
-        mm_err(
-            "%%MatrixMarket matrix coordinate real skew-symmetric\n1 1 0\n",
-            1,
-            &["'skew-symmetric'"],
-        );
-        mm_err(
-            "%%MatrixMarket matrix coordinate real\n1 1 0\n",
-            1,
-            &["incomplete"],
-        );
-        mm_err(
-            "1 1 4.9e4\n1 2 1.6e4\n",
-            1,
-            &["not a Matrix Market file", "CalculiX"],
-        );
+        mm_err("%%MatrixMarket matrix array real general\n2 2\n1\n2\n3\n4\n", 1, &["'array'", "coordinate"]);
+        mm_err("%%MatrixMarket matrix coordinate complex general\n1 1 1\n1 1 1 0\n", 1, &["'complex'", "real"]);
+        mm_err("%%MatrixMarket matrix coordinate pattern symmetric\n1 1 1\n1 1\n", 1, &["'pattern'"]);
+        mm_err("%%MatrixMarket matrix coordinate real hermitian\n1 1 1\n1 1 1\n", 1, &["'hermitian'"]);
+        mm_err("%%MatrixMarket matrix coordinate real skew-symmetric\n1 1 0\n", 1, &["'skew-symmetric'"]);
+        mm_err("%%MatrixMarket matrix coordinate real\n1 1 0\n", 1, &["incomplete"]);
+        mm_err("1 1 4.9e4\n1 2 1.6e4\n", 1, &["not a Matrix Market file", "CalculiX"]);
         mm_err(&format!("{h}% c\n2 3 1\n1 1 1\n"), 3, &["2 x 3", "square"]);
         mm_err(&format!("{h}2 2\n"), 2, &["rows columns entries"]);
         mm_err(&format!("{h}2 2 x\n"), 2, &["malformed size 'x'"]);
-        mm_err(
-            &format!("{h}2 2 2\n1 1 1\n3 1 1\n"),
-            4,
-            &["row index 3 out of range", "2 x 2"],
-        );
-        mm_err(
-            &format!("{h}2 2 2\n1 1 1\n1 0 1\n"),
-            4,
-            &["column index 0 out of range", "1-based"],
-        );
-        mm_err(
-            &format!("{h}2 2 2\n1 1 1\n1.5 1 1\n"),
-            4,
-            &["malformed row index '1.5'"],
-        );
-        mm_err(
-            &format!("{h}2 2 3\n1 1 1\n2 2 1\n"),
-            2,
-            &["announces 3 entries", "contains 2"],
-        );
-        mm_err(
-            &format!("{h}2 2 1\n1 1 1\n%\n2 2 1\n"),
-            5,
-            &["more entries than the 1 announced", "line 2"],
-        );
-        mm_err(
-            &format!("{h}2 2 2\n1 1 1\n2 2 1.0.0\n"),
-            4,
-            &["malformed number '1.0.0'"],
-        );
+        mm_err(&format!("{h}2 2 2\n1 1 1\n3 1 1\n"), 4, &["row index 3 out of range", "2 x 2"]);
+        mm_err(&format!("{h}2 2 2\n1 1 1\n1 0 1\n"), 4, &["column index 0 out of range", "1-based"]);
+        mm_err(&format!("{h}2 2 2\n1 1 1\n1.5 1 1\n"), 4, &["malformed row index '1.5'"]);
+        mm_err(&format!("{h}2 2 3\n1 1 1\n2 2 1\n"), 2, &["announces 3 entries", "contains 2"]);
+        mm_err(&format!("{h}2 2 1\n1 1 1\n%\n2 2 1\n"), 5, &["more entries than the 1 announced", "line 2"]);
+        mm_err(&format!("{h}2 2 2\n1 1 1\n2 2 1.0.0\n"), 4, &["malformed number '1.0.0'"]);
         mm_err(&format!("{h}2 2 2\n1 1 1\n2 2 NaN\n"), 4, &["not finite"]);
         mm_err(&format!("{h}2 2 2\n1 1 inf\n2 2 1\n"), 3, &["not finite"]);
         mm_err(&format!("{h}2 2 2\n1 1 1e999\n2 2 1\n"), 3, &["not finite"]);
-        mm_err(
-            &format!("{h}2 2 2\n1 1 1\n2 2 1 0\n"),
-            4,
-            &["4 values", "row column value"],
-        );
+        mm_err(&format!("{h}2 2 2\n1 1 1\n2 2 1 0\n"), 4, &["4 values", "row column value"]);
         mm_err(
             "%%MatrixMarket matrix coordinate integer general\n1 1 1\n1 1 1.5\n",
             3,
@@ -598,12 +455,7 @@ mod tests {
         mm_err(
             "%%MatrixMarket matrix coordinate real general\n3 3 6\n1 1 10\n2 2 10\n3 3 10\n1 2 1\n2 1 1.00000000001\n2 3 5e-9\n",
             8,
-            &[
-                "not symmetric",
-                "A(2, 3) = 5e-9",
-                "A(3, 2) = 0 (no entry)",
-                "1e-10 x max|diagonal| = 1.000e-9",
-            ],
+            &["not symmetric", "A(2, 3) = 5e-9", "A(3, 2) = 0 (no entry)", "1e-10 x max|diagonal| = 1.000e-9"],
         );
         mm_err(
             "%%MatrixMarket matrix coordinate real general\n2 2 4\n1 1 10\n2 2 10\n2 1 1\n1 2 2\n",

@@ -134,19 +134,11 @@ pub fn read_matrix_model(files: &MatrixFiles, free_free: bool) -> Result<MatrixM
     }
     // The first unknown node in file order is the one a reader finds first
     // (rows are in matrix order, which an ANSYS mapping need not follow).
-    if let Some(r) = rows
-        .iter()
-        .filter(|r| !file_index.contains_key(&r.node))
-        .min_by_key(|r| r.line)
-    {
+    if let Some(r) = rows.iter().filter(|r| !file_index.contains_key(&r.node)).min_by_key(|r| r.line) {
         return Err(ImportError::new(
             files.dof_map,
             r.line,
-            format!(
-                "node {} of the DoF map is not defined in the node file {}",
-                r.node,
-                files.nodes.display()
-            ),
+            format!("node {} of the DoF map is not defined in the node file {}", r.node, files.nodes.display()),
         ));
     }
     let mut used = vec![false; node_file.ids.len()];
@@ -174,26 +166,15 @@ pub fn read_matrix_model(files: &MatrixFiles, free_free: bool) -> Result<MatrixM
         .sets
         .iter()
         .map(|(name, members)| {
-            let mapped = members
-                .iter()
-                .filter_map(|&f| dense.get(f).copied().filter(|&d| d != usize::MAX))
-                .collect::<Vec<_>>();
+            let mapped =
+                members.iter().filter_map(|&f| dense.get(f).copied().filter(|&d| d != usize::MAX)).collect::<Vec<_>>();
             (name.clone(), mapped)
         })
         .collect::<BTreeMap<_, _>>();
-    let perm: Vec<usize> = rows
-        .iter()
-        .zip(&row_file_node)
-        .map(|(r, &f)| 3 * dense[f] + r.direction)
-        .collect();
+    let perm: Vec<usize> = rows.iter().zip(&row_file_node).map(|(r, &f)| 3 * dense[f] + r.direction).collect();
 
     let label = |row: usize| match rows.get(row) {
-        Some(r) => format!(
-            "row {} (node {} {})",
-            row + 1,
-            r.node,
-            DIRECTIONS[r.direction]
-        ),
+        Some(r) => format!("row {} (node {} {})", row + 1, r.node, DIRECTIONS[r.direction]),
         None => format!("row {}", row + 1),
     };
     let map = (rows.len(), files.dof_map);
@@ -214,18 +195,9 @@ pub fn read_matrix_model(files: &MatrixFiles, free_free: bool) -> Result<MatrixM
     };
 
     check_mass_semidefinite(&mass, files.mass)?;
-    let rigid_body_residual =
-        check_free_free(&stiffness, &nodes, &node_ids, free_free, files.stiffness)?;
+    let rigid_body_residual = check_free_free(&stiffness, &nodes, &node_ids, free_free, files.stiffness)?;
 
-    Ok(MatrixModel {
-        nodes,
-        node_ids,
-        node_sets,
-        stiffness,
-        mass,
-        damping,
-        rigid_body_residual,
-    })
+    Ok(MatrixModel { nodes, node_ids, node_sets, stiffness, mass, damping, rigid_body_residual })
 }
 
 // ---------------------------------------------------------------------------
@@ -234,27 +206,17 @@ pub fn read_matrix_model(files: &MatrixFiles, free_free: bool) -> Result<MatrixM
 /// A number as exporters write it.
 fn parse_f64(s: &str) -> Option<f64> {
     // Fortran exponents (1.0D3) are what some exporters write.
-    if s.contains(['d', 'D']) {
-        s.replace(['d', 'D'], "e").parse().ok()
-    } else {
-        s.parse().ok()
-    }
+    if s.contains(['d', 'D']) { s.replace(['d', 'D'], "e").parse().ok() } else { s.parse().ok() }
 }
 
 /// At most 60 characters of a line, for messages.
 fn clip(s: &str) -> String {
-    if s.chars().count() > 60 {
-        format!("{}...", s.chars().take(60).collect::<String>())
-    } else {
-        s.to_string()
-    }
+    if s.chars().count() > 60 { format!("{}...", s.chars().take(60).collect::<String>()) } else { s.to_string() }
 }
 
 /// The comma and/or whitespace separated fields of a line.
 fn split_fields(t: &str) -> Vec<&str> {
-    t.split(|c: char| c == ',' || c.is_whitespace())
-        .filter(|s| !s.is_empty())
-        .collect()
+    t.split(|c: char| c == ',' || c.is_whitespace()).filter(|s| !s.is_empty()).collect()
 }
 
 #[cfg(test)]
@@ -274,9 +236,7 @@ mod test_util {
 
     pub(super) fn dense(m: &SparseColMat<usize, f64>) -> Vec<Vec<f64>> {
         let d = m.to_dense();
-        (0..d.nrows())
-            .map(|i| (0..d.ncols()).map(|j| d[(i, j)]).collect())
-            .collect()
+        (0..d.nrows()).map(|i| (0..d.ncols()).map(|j| d[(i, j)]).collect()).collect()
     }
 
     /// A scratch directory unique to the test.
@@ -338,10 +298,7 @@ mod tests {
             [1.05, 1.0, 1.0],
             [0.0, 1.0, 1.0],
         ];
-        let coords: Vec<[f64; 3]> = unit
-            .iter()
-            .map(|p| [0, 1, 2].map(|d| base[d] + 0.02 * p[d]))
-            .collect();
+        let coords: Vec<[f64; 3]> = unit.iter().map(|p| [0, 1, 2].map(|d| base[d] + 0.02 * p[d])).collect();
         let ids = (1..=8).map(|k| 10 * k + 1).collect();
         let ea = 210e9 * 1e-4;
         let mut k = vec![0.0; 24 * 24];
@@ -401,46 +358,22 @@ mod tests {
         write_mm(&dir.join("d.mtx"), &damp, 24, &perm, true);
         let mut map = String::from("Matrix Eqn   Node   DOF\n");
         for (r, &p) in perm.iter().enumerate().rev() {
-            map += &format!(
-                "{:>10} {:>6}    {}\n",
-                r + 1,
-                ids[p / 3],
-                ["UX", "UY", "UZ"][p % 3]
-            );
+            map += &format!("{:>10} {:>6}    {}\n", r + 1, ids[p / 3], ["UX", "UY", "UZ"][p % 3]);
         }
         std::fs::write(dir.join("k.mapping"), map).unwrap();
         let mut inp = String::from("** nodes only\n*NODE, NSET=NALL\n999, 5., 5., 5.\n");
         for a in (0..8).rev() {
-            inp += &format!(
-                "{}, {:e}, {:e}, {:e}\n",
-                ids[a], coords[a][0], coords[a][1], coords[a][2]
-            );
+            inp += &format!("{}, {:e}, {:e}, {:e}\n", ids[a], coords[a][0], coords[a][1], coords[a][2]);
         }
-        inp += &format!(
-            "*NSET, NSET=BOTTOM\n{}, {}, {}, {}, 999\n",
-            ids[0], ids[1], ids[2], ids[3]
-        );
+        inp += &format!("*NSET, NSET=BOTTOM\n{}, {}, {}, {}, 999\n", ids[0], ids[1], ids[2], ids[3]);
         std::fs::write(dir.join("nodes.inp"), inp).unwrap();
-        CellFiles {
-            dir,
-            k,
-            m,
-            coords,
-            ids,
-            perm,
-        }
+        CellFiles { dir, k, m, coords, ids, perm }
     }
 
     impl CellFiles {
         fn files(&self) -> (PathBuf, PathBuf, PathBuf, PathBuf, PathBuf) {
             let d = &self.dir;
-            (
-                d.join("k.mtx"),
-                d.join("m.mtx"),
-                d.join("d.mtx"),
-                d.join("k.mapping"),
-                d.join("nodes.inp"),
-            )
+            (d.join("k.mtx"), d.join("m.mtx"), d.join("d.mtx"), d.join("k.mapping"), d.join("nodes.inp"))
         }
     }
 
@@ -448,13 +381,7 @@ mod tests {
     fn round_trip_and_rigid_body_residual() {
         let h = cell_files("roundtrip", NEAR);
         let (k, m, d, map, nodes) = h.files();
-        let files = MatrixFiles {
-            stiffness: &k,
-            mass: &m,
-            damping: Some(&d),
-            dof_map: &map,
-            nodes: &nodes,
-        };
+        let files = MatrixFiles { stiffness: &k, mass: &m, damping: Some(&d), dof_map: &map, nodes: &nodes };
         let model = read_matrix_model(&files, true).unwrap();
         // Dense numbering follows the node file, which lists the nodes in reverse.
         let rev: Vec<u64> = h.ids.iter().rev().copied().collect();
@@ -471,20 +398,14 @@ mod tests {
                 assert_eq!(ks[dof(a)][dof(b)], h.k[a * 24 + b], "K({a},{b})");
                 let want_m = 0.5 * h.m[a * 24 + b] + 0.5 * h.m[b * 24 + a];
                 assert_eq!(ms[dof(a)][dof(b)], want_m, "M({a},{b})");
-                assert_eq!(
-                    dmp[dof(a)][dof(b)],
-                    1e-5 * h.k[a * 24 + b] + 2.0 * h.m[a * 24 + b]
-                );
+                assert_eq!(dmp[dof(a)][dof(b)], 1e-5 * h.k[a * 24 + b] + 2.0 * h.m[a * 24 + b]);
             }
         }
         assert_eq!(model.stiffness.nrows(), 24);
         for (c, r) in model.rigid_body_residual.iter().enumerate() {
             assert!(*r < 1e-14, "{}: {r:e}", RIGID_BODY_MOTIONS[c]);
         }
-        assert_eq!(
-            rigid_body_residual(&model.stiffness, &model.nodes),
-            model.rigid_body_residual
-        );
+        assert_eq!(rigid_body_residual(&model.stiffness, &model.nodes), model.rigid_body_residual);
         std::fs::remove_dir_all(&h.dir).ok();
     }
 
@@ -495,13 +416,7 @@ mod tests {
     fn far_from_origin_is_still_free_free() {
         let h = cell_files("far", [100.0, -50.0, 20.0]);
         let (k, m, _, map, nodes) = h.files();
-        let files = MatrixFiles {
-            stiffness: &k,
-            mass: &m,
-            damping: None,
-            dof_map: &map,
-            nodes: &nodes,
-        };
+        let files = MatrixFiles { stiffness: &k, mass: &m, damping: None, dof_map: &map, nodes: &nodes };
         let model = read_matrix_model(&files, true).unwrap();
         for (c, r) in model.rigid_body_residual.iter().enumerate() {
             assert!(*r < 1e-10, "{}: {r:e}", RIGID_BODY_MOTIONS[c]);
@@ -518,26 +433,13 @@ mod tests {
         let mut ks = h.k.clone();
         ks[7 * 24 + 7] += 1e3 * kmax;
         write_mm(&k, &ks, 24, &h.perm, true);
-        let files = MatrixFiles {
-            stiffness: &k,
-            mass: &m,
-            damping: None,
-            dof_map: &map,
-            nodes: &nodes,
-        };
+        let files = MatrixFiles { stiffness: &k, mass: &m, damping: None, dof_map: &map, nodes: &nodes };
         let e = read_matrix_model(&files, true).unwrap_err();
         check_err(
             e,
             "k.mtx",
             0,
-            &[
-                "translation y",
-                "rotation about x",
-                "rotation about z",
-                "node 31 y",
-                "supports",
-                "free-free",
-            ],
+            &["translation y", "rotation about x", "rotation about z", "node 31 y", "supports", "free-free"],
         );
         // Not free-free: accepted, and the residual tells.
         let model = read_matrix_model(&files, false).unwrap();
@@ -554,13 +456,7 @@ mod tests {
         let (k, m, _, map, nodes) = h.files();
         let dir = &h.dir;
         let model = |k: &Path, m: &Path, map: &Path, nodes: &Path| {
-            let files = MatrixFiles {
-                stiffness: k,
-                mass: m,
-                damping: None,
-                dof_map: map,
-                nodes,
-            };
+            let files = MatrixFiles { stiffness: k, mass: m, damping: None, dof_map: map, nodes };
             read_matrix_model(&files, true)
         };
 
@@ -569,39 +465,15 @@ mod tests {
         std::fs::write(&few, "11 0 0 0\n21 1 0 0\n").unwrap();
         let e = model(&k, &m, &map, &few).unwrap_err();
         assert!(e.file.ends_with("k.mapping"), "{e}");
-        assert!(
-            e.message
-                .contains("node 81 of the DoF map is not defined in the node file"),
-            "{e}"
-        );
+        assert!(e.message.contains("node 81 of the DoF map is not defined in the node file"), "{e}");
         assert_eq!(e.line, 2, "{e}"); // the mapping lists row 24 first
 
         // Matrix size differs from the map.
         let small = dir.join("small.mtx");
-        std::fs::write(
-            &small,
-            "%%MatrixMarket matrix coordinate real symmetric\n%\n3 3 1\n1 1 1\n",
-        )
-        .unwrap();
-        check_err(
-            model(&k, &small, &map, &nodes).unwrap_err(),
-            "small.mtx",
-            3,
-            &["3 x 3", "has 24 rows", "k.mapping"],
-        );
-        let files = MatrixFiles {
-            stiffness: &k,
-            mass: &m,
-            damping: Some(&small),
-            dof_map: &map,
-            nodes: &nodes,
-        };
-        check_err(
-            read_matrix_model(&files, true).unwrap_err(),
-            "small.mtx",
-            3,
-            &["has 24 rows"],
-        );
+        std::fs::write(&small, "%%MatrixMarket matrix coordinate real symmetric\n%\n3 3 1\n1 1 1\n").unwrap();
+        check_err(model(&k, &small, &map, &nodes).unwrap_err(), "small.mtx", 3, &["3 x 3", "has 24 rows", "k.mapping"]);
+        let files = MatrixFiles { stiffness: &k, mass: &m, damping: Some(&small), dof_map: &map, nodes: &nodes };
+        check_err(read_matrix_model(&files, true).unwrap_err(), "small.mtx", 3, &["has 24 rows"]);
 
         // Non-positive diagonal: named by node and direction.
         let mut ks = h.k.clone();
@@ -610,11 +482,7 @@ mod tests {
         write_mm(&bad, &ks, 24, &h.perm, true);
         let e = model(&bad, &m, &map, &nodes).unwrap_err();
         assert!(e.line > 3 && e.file.ends_with("bad_k.mtx"), "{e}");
-        for part in [
-            "stiffness diagonal entry of row",
-            "(node 21 z) is -1e0",
-            "positive",
-        ] {
+        for part in ["stiffness diagonal entry of row", "(node 21 z) is -1e0", "positive"] {
             assert!(e.message.contains(part), "{e}");
         }
 
@@ -625,12 +493,7 @@ mod tests {
         ms[24] = 1.0;
         let bad = dir.join("bad_m.mtx");
         write_mm(&bad, &ms, 24, &h.perm, true);
-        check_err(
-            model(&k, &bad, &map, &nodes).unwrap_err(),
-            "bad_m.mtx",
-            0,
-            &["mass matrix is indefinite"],
-        );
+        check_err(model(&k, &bad, &map, &nodes).unwrap_err(), "bad_m.mtx", 0, &["mass matrix is indefinite"]);
 
         // A plain table node file and a CalculiX-style .dof map in another row order.
         let table = dir.join("nodes.csv");
@@ -665,19 +528,7 @@ mod tests {
             "# c\n7 1\n7, y\n7 UZ\n",
             "1, 0, 0, 0\n2 1.5 2e3 -1\n",
         ];
-        let junk = [
-            "",
-            " ",
-            "\n",
-            "%",
-            "0",
-            "-",
-            "9999999999999999999999",
-            "é",
-            ".",
-            "nan",
-            "\u{feff}",
-        ];
+        let junk = ["", " ", "\n", "%", "0", "-", "9999999999999999999999", "é", ".", "nan", "\u{feff}"];
         for t in texts {
             let cuts: Vec<usize> = (0..=t.len()).filter(|&c| t.is_char_boundary(c)).collect();
             for &c in &cuts {

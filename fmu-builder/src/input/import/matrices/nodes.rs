@@ -15,10 +15,7 @@ pub(super) struct NodeFile {
 }
 
 pub(super) fn read_nodes(path: &Path) -> Result<NodeFile, ImportError> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase());
+    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
     let mesh = match ext.as_deref() {
         Some("inp") => read_mesh(path)?,
         Some("msh") => {
@@ -37,21 +34,13 @@ pub(super) fn read_nodes(path: &Path) -> Result<NodeFile, ImportError> {
         }
         _ => {
             let (ids, coords) = parse_node_table(&read_text(path)?, path)?;
-            return Ok(NodeFile {
-                ids,
-                coords,
-                sets: BTreeMap::new(),
-            });
+            return Ok(NodeFile { ids, coords, sets: BTreeMap::new() });
         }
     };
     if mesh.nodes.is_empty() {
         return Err(ImportError::new(path, 0, "the node file defines no nodes"));
     }
-    Ok(NodeFile {
-        ids: mesh.node_ids,
-        coords: mesh.nodes,
-        sets: mesh.node_sets,
-    })
+    Ok(NodeFile { ids: mesh.node_ids, coords: mesh.nodes, sets: mesh.node_sets })
 }
 
 /// Parses a node table: `id x y z` per line, comma and/or whitespace
@@ -80,54 +69,33 @@ pub fn parse_node_table(text: &str, path: &Path) -> Result<(Vec<u64>, Vec<[f64; 
                 ),
             ));
         }
-        let id = f[0].parse::<u64>().map_err(|_| {
-            err(
-                line,
-                format!(
-                    "malformed node id '{}': expected a non-negative integer",
-                    f[0]
-                ),
-            )
-        })?;
+        let id = f[0]
+            .parse::<u64>()
+            .map_err(|_| err(line, format!("malformed node id '{}': expected a non-negative integer", f[0])))?;
         let mut x = [0.0; 3];
         for d in 0..3 {
             let s = f[d + 1];
             x[d] = match parse_f64(s) {
                 Some(v) if v.is_finite() => v,
                 Some(_) => {
-                    return Err(err(
-                        line,
-                        format!(
-                            "coordinate {} of node {id} is not finite: '{s}'",
-                            DIRECTIONS[d]
-                        ),
-                    ));
+                    return Err(err(line, format!("coordinate {} of node {id} is not finite: '{s}'", DIRECTIONS[d])));
                 }
                 None => {
                     return Err(err(
                         line,
-                        format!(
-                            "malformed coordinate {} of node {id}: '{s}', expected a number",
-                            DIRECTIONS[d]
-                        ),
+                        format!("malformed coordinate {} of node {id}: '{s}', expected a number", DIRECTIONS[d]),
                     ));
                 }
             };
         }
         if let Some(first) = first_line.insert(id, line) {
-            return Err(err(
-                line,
-                format!("duplicate node id {id} (first defined on line {first})"),
-            ));
+            return Err(err(line, format!("duplicate node id {id} (first defined on line {first})")));
         }
         ids.push(id);
         coords.push(x);
     }
     if ids.is_empty() {
-        return Err(err(
-            0,
-            "the node file defines no nodes (expected 'id x y z' lines)".into(),
-        ));
+        return Err(err(0, "the node file defines no nodes (expected 'id x y z' lines)".into()));
     }
     Ok((ids, coords))
 }
@@ -142,35 +110,12 @@ mod tests {
         let t = "# id x y z\n* from a deck\n% or so\n\n10, 0.0, 1.0, 2.0\n 20 1e-3 -2.5D1 3\n30,4 5, 6\n";
         let (ids, x) = parse_node_table(t, Path::new("n.txt")).unwrap();
         assert_eq!(ids, vec![10, 20, 30]);
-        assert_eq!(
-            x,
-            vec![[0.0, 1.0, 2.0], [1e-3, -25.0, 3.0], [4.0, 5.0, 6.0]]
-        );
+        assert_eq!(x, vec![[0.0, 1.0, 2.0], [1e-3, -25.0, 3.0], [4.0, 5.0, 6.0]]);
         let e = |t: &str| parse_node_table(t, Path::new("n.txt")).unwrap_err();
-        check_err(
-            e("1 0 0 0\n\n1 1 1 1\n"),
-            "n.txt",
-            3,
-            &["duplicate node id 1 (first defined on line 1)"],
-        );
-        check_err(
-            e("1 0 0 0\n2 0 0\n"),
-            "n.txt",
-            2,
-            &["found 3 values", "id x y z"],
-        );
-        check_err(
-            e("1 0 0 0\n2 0 a 0\n"),
-            "n.txt",
-            2,
-            &["malformed coordinate y of node 2: 'a'"],
-        );
-        check_err(
-            e("1 0 0 0\n2 0 0 nan\n"),
-            "n.txt",
-            2,
-            &["coordinate z of node 2 is not finite"],
-        );
+        check_err(e("1 0 0 0\n\n1 1 1 1\n"), "n.txt", 3, &["duplicate node id 1 (first defined on line 1)"]);
+        check_err(e("1 0 0 0\n2 0 0\n"), "n.txt", 2, &["found 3 values", "id x y z"]);
+        check_err(e("1 0 0 0\n2 0 a 0\n"), "n.txt", 2, &["malformed coordinate y of node 2: 'a'"]);
+        check_err(e("1 0 0 0\n2 0 0 nan\n"), "n.txt", 2, &["coordinate z of node 2 is not finite"]);
         check_err(e("-1 0 0 0\n"), "n.txt", 1, &["malformed node id '-1'"]);
         check_err(e("# nothing\n"), "n.txt", 0, &["no nodes"]);
     }

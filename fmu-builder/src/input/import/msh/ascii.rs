@@ -22,12 +22,11 @@ impl<'a> Cursor<'a> {
     }
 
     fn next(&mut self, what: &str) -> Res<(usize, &'a str)> {
-        let l = self.lines.get(self.pos).copied().ok_or_else(|| {
-            self.err(
-                self.last_line(),
-                format!("unexpected end of file while reading {what}"),
-            )
-        })?;
+        let l = self
+            .lines
+            .get(self.pos)
+            .copied()
+            .ok_or_else(|| self.err(self.last_line(), format!("unexpected end of file while reading {what}")))?;
         self.pos += 1;
         Ok(l)
     }
@@ -65,11 +64,7 @@ fn count(path: &Path, line: usize, v: i64, what: &str) -> Res<usize> {
 fn float(path: &Path, line: usize, s: &str, what: &str) -> Res<f64> {
     match s.parse::<f64>() {
         Ok(v) if v.is_finite() => Ok(v),
-        _ => Err(ImportError::new(
-            path,
-            line,
-            format!("malformed number '{s}' in {what}"),
-        )),
+        _ => Err(ImportError::new(path, line, format!("malformed number '{s}' in {what}"))),
     }
 }
 
@@ -79,12 +74,7 @@ fn float(path: &Path, line: usize, s: &str, what: &str) -> Res<f64> {
 pub fn parse_msh(text: &str, path: &Path) -> Result<ImportedMesh, ImportError> {
     let mut cur = Cursor {
         path,
-        lines: text
-            .lines()
-            .enumerate()
-            .map(|(i, l)| (i + 1, l.trim()))
-            .filter(|(_, l)| !l.is_empty())
-            .collect(),
+        lines: text.lines().enumerate().map(|(i, l)| (i + 1, l.trim())).filter(|(_, l)| !l.is_empty()).collect(),
         pos: 0,
     };
 
@@ -94,10 +84,7 @@ pub fn parse_msh(text: &str, path: &Path) -> Result<ImportedMesh, ImportError> {
     while cur.pos < cur.lines.len() {
         let (n, header) = cur.next("section")?;
         if !header.starts_with('$') {
-            return Err(cur.err(
-                n,
-                format!("expected a section header ($Name), found '{header}'"),
-            ));
+            return Err(cur.err(n, format!("expected a section header ($Name), found '{header}'")));
         }
         let section = &header[1..];
         if !have_format && section != "MeshFormat" {
@@ -116,13 +103,9 @@ pub fn parse_msh(text: &str, path: &Path) -> Result<ImportedMesh, ImportError> {
                     ));
                 }
                 if t[1] != "0" {
-                    return Err(cur.err(
-                        n,
-                        format!(
-                            "$MeshFormat: file-type '{}' (expected 0 for ASCII or 1 for binary)",
-                            t[1]
-                        ),
-                    ));
+                    return Err(
+                        cur.err(n, format!("$MeshFormat: file-type '{}' (expected 0 for ASCII or 1 for binary)", t[1]))
+                    );
                 }
                 if t[0] != "4.1" {
                     return Err(cur.err(
@@ -155,17 +138,9 @@ pub fn parse_msh(text: &str, path: &Path) -> Result<ImportedMesh, ImportError> {
                         let what = "entity";
                         let bad = || cur.err(n, format!("malformed {dim}D entity line"));
                         let tag = int(path, n, t.first().ok_or_else(bad)?, what)?;
-                        let np = count(
-                            path,
-                            n,
-                            int(path, n, t.get(at).ok_or_else(bad)?, what)?,
-                            what,
-                        )?;
+                        let np = count(path, n, int(path, n, t.get(at).ok_or_else(bad)?, what)?, what)?;
                         let phys = t.get(at + 1..at + 1 + np).ok_or_else(bad)?;
-                        let phys = phys
-                            .iter()
-                            .map(|s| int(path, n, s, what).map(i64::abs))
-                            .collect::<Res<Vec<_>>>()?;
+                        let phys = phys.iter().map(|s| int(path, n, s, what).map(i64::abs)).collect::<Res<Vec<_>>>()?;
                         mb.entity_physicals.insert((dim, tag), phys);
                     }
                 }
@@ -181,35 +156,24 @@ pub fn parse_msh(text: &str, path: &Path) -> Result<ImportedMesh, ImportError> {
                 let blocks = count(path, hn, h[0], "block count")?;
                 let total = count(path, hn, h[1], "node count")?;
                 for _ in 0..blocks {
-                    let (bn, b) = cur.ints(
-                        4,
-                        "node block header (entityDim entityTag parametric numNodes)",
-                    )?;
+                    let (bn, b) = cur.ints(4, "node block header (entityDim entityTag parametric numNodes)")?;
                     let dim = b[0];
                     let parametric = b[2] != 0;
                     let nb = count(path, bn, b[3], "node count")?;
                     let mut tags = Vec::with_capacity(nb.min(cur.lines.len()));
                     for _ in 0..nb {
                         let (n, t) = cur.ints(1, "node tag")?;
-                        let tag = u64::try_from(t[0])
-                            .map_err(|_| cur.err(n, format!("invalid node tag {}", t[0])))?;
+                        let tag = u64::try_from(t[0]).map_err(|_| cur.err(n, format!("invalid node tag {}", t[0])))?;
                         mb.node_tag(Loc::Line(n), tag)?;
                         tags.push(tag);
                     }
-                    let expect = if parametric {
-                        3 + dim.max(0) as usize
-                    } else {
-                        3
-                    };
+                    let expect = if parametric { 3 + dim.max(0) as usize } else { 3 };
                     for &tag in &tags {
                         let (n, t) = cur.tokens("node coordinates")?;
                         if t.len() != expect && t.len() != 3 {
                             return Err(cur.err(
                                 n,
-                                format!(
-                                    "coordinates of node {tag}: expected {expect} values, got {}",
-                                    t.len()
-                                ),
+                                format!("coordinates of node {tag}: expected {expect} values, got {}", t.len()),
                             ));
                         }
                         let mut x = [0.0; 3];
@@ -229,17 +193,13 @@ pub fn parse_msh(text: &str, path: &Path) -> Result<ImportedMesh, ImportError> {
                 let total = count(path, hn, h[1], "element count")?;
                 let mut seen = 0usize;
                 for _ in 0..blocks {
-                    let (bn, b) = cur.ints(
-                        4,
-                        "element block header (entityDim entityTag elementType numElements)",
-                    )?;
+                    let (bn, b) = cur.ints(4, "element block header (entityDim entityTag elementType numElements)")?;
                     let ne = count(path, bn, b[3], "element count")?;
                     let block = mb.element_block(Loc::Line(bn), b[0], b[1], b[2])?;
                     for _ in 0..ne {
                         let (n, t) = cur.tokens("element")?;
                         let tag = int(path, n, t[0], "element tag")?;
-                        let tag = u64::try_from(tag)
-                            .map_err(|_| cur.err(n, format!("invalid element tag {tag}")))?;
+                        let tag = u64::try_from(tag).map_err(|_| cur.err(n, format!("invalid element tag {tag}")))?;
                         mb.element_tag(Loc::Line(n), tag)?;
                         let nn = t.len() - 1;
                         if let Some((name, expect, _)) = block.info
@@ -247,10 +207,7 @@ pub fn parse_msh(text: &str, path: &Path) -> Result<ImportedMesh, ImportError> {
                         {
                             return Err(cur.err(
                                 n,
-                                format!(
-                                    "element {tag}: type {} ({name}) needs {expect} nodes, got {nn}",
-                                    block.etype
-                                ),
+                                format!("element {tag}: type {} ({name}) needs {expect} nodes, got {nn}", block.etype),
                             ));
                         }
                         if nn == 0 {
@@ -272,9 +229,9 @@ pub fn parse_msh(text: &str, path: &Path) -> Result<ImportedMesh, ImportError> {
                 // Unknown / irrelevant section ($Comments, $NodeData, $Periodic, ...): skip.
                 let end = format!("$End{section}");
                 loop {
-                    let (_, l) = cur.next(&end).map_err(|_| {
-                        cur.err(n, format!("section ${section} is not terminated by {end}"))
-                    })?;
+                    let (_, l) = cur
+                        .next(&end)
+                        .map_err(|_| cur.err(n, format!("section ${section} is not terminated by {end}")))?;
                     if l == end {
                         break;
                     }
@@ -283,11 +240,7 @@ pub fn parse_msh(text: &str, path: &Path) -> Result<ImportedMesh, ImportError> {
         }
     }
     if !have_format {
-        return Err(ImportError::new(
-            path,
-            cur.last_line(),
-            "not a Gmsh file: no $MeshFormat section",
-        ));
+        return Err(ImportError::new(path, cur.last_line(), "not a Gmsh file: no $MeshFormat section"));
     }
     mb.finish(Loc::Line(cur.last_line()))
 }
@@ -321,10 +274,7 @@ mod tests {
         for p in parts {
             assert!(e.message.contains(p), "message lacks '{p}': {e}");
         }
-        assert!(
-            e.to_string().starts_with(&format!("bad.msh:{line}: ")),
-            "{e}"
-        );
+        assert!(e.to_string().starts_with(&format!("bad.msh:{line}: ")), "{e}");
     }
 
     #[test]
@@ -332,52 +282,17 @@ mod tests {
         check(
             "$MeshFormat\n4.1 1 8\n\u{1}\0\0\0\n$EndMeshFormat\n",
             2,
-            &[
-                "binary .msh not supported here, save as ASCII",
-                "parse_msh_bytes",
-            ],
+            &["binary .msh not supported here, save as ASCII", "parse_msh_bytes"],
         );
-        check(
-            "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n",
-            2,
-            &["version 2.2"],
-        );
+        check("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n", 2, &["version 2.2"]);
         check("$Nodes\n", 1, &["$MeshFormat"]);
         // line numbers refer to CUBE
-        check(
-            &CUBE.replace("3 6 7 8", "3 6 7 9"),
-            46,
-            &["element 3", "undefined node 9"],
-        );
-        check(
-            &CUBE.replace("1 1 2 3 4\n2 2", "1 1 2 3\n2 2"),
-            43,
-            &["needs 4 nodes, got 3"],
-        );
-        check(
-            &CUBE.replace("3 1 5 1", "3 1 6 1"),
-            47,
-            &["unsupported 3D element type 6 (prism6)"],
-        );
-        check(
-            &CUBE.replace("1 1 0\n0 1 0", "1 x 0\n0 1 0"),
-            24,
-            &["malformed number 'x'"],
-        );
-        check(
-            &CUBE.replace("\n4\n0 0 0", "\n3\n0 0 0"),
-            21,
-            &["duplicate node tag 3"],
-        );
-        check(
-            &CUBE.replace("3 6 7 8", "1 6 7 8"),
-            46,
-            &["duplicate element tag 1"],
-        );
-        check(
-            &CUBE.replace("$EndNodes\n", ""),
-            36,
-            &["expected $EndNodes"],
-        );
+        check(&CUBE.replace("3 6 7 8", "3 6 7 9"), 46, &["element 3", "undefined node 9"]);
+        check(&CUBE.replace("1 1 2 3 4\n2 2", "1 1 2 3\n2 2"), 43, &["needs 4 nodes, got 3"]);
+        check(&CUBE.replace("3 1 5 1", "3 1 6 1"), 47, &["unsupported 3D element type 6 (prism6)"]);
+        check(&CUBE.replace("1 1 0\n0 1 0", "1 x 0\n0 1 0"), 24, &["malformed number 'x'"]);
+        check(&CUBE.replace("\n4\n0 0 0", "\n3\n0 0 0"), 21, &["duplicate node tag 3"]);
+        check(&CUBE.replace("3 6 7 8", "1 6 7 8"), 46, &["duplicate element tag 1"]);
+        check(&CUBE.replace("$EndNodes\n", ""), 36, &["expected $EndNodes"]);
     }
 }

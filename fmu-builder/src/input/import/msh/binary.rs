@@ -9,11 +9,7 @@ use std::path::Path;
 /// Whether the file starts with a `$MeshFormat` section of file-type 1.
 /// Anything else goes to the ASCII reader, which reports what is wrong.
 pub(super) fn is_binary(bytes: &[u8]) -> bool {
-    let mut r = Bin {
-        path: Path::new(""),
-        b: bytes,
-        pos: 0,
-    };
+    let mut r = Bin { path: Path::new(""), b: bytes, pos: 0 };
     matches!(r.line(), Some((_, l)) if l == b"$MeshFormat")
         && r.line().is_some_and(|(_, l)| {
             let t = ascii_tokens(l);
@@ -23,9 +19,7 @@ pub(super) fn is_binary(bytes: &[u8]) -> bool {
 
 /// ASCII-whitespace separated tokens of a line of bytes.
 fn ascii_tokens(l: &[u8]) -> Vec<&[u8]> {
-    l.split(|c| c.is_ascii_whitespace())
-        .filter(|t| !t.is_empty())
-        .collect()
+    l.split(|c| c.is_ascii_whitespace()).filter(|t| !t.is_empty()).collect()
 }
 
 /// A line of a binary file for a message: lossy UTF-8, escaped, at most
@@ -149,16 +143,10 @@ impl<'a> Bin<'a> {
         let pat = end.as_bytes();
         let b = self.b;
         let mut from = self.pos;
-        while let Some(i) = b
-            .get(from..)
-            .and_then(|rest| rest.windows(pat.len()).position(|w| w == pat))
-        {
+        while let Some(i) = b.get(from..).and_then(|rest| rest.windows(pat.len()).position(|w| w == pat)) {
             let start = from + i;
             let stop = start + pat.len();
-            let line_start = start
-                .checked_sub(1)
-                .and_then(|p| b.get(p))
-                .is_none_or(|c| c.is_ascii_whitespace());
+            let line_start = start.checked_sub(1).and_then(|p| b.get(p)).is_none_or(|c| c.is_ascii_whitespace());
             let line_end = b.get(stop).is_none_or(|c| c.is_ascii_whitespace());
             if line_start && line_end {
                 self.pos = stop;
@@ -172,22 +160,12 @@ impl<'a> Bin<'a> {
 
 /// Parses a binary MSH 4.1 file (see the module documentation).
 pub(super) fn parse_binary(bytes: &[u8], path: &Path) -> Res<ImportedMesh> {
-    let mut r = Bin {
-        path,
-        b: bytes,
-        pos: 0,
-    };
+    let mut r = Bin { path, b: bytes, pos: 0 };
     let mut mb = MeshBuilder::new(path);
     let mut have_format = false;
     while let Some((at, header)) = r.line() {
         let Some(section) = header.strip_prefix(b"$") else {
-            return Err(r.err(
-                at,
-                format!(
-                    "expected a section header ($Name), found '{}'",
-                    shown(header)
-                ),
-            ));
+            return Err(r.err(at, format!("expected a section header ($Name), found '{}'", shown(header))));
         };
         let section = String::from_utf8_lossy(section).into_owned();
         if !have_format && section != "MeshFormat" {
@@ -206,8 +184,7 @@ pub(super) fn parse_binary(bytes: &[u8], path: &Path) -> Res<ImportedMesh> {
                 let c = ints_of(path, Loc::Byte(at), &t, 1, "$PhysicalNames count")?;
                 for _ in 0..count_at(path, Loc::Byte(at), c[0], "count")? {
                     let (at, l) = r.ascii_line(S, "a physical name line")?;
-                    let (key, name) =
-                        physical_name(path, Loc::Byte(at), &String::from_utf8_lossy(l))?;
+                    let (key, name) = physical_name(path, Loc::Byte(at), &String::from_utf8_lossy(l))?;
                     mb.physical_names.insert(key, name);
                 }
                 r.expect_end(S)?;
@@ -255,9 +232,7 @@ pub(super) fn parse_binary(bytes: &[u8], path: &Path) -> Res<ImportedMesh> {
                     let parametric = r.int(S, "node block parametric flag")? != 0;
                     let nb = r.count(S, "the number of nodes in a block")?;
                     if !(0..=3).contains(&dim) {
-                        return Err(
-                            r.err(bat, format!("invalid node block entity dimension {dim}"))
-                        );
+                        return Err(r.err(bat, format!("invalid node block entity dimension {dim}")));
                     }
                     // parametric coordinates: u (curves), u v (surfaces), u v w (volumes)
                     let extra = if parametric { dim as usize } else { 0 };
@@ -275,10 +250,7 @@ pub(super) fn parse_binary(bytes: &[u8], path: &Path) -> Res<ImportedMesh> {
                             *v = r.double(S, "node coordinate")?;
                         }
                         if let Some(v) = x.iter().find(|v| !v.is_finite()) {
-                            return Err(r.err(
-                                at,
-                                format!("coordinates of node {tag}: {v} is not a finite number"),
-                            ));
+                            return Err(r.err(at, format!("coordinates of node {tag}: {v} is not a finite number")));
                         }
                         r.skip(extra, 8, S, "parametric node coordinates")?;
                         mb.push_node(tag, x);
@@ -301,8 +273,7 @@ pub(super) fn parse_binary(bytes: &[u8], path: &Path) -> Res<ImportedMesh> {
                     let etag = r.int(S, "element block entity tag")?;
                     let etype = r.int(S, "element block element type")?;
                     let ne = r.count(S, "the number of elements in a block")?;
-                    let block =
-                        mb.element_block(bat, i64::from(dim), i64::from(etag), i64::from(etype))?;
+                    let block = mb.element_block(bat, i64::from(dim), i64::from(etag), i64::from(etype))?;
                     let Some((_, nn, _)) = block.info else {
                         return Err(mb.err(
                             bat,
@@ -339,19 +310,12 @@ fn binary_mesh_format(r: &mut Bin) -> Res<()> {
     const S: &str = "MeshFormat";
     let (at, l) = r.ascii_line(S, "'version file-type data-size'")?;
     let t = ascii_tokens(l);
-    let text = |i: usize| {
-        t.get(i)
-            .map(|s| String::from_utf8_lossy(s))
-            .unwrap_or_default()
-    };
+    let text = |i: usize| t.get(i).map(|s| String::from_utf8_lossy(s)).unwrap_or_default();
     if t.len() != 3 {
         return Err(r.err(at, "$MeshFormat: expected 'version file-type data-size'"));
     }
     if text(1) != "1" {
-        return Err(r.err(
-            at,
-            format!("$MeshFormat: file-type {} in a binary file", text(1)),
-        ));
+        return Err(r.err(at, format!("$MeshFormat: file-type {} in a binary file", text(1))));
     }
     if text(0) != "4.1" {
         return Err(r.err(
@@ -452,10 +416,7 @@ mod tests {
         w.s("$MeshFormat\n4.1 1 8\n").i(1).s("\n$EndMeshFormat\n");
         w.s("$PhysicalNames\n2\n2 1 \"fixed\"\n3 2 \"body\"\n$EndPhysicalNames\n");
         w.s("$Entities\n").z(0).z(0).z(2).z(1);
-        for (tag, bbox, phys) in [
-            (1, [0., 0., 0., 1., 1., 0.], 1),
-            (2, [0., 0., 1., 1., 1., 1.], 3),
-        ] {
+        for (tag, bbox, phys) in [(1, [0., 0., 0., 1., 1., 0.], 1), (2, [0., 0., 1., 1., 1., 1.], 3)] {
             w.i(tag);
             w.ds(&bbox);
             w.z(1).i(phys).z(0);
@@ -469,10 +430,7 @@ mod tests {
         if is(Defect::NodeCount) {
             w.mark();
         }
-        w.z(2)
-            .z(if is(Defect::NodeCount) { 9 } else { 8 })
-            .z(1)
-            .z(8);
+        w.z(2).z(if is(Defect::NodeCount) { 9 } else { 8 }).z(1).z(8);
         w.i(3).i(1).i(0).z(4);
         for tag in 1..=4 {
             if tag == 4 && is(Defect::DuplicateNodeTag) {
@@ -481,10 +439,7 @@ mod tests {
                 w.z(tag);
             }
         }
-        for (k, p) in [[0., 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.]]
-            .into_iter()
-            .enumerate()
-        {
+        for (k, p) in [[0., 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.]].into_iter().enumerate() {
             if k == 2 && is(Defect::NanCoordinate) {
                 w.mark().d(p[0]).d(f64::NAN).d(p[2]);
             } else {
@@ -496,19 +451,12 @@ mod tests {
         for tag in 5..=8 {
             w.z(tag);
         }
-        for p in [
-            [0., 0., 1., 0., 0.],
-            [1., 0., 1., 1., 0.],
-            [1., 1., 1., 1., 1.],
-            [0., 1., 1., 0., 1.],
-        ] {
+        for p in [[0., 0., 1., 0., 0.], [1., 0., 1., 1., 0.], [1., 1., 1., 1., 1.], [0., 1., 1., 0., 1.]] {
             w.ds(&p);
         }
         w.s("\n$EndNodes\n$Comments\nanything $here\n$EndComments\n");
         // Binary junk with a newline, a '$' and a look-alike end marker.
-        w.s("$Junk\n")
-            .raw(&[0, b'\n', b'$', 0xff, 0xfe])
-            .s("\n$EndJunkX\n");
+        w.s("$Junk\n").raw(&[0, b'\n', b'$', 0xff, 0xfe]).s("\n$EndJunkX\n");
         w.z(u64::MAX).s("\n$EndJunk\n");
 
         w.s("$Elements\n").z(3).z(4).z(1).z(5);
@@ -517,10 +465,7 @@ mod tests {
         if is(Defect::UnknownType) {
             w.mark();
         }
-        w.i(2)
-            .i(2)
-            .i(if is(Defect::UnknownType) { 99 } else { 2 })
-            .z(2);
+        w.i(2).i(2).i(if is(Defect::UnknownType) { 99 } else { 2 }).z(2);
         w.z(2).z(5).z(6).z(7);
         w.z(3).z(6).z(7);
         if is(Defect::UndefinedNode) {
@@ -546,21 +491,14 @@ mod tests {
         let ascii = parse_msh(CUBE, Path::new("cube.msh")).unwrap();
         assert_eq!(parse_msh_bytes(&bin, Path::new("cube.msh")).unwrap(), ascii);
         // and the ASCII text through the bytes entry point
-        assert_eq!(
-            parse_msh_bytes(CUBE.as_bytes(), Path::new("cube.msh")).unwrap(),
-            ascii
-        );
+        assert_eq!(parse_msh_bytes(CUBE.as_bytes(), Path::new("cube.msh")).unwrap(), ascii);
     }
 
     /// Parses a defective binary file; the error must name the byte.
     fn check_bin(bytes: &[u8], byte: usize, parts: &[&str]) {
         let e = parse_msh_bytes(bytes, Path::new("bad.msh")).unwrap_err();
         assert_eq!(e.line, 0, "{e}");
-        assert!(
-            e.to_string()
-                .starts_with(&format!("bad.msh: byte {byte}: ")),
-            "wrong location: {e}"
-        );
+        assert!(e.to_string().starts_with(&format!("bad.msh: byte {byte}: ")), "wrong location: {e}");
         for p in parts {
             assert!(e.message.contains(p), "message lacks '{p}': {e}");
         }
@@ -574,30 +512,12 @@ mod tests {
             ((), dup - 8)
         };
         let cases = [
-            (
-                Defect::DuplicateNodeTag,
-                vec![format!("duplicate node tag 3 (first at byte {first_tag3})")],
-            ),
-            (
-                Defect::NodeCount,
-                vec!["announces 9 nodes but the blocks contain 8".to_string()],
-            ),
-            (
-                Defect::NanCoordinate,
-                vec!["coordinates of node 3: NaN is not a finite number".to_string()],
-            ),
-            (
-                Defect::UndefinedNode,
-                vec!["element 3 references undefined node 9".to_string()],
-            ),
-            (
-                Defect::UnknownType,
-                vec!["unknown element type 99 in a 2D block".to_string()],
-            ),
-            (
-                Defect::Prism,
-                vec!["unsupported 3D element type 6 (prism6)".to_string()],
-            ),
+            (Defect::DuplicateNodeTag, vec![format!("duplicate node tag 3 (first at byte {first_tag3})")]),
+            (Defect::NodeCount, vec!["announces 9 nodes but the blocks contain 8".to_string()]),
+            (Defect::NanCoordinate, vec!["coordinates of node 3: NaN is not a finite number".to_string()]),
+            (Defect::UndefinedNode, vec!["element 3 references undefined node 9".to_string()]),
+            (Defect::UnknownType, vec!["unknown element type 99 in a 2D block".to_string()]),
+            (Defect::Prism, vec!["unsupported 3D element type 6 (prism6)".to_string()]),
         ];
         for (defect, parts) in cases {
             let (bin, at) = cube_bin(defect);
@@ -607,42 +527,19 @@ mod tests {
 
         let (good, _) = cube_bin(Defect::None);
         let replaced = |from: &[u8], to: &[u8]| -> Vec<u8> {
-            let i = good
-                .windows(from.len())
-                .position(|w| w == from)
-                .expect("pattern in the file");
+            let i = good.windows(from.len()).position(|w| w == from).expect("pattern in the file");
             [&good[..i], to, &good[i + from.len()..]].concat()
         };
         // $MeshFormat: version, data size, endianness check
-        check_bin(
-            &replaced(b"4.1 1 8", b"4.1 1 4"),
-            12,
-            &["data-size 4 not supported", "only 8"],
-        );
+        check_bin(&replaced(b"4.1 1 8", b"4.1 1 4"), 12, &["data-size 4 not supported", "only 8"]);
         check_bin(&replaced(b"4.1 1 8", b"2.2 1 8"), 12, &["version 2.2"]);
-        check_bin(
-            &replaced(b"8\n\x01\0\0\0", b"8\n\0\0\0\x01"),
-            20,
-            &["byte-swapped", "big-endian"],
-        );
-        check_bin(
-            &replaced(b"8\n\x01\0\0\0", b"8\n\x02\0\0\0"),
-            20,
-            &["endianness check", "[02, 00, 00, 00]"],
-        );
+        check_bin(&replaced(b"8\n\x01\0\0\0", b"8\n\0\0\0\x01"), 20, &["byte-swapped", "big-endian"]);
+        check_bin(&replaced(b"8\n\x01\0\0\0", b"8\n\x02\0\0\0"), 20, &["endianness check", "[02, 00, 00, 00]"]);
         // section footers
         let at = good.windows(10).position(|w| w == b"$EndNodes\n").unwrap();
-        check_bin(
-            &replaced(b"$EndNodes\n", b"$EndNodez\n"),
-            at,
-            &["expected $EndNodes, found '$EndNodez'"],
-        );
+        check_bin(&replaced(b"$EndNodes\n", b"$EndNodez\n"), at, &["expected $EndNodes, found '$EndNodez'"]);
         let at = good.windows(6).position(|w| w == b"$Junk\n").unwrap();
-        check_bin(
-            &replaced(b"$EndJunk\n", b"$EndJunq\n"),
-            at,
-            &["section $Junk is not terminated by $EndJunk"],
-        );
+        check_bin(&replaced(b"$EndJunk\n", b"$EndJunq\n"), at, &["section $Junk is not terminated by $EndJunk"]);
         // the ASCII text entry point refuses binary content clearly
         let text = String::from_utf8_lossy(&good);
         let e = parse_msh(&text, Path::new("bad.msh")).unwrap_err();
@@ -653,20 +550,13 @@ mod tests {
     #[test]
     fn truncated_binary_files_are_errors_not_panics() {
         let (cube, _) = cube_bin(Defect::None);
-        let files = FIXTURES
-            .iter()
-            .map(|&(name, _, bin)| (name, bin))
-            .chain([("cube", &cube[..])]);
+        let files = FIXTURES.iter().map(|&(name, _, bin)| (name, bin)).chain([("cube", &cube[..])]);
         for (name, bin) in files {
             let path = Path::new("cut.msh");
             let full = parse_msh_bytes(bin, path).unwrap();
             for len in 0..bin.len() - 1 {
                 if let Ok(m) = parse_msh_bytes(&bin[..len], path) {
-                    panic!(
-                        "{name}: the first {len} of {} bytes parse ({} nodes)",
-                        bin.len(),
-                        m.num_nodes()
-                    );
+                    panic!("{name}: the first {len} of {} bytes parse ({} nodes)", bin.len(), m.num_nodes());
                 }
             }
             // Only the final newline missing: the file is complete.
@@ -682,20 +572,14 @@ mod tests {
             ("Elements", 32 + 20 + 8 + 3, "element node tag"),
         ] {
             let header = format!("${section}\n");
-            let start = bin
-                .windows(header.len())
-                .position(|w| w == header.as_bytes())
-                .unwrap()
-                + header.len();
+            let start = bin.windows(header.len()).position(|w| w == header.as_bytes()).unwrap() + header.len();
             let cut = start + into;
             let e = parse_msh_bytes(&bin[..cut], Path::new("cut.msh")).unwrap_err();
             assert_eq!(e.line, 0);
             let msg = e.to_string();
             assert!(
                 msg.starts_with("cut.msh: byte ")
-                    && msg.contains(&format!(
-                        "unexpected end of file in ${section}: expected {what}"
-                    )),
+                    && msg.contains(&format!("unexpected end of file in ${section}: expected {what}")),
                 "{msg}"
             );
         }

@@ -164,10 +164,7 @@ impl<'p> MeshBuilder<'p> {
         if self.mesh.nodes.len() != total {
             return Err(self.err(
                 header,
-                format!(
-                    "$Nodes header announces {total} nodes but the blocks contain {}",
-                    self.mesh.nodes.len()
-                ),
+                format!("$Nodes header announces {total} nodes but the blocks contain {}", self.mesh.nodes.len()),
             ));
         }
         Ok(())
@@ -184,13 +181,7 @@ impl<'p> MeshBuilder<'p> {
         Ok(())
     }
 
-    pub(super) fn element_block(
-        &mut self,
-        loc: Loc,
-        dim: i64,
-        etag: i64,
-        etype: i64,
-    ) -> Res<ElementBlock> {
+    pub(super) fn element_block(&mut self, loc: Loc, dim: i64, etag: i64, etype: i64) -> Res<ElementBlock> {
         let info = gmsh_type_info(etype);
         let conv = if dim == 3 {
             Some(supported_3d(etype).ok_or_else(|| {
@@ -208,69 +199,39 @@ impl<'p> MeshBuilder<'p> {
         if let Some((name, _, tdim)) = info
             && i64::from(tdim) != dim
         {
-            return Err(self.err(
-                loc,
-                format!("element type {etype} ({name}) in a {dim}D entity block"),
-            ));
+            return Err(self.err(loc, format!("element type {etype} ({name}) in a {dim}D entity block")));
         }
         // An empty block of a physical entity still makes its (empty) set.
         self.entity_nodes.entry((dim, etag)).or_default();
-        Ok(ElementBlock {
-            dim,
-            etag,
-            etype,
-            info,
-            conv,
-        })
+        Ok(ElementBlock { dim, etag, etype, info, conv })
     }
 
     pub(super) fn element_tag(&mut self, loc: Loc, tag: u64) -> Res<()> {
         if let Some(first) = self.element_loc.insert(tag, loc) {
-            return Err(self.err(
-                loc,
-                format!("duplicate element tag {tag} (first at {first})"),
-            ));
+            return Err(self.err(loc, format!("duplicate element tag {tag} (first at {first})")));
         }
         Ok(())
     }
 
     /// Index of node `id` referenced by element `element`.
-    pub(super) fn node_ref<T: Copy + fmt::Display>(
-        &self,
-        loc: Loc,
-        element: u64,
-        id: T,
-    ) -> Res<usize>
+    pub(super) fn node_ref<T: Copy + fmt::Display>(&self, loc: Loc, element: u64, id: T) -> Res<usize>
     where
         u64: TryFrom<T>,
     {
         u64::try_from(id)
             .ok()
             .and_then(|id| self.node_index.get(&id).copied())
-            .ok_or_else(|| {
-                self.err(
-                    loc,
-                    format!("element {element} references undefined node {id}"),
-                )
-            })
+            .ok_or_else(|| self.err(loc, format!("element {element} references undefined node {id}")))
     }
 
     /// Adds an element of `block`; `nodes` (indices, Gmsh order) has the
     /// node count of the block's type whenever the type is known.
     pub(super) fn push_element(&mut self, block: &ElementBlock, tag: u64, nodes: Vec<usize>) {
-        self.entity_nodes
-            .entry((block.dim, block.etag))
-            .or_default()
-            .extend(nodes.iter().copied());
+        self.entity_nodes.entry((block.dim, block.etag)).or_default().extend(nodes.iter().copied());
         if let Some((ty, perm)) = block.conv {
-            self.volume_elements
-                .entry(block.etag)
-                .or_default()
-                .push(self.mesh.connectivity.len());
+            self.volume_elements.entry(block.etag).or_default().push(self.mesh.connectivity.len());
             // A 3D block has a known type, so `nodes` has `perm.len()` entries.
-            self.mesh
-                .connectivity
-                .push(perm.iter().map(|&k| nodes[k]).collect());
+            self.mesh.connectivity.push(perm.iter().map(|&k| nodes[k]).collect());
             self.mesh.element_types.push(ty);
             self.mesh.element_ids.push(tag);
         }
@@ -278,12 +239,9 @@ impl<'p> MeshBuilder<'p> {
 
     pub(super) fn end_elements(&self, header: Loc, total: usize, seen: usize) -> Res<()> {
         if seen != total {
-            return Err(self.err(
-                header,
-                format!(
-                    "$Elements header announces {total} elements but the blocks contain {seen}"
-                ),
-            ));
+            return Err(
+                self.err(header, format!("$Elements header announces {total} elements but the blocks contain {seen}"))
+            );
         }
         Ok(())
     }
@@ -295,19 +253,9 @@ impl<'p> MeshBuilder<'p> {
             return Err(self.err(end, "missing $Nodes or $Elements section"));
         }
         if !self.have_entities && !self.physical_names.is_empty() {
-            return Err(self.err(
-                end,
-                "$PhysicalNames present but no $Entities section: cannot map physical groups",
-            ));
+            return Err(self.err(end, "$PhysicalNames present but no $Entities section: cannot map physical groups"));
         }
-        let MeshBuilder {
-            physical_names,
-            entity_physicals,
-            mut mesh,
-            entity_nodes,
-            volume_elements,
-            ..
-        } = self;
+        let MeshBuilder { physical_names, entity_physicals, mut mesh, entity_nodes, volume_elements, .. } = self;
 
         // Physical group (dim, tag) -> nodes / elements.
         let mut group_nodes: BTreeMap<(i64, i64), BTreeSet<usize>> = BTreeMap::new();
@@ -319,21 +267,11 @@ impl<'p> MeshBuilder<'p> {
             }
         }
         for (&(dim, etag), nodes) in &entity_nodes {
-            for &p in entity_physicals
-                .get(&(dim, etag))
-                .map(Vec::as_slice)
-                .unwrap_or(&[])
-            {
-                group_nodes
-                    .entry((dim, p))
-                    .or_default()
-                    .extend(nodes.iter().copied());
+            for &p in entity_physicals.get(&(dim, etag)).map(Vec::as_slice).unwrap_or(&[]) {
+                group_nodes.entry((dim, p)).or_default().extend(nodes.iter().copied());
                 if dim == 3 {
                     let els = volume_elements.get(&etag).map(Vec::as_slice).unwrap_or(&[]);
-                    group_elements
-                        .entry(p)
-                        .or_default()
-                        .extend(els.iter().copied());
+                    group_elements.entry(p).or_default().extend(els.iter().copied());
                 }
             }
         }
@@ -341,32 +279,17 @@ impl<'p> MeshBuilder<'p> {
             if let Some(name) = physical_names.get(&(dim, tag)) {
                 return name.clone();
             }
-            let shared = group_nodes
-                .keys()
-                .any(|&(d, t)| t == tag && d != dim && !physical_names.contains_key(&(d, t)));
-            if shared {
-                format!("PHYSICAL_{dim}D_{tag}")
-            } else {
-                format!("PHYSICAL_{tag}")
-            }
+            let shared =
+                group_nodes.keys().any(|&(d, t)| t == tag && d != dim && !physical_names.contains_key(&(d, t)));
+            if shared { format!("PHYSICAL_{dim}D_{tag}") } else { format!("PHYSICAL_{tag}") }
         };
         for (&(dim, tag), nodes) in &group_nodes {
-            mesh.node_sets
-                .entry(group_name(dim, tag))
-                .or_default()
-                .extend(nodes.iter().copied());
+            mesh.node_sets.entry(group_name(dim, tag)).or_default().extend(nodes.iter().copied());
         }
         for (&tag, els) in &group_elements {
-            mesh.element_sets
-                .entry(group_name(3, tag))
-                .or_default()
-                .extend(els.iter().copied());
+            mesh.element_sets.entry(group_name(3, tag)).or_default().extend(els.iter().copied());
         }
-        for v in mesh
-            .node_sets
-            .values_mut()
-            .chain(mesh.element_sets.values_mut())
-        {
+        for v in mesh.node_sets.values_mut().chain(mesh.element_sets.values_mut()) {
             v.sort_unstable();
             v.dedup();
         }
@@ -382,18 +305,13 @@ mod tests {
 
     /// Builds a one-element .msh whose midside nodes are placed at the
     /// midpoints of the Gmsh edges (per the Gmsh "Node ordering" docs).
-    fn single_element_msh(
-        gmsh_type: i64,
-        corners: &[[f64; 3]],
-        gmsh_edges: &[(usize, usize)],
-    ) -> String {
+    fn single_element_msh(gmsh_type: i64, corners: &[[f64; 3]], gmsh_edges: &[(usize, usize)]) -> String {
         let mut pts: Vec<[f64; 3]> = corners.to_vec();
         for &(a, b) in gmsh_edges {
             pts.push([0, 1, 2].map(|d| 0.5 * (corners[a][d] + corners[b][d])));
         }
         let n = pts.len();
-        let mut s =
-            format!("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 {n} 1 {n}\n3 1 0 {n}\n");
+        let mut s = format!("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 {n} 1 {n}\n3 1 0 {n}\n");
         // Node tags in reverse order (tag != index + 1) to exercise the mapping.
         for k in 0..n {
             s += &format!("{}\n", 100 + n - k);
@@ -410,19 +328,10 @@ mod tests {
 
     #[test]
     fn tet10_node_order_is_converted() {
-        let corners = [
-            [0.1, 0.0, 0.0],
-            [2.0, 0.3, 0.0],
-            [0.2, 3.0, 0.1],
-            [0.3, 0.1, 5.0],
-        ];
+        let corners = [[0.1, 0.0, 0.0], [2.0, 0.3, 0.0], [0.2, 3.0, 0.1], [0.3, 0.1, 5.0]];
         // Gmsh Tetrahedron10: 4: 0-1, 5: 1-2, 6: 2-0, 7: 0-3, 8: 2-3, 9: 1-3
         let gmsh_edges = [(0, 1), (1, 2), (2, 0), (0, 3), (2, 3), (1, 3)];
-        let m = parse_msh(
-            &single_element_msh(11, &corners, &gmsh_edges),
-            Path::new("t.msh"),
-        )
-        .unwrap();
+        let m = parse_msh(&single_element_msh(11, &corners, &gmsh_edges), Path::new("t.msh")).unwrap();
         assert_eq!(m.element_types, vec![ElementKind::Tet10]);
         assert_eq!(m.element_ids, vec![7]);
         assert_midsides_at_midpoints(&m);
@@ -442,25 +351,9 @@ mod tests {
         ];
         // Gmsh Hexahedron20: 8: 0-1, 9: 0-3, 10: 0-4, 11: 1-2, 12: 1-5, 13: 2-3,
         // 14: 2-6, 15: 3-7, 16: 4-5, 17: 4-7, 18: 5-6, 19: 6-7
-        let gmsh_edges = [
-            (0, 1),
-            (0, 3),
-            (0, 4),
-            (1, 2),
-            (1, 5),
-            (2, 3),
-            (2, 6),
-            (3, 7),
-            (4, 5),
-            (4, 7),
-            (5, 6),
-            (6, 7),
-        ];
-        let m = parse_msh(
-            &single_element_msh(17, &corners, &gmsh_edges),
-            Path::new("h.msh"),
-        )
-        .unwrap();
+        let gmsh_edges =
+            [(0, 1), (0, 3), (0, 4), (1, 2), (1, 5), (2, 3), (2, 6), (3, 7), (4, 5), (4, 7), (5, 6), (6, 7)];
+        let m = parse_msh(&single_element_msh(17, &corners, &gmsh_edges), Path::new("h.msh")).unwrap();
         assert_eq!(m.element_types, vec![ElementKind::Hex20]);
         assert_midsides_at_midpoints(&m);
         // corners unchanged

@@ -48,8 +48,7 @@ use std::path::Path;
 
 /// Reads a Gmsh MSH 4.1 file, ASCII or binary.
 pub fn read_msh(path: &Path) -> Result<ImportedMesh, ImportError> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| ImportError::new(path, 0, format!("cannot read file: {e}")))?;
+    let bytes = std::fs::read(path).map_err(|e| ImportError::new(path, 0, format!("cannot read file: {e}")))?;
     parse_msh_bytes(&bytes, path)
 }
 
@@ -95,18 +94,13 @@ fn error(path: &Path, loc: Loc, msg: impl Into<String>) -> ImportError {
 /// The tokens of a line as exactly `count` integers.
 fn ints_of(path: &Path, loc: Loc, t: &[&str], count: usize, what: &str) -> Res<Vec<i64>> {
     if t.len() != count {
-        return Err(error(
-            path,
-            loc,
-            format!("{what}: expected {count} values, got {}", t.len()),
-        ));
+        return Err(error(path, loc, format!("{what}: expected {count} values, got {}", t.len())));
     }
     t.iter().map(|s| int_at(path, loc, s, what)).collect()
 }
 
 fn int_at(path: &Path, loc: Loc, s: &str, what: &str) -> Res<i64> {
-    s.parse::<i64>()
-        .map_err(|_| error(path, loc, format!("malformed integer '{s}' in {what}")))
+    s.parse::<i64>().map_err(|_| error(path, loc, format!("malformed integer '{s}' in {what}")))
 }
 
 fn count_at(path: &Path, loc: Loc, v: i64, what: &str) -> Res<usize> {
@@ -116,12 +110,7 @@ fn count_at(path: &Path, loc: Loc, v: i64, what: &str) -> Res<usize> {
 /// A `$PhysicalNames` line `dim tag "name"` (ASCII in both encodings).
 fn physical_name(path: &Path, loc: Loc, l: &str) -> Res<((i64, i64), String)> {
     let mut it = l.splitn(2, char::is_whitespace);
-    let dim = int_at(
-        path,
-        loc,
-        it.next().unwrap_or(""),
-        "physical name dimension",
-    )?;
+    let dim = int_at(path, loc, it.next().unwrap_or(""), "physical name dimension")?;
     let rest = it.next().unwrap_or("").trim_start();
     let mut it = rest.splitn(2, char::is_whitespace);
     let tag = int_at(path, loc, it.next().unwrap_or(""), "physical name tag")?;
@@ -192,26 +181,10 @@ $EndElements
     /// (name, ASCII export, binary export) of one Gmsh model each, written
     /// by `testdata/make_fixtures.py` (Gmsh 4.15.2).
     pub(super) const FIXTURES: [(&str, &[u8], &[u8]); 4] = [
-        (
-            "hex8",
-            include_bytes!("testdata/hex8.msh"),
-            include_bytes!("testdata/hex8.bin.msh"),
-        ),
-        (
-            "hex20",
-            include_bytes!("testdata/hex20.msh"),
-            include_bytes!("testdata/hex20.bin.msh"),
-        ),
-        (
-            "tet4",
-            include_bytes!("testdata/tet4.msh"),
-            include_bytes!("testdata/tet4.bin.msh"),
-        ),
-        (
-            "tet10",
-            include_bytes!("testdata/tet10.msh"),
-            include_bytes!("testdata/tet10.bin.msh"),
-        ),
+        ("hex8", include_bytes!("testdata/hex8.msh"), include_bytes!("testdata/hex8.bin.msh")),
+        ("hex20", include_bytes!("testdata/hex20.msh"), include_bytes!("testdata/hex20.bin.msh")),
+        ("tet4", include_bytes!("testdata/tet4.msh"), include_bytes!("testdata/tet4.bin.msh")),
+        ("tet10", include_bytes!("testdata/tet10.msh"), include_bytes!("testdata/tet10.bin.msh")),
     ];
 }
 
@@ -236,15 +209,8 @@ mod tests {
                 );
             }
         }
-        let without_coordinates = |m: &ImportedMesh| ImportedMesh {
-            nodes: Vec::new(),
-            ..m.clone()
-        };
-        assert_eq!(
-            without_coordinates(ascii),
-            without_coordinates(binary),
-            "{what}"
-        );
+        let without_coordinates = |m: &ImportedMesh| ImportedMesh { nodes: Vec::new(), ..m.clone() };
+        assert_eq!(without_coordinates(ascii), without_coordinates(binary), "{what}");
     }
 
     fn parse_fixture(name: &str, bytes: &[u8]) -> ImportedMesh {
@@ -255,10 +221,7 @@ mod tests {
     fn binary_fixtures_equal_their_ascii_twins() {
         for (name, ascii, binary) in FIXTURES {
             assert!(ascii.starts_with(b"$MeshFormat\n4.1 0 8\n"), "{name}");
-            assert!(
-                binary.starts_with(b"$MeshFormat\n4.1 1 8\n\x01\0\0\0\n"),
-                "{name}"
-            );
+            assert!(binary.starts_with(b"$MeshFormat\n4.1 1 8\n\x01\0\0\0\n"), "{name}");
             let a = parse_fixture(name, ascii);
             let b = parse_fixture(name, binary);
             assert_same_mesh(&a, &b, name);
@@ -270,10 +233,7 @@ mod tests {
                     let m = b.nodes[conn[ty.corner_nodes() + k]];
                     let (p, q) = (b.nodes[conn[i]], b.nodes[conn[j]]);
                     for d in 0..3 {
-                        assert!(
-                            (m[d] - 0.5 * (p[d] + q[d])).abs() < 1e-9,
-                            "{name}: {ty} edge {i}-{j}"
-                        );
+                        assert!((m[d] - 0.5 * (p[d] + q[d])).abs() < 1e-9, "{name}: {ty} edge {i}-{j}");
                     }
                 }
             }
@@ -282,20 +242,13 @@ mod tests {
                 let s = &b.node_sets[set];
                 assert!(!s.is_empty(), "{name}: {set} is empty");
                 for &n in s {
-                    assert!(
-                        pred(b.nodes[n]),
-                        "{name}: node {n} of {set} at {:?}",
-                        b.nodes[n]
-                    );
+                    assert!(pred(b.nodes[n]), "{name}: node {n} of {set} at {:?}", b.nodes[n]);
                 }
             };
             match name {
                 "hex8" | "hex20" => {
-                    let (ty, nn, bottom) = if name == "hex8" {
-                        (ElementKind::Hex8, 12, 6)
-                    } else {
-                        (ElementKind::Hex20, 32, 13)
-                    };
+                    let (ty, nn, bottom) =
+                        if name == "hex8" { (ElementKind::Hex8, 12, 6) } else { (ElementKind::Hex20, 32, 13) };
                     assert_eq!(b.element_types, vec![ty; 2], "{name}");
                     assert_eq!(b.num_nodes(), nn, "{name}");
                     assert_eq!(b.node_sets.len(), 2, "{name}");
@@ -306,28 +259,16 @@ mod tests {
                     assert_eq!(b.element_sets["block"], vec![0, 1], "{name}");
                 }
                 _ => {
-                    let ty = if name == "tet4" {
-                        ElementKind::Tet4
-                    } else {
-                        ElementKind::Tet10
-                    };
+                    let ty = if name == "tet4" { ElementKind::Tet4 } else { ElementKind::Tet10 };
                     assert!(b.num_elements() > 5, "{name}");
                     assert!(b.element_types.iter().all(|&t| t == ty), "{name}");
                     let names: Vec<&str> = b.node_sets.keys().map(String::as_str).collect();
-                    assert_eq!(
-                        names,
-                        ["PHYSICAL_1D_3", "PHYSICAL_2D_3", "body", "fixed"],
-                        "{name}"
-                    );
+                    assert_eq!(names, ["PHYSICAL_1D_3", "PHYSICAL_2D_3", "body", "fixed"], "{name}");
                     on("fixed", &|p| p[0] == 0.0);
                     on("PHYSICAL_2D_3", &|p| p[0] == 1.0);
                     on("PHYSICAL_1D_3", &|p| p[0] == 1.0 && p[1] == 0.0);
                     assert_eq!(b.node_sets["body"].len(), b.num_nodes(), "{name}");
-                    assert_eq!(
-                        b.element_sets["body"],
-                        (0..b.num_elements()).collect::<Vec<_>>(),
-                        "{name}"
-                    );
+                    assert_eq!(b.element_sets["body"], (0..b.num_elements()).collect::<Vec<_>>(), "{name}");
                 }
             }
         }
@@ -336,10 +277,7 @@ mod tests {
     #[test]
     fn read_msh_and_read_mesh_read_binary_files() {
         let (name, _, binary) = FIXTURES[1];
-        let path = std::env::temp_dir().join(format!(
-            "fmu-builder-msh-test-{}-{name}.bin.msh",
-            std::process::id()
-        ));
+        let path = std::env::temp_dir().join(format!("fmu-builder-msh-test-{}-{name}.bin.msh", std::process::id()));
         std::fs::write(&path, binary).unwrap();
         let by_read_msh = read_msh(&path);
         let by_read_mesh = super::super::read_mesh(&path);
