@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
-# The project's test command: Rust unit tests, the release builder, then the end-to-end tests
-# with FMPy in a virtual environment this script creates (tests/.venv).
+# The project's test command: formatting and lints, Rust tests, the release builder, then the
+# end-to-end tests with FMPy in a virtual environment this script creates (tests/.venv).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
+# formatting and lints first: cheap, and the code base must be clean under both
+cargo fmt --all -- --check
+cargo clippy --workspace --all-targets -- -D warnings
 cargo test --workspace --release
 cargo build --release -p fmu-builder
 if [ ! -x tests/.venv/bin/python ]; then
