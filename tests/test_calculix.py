@@ -43,7 +43,8 @@ def fmu_static_tip(fmu_path):
     try:
         fmu.set(static_start=True, **{"tip.f[3]": F_Z, "tip.t[1]": M_X, "tip.t[2]": M_Y})
         fmu.initialize()
-        assert np.allclose(fmu.derivatives(), 0.0, atol=1e-9), "static start is not at rest"
+        # measured 1.3e-29; round-off of the modal loads (~F_Z) is ~1e-16 F_Z: 1e-15 F_Z
+        assert np.allclose(fmu.derivatives(), 0.0, rtol=0, atol=1e-15 * F_Z), "static start is not at rest"
         return fmu.get(*TIP_U), fmu.get(*TIP_PHI)
     finally:
         fmu.close()
@@ -247,7 +248,8 @@ def test_tsquare_centrifugal_reference(tmp_path):
             v = ref[flange][key]
             assert np.all(np.isfinite(v)) and np.linalg.norm(v) > 0, (flange, key)
     # the head's arms bend under the spin: rotations of order 1e-5 rad, displacements of 1e-6 m
-    assert 1e-7 < np.linalg.norm(ref["left"]["u"]) < 1e-4
+    # (measured |u| 2.7e-6 m; a factor 10 either way catches a wrong w^2 or unit)
+    assert 2.7e-7 < np.linalg.norm(ref["left"]["u"]) < 2.7e-5
 
     w = ref["omega"] * ref["axis"]
     reaction = report["mass"] * np.cross(w, np.cross(w, np.array(report["center_of_mass"])))
