@@ -141,10 +141,10 @@ fn rotating_mount(inst: &Instance) -> Result<(), String> {
     let rot = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]];
     let mut names = Vec::new();
     let mut values = Vec::new();
-    for i in 0..3 {
-        for j in 0..3 {
+    for (i, row) in rot.iter().enumerate() {
+        for (j, value) in row.iter().enumerate() {
             names.push(format!("base.R[{},{}]", i + 1, j + 1));
-            values.push(rot[i][j]);
+            values.push(*value);
         }
     }
     for (i, w) in [0.0, 0.0, SPIN].iter().enumerate() {
