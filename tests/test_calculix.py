@@ -66,6 +66,7 @@ def compare_static_tip(fmu_path, deck, workdir, label):
     ours = np.concatenate([u, phi])
     theirs = np.concatenate([u_ccx, phi_ccx])
     names = ["u_x", "u_y", "u_z", "phi_x", "phi_y", "phi_z"]
+    assert len(ours) == len(theirs) == len(names)
     print(f"\n{label}: FMU static tip vs CalculiX, same mesh")
     for name, a, b in zip(names, ours, theirs):
         rel = abs(a - b) / abs(b) if b != 0 else float("nan")
@@ -105,7 +106,9 @@ def test_deck_reaches_calculix_bit_for_bit(tmp_path):
     widest = max(len(t) for line in readable.splitlines() if not line.startswith("*")
                  for t in line.split(","))
     assert widest <= ccx.FIELD_WIDTH + 1  # + the blank after the comma
-    for old, new in zip(deck.split("*MATERIAL")[1].split(), readable.split("*MATERIAL")[1].split()):
+    old_tokens, new_tokens = deck.split("*MATERIAL")[1].split(), readable.split("*MATERIAL")[1].split()
+    assert len(old_tokens) == len(new_tokens) > 0
+    for old, new in zip(old_tokens, new_tokens):
         if old[0].isdigit():
             assert float(old.rstrip(",")) == float(new.rstrip(",")), (old, new)
 

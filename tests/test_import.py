@@ -440,7 +440,9 @@ def test_bracket_inp_msh_and_matrices_give_the_same_fmu(tmp_path):
         assert rep["mass"] == pytest.approx(rep_msh["mass"], rel=1e-13)
         hz = np.array(rep["accuracy"]["reduced_hz"])
         dev_hz = np.max(np.abs(hz / np.array(rep_msh["accuracy"]["reduced_hz"]) - 1))
-        devs = [np.max(np.abs(a - b)) / np.max(np.abs(b)) for a, b in zip(fmu_outputs(fmu), ref)]
+        found = fmu_outputs(fmu)
+        assert len(found) == len(ref) and all(a.shape == b.shape for a, b in zip(found, ref))
+        devs = [np.max(np.abs(a - b)) / np.max(np.abs(b)) for a, b in zip(found, ref)]
         print(f"\n{label} vs msh: frequencies {dev_hz:.1e}, static {devs[0]:.1e}, step response {devs[1]:.1e}")
         assert dev_hz < 3e-10 and devs[0] < 5e-10 and devs[1] < 1e-9
 
@@ -479,7 +481,9 @@ def test_bracket_matrices_assembled_by_calculix(tmp_path):
     assert max(rep_ccx["rigid_body_residual"]) < 2e-13
     assert rep_ccx["mass"] == pytest.approx(rep_own["mass"], rel=1e-13)
     hz = np.array(rep_ccx["accuracy"]["reduced_hz"]) / np.array(rep_own["accuracy"]["reduced_hz"]) - 1
-    devs = [np.max(np.abs(a - b)) / np.max(np.abs(b)) for a, b in zip(fmu_outputs(fmu_ccx), fmu_outputs(fmu_own))]
+    found, expected = fmu_outputs(fmu_ccx), fmu_outputs(fmu_own)
+    assert len(found) == len(expected) and all(a.shape == b.shape for a, b in zip(found, expected))
+    devs = [np.max(np.abs(a - b)) / np.max(np.abs(b)) for a, b in zip(found, expected)]
     print(f"CalculiX-assembled vs ours: frequencies {np.max(np.abs(hz)):.1e}, static {devs[0]:.1e}, "
           f"step response {devs[1]:.1e}")
     assert np.max(np.abs(hz)) < 1e-8 and max(devs) < 1e-8
