@@ -72,14 +72,14 @@ const T_END: f64 = 0.5;
 const SHORT_T_END: f64 = 0.1;
 
 /// Target: full-model Newmark step / FMU fmi2DoStep at the same h = 1 ms, the FMU's error being
-/// at most Newmark's. Measured on the README's 2-core VM while two other builds ran: 2.6e3
-/// (100 modes) to 6.2e3 (20 modes); --short 5.7e3 to 1.1e4 at 20 modes. 1e3 leaves a margin
-/// of 2.6 under that load.
+/// at most Newmark's. Measured on the README's 2-core VM: 2.5e3 (100 modes) to 7.2e3 (10
+/// modes) quiet, 2.6e3 to 6.2e3 while two other builds ran; --short 5.7e3 to 1.1e4 at 20
+/// modes. 1e3 leaves a margin of 2.5 at 100 modes and 5.7 for CI's 20.
 const PER_STEP_RATIO: f64 = 1e3;
 /// Target: full-model cost per simulated second at the Newmark step that reaches the FMU's
 /// error (from Newmark's measured h^2 law, at most 1 ms) / the FMU's cost per simulated second.
-/// Measured as above: 6.7e4 (10 modes) to 1.6e6 (100 modes); --short 2.0e5 to 3.8e5 at 20
-/// modes. 1e4 leaves a margin of 6.7.
+/// Measured as above: 8.9e4 (10 modes) to 1.5e6 (100 modes) quiet, 6.7e4 to 1.6e6 loaded;
+/// --short 2.0e5 to 3.8e5 at 20 modes. 1e4 leaves a margin of 6.7.
 const EQUAL_ERROR_RATIO: f64 = 1e4;
 /// Calls of each kind counted for heap allocations.
 const COUNTED_CALLS: usize = 2000;
