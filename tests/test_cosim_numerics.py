@@ -74,6 +74,9 @@ def test_free_vibration_energy_never_grows(stiff_beam, beta, h):
         fmu.set(static_start=True, **{"tip.f[3]": 100.0, "tip.t[1]": 1.0, "damping.beta": beta})
         fmu.initialize()
         fmu.set(**{"tip.f[3]": 0.0, "tip.t[1]": 0.0})
+        n = len(omega)
+        q0 = fmu.get(*[f"q[{k + 1}]" for k in range(n)])
+        qd0 = fmu.get(*[f"qd[{k + 1}]" for k in range(n)])
         energy = [modal_energy(fmu, omega)]
         for k in range(STEPS):
             fmu.fmu.doStep(k * h, h)
@@ -90,8 +93,15 @@ def test_free_vibration_energy_never_grows(stiff_beam, beta, h):
         # exact propagation: conserved to round-off over 10^4 steps (measured drift 8.6e-13)
         assert drift < 1e-11
     else:
-        assert growth <= 1e-13
-        assert energy[-1] < 1e-3 * energy[0]
+        assert growth <= 1e-13  # measured: no step increases it (round-off allowance)
+        # the decay, derived: for q'' + 2 zeta w q' + w^2 q = 0 (Rayleigh, alpha = 0:
+        # 2 zeta w = beta w^2), V = E + zeta w q q' obeys V' = -2 zeta w V exactly, and
+        # (1 - zeta) E <= V, so each mode's energy is at most V(0) exp(-beta w^2 t) / (1 - zeta)
+        zeta = beta * omega / 2
+        v0 = 0.5 * (qd0**2 + (omega * q0) ** 2) + zeta * omega * q0 * qd0
+        bound = np.sum(v0 * np.exp(-beta * omega**2 * STEPS * h) / (1 - zeta))
+        print(f"  end energy / its derived bound = {energy[-1] / bound:.6f}")
+        assert energy[-1] <= bound * (1 + 1e-9)
 
 
 def test_constant_load_settles_on_the_static_solution(stiff_beam):
@@ -116,7 +126,7 @@ def test_constant_load_settles_on_the_static_solution(stiff_beam):
         fmu.close()
     dev = np.max(np.abs(settled - reference) / np.abs(reference))
     print(f"\nafter {STEPS * H:.0f} s at h = {H} s: {settled} vs static {reference} ({dev:.1e})")
-    assert dev < 1e-9
+    assert dev < 1e-14  # measured 7.1e-16: the damped transient is gone, round-off remains
 
 
 def test_step_size_convergence_shows_the_order(tmp_path):
@@ -166,7 +176,9 @@ def test_step_size_convergence_shows_the_order(tmp_path):
         errors = np.array([abs(cosim(h, first_order) - reference) for h in steps]) / abs(reference)
         orders = np.log2(errors[:-1] / errors[1:])
         print(f"\n{'first' if first_order else 'zero'}-order hold: errors {errors}, observed orders {orders}")
-        assert np.all(np.abs(orders - expected) < 0.25)
+        # measured 1.003, 0.991, 0.995 and 2.18, 2.07, 2.04 (the coarsest pair is still
+        # approaching the asymptotic order)
+        assert np.all(np.abs(orders - expected) < (0.1 if expected == 1.0 else 0.25))
 
 
 def test_rotating_mount_convergence_shows_the_order(tmp_path):
@@ -243,8 +255,9 @@ def test_rotating_mount_convergence_shows_the_order(tmp_path):
     for first_order, expected in ((False, 1.0), (True, 2.0)):
         errors = np.array([np.abs(cosim(h, first_order) - reference) / np.abs(reference) for h in steps])
         orders = np.log2(errors[:-1, 0] / errors[1:, 0])
-        print(f"\n{'first' if first_order else 'zero'}-order hold, spinning mount: errors of {outputs} "
+        print(f"\n{'first' if first_order else 'zero'}-order hold, spinning mount, orders of all {np.log2(errors[:-1] / errors[1:]).tolist()}: errors of {outputs} "
               f"{errors.tolist()}, observed orders of {outputs[0]} {orders}")
+        # measured 0.86, 0.95, 0.97 and 1.89, 2.04, 2.01
         assert np.all(np.abs(orders - expected) < 0.25)
         if first_order:
-            assert np.all(errors[-1] < 1e-3), errors[-1]
+            assert np.all(errors[-1] < 1e-3), errors[-1]  # measured 5.9e-5, 1.4e-4, 8.3e-5

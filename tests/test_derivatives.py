@@ -208,7 +208,9 @@ def test_directional_derivative_is_linear_in_the_seed(tsquare):
     seed = [0.3, -2.0, 0.05]
     combined = np.array(fmu.fmu.getDirectionalDerivative(outputs, knowns, seed))
     columns = sum(s * np.array(fmu.fmu.getDirectionalDerivative(outputs, [k], [1.0])) for k, s in zip(knowns, seed))
-    assert np.allclose(combined, columns, rtol=1e-13, atol=1e-13 * np.max(np.abs(columns)))
+    print(f"\nseed linearity: {np.abs(combined - columns).max() / np.max(np.abs(columns)):.1e}")
+    # measured 1.2e-16: round-off of one combination
+    assert np.allclose(combined, columns, rtol=2e-15, atol=2e-15 * np.max(np.abs(columns)))
     fmu.close()
 
 
@@ -232,7 +234,9 @@ def test_output_derivatives_follow_the_kinematics(tsquare, free_block):
                 names = flange_names(fmu, flange, of)
                 d = np.array(fmu.fmu.getRealOutputDerivatives([fmu.vr[n] for n in names], [1, 1, 1]))
                 expected = fmu.get(*flange_names(fmu, flange, rate))
-                assert np.allclose(d, expected, rtol=1e-12, atol=1e-12 * np.max(np.abs(expected))), (flange, of, d, expected)
+                print(f"\n{flange} d{of}/dt vs {rate}: {np.abs(d - expected).max() / np.max(np.abs(expected)):.1e}")
+                # the same quantity by two routes: measured 3.1e-16 at most
+                assert np.allclose(d, expected, rtol=3e-15, atol=3e-15 * np.max(np.abs(expected))), (flange, of, d, expected)
         fmu.close()
 
 

@@ -59,7 +59,8 @@ def test_beam_with_many_modes_keeps_the_projection_exact(tmp_path):
 
 def test_lbeam_with_200_modes_keeps_the_projection_exact(tmp_path):
     error = check_projection(build(tmp_path, "l-beam.json", 200, "lbeam"), "l-beam.json", 200)
-    assert error < 1e-6
+    print(f"lowest ten within {error:.1e}")
+    assert error < 3e-7  # measured 2.7e-8
 
 
 def test_too_many_modes_are_refused_quickly(tmp_path):
@@ -90,4 +91,4 @@ def test_too_many_modes_are_refused_quickly(tmp_path):
         assert proc.returncode != 0 and not (tmp_path / "Bar.fmu").exists()
         assert "reduction.modes" in proc.stderr and "bar.json" in proc.stderr, proc.stderr
         assert expected in proc.stderr, proc.stderr
-        assert elapsed < 60
+        assert elapsed < 2  # measured 0.1 s (the builder's start-up; a loaded machine can double it)

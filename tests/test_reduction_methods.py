@@ -101,7 +101,7 @@ def test_krylov_and_craig_bampton_meet_the_same_band_tolerance(tmp_path):
         theirs = scipy_frf(tmp_path / "mm", freqs[i], frf["damping"]).ravel()
         err = np.linalg.norm(ours - theirs) / np.linalg.norm(theirs)
         print(f"  full FRF at {freqs[i]:.3f} Hz vs SciPy: {err:.1e}")
-        assert err < 1e-8
+        assert err < 1e-8  # measured 1.8e-9 at most (1.25 Hz: the dynamic stiffness is nearly K, cond ~1e12)
 
 
 SMALL_BEAM = {
@@ -127,7 +127,9 @@ def with_reduction(reduction, scene=None):
 def test_error_in_band_falls_as_the_order_grows(tmp_path, method):
     """For each method the reported flange-FRF error over the band falls monotonically as the
     order grows (Galerkin projection on nested spaces), until it reaches the round-off floor of
-    the comparison (~1e-9: the full responses are accurate to that at cond(K) ~ 1e10)."""
+    the comparison (measured 5.5e-10: the full responses are accurate to that at cond(K) ~ 1e10).
+    The last order's error, per method: ten times the measured 5.3e-3 (craig_bampton, 10 modes),
+    3.2e-4 (modal, 10 modes) and the floor (krylov, 4 moments)."""
     if method == "krylov":
         steps = [{"method": "krylov", "expansion_points": [300], "moments": m} for m in (1, 2, 3, 4)]
     else:
@@ -138,8 +140,8 @@ def test_error_in_band_falls_as_the_order_grows(tmp_path, method):
         errors.append(report["accuracy"]["frequency_response"]["max_relative_error"])
         orders.append(report["order"])
     print(f"\n{method}: orders {orders}, errors " + ", ".join(f"{e:.2e}" for e in errors))
-    assert all(b < a or max(a, b) < 1e-8 for a, b in zip(errors, errors[1:]))
-    assert errors[-1] < 1e-2
+    assert all(b < a or max(a, b) < 5e-9 for a, b in zip(errors, errors[1:]))
+    assert errors[-1] < {"craig_bampton": 5e-2, "modal": 3e-3, "krylov": 5e-9}[method]
 
 
 def fmi_frf(path, freqs_hz):
@@ -173,16 +175,19 @@ def test_chosen_order_meets_the_tolerance_when_checked_independently(tmp_path):
     frf = report["accuracy"]["frequency_response"]
     freqs = frf["frequencies_hz"]
     ours = fmi_frf(path, freqs)
+    assert len(ours) == len(freqs) > 0
     scale = 1 / np.sqrt(np.abs(np.diag(report["accuracy"]["compliance_full"])))
     worst = 0.0
     for f, h_fmu in zip(freqs, ours):
         h = scipy_frf(tmp_path / "mm", f, frf["damping"])
         s = np.outer(scale, scale)
         worst = max(worst, np.linalg.norm((h - h_fmu) * s) / np.linalg.norm(h * s))
-    print(f"\nchosen order {report['order']} of 18 candidates; independent FRF error {worst:.2e} (tolerance {tol})")
+    print(f"\nchosen order {report['order']} of 18 candidates; independent FRF error {worst:.2e} (tolerance {tol}), "
+          f"reported {frf['max_relative_error']:.2e} ({worst / frf['max_relative_error'] - 1:+.1e})")
     assert report["order"] < 18
     assert worst <= tol
-    assert worst == pytest.approx(frf["max_relative_error"], rel=1e-3)
+    # the same error by two routes (measured 1.5e-13: the central differences' rounding)
+    assert worst == pytest.approx(frf["max_relative_error"], rel=2e-12)
 
 
 def damping_ratios(path):
@@ -204,15 +209,18 @@ def test_modal_damping_one_ratio_and_by_band(tmp_path):
     spec = with_reduction({"method": "craig_bampton", "modes": 6}, {"loads": []})
     spec["damping"] = {"modal_ratio": 0.02}
     path, _, _ = build(tmp_path, spec, "modal_one")
+    print(f"\nmodal_ratio: {max(abs(z / 0.02 - 1) for _, z in damping_ratios(path)):.1e}")
+    # measured 2.0e-14: the rounding of the central-difference state matrix
     for f, zeta in damping_ratios(path):
-        assert zeta == pytest.approx(0.02, rel=1e-9, abs=0), f
+        assert zeta == pytest.approx(0.02, rel=2e-13, abs=0), f
     spec["damping"] = {"modal_bands": [{"below": 100, "ratio": 0.01}, {"below": 1000, "ratio": 0.1}]}
     path, _, _ = build(tmp_path, spec, "modal_bands")
     seen = set()
-    for f, zeta in damping_ratios(path):
-        expected = 0.01 if f < 100 else 0.1 if f < 1000 else 0.0
-        # modal damping of undamped frequency f_n: |s| = f_n exactly
-        assert zeta == pytest.approx(expected, rel=1e-9, abs=1e-12), f
+    bands = [(f, zeta, 0.01 if f < 100 else 0.1 if f < 1000 else 0.0) for f, zeta in damping_ratios(path)]
+    print("modal_bands: worst " + f"{max(abs(z - e) / max(e, 0.01) for _, z, e in bands):.1e} of the ratio")
+    for f, zeta, expected in bands:
+        # modal damping of undamped frequency f_n: |s| = f_n exactly; as above, 2e-13
+        assert zeta == pytest.approx(expected, rel=2e-13, abs=2e-15), f
         seen.add(expected)
     assert seen == {0.01, 0.1, 0.0}
 
@@ -276,7 +284,9 @@ def test_krylov_at_a_real_expansion_point(tmp_path):
     for moments in (1, 3):
         red = {"method": "krylov", "real_expansion_points": [1000.0], "moments": moments}
         _, report, _ = build(tmp_path, with_reduction(red), f"real{moments}")
-        assert report["accuracy"]["compliance_max_relative_error"] < 1e-8
+        print(f"\ncompliance {report['accuracy']['compliance_max_relative_error']:.1e}")
+        assert report["accuracy"]["compliance_max_relative_error"] < 1e-11  # measured 6.4e-13
         errors.append(report["accuracy"]["frequency_response"]["max_relative_error"])
     print(f"\nreal point 1000 1/s: FRF error {errors[0]:.2e} (1 moment) -> {errors[1]:.2e} (3 moments)")
-    assert errors[1] < 1e-6 < errors[0]
+    # measured 6.2e-2 -> 1.3e-10: three moments reach the comparison's floor
+    assert errors[1] < 1.5e-9 and errors[0] > 1e3 * errors[1]

@@ -15,6 +15,7 @@ import scipy.linalg
 
 from conftest import EXAMPLES, run_builder
 from fmu_access import Fmu
+from fmpy.fmi1 import FMICallException
 from test_fmi_robustness import Recorder, restore_default_logger  # noqa: F401 (autouse fixture)
 
 T_END = 20.0
@@ -125,7 +126,7 @@ def critical_speed(fmu_path, axis):
 def test_undamped_spin_follows_the_exact_solution(undamped, axis):
     w_c = critical_speed(undamped, axis)
     print(f"\naxis {axis}: first critical speed {w_c:.1f} rad/s")
-    assert 300 < w_c < 1e5, w_c
+    assert 500 < w_c < 1e4, w_c  # measured 2701 (z) and 1522 (x) rad/s; 0.8 w_c must exceed 300
     for w in (100.0, 300.0, 0.8 * w_c):
         inputs = spin_inputs(axis, w)
         jac, f0, names = linear_model(undamped, inputs)
@@ -142,11 +143,13 @@ def test_undamped_spin_follows_the_exact_solution(undamped, axis):
             h_found, _ = energy(found, jac, f0, n)
             drift = np.abs(h_found - h_found[0]).max() / e_exact.max()
             growth = (h_found[-1] - h_found[0]) / e_exact.max()
+            print(f"  |max|q| / exact - 1| {abs(ratio - 1):.1e}")
             print(f"  w {w:7.1f} rad/s, h {h:g}: max|q| {np.abs(found[:, :n]).max():.4e} vs exact {q_max:.4e}, "
                   f"trajectory deviation {deviation:.1e} of max|q|, energy drift {drift:.1e}, end growth {growth:.1e}")
             # the issue asks max|q| within 1e-2 of the exact solution; the trajectory itself
-            # agrees to the round-off of two exponentials (measured <= 5.9e-9 of max|q|)
-            assert abs(ratio - 1) < 1e-2
+            # agrees to the round-off of two exponentials (measured <= 5.9e-9 of max|q|), and
+            # |max|found| - max|exact|| <= max|found - exact|, so both hold to 6e-8
+            assert abs(ratio - 1) < 6e-8
             assert deviation < 6e-8
             # the energy of the rotating-frame system stays (measured drift <= 3.2e-9)
             assert drift < 3e-8 and growth < 3e-8
@@ -204,7 +207,8 @@ def test_spin_above_the_critical_speed_is_reported(undamped):
     for _ in range(2000):
         try:
             slave.doStep(t, 1.0)
-        except Exception:
+        except FMICallException as e:
+            assert e.status == 3 and e.function == "fmi2DoStep", e  # fmi2Error, with the reason below
             failed = True
             break
         t += 1.0

@@ -1,6 +1,9 @@
 //! An FMU as a co-simulation master sees it: unzip, read modelDescription.xml, dlopen the
-//! binary and call it through the FMI 2.0 C API only. The C types come from fmu-runtime (types
-//! only: every call goes through the dlopen'ed library, checked with dladdr).
+//! binary and call it through the FMI 2.0 C API only. The C types come from fmu-runtime, and
+//! every timed call goes through the dlopen'ed library (checked with dladdr). One exception,
+//! `Fmu::open_in_process`: the same FMU (its modelDescription.xml and resources) driven through
+//! the runtime's exported C functions as linked into this binary, so that the bench's counting
+//! allocator sees their heap allocations (the dlopen'ed binary has its own allocator).
 
 use fmi2::types::*;
 use std::collections::HashMap;
@@ -103,6 +106,7 @@ pub struct Fmu {
     pub description: ModelDescription,
     pub binary: PathBuf,
     resource_uri: CString,
+    /// dlopen handle; null for the in-process runtime.
     handle: *mut c_void,
     pub api: Api,
 }
@@ -175,6 +179,35 @@ impl Fmu {
         Ok(Self { description, binary, resource_uri, handle, api })
     }
 
+    /// The FMU unzipped in `dir` by `open`, driven through the runtime's C functions linked into
+    /// this binary (same source as the FMU's binary, built with this workspace): for counting
+    /// heap allocations, never for timing.
+    pub fn open_in_process(dir: &Path) -> Result<Self, String> {
+        let xml = std::fs::read_to_string(dir.join("modelDescription.xml")).map_err(|e| e.to_string())?;
+        let description = ModelDescription::parse(&xml)?;
+        let resources = dir.join("resources").canonicalize().map_err(|e| format!("resources: {e}"))?;
+        let resource_uri = CString::new(format!("file://{}", resources.display())).map_err(|e| e.to_string())?;
+        let api = Api {
+            instantiate: fmu_runtime::fmi2Instantiate,
+            free_instance: fmu_runtime::fmi2FreeInstance,
+            setup_experiment: fmu_runtime::fmi2SetupExperiment,
+            enter_initialization_mode: fmu_runtime::fmi2EnterInitializationMode,
+            exit_initialization_mode: fmu_runtime::fmi2ExitInitializationMode,
+            terminate: fmu_runtime::fmi2Terminate,
+            new_discrete_states: fmu_runtime::fmi2NewDiscreteStates,
+            enter_continuous_time_mode: fmu_runtime::fmi2EnterContinuousTimeMode,
+            do_step: fmu_runtime::fmi2DoStep,
+            set_real: fmu_runtime::fmi2SetReal,
+            get_real: fmu_runtime::fmi2GetReal,
+            set_continuous_states: fmu_runtime::fmi2SetContinuousStates,
+            get_derivatives: fmu_runtime::fmi2GetDerivatives,
+            get_fmu_state: fmu_runtime::fmi2GetFMUstate,
+            set_fmu_state: fmu_runtime::fmi2SetFMUstate,
+            free_fmu_state: fmu_runtime::fmi2FreeFMUstate,
+        };
+        Ok(Self { description, binary: PathBuf::from("(in process)"), resource_uri, handle: std::ptr::null_mut(), api })
+    }
+
     /// fmi2Instantiate and fmi2SetupExperiment (start 0, no tolerance, no stop time).
     pub fn instantiate(&self, kind: fmi2Type, name: &str) -> Result<Instance<'_>, String> {
         let name = CString::new(name).map_err(|e| e.to_string())?;
@@ -196,7 +229,9 @@ impl Fmu {
 impl Drop for Fmu {
     fn drop(&mut self) {
         // SAFETY: every instance borrowed self and is gone.
-        unsafe { libc::dlclose(self.handle) };
+        if !self.handle.is_null() {
+            unsafe { libc::dlclose(self.handle) };
+        }
     }
 }
 

@@ -58,19 +58,21 @@ fn rotating_frame_energy(
     Ok((kinetic + elastic - work, kinetic + elastic))
 }
 
-pub fn run() -> Result<bool, String> {
+/// `short` (CI): the many-mode case at 100 modes only (the 300-mode build takes ~15 s).
+pub fn run(short: bool) -> Result<bool, String> {
     let mut all = true;
     println!("## Hard cases: accuracy and its cost\n");
 
     println!("### Many modes (beam, Craig-Bampton): reduced vs full FE model on the same mesh\n");
     println!(
-        "Targets: every reduced frequency >= the full model's (Rayleigh-Ritz; 1e-10 eigensolver allowance), static flange compliance exact to 1e-9.\n"
+        "Targets: every reduced frequency >= the full model's (Rayleigh-Ritz; 1e-10 eigensolver allowance), static flange compliance exact to 3e-12 (measured 9.4e-14 and 1.7e-13; as tests/test_many_modes.py).\n"
     );
     println!(
         "| modes | order | build [s] | f1 reduced / full - 1 | min (reduced - full) / full | compliance error | verdict |"
     );
     println!("|---:|---:|---:|---:|---:|---:|---|");
-    for modes in [100usize, 300] {
+    let counts: &[usize] = if short { &[100] } else { &[100, 300] };
+    for &modes in counts {
         let (spec, path) = example_spec("beam.json", |j| {
             j["reduction"] = serde_json::json!({ "method": "craig_bampton", "modes": modes })
         })?;
@@ -83,7 +85,7 @@ pub fn run() -> Result<bool, String> {
             .map(|i| (acc.reduced_hz[i] - acc.full_hz[i]) / acc.full_hz[i])
             .fold(f64::INFINITY, f64::min);
         let f1 = acc.reduced_hz[0] / acc.full_hz[0] - 1.0;
-        let ok = min >= -1e-10 && acc.compliance_max_relative_error <= 1e-9;
+        let ok = min >= -1e-10 && acc.compliance_max_relative_error <= 3e-12;
         all &= ok;
         println!(
             "| {modes} | {} | {seconds:.1} | {f1:.1e} | {min:.1e} | {:.1e} | {} |",
@@ -96,7 +98,7 @@ pub fn run() -> Result<bool, String> {
 
     println!("### Undamped T-square on a steadily spinning mount, Co-Simulation over 20 s\n");
     println!(
-        "The rotating-frame energy H = 1/2 |q'|^2 + 1/2 q^T K q - p^T q is invariant (gyroscopic coupling does no work). Target: |H - H(0)| <= 1e-6 of the largest elastic plus kinetic energy, at any step. Time: the runtime's step, in-process (no FMI layer).\n"
+        "The rotating-frame energy H = 1/2 |q'|^2 + 1/2 q^T K q - p^T q is invariant (gyroscopic coupling does no work). Target: |H - H(0)| <= 3e-8 of the largest elastic plus kinetic energy, at any step (measured 3.2e-9 at worst; as tests/test_spinning_mount.py). Time: the runtime's step, in-process (no FMI layer).\n"
     );
     println!(
         "| spin about | w [rad/s] | h [ms] | ns per step | max abs q | energy drift | verdict |"
@@ -136,7 +138,7 @@ pub fn run() -> Result<bool, String> {
                     }
                 }
                 let relative = drift / scale;
-                let ok = relative <= 1e-6;
+                let ok = relative <= 3e-8;
                 all &= ok;
                 println!(
                     "| {name} | {w:.0} | {} | {:.0} | {q_max:.3e} | {relative:.1e} | {} |",

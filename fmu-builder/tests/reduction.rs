@@ -58,13 +58,19 @@ fn lanczos_matches_dense_eigenvalues() {
     let lanczos = eigen::lowest(&SpdSolver::new(&k, "K").unwrap(), &m, 15, EIGEN_TOL).unwrap();
     assert_eq!(lanczos.values.len(), 15);
     assert!(reference.len() >= 15);
+    let worst = lanczos.values.iter().zip(&reference).map(|(l, r)| (l - r).abs() / r).fold(0.0, f64::max);
+    eprintln!("Lanczos vs dense: worst relative deviation {worst:.1e}");
+    // measured 9.4e-11: the Lanczos residual tolerance (EIGEN_TOL) bounds it
     for (i, (l, r)) in lanczos.values.iter().zip(&reference).enumerate() {
         assert!((l - r).abs() <= 1e-9 * r, "mode {i}: {l} vs {r}");
     }
     // and the report's full-model frequencies are these
-    assert!(built.report.accuracy.full_hz.len() >= 10);
+    assert!(built.report.accuracy.full_hz.len() >= 10 && reference.len() >= built.report.accuracy.full_hz.len());
+    let worst = built.report.accuracy.full_hz.iter().zip(&reference).map(|(f, r)| (f - r.sqrt() / (2.0 * std::f64::consts::PI)).abs() / f).fold(0.0, f64::max);
+    eprintln!("report vs dense: worst relative deviation {worst:.1e}");
+    // measured 4.7e-11 (frequencies: half the eigenvalues' relative deviation)
     for (f, r) in built.report.accuracy.full_hz.iter().zip(&reference) {
-        assert!((f - r.sqrt() / (2.0 * std::f64::consts::PI)).abs() <= 1e-9 * f);
+        assert!((f - r.sqrt() / (2.0 * std::f64::consts::PI)).abs() <= 5e-10 * f);
     }
 }
 
@@ -89,13 +95,24 @@ fn mass_properties_are_those_of_the_box() {
     let (a, b, c) = (0.5, 0.04, 0.06);
     let m = 2700.0 * a * b * c;
     let r = &built.report;
-    assert!((r.mass - m).abs() <= 1e-12 * m);
+    // round-off of sums over the elements: measured 2.3e-15 (mass), 1.1e-16 m (centre of mass),
+    // 8.3e-15 (inertia)
+    assert!((r.mass - m).abs() <= 3e-14 * m);
     // body origin: centre of the -x face; centre of mass at (a/2, 0, 0)
-    assert!((r.center_of_mass[0] - a / 2.0).abs() < 1e-12 && r.center_of_mass[1].abs() < 1e-12);
+    assert!((r.center_of_mass[0] - a / 2.0).abs() < 2e-15 && r.center_of_mass[1].abs() < 2e-15);
     // inertia about the origin: J_xx = m (b^2 + c^2)/12, J_yy = m (a^2/3 + c^2/12)
     let j = r.inertia_about_origin;
-    assert!((j[0] - m * (b * b + c * c) / 12.0).abs() <= 1e-10 * j[0]);
-    assert!((j[4] - m * (a * a / 3.0 + c * c / 12.0)).abs() <= 1e-10 * j[4]);
-    assert!((j[8] - m * (a * a / 3.0 + b * b / 12.0)).abs() <= 1e-10 * j[8]);
+    eprintln!(
+        "mass {:.1e}, centre of mass {:.1e} {:.1e}, inertia {:.1e} {:.1e} {:.1e}",
+        (r.mass - m).abs() / m,
+        (r.center_of_mass[0] - a / 2.0).abs(),
+        r.center_of_mass[1].abs(),
+        (j[0] - m * (b * b + c * c) / 12.0).abs() / j[0],
+        (j[4] - m * (a * a / 3.0 + c * c / 12.0)).abs() / j[4],
+        (j[8] - m * (a * a / 3.0 + b * b / 12.0)).abs() / j[8]
+    );
+    assert!((j[0] - m * (b * b + c * c) / 12.0).abs() <= 1e-13 * j[0]);
+    assert!((j[4] - m * (a * a / 3.0 + c * c / 12.0)).abs() <= 1e-13 * j[4]);
+    assert!((j[8] - m * (a * a / 3.0 + b * b / 12.0)).abs() <= 1e-13 * j[8]);
 }
 
