@@ -36,6 +36,10 @@ fn main() {
             .env_remove("CARGO_BUILD_TARGET")
             .env_remove("CARGO_TARGET_DIR")
             .env_remove("CARGO_BUILD_RUSTFLAGS")
+            // `cargo clippy` runs the workspace through clippy-driver: the FMU binary is compiled
+            // by rustc, and linted where the runtime crate itself is linted
+            .env_remove("RUSTC_WORKSPACE_WRAPPER")
+            .env_remove("CLIPPY_ARGS")
             .status()
             .expect("cannot run cargo to build fmu-runtime");
         if !status.success() {

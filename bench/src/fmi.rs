@@ -128,8 +128,10 @@ impl Fmu {
         let binary = dir.join("binaries/linux64").join(format!("{}.so", description.model_identifier));
         let resources = dir.join("resources").canonicalize().map_err(|e| format!("resources: {e}"))?;
         let resource_uri = CString::new(format!("file://{}", resources.display())).map_err(|e| e.to_string())?;
-        let c_path = CString::new(binary.canonicalize().map_err(|e| format!("{}: {e}", binary.display()))?.as_os_str().as_encoded_bytes())
-            .map_err(|e| e.to_string())?;
+        let c_path = CString::new(
+            binary.canonicalize().map_err(|e| format!("{}: {e}", binary.display()))?.as_os_str().as_encoded_bytes(),
+        )
+        .map_err(|e| e.to_string())?;
         // SAFETY: a NUL-terminated path; RTLD_LOCAL keeps each FMU's fmi2* symbols to itself.
         let handle = unsafe { libc::dlopen(c_path.as_ptr(), libc::RTLD_NOW | libc::RTLD_LOCAL) };
         if handle.is_null() {
@@ -148,7 +150,11 @@ impl Fmu {
             }
             let from = unsafe { CStr::from_ptr(info.dli_fname) };
             if from != c_path.as_c_str() {
-                return Err(format!("{} resolved to {} instead of the FMU's binary", name.to_string_lossy(), from.to_string_lossy()));
+                return Err(format!(
+                    "{} resolved to {} instead of the FMU's binary",
+                    name.to_string_lossy(),
+                    from.to_string_lossy()
+                ));
             }
             Ok(p)
         };
@@ -215,13 +221,23 @@ impl Fmu {
         let callbacks = callbacks();
         // SAFETY: FMI 2.0 contract; all strings live across the call, the layer copies them.
         let c = unsafe {
-            (self.api.instantiate)(name.as_ptr(), kind, guid.as_ptr(), self.resource_uri.as_ptr(), &callbacks, fmi2False, fmi2False)
+            (self.api.instantiate)(
+                name.as_ptr(),
+                kind,
+                guid.as_ptr(),
+                self.resource_uri.as_ptr(),
+                &callbacks,
+                fmi2False,
+                fmi2False,
+            )
         };
         if c.is_null() {
             return Err("fmi2Instantiate returned NULL".into());
         }
         let inst = Instance { fmu: self, c };
-        inst.check("fmi2SetupExperiment", unsafe { (self.api.setup_experiment)(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) })?;
+        inst.check("fmi2SetupExperiment", unsafe {
+            (self.api.setup_experiment)(c, fmi2False, 0.0, 0.0, fmi2False, 0.0)
+        })?;
         Ok(inst)
     }
 }
@@ -248,14 +264,17 @@ unsafe extern "C" fn logger(
     message: *const c_char,
     arg: *const c_char,
 ) {
-    let text = |p: *const c_char| if p.is_null() { String::new() } else { unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned() };
+    let text = |p: *const c_char| {
+        if p.is_null() { String::new() } else { unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned() }
+    };
     let message = text(message);
     let message = if message == "%s" { text(arg) } else { message };
     eprintln!("[{}] {:?} {}: {}", text(instance), status, text(category), message);
 }
 
 fn callbacks() -> fmi2CallbackFunctions {
-    type Fixed = unsafe extern "C" fn(*mut c_void, *const c_char, fmi2Status, *const c_char, *const c_char, *const c_char);
+    type Fixed =
+        unsafe extern "C" fn(*mut c_void, *const c_char, fmi2Status, *const c_char, *const c_char, *const c_char);
     // SAFETY: see `logger`.
     let logger: fmi2CallbackLogger = unsafe { std::mem::transmute(logger as Fixed) };
     fmi2CallbackFunctions {
@@ -285,7 +304,9 @@ impl Instance<'_> {
 
     pub fn get(&self, vrs: &[u32], values: &mut [f64]) -> Result<(), String> {
         assert_eq!(vrs.len(), values.len());
-        self.check("fmi2GetReal", unsafe { (self.fmu.api.get_real)(self.c, vrs.as_ptr(), vrs.len(), values.as_mut_ptr()) })
+        self.check("fmi2GetReal", unsafe {
+            (self.fmu.api.get_real)(self.c, vrs.as_ptr(), vrs.len(), values.as_mut_ptr())
+        })
     }
 
     pub fn initialize(&self) -> Result<(), String> {

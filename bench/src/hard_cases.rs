@@ -15,10 +15,7 @@ fn examples() -> std::path::PathBuf {
 }
 
 /// An example's spec with its JSON edited by `edit`.
-fn example_spec(
-    name: &str,
-    edit: impl FnOnce(&mut serde_json::Value),
-) -> Result<(Spec, std::path::PathBuf), String> {
+fn example_spec(name: &str, edit: impl FnOnce(&mut serde_json::Value)) -> Result<(Spec, std::path::PathBuf), String> {
     let path = examples().join(name);
     let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
     let mut json: serde_json::Value = serde_json::from_str(&text).map_err(|e| e.to_string())?;
@@ -37,12 +34,7 @@ fn verdict(ok: bool) -> &'static str {
 /// H = 1/2 |q'|^2 + 1/2 q^T K q - p^T q of q'' + G q' + K q = p (steady spin: G skew, K
 /// symmetric), from the body's own evaluation: p = q''(0, 0) and K q = p - q''(q, 0). The
 /// second value is the elastic and kinetic part alone (the scale the drift is measured on).
-fn rotating_frame_energy(
-    body: &FlexibleBody,
-    q: &[f64],
-    qd: &[f64],
-    p: &[f64],
-) -> Result<(f64, f64), String> {
+fn rotating_frame_energy(body: &FlexibleBody, q: &[f64], qd: &[f64], p: &[f64]) -> Result<(f64, f64), String> {
     let mut probe = body.clone();
     let zeros = vec![0.0; q.len()];
     probe.set_state(q, &zeros);
@@ -81,9 +73,7 @@ pub fn run(short: bool) -> Result<bool, String> {
         let seconds = start.elapsed().as_secs_f64();
         let acc = &built.report.accuracy;
         let n = acc.reduced_hz.len().min(acc.full_hz.len());
-        let min = (0..n)
-            .map(|i| (acc.reduced_hz[i] - acc.full_hz[i]) / acc.full_hz[i])
-            .fold(f64::INFINITY, f64::min);
+        let min = (0..n).map(|i| (acc.reduced_hz[i] - acc.full_hz[i]) / acc.full_hz[i]).fold(f64::INFINITY, f64::min);
         let f1 = acc.reduced_hz[0] / acc.full_hz[0] - 1.0;
         let ok = min >= -1e-10 && acc.compliance_max_relative_error <= 3e-12;
         all &= ok;
@@ -100,9 +90,7 @@ pub fn run(short: bool) -> Result<bool, String> {
     println!(
         "The rotating-frame energy H = 1/2 |q'|^2 + 1/2 q^T K q - p^T q is invariant (gyroscopic coupling does no work). Target: |H - H(0)| <= 3e-8 of the largest elastic plus kinetic energy, at any step (measured 3.2e-9 at worst; as tests/test_spinning_mount.py). Time: the runtime's step, in-process (no FMI layer).\n"
     );
-    println!(
-        "| spin about | w [rad/s] | h [ms] | ns per step | max abs q | energy drift | verdict |"
-    );
+    println!("| spin about | w [rad/s] | h [ms] | ns per step | max abs q | energy drift | verdict |");
     println!("|---|---:|---:|---:|---:|---:|---|");
     let (spec, path) = example_spec("t-square.json", |j| {
         if let Some(o) = j.as_object_mut() {

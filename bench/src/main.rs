@@ -92,7 +92,11 @@ const BETA: f64 = 0.001;
 /// scene the FMU keeps the rotating-frame terms; `rotation: false` declares a scene without
 /// rotation (an FMU for a mount that does not rotate, as the builder writes it then).
 fn beam_spec(modes: usize, rotation: bool) -> String {
-    let (name, scene) = if rotation { (format!("BenchBeam{modes}"), "") } else { (format!("BenchBeam{modes}Fixed"), r#""scene": { "loads": [] },"#) };
+    let (name, scene) = if rotation {
+        (format!("BenchBeam{modes}"), "")
+    } else {
+        (format!("BenchBeam{modes}Fixed"), r#""scene": { "loads": [] },"#)
+    };
     format!(
         r#"{{
   "name": "{name}",
@@ -246,7 +250,8 @@ impl<'a> CoSim<'a> {
                 if step {
                     bad += ((api.do_step)(c, t, H, 1) != fmi2Status::fmi2OK) as usize;
                 }
-                bad += ((api.get_real)(c, out_vrs.as_ptr(), out.len(), out.as_mut_ptr()) != fmi2Status::fmi2OK) as usize;
+                bad +=
+                    ((api.get_real)(c, out_vrs.as_ptr(), out.len(), out.as_mut_ptr()) != fmi2Status::fmi2OK) as usize;
             }
             sink += out[2];
             t += H;
@@ -274,7 +279,9 @@ fn derivatives(fmu: &Fmu, spin: bool, n_states: usize, repeats: usize, target: D
     inst.initialize()?;
     inst.enter_continuous_time()?;
     let n = n_states / 2;
-    let x: Vec<f64> = (0..n_states).map(|i| if i < n { 1e-5 * (1.0 + (i % 7) as f64) } else { 1e-3 * (1.0 + (i % 5) as f64) }).collect();
+    let x: Vec<f64> = (0..n_states)
+        .map(|i| if i < n { 1e-5 * (1.0 + (i % 7) as f64) } else { 1e-3 * (1.0 + (i % 5) as f64) })
+        .collect();
     let mut dx = vec![0.0; n_states];
     let api = &fmu.api;
     let c = inst.c;
@@ -367,7 +374,10 @@ fn bench_fmu(fmu: &Fmu, spin: bool, repeats: usize) -> Result<Timings, String> {
     let forces: Vec<f64> = (0..1000)
         .map(|k| {
             let t = k as f64 * H;
-            F_TIP * (1.0 + 0.5 * (2.0 * std::f64::consts::PI * 7.0 * t).sin() + 0.05 * (2.0 * std::f64::consts::PI * 100.0 * t).sin())
+            F_TIP
+                * (1.0
+                    + 0.5 * (2.0 * std::f64::consts::PI * 7.0 * t).sin()
+                    + 0.05 * (2.0 * std::f64::consts::PI * 100.0 * t).sin())
         })
         .collect();
     let cs = CoSim::new(fmu, spin)?;
@@ -406,7 +416,9 @@ fn count_allocations(dir: &Path, spin: bool) -> Result<Vec<(String, usize)>, Str
         inst.initialize()?;
         // the counter sees the runtime's allocations: instantiation reads and stores the body
         if ALLOCATIONS.load(Ordering::Relaxed) == before {
-            return Err("the allocation counter saw no allocation in fmi2Instantiate: it does not count the runtime".into());
+            return Err(
+                "the allocation counter saw no allocation in fmi2Instantiate: it does not count the runtime".into()
+            );
         }
         let c = inst.c;
         let mut t = 0.0;
@@ -416,7 +428,8 @@ fn count_allocations(dir: &Path, spin: bool) -> Result<Vec<(String, usize)>, Str
             unsafe {
                 bad += ((api.set_real)(c, force_vrs.as_ptr(), 3, f.as_ptr()) != fmi2Status::fmi2OK) as usize;
                 bad += ((api.do_step)(c, t, H, 1) != fmi2Status::fmi2OK) as usize;
-                bad += ((api.get_real)(c, out_vrs.as_ptr(), out.len(), out.as_mut_ptr()) != fmi2Status::fmi2OK) as usize;
+                bad +=
+                    ((api.get_real)(c, out_vrs.as_ptr(), out.len(), out.as_mut_ptr()) != fmi2Status::fmi2OK) as usize;
             }
             sink += out[2];
             t += H;
@@ -508,7 +521,11 @@ fn relative_error(a: &[f64], reference: &[f64]) -> f64 {
 fn machine() -> String {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("model name")).map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
+        })
         .unwrap_or_else(|| "unknown CPU".into());
     let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
     format!("{cpu}, {cores} cores available")
@@ -525,13 +542,23 @@ struct Options {
 }
 
 fn options() -> Result<Options, String> {
-    let mut o = Options { modes: vec![10, 20, 50, 100], fixed_modes: vec![20], repeats: 21, skip_full: false, keep: None, short: false };
+    let mut o = Options {
+        modes: vec![10, 20, 50, 100],
+        fixed_modes: vec![20],
+        repeats: 21,
+        skip_full: false,
+        keep: None,
+        short: false,
+    };
     // --short first, so that explicit options after it still apply
     if std::env::args().any(|a| a == "--short") {
         o = Options { modes: vec![20], fixed_modes: vec![], repeats: 5, short: true, ..o };
     }
     let list = |text: &str| -> Result<Vec<usize>, String> {
-        text.split(',').filter(|m| !m.trim().is_empty()).map(|m| m.trim().parse().map_err(|e| format!("mode list {text}: {e}"))).collect()
+        text.split(',')
+            .filter(|m| !m.trim().is_empty())
+            .map(|m| m.trim().parse().map_err(|e| format!("mode list {text}: {e}")))
+            .collect()
     };
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
@@ -543,17 +570,26 @@ fn options() -> Result<Options, String> {
                 o.fixed_modes = list(&args.next().ok_or("--fixed-modes needs a list, e.g. 20 (\"\" for none)")?)?;
             }
             "--repeats" => {
-                o.repeats = args.next().ok_or("--repeats needs a number")?.parse().map_err(|e| format!("--repeats: {e}"))?;
+                o.repeats =
+                    args.next().ok_or("--repeats needs a number")?.parse().map_err(|e| format!("--repeats: {e}"))?;
                 o.repeats = o.repeats.max(1);
             }
             "--skip-full" => o.skip_full = true,
             "--short" => {}
             "--keep" => o.keep = Some(PathBuf::from(args.next().ok_or("--keep needs a folder")?)),
             "-h" | "--help" => {
-                println!("fmu-bench [--short] [--modes 10,20,50,100] [--fixed-modes 20] [--repeats 21] [--skip-full] [--keep DIR]");
-                println!("  --short: CI mode: --modes 20 --fixed-modes \"\" --repeats 5, a {SHORT_T_END} s window for the full model, hard cases without the 300-mode build; the same ratio targets");
-                println!("  --modes: FMUs with the rotating-frame terms (no scene), timed with the mount fixed and spinning");
-                println!("  --fixed-modes: FMUs built for a mount that does not rotate (scene without rotation), fixed mount only");
+                println!(
+                    "fmu-bench [--short] [--modes 10,20,50,100] [--fixed-modes 20] [--repeats 21] [--skip-full] [--keep DIR]"
+                );
+                println!(
+                    "  --short: CI mode: --modes 20 --fixed-modes \"\" --repeats 5, a {SHORT_T_END} s window for the full model, hard cases without the 300-mode build; the same ratio targets"
+                );
+                println!(
+                    "  --modes: FMUs with the rotating-frame terms (no scene), timed with the mount fixed and spinning"
+                );
+                println!(
+                    "  --fixed-modes: FMUs built for a mount that does not rotate (scene without rotation), fixed mount only"
+                );
                 std::process::exit(0);
             }
             other => return Err(format!("unknown argument {other} (try --help)")),
@@ -587,12 +623,17 @@ fn run() -> Result<(), String> {
 
 fn run_in(opts: &Options, work: &Path) -> Result<(), String> {
     println!("# fmu-bench: FMI 2.0 runtime speed (beam, Craig-Bampton)\n");
-    println!("machine: {}; timings are medians of {} batches, (min-max) in brackets, ns per call\n", machine(), opts.repeats);
+    println!(
+        "machine: {}; timings are medians of {} batches, (min-max) in brackets, ns per call\n",
+        machine(),
+        opts.repeats
+    );
     let t_end = if opts.short { SHORT_T_END } else { T_END };
     let mut rows = Vec::new();
     let mut full_model = None;
     let mut allocations: Vec<(String, String, usize)> = Vec::new();
-    let cases: Vec<(usize, bool)> = opts.modes.iter().map(|&m| (m, true)).chain(opts.fixed_modes.iter().map(|&m| (m, false))).collect();
+    let cases: Vec<(usize, bool)> =
+        opts.modes.iter().map(|&m| (m, true)).chain(opts.fixed_modes.iter().map(|&m| (m, false))).collect();
     for (modes, rotation) in cases {
         let spec = beam_spec(modes, rotation);
         let tag = if rotation { format!("{modes}") } else { format!("{modes}Fixed") };
@@ -600,15 +641,22 @@ fn run_in(opts: &Options, work: &Path) -> Result<(), String> {
         let output = work.join(format!("BenchBeam{tag}.fmu"));
         std::fs::write(&input, spec).map_err(|e| e.to_string())?;
         let start = Instant::now();
-        let built = fmu_builder::build::build(&input, &output).map_err(|e| format!("building {}: {e}", input.display()))?;
+        let built =
+            fmu_builder::build::build(&input, &output).map_err(|e| format!("building {}: {e}", input.display()))?;
         let build_s = start.elapsed().as_secs_f64();
         let order = built.reduced.n_modes();
-        let top_hz = built.basis.fixed_interface_omega.iter().copied().fold(0.0, f64::max) / (2.0 * std::f64::consts::PI);
+        let top_hz =
+            built.basis.fixed_interface_omega.iter().copied().fold(0.0, f64::max) / (2.0 * std::f64::consts::PI);
         eprintln!("built {} (order {order}) in {build_s:.1} s", output.display());
         let dir = work.join(format!("BenchBeam{tag}"));
         let fmu = Fmu::open(&output, &dir)?;
         if fmu.description.n_states != 2 * order {
-            return Err(format!("{} declares {} states, expected {}", output.display(), fmu.description.n_states, 2 * order));
+            return Err(format!(
+                "{} declares {} states, expected {}",
+                output.display(),
+                fmu.description.n_states,
+                2 * order
+            ));
         }
         let fixed = bench_fmu(&fmu, false, opts.repeats)?;
         let rotating = if rotation { Some(bench_fmu(&fmu, true, opts.repeats)?) } else { None };
@@ -626,10 +674,18 @@ fn run_in(opts: &Options, work: &Path) -> Result<(), String> {
     }
 
     println!("## Co-Simulation: ns per call through the C API (h = {} ms)\n", H * 1e3);
-    println!("Order = fixed-interface modes + 6 constraint modes of the tip flange. Fixed: mount at rest. Rotating: base.w = (0, 0, {SPIN}) rad/s, base.R = Rz(0.3), base.r = base.v = base.a = 0 (spinning about its own axis), set once before initialisation.");
-    println!("Master loop = fmi2SetReal(tip.f, 3 values) + fmi2DoStep + fmi2GetReal(tip.r, tip.v, tip.w, tip.R: 18 values), the force changing every step; outputs = the same without fmi2DoStep (what reading outputs after an input change costs).\n");
-    println!("Spin-up = fmi2SetReal(base.w[3]) + fmi2DoStep with the spin growing by {SPIN_UP_RATE} rad/s^2 (from {SPIN} rad/s, back every second): the coupling changes every step.\n");
-    println!("| modes | order | f_max [Hz] | fmi2DoStep fixed | fmi2DoStep rotating | spin-up | master loop fixed | master loop rotating | outputs fixed | outputs rotating |");
+    println!(
+        "Order = fixed-interface modes + 6 constraint modes of the tip flange. Fixed: mount at rest. Rotating: base.w = (0, 0, {SPIN}) rad/s, base.R = Rz(0.3), base.r = base.v = base.a = 0 (spinning about its own axis), set once before initialisation."
+    );
+    println!(
+        "Master loop = fmi2SetReal(tip.f, 3 values) + fmi2DoStep + fmi2GetReal(tip.r, tip.v, tip.w, tip.R: 18 values), the force changing every step; outputs = the same without fmi2DoStep (what reading outputs after an input change costs).\n"
+    );
+    println!(
+        "Spin-up = fmi2SetReal(base.w[3]) + fmi2DoStep with the spin growing by {SPIN_UP_RATE} rad/s^2 (from {SPIN} rad/s, back every second): the coupling changes every step.\n"
+    );
+    println!(
+        "| modes | order | f_max [Hz] | fmi2DoStep fixed | fmi2DoStep rotating | spin-up | master loop fixed | master loop rotating | outputs fixed | outputs rotating |"
+    );
     println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for r in &rows {
         let rot = r.rotating.as_ref();
@@ -647,12 +703,21 @@ fn run_in(opts: &Options, work: &Path) -> Result<(), String> {
             opt_cell(rot, |t| t.outputs)
         );
     }
-    println!("\n(f_max: highest fixed-interface mode kept. \"no rotation declared\": built with a scene without rotation, so the FMU has no rotating-frame terms and refuses a rotating mount.)\n");
+    println!(
+        "\n(f_max: highest fixed-interface mode kept. \"no rotation declared\": built with a scene without rotation, so the FMU has no rotating-frame terms and refuses a rotating mount.)\n"
+    );
     println!("## Model Exchange: ns per fmi2SetContinuousStates + fmi2GetDerivatives\n");
     println!("| modes | states | fixed mount | rotating mount | build [s] |");
     println!("|---|---:|---:|---:|---:|");
     for r in &rows {
-        println!("| {} | {} | {} | {} | {:.1} |", r.label(), 2 * r.order, cell(r.fixed.derivatives), opt_cell(r.rotating.as_ref(), |t| t.derivatives), r.build_s);
+        println!(
+            "| {} | {} | {} | {} | {:.1} |",
+            r.label(),
+            2 * r.order,
+            cell(r.fixed.derivatives),
+            opt_cell(r.rotating.as_ref(), |t| t.derivatives),
+            r.build_s
+        );
     }
     println!();
     let with_rotation = rows.iter().find(|r| r.modes == 20 && r.rotation);
@@ -679,7 +744,9 @@ fn run_in(opts: &Options, work: &Path) -> Result<(), String> {
     }
 
     println!("## Heap allocations per call (counted in process)\n");
-    println!("The runtime's exported C functions as linked into this binary, driving the same FMU (its modelDescription.xml and resources), {COUNTED_CALLS} calls of each kind from the first step after initialisation, counted by this binary's global allocator (the dlopen'ed FMU binary has its own allocator, which no host sees; `cargo test -p fmu-runtime --test no_alloc` counts the same functions per thread).\n");
+    println!(
+        "The runtime's exported C functions as linked into this binary, driving the same FMU (its modelDescription.xml and resources), {COUNTED_CALLS} calls of each kind from the first step after initialisation, counted by this binary's global allocator (the dlopen'ed FMU binary has its own allocator, which no host sees; `cargo test -p fmu-runtime --test no_alloc` counts the same functions per thread).\n"
+    );
     println!("| FMU | calls | allocations |");
     println!("|---|---|---:|");
     let mut targets = Vec::new();
@@ -688,7 +755,10 @@ fn run_in(opts: &Options, work: &Path) -> Result<(), String> {
     }
     let total: usize = allocations.iter().map(|a| a.2).sum();
     targets.push(Target {
-        what: format!("FMU heap allocations per call ({} kinds of call x {COUNTED_CALLS}, table above)", allocations.len()),
+        what: format!(
+            "FMU heap allocations per call ({} kinds of call x {COUNTED_CALLS}, table above)",
+            allocations.len()
+        ),
         measured: format!("{total} in total"),
         limit: "0".into(),
         ok: total == 0 && !allocations.is_empty(),
@@ -701,10 +771,17 @@ fn run_in(opts: &Options, work: &Path) -> Result<(), String> {
         targets.extend(full_comparison(&built, &rows, t_end, subdivisions)?);
     }
     let hard = hard_cases::run(opts.short)?;
-    targets.push(Target { what: "hard cases (tables above)".into(), measured: if hard { "all pass" } else { "missed" }.into(), limit: "all pass".into(), ok: hard });
+    targets.push(Target {
+        what: "hard cases (tables above)".into(),
+        measured: if hard { "all pass" } else { "missed" }.into(),
+        limit: "all pass".into(),
+        ok: hard,
+    });
 
     println!("## Targets\n");
-    println!("Ratios of two measurements of this run on this machine, allocation counts and the hard cases' accuracy; a miss makes the bench exit non-zero.\n");
+    println!(
+        "Ratios of two measurements of this run on this machine, allocation counts and the hard cases' accuracy; a miss makes the bench exit non-zero.\n"
+    );
     println!("| target | measured | required | verdict |");
     println!("|---|---:|---:|---|");
     for t in &targets {
@@ -732,7 +809,12 @@ struct NewmarkRun {
 /// Full FE model by Newmark against the FMUs, same scene: mount fixed, tip force F_TIP along z
 /// from t = 0, `t_end` seconds, tip u_z compared every millisecond; Newmark at H / each of
 /// `subdivisions`, the three finest make the reference. Returns the ratio and allocation targets.
-fn full_comparison(built: &fmu_builder::build::Built, rows: &[&Row], t_end: f64, subdivisions: &[usize]) -> Result<Vec<Target>, String> {
+fn full_comparison(
+    built: &fmu_builder::build::Built,
+    rows: &[&Row],
+    t_end: f64,
+    subdivisions: &[usize],
+) -> Result<Vec<Target>, String> {
     let model = &built.model;
     let nc = model.dofs.n_clamped();
     let k = fmu_builder::linalg::sparse::block(&model.stiffness, 0..nc, 0..nc).map_err(|e| e.to_string())?;
@@ -761,12 +843,18 @@ fn full_comparison(built: &fmu_builder::build::Built, rows: &[&Row], t_end: f64,
         let elapsed = start.elapsed().as_secs_f64();
         let allocations = ALLOCATIONS.load(Ordering::Relaxed) - before;
         let step_ns = elapsed * 1e9 / (samples * sub) as f64;
-        eprintln!("full model, Newmark h = {:.4} ms: {elapsed:.1} s, {} ns per step, {allocations} allocations", h * 1e3, ns(step_ns));
+        eprintln!(
+            "full model, Newmark h = {:.4} ms: {elapsed:.1} s, {} ns per step, {allocations} allocations",
+            h * 1e3,
+            ns(step_ns)
+        );
         runs.push(NewmarkRun { h, step_ns, allocations, u });
     }
     // reference: Romberg on the three finest runs (the trapezoidal rule's error expands in even
     // powers of h): two Richardson steps (4 u_{h/2} - u_h) / 3, then (16 R_fine - R_coarse) / 15
-    let combine = |coarse: &[f64], fine: &[f64], w: f64| -> Vec<f64> { coarse.iter().zip(fine).map(|(c, f)| (w * f - c) / (w - 1.0)).collect() };
+    let combine = |coarse: &[f64], fine: &[f64], w: f64| -> Vec<f64> {
+        coarse.iter().zip(fine).map(|(c, f)| (w * f - c) / (w - 1.0)).collect()
+    };
     let nr = runs.len();
     let r1_coarse = combine(&runs[nr - 3].u, &runs[nr - 2].u, 4.0);
     let r1_fine = combine(&runs[nr - 2].u, &runs[nr - 1].u, 4.0);
@@ -778,7 +866,10 @@ fn full_comparison(built: &fmu_builder::build::Built, rows: &[&Row], t_end: f64,
     let full_ns = step_costs[step_costs.len() / 2];
 
     println!("## Full FE model vs FMU\n");
-    println!("Scene: mount fixed, tip force {F_TIP} N along z from t = 0 (held), tip u_z compared every {} ms over {t_end} s.", H * 1e3);
+    println!(
+        "Scene: mount fixed, tip force {F_TIP} N along z from t = 0 (held), tip u_z compared every {} ms over {t_end} s.",
+        H * 1e3
+    );
     println!(
         "Full model: the builder's assembled model of the same mesh, {nc} DoFs (mount held), K and M with {k_nnz} nonzeros; Newmark average acceleration (gamma 1/2, beta 1/4), Rayleigh alpha = {ALPHA}, beta = {BETA} as in the FMU; K + 2/h C + 4/h^2 M factored once per h (faer sparse Cholesky, AMD, {l_nnz} nonzeros in L); a step = 2 sparse products + 1 solve; heap allocations counted in all stepping loops: {}.",
         runs.iter().map(|r| r.allocations).sum::<usize>()
@@ -791,8 +882,12 @@ fn full_comparison(built: &fmu_builder::build::Built, rows: &[&Row], t_end: f64,
         ref_change,
         peak
     );
-    println!("Both sides discretise time. The FMU propagates each mode exactly over the step with the input held, exact for this held load, so its difference to the reference is the reduction error alone. Newmark's difference is its own time error (period elongation ~ (omega h)^2 / 12 per period, accumulating as a phase drift of the first bending mode over the window), so the FMU against Newmark at the same 1 ms measures Newmark, not the FMU.\n");
-    println!("| model | time step [ms] | ns per step | ms per simulated second | tip u_z error / peak vs reference | vs full Newmark at h = 1 ms |");
+    println!(
+        "Both sides discretise time. The FMU propagates each mode exactly over the step with the input held, exact for this held load, so its difference to the reference is the reduction error alone. Newmark's difference is its own time error (period elongation ~ (omega h)^2 / 12 per period, accumulating as a phase drift of the first bending mode over the window), so the FMU against Newmark at the same 1 ms measures Newmark, not the FMU.\n"
+    );
+    println!(
+        "| model | time step [ms] | ns per step | ms per simulated second | tip u_z error / peak vs reference | vs full Newmark at h = 1 ms |"
+    );
     println!("|---|---:|---:|---:|---:|---:|");
     let newmark_1ms = &runs[0].u;
     for r in rows {
@@ -829,7 +924,9 @@ fn full_comparison(built: &fmu_builder::build::Built, rows: &[&Row], t_end: f64,
         fit.h * 1e3,
         ns(full_ns)
     );
-    println!("| FMU | its error | full Newmark step for that error [ms] | full model [ms per simulated s] | FMU [ms per simulated s] | speed ratio at equal error | per-step ratio at h = 1 ms |");
+    println!(
+        "| FMU | its error | full Newmark step for that error [ms] | full model [ms per simulated s] | FMU [ms per simulated s] | speed ratio at equal error | per-step ratio at h = 1 ms |"
+    );
     println!("|---|---:|---:|---:|---:|---:|---:|");
     let mut targets = Vec::new();
     let newmark_1ms_error = relative_error(newmark_1ms, &reference);
@@ -840,7 +937,10 @@ fn full_comparison(built: &fmu_builder::build::Built, rows: &[&Row], t_end: f64,
         let fmu_per_s = r.fixed.do_step.median / H;
         let per_step = full_ns / r.fixed.do_step.median;
         targets.push(Target {
-            what: format!("{} modes: full-model Newmark step / FMU fmi2DoStep, both at h = 1 ms, FMU error <= Newmark's", r.modes),
+            what: format!(
+                "{} modes: full-model Newmark step / FMU fmi2DoStep, both at h = 1 ms, FMU error <= Newmark's",
+                r.modes
+            ),
             measured: format!("{per_step:.1e} (errors {e:.1e} <= {newmark_1ms_error:.1e})"),
             limit: format!(">= {PER_STEP_RATIO:.0e}"),
             ok: per_step >= PER_STEP_RATIO && e <= newmark_1ms_error,
@@ -864,7 +964,9 @@ fn full_comparison(built: &fmu_builder::build::Built, rows: &[&Row], t_end: f64,
     }
     println!();
     if ref_change > 0.1 * rows.iter().map(|r| relative_error(&r.response, &reference)).fold(f64::INFINITY, f64::min) {
-        println!("(The smallest FMU errors are within a factor 10 of the reference's own error bound: read them as upper bounds.)\n");
+        println!(
+            "(The smallest FMU errors are within a factor 10 of the reference's own error bound: read them as upper bounds.)\n"
+        );
     }
     let newmark_allocations: usize = runs.iter().map(|r| r.allocations).sum();
     targets.push(Target {

@@ -10,9 +10,9 @@
 //! largest response to a natural-size change of any known (entries that small are rounding
 //! noise in the finite difference, not a test of the derivative).
 
+use fmi2::{Causality, Model};
 use fmu_builder::build::reduce_spec;
 use fmu_builder::input::spec::Spec;
-use fmi2::{Causality, Model};
 use fmu_runtime::fmu::BodyFmu;
 use fmu_runtime::interface::VariableTable;
 use std::path::Path;
@@ -71,9 +71,13 @@ fn unknowns_of(fmu: &mut BodyFmu, unknowns: &[u32]) -> Vec<f64> {
 fn check_jacobian(fmu: &mut BodyFmu, table: &VariableTable, what: &str) -> f64 {
     let vars = all(table);
     let states = table.states();
-    let knowns: Vec<u32> =
-        vars.iter().copied().filter(|&r| table.get(r).unwrap().causality == Causality::Input || states.contains(&r)).collect();
-    let mut unknowns: Vec<u32> = vars.iter().copied().filter(|&r| table.get(r).unwrap().causality == Causality::Output).collect();
+    let knowns: Vec<u32> = vars
+        .iter()
+        .copied()
+        .filter(|&r| table.get(r).unwrap().causality == Causality::Input || states.contains(&r))
+        .collect();
+    let mut unknowns: Vec<u32> =
+        vars.iter().copied().filter(|&r| table.get(r).unwrap().causality == Causality::Output).collect();
     unknowns.extend(table.derivatives());
     let name = |r: u32| table.get(r).unwrap().name.clone();
     let mut x0 = vec![0.0; fmu.n_states()];
@@ -146,7 +150,11 @@ fn check_jacobian(fmu: &mut BodyFmu, table: &VariableTable, what: &str) -> f64 {
     let mut x1 = vec![0.0; fmu.n_states()];
     fmu.get_continuous_states(&mut x1);
     assert_eq!(x0, x1);
-    eprintln!("{what}: {} knowns x {} unknowns, {checked} entries checked relatively, worst {worst:.1e} ({worst_at})", knowns.len(), unknowns.len());
+    eprintln!(
+        "{what}: {} knowns x {} unknowns, {checked} entries checked relatively, worst {worst:.1e} ({worst_at})",
+        knowns.len(),
+        unknowns.len()
+    );
     assert!(checked > 100, "{what}: only {checked} entries were large enough to compare");
     worst
 }
@@ -188,9 +196,15 @@ fn spinning_beam_jacobian_equals_finite_differences() {
         let (s, c) = phi.sin_cos();
         let [x, y, z] = axis;
         [
-            c + x * x * (1.0 - c), x * y * (1.0 - c) - z * s, x * z * (1.0 - c) + y * s,
-            y * x * (1.0 - c) + z * s, c + y * y * (1.0 - c), y * z * (1.0 - c) - x * s,
-            z * x * (1.0 - c) - y * s, z * y * (1.0 - c) + x * s, c + z * z * (1.0 - c),
+            c + x * x * (1.0 - c),
+            x * y * (1.0 - c) - z * s,
+            x * z * (1.0 - c) + y * s,
+            y * x * (1.0 - c) + z * s,
+            c + y * y * (1.0 - c),
+            y * z * (1.0 - c) - x * s,
+            z * x * (1.0 - c) - y * s,
+            z * y * (1.0 - c) + x * s,
+            c + z * z * (1.0 - c),
         ]
     };
     for i in 0..3 {
@@ -199,9 +213,20 @@ fn spinning_beam_jacobian_equals_finite_differences() {
         }
     }
     for (name, x) in [
-        ("base.r[1]", 0.2), ("base.v[2]", 1.5), ("base.w[1]", 3.0), ("base.w[3]", 20.0), ("base.w[2]", -5.0),
-        ("base.a[1]", 4.0), ("base.a[3]", -2.0), ("base.z[2]", 30.0), ("base.z[3]", -10.0),
-        ("tip.f[1]", 300.0), ("tip.f[2]", -80.0), ("tip.f[3]", 50.0), ("tip.t[1]", 5.0), ("tip.t[3]", -3.0),
+        ("base.r[1]", 0.2),
+        ("base.v[2]", 1.5),
+        ("base.w[1]", 3.0),
+        ("base.w[3]", 20.0),
+        ("base.w[2]", -5.0),
+        ("base.a[1]", 4.0),
+        ("base.a[3]", -2.0),
+        ("base.z[2]", 30.0),
+        ("base.z[3]", -10.0),
+        ("tip.f[1]", 300.0),
+        ("tip.f[2]", -80.0),
+        ("tip.f[3]", 50.0),
+        ("tip.t[1]", 5.0),
+        ("tip.t[3]", -3.0),
         ("g[3]", -9.81),
     ] {
         set(&mut fmu, name, x);
@@ -213,7 +238,8 @@ fn spinning_beam_jacobian_equals_finite_differences() {
 
     // A change of base.R off the rotations (dR = R S, S symmetric) moves nothing: the body
     // uses the input's rotational part only. A rotation (dR = R W~) moves everything.
-    let r_vrs: Vec<u32> = (0..9).map(|ij| table.value_reference(&format!("base.R[{},{}]", ij / 3 + 1, ij % 3 + 1)).unwrap()).collect();
+    let r_vrs: Vec<u32> =
+        (0..9).map(|ij| table.value_reference(&format!("base.R[{},{}]", ij / 3 + 1, ij % 3 + 1)).unwrap()).collect();
     let unknowns: Vec<u32> = all(&table)
         .into_iter()
         .filter(|&r| table.get(r).unwrap().causality == Causality::Output)
@@ -223,13 +249,28 @@ fn spinning_beam_jacobian_equals_finite_differences() {
         (0..9).map(|ij| (0..3).map(|k| rot[3 * (ij / 3) + k] * m[3 * k + ij % 3]).sum()).collect()
     };
     let mut stretch = vec![0.0; unknowns.len()];
-    fmu.directional_derivative(&unknowns, &r_vrs, &times([0.3, 0.1, -0.2, 0.1, -0.5, 0.4, -0.2, 0.4, 0.7]), &mut stretch).unwrap();
+    fmu.directional_derivative(
+        &unknowns,
+        &r_vrs,
+        &times([0.3, 0.1, -0.2, 0.1, -0.5, 0.4, -0.2, 0.4, 0.7]),
+        &mut stretch,
+    )
+    .unwrap();
     let mut turn = vec![0.0; unknowns.len()];
-    fmu.directional_derivative(&unknowns, &r_vrs, &times([0.0, -0.4, 0.2, 0.4, 0.0, -0.6, -0.2, 0.6, 0.0]), &mut turn).unwrap();
+    fmu.directional_derivative(&unknowns, &r_vrs, &times([0.0, -0.4, 0.2, 0.4, 0.0, -0.6, -0.2, 0.6, 0.0]), &mut turn)
+        .unwrap();
     for ((u, s), t) in unknowns.iter().zip(&stretch).zip(&turn) {
         let name = &table.get(*u).unwrap().name;
-        let scale = turn.iter().zip(&unknowns).filter(|(_, v)| table.get(**v).unwrap().unit == table.get(*u).unwrap().unit).map(|(x, _)| x.abs()).fold(0.0, f64::max);
-        assert!(s.abs() <= 1e-9 * scale.max(t.abs()), "{name}: {s:e} under a non-rotational change of base.R (rotation: {t:e})");
+        let scale = turn
+            .iter()
+            .zip(&unknowns)
+            .filter(|(_, v)| table.get(**v).unwrap().unit == table.get(*u).unwrap().unit)
+            .map(|(x, _)| x.abs())
+            .fold(0.0, f64::max);
+        assert!(
+            s.abs() <= 1e-9 * scale.max(t.abs()),
+            "{name}: {s:e} under a non-rotational change of base.R (rotation: {t:e})"
+        );
     }
     assert!(turn.iter().any(|t| t.abs() > 1.0));
 }
@@ -249,9 +290,17 @@ fn free_block_jacobian_equals_finite_differences() {
     let mut fmu = BodyFmu::from_reduced(reduced);
     let set = |fmu: &mut BodyFmu, name: &str, x: f64| fmu.set_real(table.value_reference(name).unwrap(), x).unwrap();
     for (name, x) in [
-        ("initial.r[1]", 0.3), ("initial.phi[1]", 0.4), ("initial.phi[3]", -1.1), ("initial.v[2]", 0.5),
-        ("initial.w[1]", 0.5), ("initial.w[2]", -2.0), ("initial.w[3]", 3.0), ("g[3]", -9.81),
-        ("end.f[1]", 2.0), ("end.f[3]", -1.5), ("end.t[2]", 0.05),
+        ("initial.r[1]", 0.3),
+        ("initial.phi[1]", 0.4),
+        ("initial.phi[3]", -1.1),
+        ("initial.v[2]", 0.5),
+        ("initial.w[1]", 0.5),
+        ("initial.w[2]", -2.0),
+        ("initial.w[3]", 3.0),
+        ("g[3]", -9.81),
+        ("end.f[1]", 2.0),
+        ("end.f[3]", -1.5),
+        ("end.t[2]", 0.05),
     ] {
         set(&mut fmu, name, x);
     }

@@ -3,11 +3,11 @@
 //! independent of our Lanczos and of the reduction).
 
 use faer::{Mat, Side};
-use fmu_builder::linalg::eigen;
 use fmu_builder::build::reduce_spec;
-use fmu_builder::reduce::basis::EIGEN_TOL;
-use fmu_builder::linalg::sparse::{SpdSolver, Sparse, block};
 use fmu_builder::input::spec::Spec;
+use fmu_builder::linalg::eigen;
+use fmu_builder::linalg::sparse::{Sparse, SpdSolver, block};
+use fmu_builder::reduce::basis::EIGEN_TOL;
 use std::path::Path;
 
 fn spec(reduction: &str) -> Spec {
@@ -66,7 +66,14 @@ fn lanczos_matches_dense_eigenvalues() {
     }
     // and the report's full-model frequencies are these
     assert!(built.report.accuracy.full_hz.len() >= 10 && reference.len() >= built.report.accuracy.full_hz.len());
-    let worst = built.report.accuracy.full_hz.iter().zip(&reference).map(|(f, r)| (f - r.sqrt() / (2.0 * std::f64::consts::PI)).abs() / f).fold(0.0, f64::max);
+    let worst = built
+        .report
+        .accuracy
+        .full_hz
+        .iter()
+        .zip(&reference)
+        .map(|(f, r)| (f - r.sqrt() / (2.0 * std::f64::consts::PI)).abs() / f)
+        .fold(0.0, f64::max);
     eprintln!("report vs dense: worst relative deviation {worst:.1e}");
     // measured 4.7e-11 (frequencies: half the eigenvalues' relative deviation)
     for (f, r) in built.report.accuracy.full_hz.iter().zip(&reference) {
@@ -115,4 +122,3 @@ fn mass_properties_are_those_of_the_box() {
     assert!((j[4] - m * (a * a / 3.0 + c * c / 12.0)).abs() <= 1e-13 * j[4]);
     assert!((j[8] - m * (a * a / 3.0 + b * b / 12.0)).abs() <= 1e-13 * j[8]);
 }
-
