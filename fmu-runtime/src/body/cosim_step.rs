@@ -44,6 +44,15 @@ fn residual_coupling_force(c: &Coupling<f64>, reference: (&[f64], &[f64]), i: us
     s
 }
 
+/// The mount as the host set it, and which of its groups moved by their kinematic rates.
+struct HeldMount {
+    mount: MountMotion,
+    r: bool,
+    rot: bool,
+    v: bool,
+    w: bool,
+}
+
 impl FlexibleBody {
     /// Rates of the mount inputs over the next step (its rotation matrix's rate entry by entry).
     pub fn mount_rate_mut(&mut self) -> &mut MountMotion {
@@ -77,6 +86,9 @@ impl FlexibleBody {
             return Ok(());
         }
         self.check_inputs()?;
+        // the mount moves within the step as its own inputs say (r' = v, R' = w~ R, v' = a,
+        // w' = z) wherever the host gave no rate; the host's next inputs replace that motion
+        let held = self.kinematic_mount_rates();
         self.modal_load();
         let ramp = self.rates.any;
         if ramp {
@@ -110,6 +122,7 @@ impl FlexibleBody {
             if ramp {
                 self.propagator.advance_ramp(&self.body.omega, &self.load, &self.load_rate, &mut self.q, &mut self.qd);
                 self.extrapolate_inputs(h);
+                self.restore_held_mount(&held);
             } else {
                 self.propagator.advance(&self.body.omega, &self.load, &mut self.q, &mut self.qd);
             }
@@ -184,6 +197,7 @@ impl FlexibleBody {
         self.coupled_work = work;
         if ramp {
             self.extrapolate_inputs(h);
+            self.restore_held_mount(&held);
         }
         self.eval.valid = false;
         if !(self.q.iter().chain(&self.qd).all(|v| v.is_finite())) {
@@ -261,6 +275,64 @@ impl FlexibleBody {
                 }
             }
         }
+    }
+
+    /// Fills the rates of the mount's pose and velocities the host left at zero with the
+    /// motion its inputs describe: r' = v, R' = w~ R (w in world axes), v' = a, w' = z. Without
+    /// it a spinning or accelerating mount would stand still within a step, its gravity and
+    /// coupling held at the step's start (first order in h); with it they follow the pose
+    /// (second order, as with host-given rates). Returns the inputs as the host set them, for
+    /// the groups filled here: the host's values stay what fmi2GetReal returns after the step.
+    fn kinematic_mount_rates(&mut self) -> HeldMount {
+        let m = self.mount;
+        let r = &mut self.rates.mount;
+        let unset = |x: &[f64]| x.iter().all(|v| *v == 0.0);
+        let mut held = HeldMount { mount: m, r: false, rot: false, v: false, w: false };
+        if unset(&r.r) && !unset(&m.v) {
+            r.r = m.v;
+            held.r = true;
+        }
+        if unset(&r.rot) && !unset(&m.w) {
+            let w = m.w;
+            // w~ R, column by column: w x (column j of R)
+            for j in 0..3 {
+                let col = k3::cross(w, [m.rot[j], m.rot[3 + j], m.rot[6 + j]]);
+                for i in 0..3 {
+                    r.rot[3 * i + j] = col[i];
+                }
+            }
+            held.rot = true;
+        }
+        if unset(&r.v) && !unset(&m.a) {
+            r.v = m.a;
+            held.v = true;
+        }
+        if unset(&r.w) && !unset(&m.z) {
+            r.w = m.z;
+            held.w = true;
+        }
+        if held.r || held.rot || held.v || held.w {
+            self.rates.any = true;
+        }
+        held
+    }
+
+    /// The host's own values of the mount groups whose rates were filled from the kinematics.
+    fn restore_held_mount(&mut self, held: &HeldMount) {
+        if held.r {
+            self.mount.r = held.mount.r;
+        }
+        if held.rot {
+            self.mount.rot = held.mount.rot;
+        }
+        if held.v {
+            self.mount.v = held.mount.v;
+        }
+        if held.w {
+            self.mount.w = held.mount.w;
+        }
+        self.coupling.valid = false;
+        self.eval.valid = false;
     }
 
     /// After a step with input rates the inputs hold their interpolated end values (what the
