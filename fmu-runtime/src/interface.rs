@@ -631,14 +631,29 @@ impl VariableTable {
     /// the loads that set the static equilibrium; q' starts at rest or its start value.
     pub fn initial_dependencies(&self, var: &Variable) -> Vec<u32> {
         use Quantity as Q;
+        // parameters are knowns of the initialization too (FMI 2.0, ModelStructure): the
+        // initial frame of a free body, gravity and damping in the loads and accelerations,
+        // and static_start, which switches the initial state between its start values and the
+        // static solution
+        let initial_frame = |q: &Q| {
+            matches!(
+                q,
+                Q::InitialPosition(_) | Q::InitialRotation(_) | Q::InitialVelocity(_) | Q::InitialAngularVelocity(_)
+            )
+        };
+        let load_parameters = |q: &Q| matches!(q, Q::Gravity(_) | Q::RayleighAlpha | Q::RayleighBeta);
         if self.variables.iter().any(|v| Self::is_frame_state(&v.quantity)) {
-            // free-floating: states start from parameters; the rest follows the loads
-            if Self::is_frame_state(&var.quantity)
-                || matches!(var.quantity, Q::ModalCoordinate(_) | Q::ModalVelocity(_))
-            {
+            // free-floating: the frame starts from its parameters, the modes at their start
+            // values; everything else follows the loads, gravity and damping as well
+            if Self::is_frame_state(&var.quantity) {
+                return self.select(initial_frame);
+            }
+            if matches!(var.quantity, Q::ModalCoordinate(_) | Q::ModalVelocity(_)) {
                 return Vec::new();
             }
-            return self.select(|q| matches!(q, Q::FlangeForce(..) | Q::FlangeTorque(..)));
+            return self.select(|q| {
+                matches!(q, Q::FlangeForce(..) | Q::FlangeTorque(..)) || initial_frame(q) || load_parameters(q)
+            });
         }
         let static_loads = |q: &Q| {
             matches!(
@@ -649,11 +664,13 @@ impl VariableTable {
                     | Q::MountAngularAcceleration(_)
                     | Q::FlangeForce(..)
                     | Q::FlangeTorque(..)
+                    | Q::Gravity(_)
+                    | Q::StaticStart
             )
         };
         let direct = match var.quantity {
             Q::ModalCoordinate(_) => return self.select(static_loads),
-            Q::ModalVelocity(_) => return Vec::new(),
+            Q::ModalVelocity(_) => return self.select(|q| *q == Q::StaticStart),
             _ => self.dependencies(var),
         };
         let mut deps = Vec::new();
@@ -661,9 +678,21 @@ impl VariableTable {
             let Some(v) = self.get(vr) else { continue };
             match v.quantity {
                 Q::ModalCoordinate(_) => deps.extend(self.select(static_loads)),
-                Q::ModalVelocity(_) => {}
+                Q::ModalVelocity(_) => deps.extend(self.select(|q| *q == Q::StaticStart)),
                 _ => deps.push(vr),
             }
+        }
+        // what the modal acceleration enters (der(qd), accelerations, reactions) also sees
+        // gravity and damping directly
+        let accelerated = matches!(
+            var.quantity,
+            Q::ModalAcceleration(_)
+                | Q::MountForce(_)
+                | Q::MountTorque(_)
+                | Q::Flange(_, FlangeOutput::Acceleration(_) | FlangeOutput::AngularAcceleration(_))
+        );
+        if accelerated {
+            deps.extend(self.select(load_parameters));
         }
         deps.sort_unstable();
         deps.dedup();
