@@ -333,8 +333,11 @@ impl Model for BodyFmu {
     }
 
     fn get_nominals(&self, nominals: &mut [f64]) {
-        // q scales like sqrt(m) * deflection: 1 is as good a guess as any for solver tolerances
-        nominals.fill(1.0);
+        // the same numbers as modelDescription.xml's `nominal` (one table); a frame state
+        // (metres, m/s, quaternion) is of order one
+        for (out, v) in nominals.iter_mut().zip(self.table.state_variables()) {
+            *out = v.nominal.unwrap_or(1.0);
+        }
     }
 
     fn get_event_indicators(&mut self, _z: &mut [f64]) -> Result<(), String> {

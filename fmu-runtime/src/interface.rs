@@ -80,6 +80,9 @@ pub struct Variable {
     pub quantity: Quantity,
     /// For a state derivative: the value reference of its state.
     pub derivative_of: Option<u32>,
+    /// For a continuous state: its expected magnitude, which hosts scale their absolute
+    /// tolerance by (FMI 2.0 `nominal`, fmi2GetNominalsOfContinuousStates).
+    pub nominal: Option<f64>,
 }
 
 /// Units used by the variables, with their SI base-unit exponents (kg, m, s, rad) for the XML.
@@ -93,6 +96,7 @@ pub const UNITS: &[(&str, [i32; 4])] = &[
     ("N", [1, 1, -2, 0]),
     ("N.m", [1, 2, -2, 0]),
     ("1/s", [0, 0, -1, 0]),
+    ("1/s2", [0, 0, -2, 0]),
     ("s", [0, 0, 1, 0]),
     ("J", [1, 2, -2, 0]),
     ("N.s", [1, 1, -1, 0]),
@@ -141,6 +145,7 @@ impl Builder {
             unit,
             quantity,
             derivative_of: None,
+            nominal: None,
         });
         vr
     }
@@ -300,6 +305,7 @@ impl VariableTable {
             Self::free_body_parameters(&mut b);
         }
         let n = body.n_modes();
+        let nominal = modal_nominals(body);
         let mut q_vr = Vec::with_capacity(n);
         for j in 0..n {
             q_vr.push(b.push(
@@ -312,6 +318,7 @@ impl VariableTable {
                 None,
                 Quantity::ModalCoordinate(j),
             ));
+            b.variables[q_vr[j] as usize - 1].nominal = Some(nominal[j]);
         }
         let mut qd_vr = Vec::with_capacity(n);
         for (j, &q_vr_j) in q_vr.iter().enumerate() {
@@ -326,6 +333,7 @@ impl VariableTable {
                 Quantity::ModalVelocity(j),
             );
             b.variables[vr as usize - 1].derivative_of = Some(q_vr_j);
+            b.variables[vr as usize - 1].nominal = Some(body.omega[j] * nominal[j]);
             qd_vr.push(vr);
         }
         for (j, &qd_vr_j) in qd_vr.iter().enumerate() {
@@ -336,7 +344,7 @@ impl VariableTable {
                 Variability::Continuous,
                 None,
                 None,
-                None,
+                Some("1/s2"),
                 Quantity::ModalAcceleration(j),
             );
             b.variables[vr as usize - 1].derivative_of = Some(qd_vr_j);
@@ -344,7 +352,8 @@ impl VariableTable {
         if body.free_floating {
             Self::free_body_states_and_outputs(&mut b);
         }
-        // modal velocities are 1/s; modal coordinates carry sqrt(kg) m, left unitless in the XML
+        // modal coordinates carry sqrt(kg) m, left unitless in the XML; their rates are then
+        // 1/s and 1/s2
         Self { variables: b.variables }
     }
 
@@ -535,15 +544,15 @@ impl VariableTable {
 
     /// State value references in state order: q[1..n] then qd[1..n].
     pub fn states(&self) -> Vec<u32> {
-        let mut s: Vec<u32> = self
-            .variables
-            .iter()
-            .filter(|v| matches!(v.quantity, Quantity::ModalCoordinate(_)))
-            .map(|v| v.vr)
-            .collect();
-        s.extend(self.variables.iter().filter(|v| matches!(v.quantity, Quantity::ModalVelocity(_))).map(|v| v.vr));
-        s.extend(self.variables.iter().filter(|v| Self::is_frame_state(&v.quantity)).map(|v| v.vr));
-        s
+        self.state_variables().map(|v| v.vr).collect()
+    }
+
+    /// The state variables in state order (q, qd, then a free body's frame), without allocating.
+    pub fn state_variables(&self) -> impl Iterator<Item = &Variable> {
+        let of = |f: fn(&Quantity) -> bool| self.variables.iter().filter(move |v| f(&v.quantity));
+        of(|q| matches!(q, Quantity::ModalCoordinate(_)))
+            .chain(of(|q| matches!(q, Quantity::ModalVelocity(_))))
+            .chain(of(Self::is_frame_state))
     }
 
     fn is_frame_state(q: &Quantity) -> bool {
@@ -698,6 +707,37 @@ impl VariableTable {
         deps.dedup();
         deps
     }
+}
+
+/// Expected magnitude of each modal coordinate: its largest static response to a unit force or
+/// torque (1 N, 1 N m) at a force flange and to 1 g of the mount's acceleration or gravity along
+/// any axis, |p_k| / omega_k^2. Hosts scale their absolute tolerance by it, so a tolerance means
+/// a relative error of the deformation; a mode no such load excites gets 1e-6 of the largest
+/// (a nominal must be positive).
+pub fn modal_nominals(body: &ReducedBody) -> Vec<f64> {
+    const G: f64 = 9.81;
+    let n = body.n_modes();
+    let mut out: Vec<f64> = (0..n)
+        .map(|k| {
+            let mut load = 0.0f64;
+            for flange in &body.flanges {
+                for row in 0..6 {
+                    load = load.max(flange.shapes[row * n + k].abs());
+                }
+            }
+            for a in 0..3 {
+                load = load.max(G * body.c_t[a * n + k].abs());
+            }
+            let w2 = body.omega[k] * body.omega[k];
+            if w2 > 0.0 && load.is_finite() { load / w2 } else { 0.0 }
+        })
+        .collect();
+    let largest = out.iter().fold(0.0f64, |m, v| m.max(*v));
+    let floor = if largest > 0.0 { 1e-6 * largest } else { 1.0 };
+    for v in out.iter_mut() {
+        *v = v.max(floor);
+    }
+    out
 }
 
 #[cfg(test)]

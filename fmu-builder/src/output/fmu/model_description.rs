@@ -442,6 +442,9 @@ fn write_variable(w: &mut W, r: &Row) -> io::Result<()> {
     if let Some(start) = &r.start {
         ty.push(("start", start.clone()));
     }
+    if let Some(nominal) = v.nominal {
+        ty.push(("nominal", format!("{nominal:e}")));
+    }
     if let Some(d) = r.derivative {
         ty.push(("derivative", d.to_string()));
     }

@@ -1,0 +1,198 @@
+"""Model Exchange in a generic host: SciPy's BDF integrator drives the FMU through FMPy's
+low-level FMI 2.0 API, with the absolute tolerance taken from the FMU's state nominals
+(atol = rtol * nominal, as CVODE-based hosts such as FMPy and fmusim do) and SciPy's default
+relative tolerance. This is the host a Modelica tool or a hand-written master is: nothing of it
+was written for these FMUs. Every flange output must agree with a converged Co-Simulation run of
+the same FMU (the CS step is exact for inputs held over a step) within 1e-3 of its peak."""
+
+import ctypes
+import json
+
+import numpy as np
+import pytest
+from fmpy import simulate_fmu
+from scipy.integrate import solve_ivp
+
+from conftest import _build, run_builder
+from fmu_access import Fmu
+from test_large_motion import FREE_BLOCK
+
+# FMPy's default relative tolerance for Model Exchange when an FMU names none: a host's
+# default, not one picked for these FMUs
+RTOL = 1e-5
+
+
+def nominals(f):
+    x = np.zeros(f.nx)
+    f.fmu.getNominalsOfContinuousStates(x.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), f.nx)
+    return x
+
+
+def flange_outputs(md, flange):
+    """The outputs that carry the deformation: the force flange's deformation u, phi and its
+    velocities v, w, and the mount reaction f, t where the body has a mount."""
+    names = {v.name for v in md.modelVariables if v.causality == "output"}
+    wanted = [f"{flange}.{q}[{i}]" for q in ("u", "phi", "v", "w") for i in (1, 2, 3)]
+    wanted += [f"base.{q}[{i}]" for q in ("f", "t") for i in (1, 2, 3)]
+    return [n for n in wanted if n in names]
+
+
+def run_me(path, t_end, inputs, start, outputs, grid):
+    """The generic host: BDF with atol from the nominals, outputs sampled on `grid`."""
+    f = Fmu(path, "ModelExchange")
+    try:
+        f.set(**start)
+        f.fmu.setupExperiment(startTime=0.0)
+        f.fmu.enterInitializationMode()
+        f.set(**inputs(0.0))
+        f.fmu.exitInitializationMode()
+        f.fmu.newDiscreteStates()
+        f.fmu.enterContinuousTimeMode()
+        x0 = f.states()
+        nom = nominals(f)
+        assert len(nom) == f.nx and np.all(nom > 0), nom
+
+        def rhs(t, x):
+            f.fmu.setTime(t)
+            f.set(**inputs(t))
+            f.set_states(x)
+            return f.derivatives()
+
+        sol = solve_ivp(rhs, (0.0, t_end), x0, method="BDF", rtol=RTOL, atol=RTOL * nom, t_eval=grid)
+        assert sol.success, sol.message
+        out = []
+        for k, t in enumerate(sol.t):
+            f.fmu.setTime(t)
+            f.set(**inputs(t))
+            f.set_states(sol.y[:, k])
+            out.append(f.get(*outputs))
+        return np.array(out), sol.nfev
+    finally:
+        f.close()
+
+
+def run_cs(path, t_end, inputs, start, outputs, h):
+    f = Fmu(path, "CoSimulation")
+    try:
+        f.set(**start)
+        f.fmu.setupExperiment(startTime=0.0)
+        f.fmu.enterInitializationMode()
+        f.set(**inputs(0.0))
+        f.fmu.exitInitializationMode()
+        n = int(round(t_end / h))
+        out = [f.get(*outputs)]
+        for k in range(n):
+            t = k * h
+            f.set(**inputs(t + 0.5 * h))  # midpoint sample: second order for smooth inputs
+            f.fmu.doStep(t, h)
+            out.append(f.get(*outputs))
+        return np.array(out)
+    finally:
+        f.close()
+
+
+CASES = {
+    # name: (example or spec, start values, inputs(t), force flange, t_end, CS step)
+    "beam force step": ("beam.json", {}, lambda t: {"tip.f[3]": 100.0}, "tip", 0.3, 1e-4),
+    "beam sine near the first mode": (
+        "beam.json", {}, lambda t: {"tip.f[2]": 50.0 * np.sin(2 * np.pi * 8.0 * t)}, "tip", 0.3, 1e-5),
+    "t-square spinning, force step": (
+        "t-square.json", {}, lambda t: {"base.w[3]": 20.0, "left.f[3]": 10.0}, "left", 0.2, 1e-4),
+}
+
+
+def build_case(example, build_dir):
+    if isinstance(example, str):
+        return _build(example, build_dir)[0]
+    spec = build_dir / f"{example['name']}.json"
+    spec.write_text(json.dumps(example))
+    out = build_dir / f"{example['name']}.fmu"
+    run_builder([spec, "-o", out])
+    return out
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_generic_bdf_host_agrees_with_co_simulation(case, build_dir):
+    example, start, inputs, flange, t_end, h = CASES[case]
+    path = build_case(example, build_dir)
+    f = Fmu(path, "ModelExchange")
+    outputs = flange_outputs(f.md, flange)
+    f.close(terminate=False)
+    assert outputs, f"no outputs of flange {flange}"
+    grid = np.linspace(0.0, t_end, int(round(t_end / h)) + 1)[:: max(1, int(round(1e-3 / h)))]
+    me, nfev = run_me(path, t_end, inputs, start, outputs, grid)
+    cs = run_cs(path, t_end, inputs, start, outputs, h)[:: max(1, int(round(1e-3 / h)))]
+    assert me.shape == cs.shape, (me.shape, cs.shape)
+    worst, compared = 0.0, 0
+    for j, name in enumerate(outputs):
+        swing = cs[:, j] - cs[0, j]
+        peak = np.max(np.abs(swing))
+        if peak == 0.0:
+            continue
+        compared += 1
+        err = np.max(np.abs(me[:, j] - cs[:, j])) / peak
+        worst = max(worst, err)
+    # the load moves the flange: a case whose outputs all stay put would test nothing
+    assert compared >= 3, f"only {compared} of {outputs} move"
+    print(f"\n{case}: BDF rtol {RTOL:g}, atol from nominals: {nfev} derivative calls, worst flange output "
+          f"error {worst:.2e} of its swing")
+    # the issue's acceptance figure: 1e-3 of the swing (measured 3.7e-4, 8.3e-4, 1.9e-4; with
+    # every nominal 1 the same host gave 1.5e-3, 3.5e-3, 2.6e-2)
+    assert worst < 1e-3
+
+
+@pytest.mark.parametrize("case", ["beam force step", "t-square spinning, force step"])
+def test_fmpy_model_exchange_at_its_defaults_agrees_with_co_simulation(case, build_dir):
+    """FMPy's own Model Exchange (CVode, the tolerance the FMU's default experiment names),
+    inputs given as start values: every flange output within 1e-3 of its swing of CS."""
+    example, start, inputs, flange, t_end, h = CASES[case]
+    path = build_case(example, build_dir)
+    f = Fmu(path, "ModelExchange")
+    outputs = flange_outputs(f.md, flange)
+    f.close(terminate=False)
+    res = simulate_fmu(str(path), fmi_type="ModelExchange", stop_time=t_end, output_interval=1e-3,
+                       start_values={**start, **inputs(0.0)}, output=outputs)
+    every = int(round(1e-3 / h))
+    cs = run_cs(path, t_end, inputs, start, outputs, h)[::every]
+    me = np.array([res[name] for name in outputs]).T
+    assert me.shape == cs.shape, (me.shape, cs.shape)
+    swing = np.max(np.abs(cs - cs[0]), axis=0)
+    moving = swing > 1e-9 * swing.max()
+    assert moving.sum() >= 3
+    worst = np.max(np.max(np.abs(me - cs), axis=0)[moving] / swing[moving])
+    print(f"\n{case}: FMPy ME (CVode, defaults) worst flange output error {worst:.2e} of its swing")
+    # the issue's acceptance figure, 1e-3 of the swing (measured: see the print)
+    assert worst < 1e-3
+
+
+def test_nominals_are_the_static_response_to_unit_loads(build_dir):
+    """The nominal of a modal coordinate is its largest static response to a unit force or
+    torque at a force flange or 1 g along an axis: checked on the FMU's own statics
+    (static_start) over those nine load cases. XML and C API give the same numbers."""
+    path = build_case("beam.json", build_dir)
+    f = Fmu(path, "ModelExchange")
+    xml = np.array([float(v.nominal) for v in f.md.modelVariables if v.name.startswith("q[")])
+    f.close(terminate=False)
+    cases = [{f"tip.{k}[{i}]": 1.0} for k in ("f", "t") for i in (1, 2, 3)]
+    cases += [{f"g[{i}]": 9.81} for i in (1, 2, 3)]
+    largest = np.zeros(len(xml))
+    for case in cases:
+        f = Fmu(path, "ModelExchange")
+        try:
+            f.set(static_start=True, **case)
+            f.initialize()
+            nom = nominals(f)
+            q = f.states()[: len(xml)]
+        finally:
+            f.close()
+        assert len(nom) == f.nx and len(q) == len(xml)
+        np.testing.assert_array_equal(nom[: len(xml)], xml)
+        largest = np.maximum(largest, np.abs(q))
+    # the static solve and the nominal are the same quotient p_k / omega_k^2 up to round-off
+    floor = 1e-6 * xml.max()
+    excited = largest > floor
+    assert excited.sum() >= len(xml) // 2, f"{excited.sum()} of {len(xml)} modes excited"
+    rel = np.abs(largest[excited] - xml[excited]) / xml[excited]
+    print(f"\nnominals vs static responses: {excited.sum()} modes, worst {rel.max():.1e}")
+    assert rel.max() < 1e-12
+    assert np.all(xml[~excited] == floor)
