@@ -1,8 +1,8 @@
 """A mount that moves within a Co-Simulation step as its own inputs say. A host that samples the
 mount's pose at step starts and gives no input derivatives (FMPy's default, most masters) used
 to have the mount stand still within each step: gravity turned in the body frame in jumps, a
-first-order error. The FMU now moves the pose by its own velocities within the step (r' = v,
-R' = w~ R, v' = a, w' = z) and the error is that of host-given derivatives.
+first-order error. The FMU now turns the mount by its own spin within the step (R' = w~ R,
+w' = z) and the error is that of host-given derivatives.
 
 The T-square spins about z at 10 rad/s under gravity along x: in the body frame gravity turns at
 10 rad/s and drives the arms. Reference: the same FMU at h = 1e-5 s with the host giving dR/dt

@@ -44,13 +44,14 @@ fn residual_coupling_force(c: &Coupling<f64>, reference: (&[f64], &[f64]), i: us
     s
 }
 
-/// The mount as the host set it, and which of its groups moved by their kinematic rates.
+/// The mount as the host set it, and which of its groups moved by their kinematic rates
+/// (position and velocity do not enter the body's equations: they are left alone).
 struct HeldMount {
     mount: MountMotion,
-    r: bool,
     rot: bool,
-    v: bool,
     w: bool,
+    /// Only the orientation turns, at the mount's own spin: body-frame w and z stay constant.
+    steady: bool,
 }
 
 impl FlexibleBody {
@@ -95,9 +96,12 @@ impl FlexibleBody {
             self.modal_load_rate();
         }
         self.prepare_coupling();
+        // a mount turning at a steady spin (R' = w~ R, nothing else moving) keeps the
+        // body-frame spin and hence the coupling: only the load turns
+        let steady = held.steady && self.steady_coupling();
         // inputs that move over the step move the coupling too: its matrices at the step's end
         let mut work = std::mem::take(&mut self.coupled_work);
-        if ramp {
+        if ramp && !steady {
             let mut end = self.mount;
             let r = &self.rates.mount;
             for i in 0..3 {
@@ -115,7 +119,7 @@ impl FlexibleBody {
             fill_coupling(&self.body, &end_rot, &end, &work.loads_end, self.params.g, &mut work.coupling_end);
         }
         // a coupling that starts at zero (spin-up from rest) still couples within the step
-        let coupled = self.coupling.active || (ramp && work.coupling_end.active);
+        let coupled = self.coupling.active || (ramp && !steady && work.coupling_end.active);
         if !coupled {
             self.coupled_work = work;
             self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, h);
@@ -137,13 +141,15 @@ impl FlexibleBody {
         // runs on one exponential.
         let prepared = self.coupled.is_prepared(h, self.params.alpha, self.params.beta);
         // a steady spin meets its own transition again: compared first, cheaper than the drift
-        let held_exactly =
-            !ramp && prepared && self.coupled.reference() == (&self.coupling.c_d[..], &self.coupling.c_k[..]);
+        let held_exactly = (!ramp || steady)
+            && prepared
+            && self.coupled.reference() == (&self.coupling.c_d[..], &self.coupling.c_k[..]);
         let drift_ok =
             |c: &Coupling<f64>| h * coupling_drift(c, self.coupled.reference(), &self.body.omega) <= REFERENCE_DRIFT;
-        let current = held_exactly || prepared && drift_ok(&self.coupling) && (!ramp || drift_ok(&work.coupling_end));
+        let current =
+            held_exactly || prepared && drift_ok(&self.coupling) && (!ramp || steady || drift_ok(&work.coupling_end));
         if !current {
-            let (c_d, c_k): (&[f64], &[f64]) = if ramp {
+            let (c_d, c_k): (&[f64], &[f64]) = if ramp && !steady {
                 for (m, (a, b)) in work.c_d_mid.iter_mut().zip(self.coupling.c_d.iter().zip(&work.coupling_end.c_d)) {
                     *m = 0.5 * (a + b);
                 }
@@ -168,7 +174,7 @@ impl FlexibleBody {
                 self.warning = Some(UNSTABLE_STIFFNESS);
             }
         }
-        let end = if ramp { &work.coupling_end } else { &self.coupling };
+        let end = if ramp && !steady { &work.coupling_end } else { &self.coupling };
         // a transition made for this step (held or midpoint coupling) needs no correction
         let exact = held_exactly || !current;
         let rate: &[f64] = if ramp { &self.load_rate } else { &work.zeros };
@@ -277,21 +283,19 @@ impl FlexibleBody {
         }
     }
 
-    /// Fills the rates of the mount's pose and velocities the host left at zero with the
-    /// motion its inputs describe: r' = v, R' = w~ R (w in world axes), v' = a, w' = z. Without
-    /// it a spinning or accelerating mount would stand still within a step, its gravity and
-    /// coupling held at the step's start (first order in h); with it they follow the pose
-    /// (second order, as with host-given rates). Returns the inputs as the host set them, for
-    /// the groups filled here: the host's values stay what fmi2GetReal returns after the step.
+    /// Fills the rates of the mount's orientation and spin the host left at zero with the motion
+    /// its inputs describe: R' = w~ R (w in world axes) and w' = z. Without it a spinning mount
+    /// would stand still within a step, its gravity and world-fixed loads held in the body frame
+    /// at the step's start (first order in h); with it they turn (second order, as with
+    /// host-given rates). Position and velocity do not enter the body's equations and are left
+    /// alone. Returns the inputs as the host set them: the host's values stay what fmi2GetReal
+    /// returns after the step.
     fn kinematic_mount_rates(&mut self) -> HeldMount {
         let m = self.mount;
         let r = &mut self.rates.mount;
         let unset = |x: &[f64]| x.iter().all(|v| *v == 0.0);
-        let mut held = HeldMount { mount: m, r: false, rot: false, v: false, w: false };
-        if unset(&r.r) && !unset(&m.v) {
-            r.r = m.v;
-            held.r = true;
-        }
+        let host_rates = self.rates.any;
+        let mut held = HeldMount { mount: m, rot: false, w: false, steady: false };
         if unset(&r.rot) && !unset(&m.w) {
             let w = m.w;
             // w~ R, column by column: w x (column j of R)
@@ -303,30 +307,41 @@ impl FlexibleBody {
             }
             held.rot = true;
         }
-        if unset(&r.v) && !unset(&m.a) {
-            r.v = m.a;
-            held.v = true;
-        }
         if unset(&r.w) && !unset(&m.z) {
             r.w = m.z;
             held.w = true;
         }
-        if held.r || held.rot || held.v || held.w {
+        held.steady = held.rot && !held.w && !host_rates;
+        if held.rot || held.w {
             self.rates.any = true;
         }
         held
     }
 
+    /// Whether the coupling stays what it is while the orientation turns at a steady spin: the
+    /// rotating-frame terms and centrifugal stiffening see only the body-frame spin (constant,
+    /// as (R^T w)' = R^T w~^T w = 0), but translational and flange-load stiffening see loads
+    /// that turn in the body frame.
+    fn steady_coupling(&self) -> bool {
+        match &self.body.stiffening {
+            None => true,
+            Some(st) => {
+                let turning_acceleration =
+                    st.translation.is_some() && k3::sub(self.mount.a, self.params.g).iter().any(|x| *x != 0.0);
+                let loaded = st
+                    .flanges
+                    .iter()
+                    .zip(&self.loads)
+                    .any(|(k, l)| !k.is_empty() && l.f.iter().chain(&l.t).any(|x| *x != 0.0));
+                !turning_acceleration && !loaded
+            }
+        }
+    }
+
     /// The host's own values of the mount groups whose rates were filled from the kinematics.
     fn restore_held_mount(&mut self, held: &HeldMount) {
-        if held.r {
-            self.mount.r = held.mount.r;
-        }
         if held.rot {
             self.mount.rot = held.mount.rot;
-        }
-        if held.v {
-            self.mount.v = held.mount.v;
         }
         if held.w {
             self.mount.w = held.mount.w;
