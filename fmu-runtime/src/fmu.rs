@@ -54,13 +54,17 @@ fn frame<T: Scalar>(b: &FlexibleBody<T>) -> Result<FrameState<T>, String> {
 const FRAME_STATES: usize = 13;
 
 impl Model for BodyFmu {
-    fn instantiate(resources: Option<&std::path::Path>, _interface: Interface) -> Result<Self, String> {
+    fn instantiate(resources: Option<&std::path::Path>, interface: Interface) -> Result<Self, String> {
         let dir =
             resources.ok_or("no resource location given: the reduced body lives in the FMU's resources folder")?;
         let path = dir.join(RESOURCE_FILE);
         let bytes = std::fs::read(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
         let reduced = ReducedBody::from_bytes(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
-        Ok(Self::from_reduced(reduced))
+        let mut fmu = Self::from_reduced(reduced);
+        // Model Exchange hands the modes above the cutoff to no integrator: they are solved at
+        // every evaluation; Co-Simulation's exact transition integrates every mode at any step
+        fmu.body.set_quasi_static(interface == Interface::ModelExchange);
+        Ok(fmu)
     }
 
     fn guid(&self) -> &str {
@@ -166,35 +170,14 @@ impl Model for BodyFmu {
         Ok(value_of(&mut d, quantity)?.d)
     }
 
+    /// q, q' of the dynamic modes and a free body's frame (the quasi-static modes are not states).
     fn is_continuous_state(&self, vr: u32) -> bool {
-        use Quantity as Q;
-        self.quantity(vr).is_ok_and(|q| {
-            matches!(
-                q,
-                Q::ModalCoordinate(_)
-                    | Q::ModalVelocity(_)
-                    | Q::FramePosition(_)
-                    | Q::FrameQuaternion(_)
-                    | Q::FrameVelocity(_)
-                    | Q::FrameAngularVelocity(_)
-            )
-        })
+        self.table.get(vr).is_some_and(|v| self.table.is_state(v.quantity))
     }
 
-    /// der(q) = qd, der(r) = v, ...
+    /// der(q) = qd, der(r) = v, ... of the states.
     fn is_state_derivative(&self, vr: u32) -> bool {
-        use Quantity as Q;
-        self.quantity(vr).is_ok_and(|q| {
-            matches!(
-                q,
-                Q::ModalVelocity(_)
-                    | Q::ModalAcceleration(_)
-                    | Q::FrameVelocity(_)
-                    | Q::FrameQuaternionRate(_)
-                    | Q::FrameAcceleration(_)
-                    | Q::FrameAngularAcceleration(_)
-            )
-        })
+        self.table.get(vr).is_some_and(|v| v.derivative_of.is_some())
     }
 
     fn max_output_derivative_order(&self) -> i32 {
@@ -288,7 +271,7 @@ impl Model for BodyFmu {
     }
 
     fn n_states(&self) -> usize {
-        2 * self.body.n_modes() + if self.body.frame().is_some() { FRAME_STATES } else { 0 }
+        2 * self.body.n_dynamic() + if self.body.frame().is_some() { FRAME_STATES } else { 0 }
     }
     fn n_event_indicators(&self) -> usize {
         0
@@ -298,16 +281,16 @@ impl Model for BodyFmu {
     }
 
     fn get_continuous_states(&self, x: &mut [f64]) {
-        let n = self.body.n_modes();
-        x[..n].copy_from_slice(self.body.q());
-        x[n..2 * n].copy_from_slice(self.body.qd());
+        let n = self.body.n_dynamic();
+        x[..n].copy_from_slice(&self.body.q()[..n]);
+        x[n..2 * n].copy_from_slice(&self.body.qd()[..n]);
         if let Some(f) = self.body.frame() {
             write_frame(&mut x[2 * n..], f);
         }
     }
 
     fn set_continuous_states(&mut self, x: &[f64]) {
-        let n = self.body.n_modes();
+        let n = self.body.n_dynamic();
         self.body.set_state(&x[..n], &x[n..2 * n]);
         if let Some(f) = self.body.frame_mut() {
             let y = &x[2 * n..];
@@ -321,7 +304,7 @@ impl Model for BodyFmu {
     }
 
     fn get_derivatives(&mut self, dx: &mut [f64]) -> Result<(), String> {
-        let n = self.body.n_modes();
+        let n = self.body.n_dynamic();
         let (modal, frame_part) = dx.split_at_mut(2 * n);
         let (dq, dqd) = modal.split_at_mut(n);
         self.body.derivatives(dq, dqd)?;
@@ -354,6 +337,7 @@ impl Model for BodyFmu {
         if self.static_start {
             self.body.settle_static()?;
         }
+        self.body.settle_quasi_static()?;
         // surface bad inputs (a non-rotation base.R) at initialisation, not at the first step
         self.body.qdd().map(|_| ())
     }
@@ -368,7 +352,9 @@ impl Model for BodyFmu {
 
     fn reset(&mut self) -> Result<(), String> {
         let reduced = self.body.reduced().clone();
+        let quasi_static = self.body.quasi_static();
         *self = Self::from_reduced(reduced);
+        self.body.set_quasi_static(quasi_static);
         Ok(())
     }
 

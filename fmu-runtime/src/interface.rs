@@ -109,6 +109,11 @@ const AXES: [&str; 3] = ["x", "y", "z"];
 #[derive(Debug, Clone)]
 pub struct VariableTable {
     pub variables: Vec<Variable>,
+    /// Modes 1..=n_dynamic are states; the rest are quasi-static (Model Exchange solves them from
+    /// the inputs and the states at every evaluation).
+    pub n_dynamic: usize,
+    /// The body has rotating-frame terms, through which q'_d loads the quasi-static modes.
+    rotates: bool,
 }
 
 struct Builder {
@@ -305,41 +310,56 @@ impl VariableTable {
             Self::free_body_parameters(&mut b);
         }
         let n = body.n_modes();
+        let nd = body.n_dynamic();
         let nominal = modal_nominals(body);
+        // a dynamic mode's q, q' are states with start values; a quasi-static mode's are
+        // calculated (its equilibrium with the inputs and the dynamic modes, at rest)
+        let initial = |j: usize| Some(if j < nd { Initial::Approx } else { Initial::Calculated });
+        let start = |j: usize| (j < nd).then_some(Start::Real(0.0));
+        let kind = |j: usize| if j < nd { "" } else { ", quasi-static in Model Exchange" };
         let mut q_vr = Vec::with_capacity(n);
         for j in 0..n {
             q_vr.push(b.push(
                 format!("q[{}]", j + 1),
-                format!("Modal coordinate {} ({:.4} Hz)", j + 1, body.omega[j] / (2.0 * std::f64::consts::PI)),
+                format!(
+                    "Modal coordinate {} ({:.4} Hz{})",
+                    j + 1,
+                    body.omega[j] / (2.0 * std::f64::consts::PI),
+                    kind(j)
+                ),
                 Causality::Local,
                 Variability::Continuous,
-                Some(Initial::Approx),
-                Some(Start::Real(0.0)),
+                initial(j),
+                start(j),
                 None,
                 Quantity::ModalCoordinate(j),
             ));
-            b.variables[q_vr[j] as usize - 1].nominal = Some(nominal[j]);
+            if j < nd {
+                b.variables[q_vr[j] as usize - 1].nominal = Some(nominal[j]);
+            }
         }
         let mut qd_vr = Vec::with_capacity(n);
         for (j, &q_vr_j) in q_vr.iter().enumerate() {
             let vr = b.push(
                 format!("qd[{}]", j + 1),
-                format!("Modal velocity {}", j + 1),
+                format!("Modal velocity {}{}", j + 1, kind(j)),
                 Causality::Local,
                 Variability::Continuous,
-                Some(Initial::Approx),
-                Some(Start::Real(0.0)),
+                initial(j),
+                start(j),
                 Some("1/s"),
                 Quantity::ModalVelocity(j),
             );
-            b.variables[vr as usize - 1].derivative_of = Some(q_vr_j);
-            b.variables[vr as usize - 1].nominal = Some(body.omega[j] * nominal[j]);
+            if j < nd {
+                b.variables[vr as usize - 1].derivative_of = Some(q_vr_j);
+                b.variables[vr as usize - 1].nominal = Some(body.omega[j] * nominal[j]);
+            }
             qd_vr.push(vr);
         }
         for (j, &qd_vr_j) in qd_vr.iter().enumerate() {
             let vr = b.push(
                 format!("der(qd[{}])", j + 1),
-                format!("Modal acceleration {}", j + 1),
+                format!("Modal acceleration {}{}", j + 1, kind(j)),
                 Causality::Local,
                 Variability::Continuous,
                 None,
@@ -347,14 +367,16 @@ impl VariableTable {
                 Some("1/s2"),
                 Quantity::ModalAcceleration(j),
             );
-            b.variables[vr as usize - 1].derivative_of = Some(qd_vr_j);
+            if j < nd {
+                b.variables[vr as usize - 1].derivative_of = Some(qd_vr_j);
+            }
         }
         if body.free_floating {
             Self::free_body_states_and_outputs(&mut b);
         }
         // modal coordinates carry sqrt(kg) m, left unitless in the XML; their rates are then
         // 1/s and 1/s2
-        Self { variables: b.variables }
+        Self { variables: b.variables, n_dynamic: nd, rotates: body.rotation.is_some() }
     }
 
     fn free_body_parameters(b: &mut Builder) {
@@ -547,12 +569,22 @@ impl VariableTable {
         self.state_variables().map(|v| v.vr).collect()
     }
 
-    /// The state variables in state order (q, qd, then a free body's frame), without allocating.
+    /// The state variables in state order (q, qd of the dynamic modes, then a free body's
+    /// frame), without allocating.
     pub fn state_variables(&self) -> impl Iterator<Item = &Variable> {
-        let of = |f: fn(&Quantity) -> bool| self.variables.iter().filter(move |v| f(&v.quantity));
-        of(|q| matches!(q, Quantity::ModalCoordinate(_)))
-            .chain(of(|q| matches!(q, Quantity::ModalVelocity(_))))
-            .chain(of(Self::is_frame_state))
+        let nd = self.n_dynamic;
+        let of = move |f: fn(&Quantity, usize) -> bool| self.variables.iter().filter(move |v| f(&v.quantity, nd));
+        of(|q, nd| matches!(q, Quantity::ModalCoordinate(j) if *j < nd))
+            .chain(of(|q, nd| matches!(q, Quantity::ModalVelocity(j) if *j < nd)))
+            .chain(of(|q, _| Self::is_frame_state(q)))
+    }
+
+    /// Whether the quantity is a continuous state: q, q' of a dynamic mode or a frame state.
+    pub fn is_state(&self, q: Quantity) -> bool {
+        match q {
+            Quantity::ModalCoordinate(j) | Quantity::ModalVelocity(j) => j < self.n_dynamic,
+            _ => Self::is_frame_state(&q),
+        }
     }
 
     fn is_frame_state(q: &Quantity) -> bool {
@@ -565,11 +597,12 @@ impl VariableTable {
         )
     }
 
-    /// Derivative value references in state order: qd[1..n] (= der(q)) then der(qd[1..n]).
+    /// Derivative value references in state order: qd (= der(q)) then der(qd) of the dynamic
+    /// modes, then a free body's frame rates.
     pub fn derivatives(&self) -> Vec<u32> {
-        let mut d: Vec<u32> =
-            self.variables.iter().filter(|v| matches!(v.quantity, Quantity::ModalVelocity(_))).map(|v| v.vr).collect();
-        d.extend(self.variables.iter().filter(|v| matches!(v.quantity, Quantity::ModalAcceleration(_))).map(|v| v.vr));
+        let nd = self.n_dynamic;
+        let mut d = self.select(|q| matches!(q, Quantity::ModalVelocity(j) if *j < nd));
+        d.extend(self.select(|q| matches!(q, Quantity::ModalAcceleration(j) if *j < nd)));
         // frame: d/dt r = v (the state frame.v), then the quaternion, velocity and spin rates
         d.extend(self.variables.iter().filter(|v| matches!(v.quantity, Quantity::FrameVelocity(_))).map(|v| v.vr));
         d.extend(
@@ -596,19 +629,26 @@ impl VariableTable {
         let mount_a = |q: &Q| matches!(q, Q::MountAcceleration(_));
         let mount_z = |q: &Q| matches!(q, Q::MountAngularAcceleration(_));
         let loads = |q: &Q| matches!(q, Q::FlangeForce(..) | Q::FlangeTorque(..));
-        let q_all = |q: &Q| matches!(q, Q::ModalCoordinate(_));
-        let qd_all = |q: &Q| matches!(q, Q::ModalVelocity(_));
+        let nd = self.n_dynamic;
+        let quasi_static = self.variables.iter().any(|v| matches!(v.quantity, Q::ModalCoordinate(j) if j >= nd));
+        let qd_all = |q: &Q| matches!(q, Q::ModalVelocity(j) if *j < nd);
+        // q: the dynamic modes' states, and what the quasi-static modes are solved from (the
+        // modal load of the mount's motion and the flange loads, the coupling of the spin, and
+        // through the gyroscopic terms the dynamic modes' velocities)
+        let rotates = self.rotates;
+        let q_all = move |q: &Q| {
+            matches!(q, Q::ModalCoordinate(j) if *j < nd)
+                || quasi_static
+                    && (mount_a(q)
+                        || mount_rot(q)
+                        || loads(q)
+                        || rotates && (mount_w(q) || mount_z(q) || matches!(q, Q::ModalVelocity(j) if *j < nd)))
+        };
         // q'' = p(a, R, loads) - d q' - w^2 q
         let accel = |q: &Q| mount_a(q) || mount_rot(q) || loads(q) || q_all(q) || qd_all(q);
         if self.variables.iter().any(|v| Self::is_frame_state(&v.quantity)) {
             // free-floating: every output and derivative may depend on every state and load
-            let mut deps = self.select(|q| {
-                Self::is_frame_state(q)
-                    || matches!(
-                        q,
-                        Q::ModalCoordinate(_) | Q::ModalVelocity(_) | Q::FlangeForce(..) | Q::FlangeTorque(..)
-                    )
-            });
+            let mut deps = self.select(|q| self.is_state(*q) || loads(q));
             deps.sort_unstable();
             return deps;
         }

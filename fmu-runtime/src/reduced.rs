@@ -68,11 +68,21 @@ pub struct ReducedBody {
     /// No mount: the FMU integrates the rigid-body motion; the body frame is at the centre of
     /// mass with mean axes (C_t = 0, C_r = 0), and `mount` is empty.
     pub free_floating: bool,
+    /// Modes up to this angular frequency [rad/s] carry the scene's dynamics; those above it are
+    /// quasi-static in Model Exchange (algebraic: solved from the loads and the dynamic modes at
+    /// every evaluation), so the host's integrator never sees their stiffness. Infinite: every
+    /// mode is dynamic.
+    pub dynamic_cutoff: f64,
 }
 
 impl ReducedBody {
     pub fn n_modes(&self) -> usize {
         self.omega.len()
+    }
+
+    /// Number of dynamic modes: the first ones (omega ascending) up to the cutoff.
+    pub fn n_dynamic(&self) -> usize {
+        self.omega.iter().take_while(|&&w| w <= self.dynamic_cutoff).count()
     }
 
     pub fn to_container(&self) -> Container {
@@ -98,6 +108,9 @@ impl ReducedBody {
         }
         if self.free_floating {
             c.put_array("free_floating", &[1], &[1.0]);
+        }
+        if self.dynamic_cutoff.is_finite() {
+            c.put_array("dynamic_cutoff", &[1], &[self.dynamic_cutoff]);
         }
         if let Some(rot) = &self.rotation {
             c.put_array("rotation.G", &[3, n, n], &rot.g);
@@ -137,6 +150,18 @@ impl ReducedBody {
                 "modal frequency omega[{bad}] = {} is not a positive number",
                 omega[bad]
             )));
+        }
+        if let Some(k) = (1..n).find(|&k| omega[k] < omega[k - 1]) {
+            return Err(FormatError::Malformed(format!(
+                "modal frequencies must ascend: omega[{k}] = {} < omega[{}] = {}",
+                omega[k],
+                k - 1,
+                omega[k - 1]
+            )));
+        }
+        let dynamic_cutoff = if c.contains("dynamic_cutoff") { c.scalar("dynamic_cutoff")? } else { f64::INFINITY };
+        if !(dynamic_cutoff > 0.0) {
+            return Err(FormatError::Malformed(format!("dynamic_cutoff = {dynamic_cutoff} is not a positive number")));
         }
         let count = c.scalar("flange.count")?;
         if !(count >= 0.0 && count.fract() == 0.0 && count < 1e4) {
@@ -195,6 +220,7 @@ impl ReducedBody {
             rotation,
             stiffening,
             free_floating: c.contains("free_floating"),
+            dynamic_cutoff,
         })
     }
 
@@ -238,6 +264,7 @@ pub fn two_mode_body() -> ReducedBody {
         rotation: None,
         stiffening: None,
         free_floating: false,
+        dynamic_cutoff: f64::INFINITY,
     }
 }
 
@@ -265,5 +292,21 @@ mod tests {
         assert!(matches!(err, FormatError::Missing(_)), "{err}");
         c.put_array("omega", &[2], &[10.0, -1.0]);
         assert!(ReducedBody::from_container(&c).unwrap_err().to_string().contains("omega[1]"));
+        c.put_array("omega", &[2], &[10.0, 5.0]);
+        let err = ReducedBody::from_container(&c).unwrap_err().to_string();
+        assert!(err.contains("must ascend"), "{err}");
+    }
+
+    #[test]
+    fn the_cutoff_splits_dynamic_from_quasi_static_modes_and_round_trips() {
+        let mut b = two_mode_body();
+        assert_eq!(b.n_dynamic(), 2, "no cutoff: every mode dynamic");
+        b.dynamic_cutoff = 100.0;
+        assert_eq!(b.n_dynamic(), 1);
+        assert_eq!(ReducedBody::from_bytes(&b.to_bytes()).unwrap(), b);
+        let mut c = b.to_container();
+        c.put_array("dynamic_cutoff", &[1], &[-1.0]);
+        let err = ReducedBody::from_container(&c).unwrap_err().to_string();
+        assert!(err.contains("dynamic_cutoff"), "{err}");
     }
 }

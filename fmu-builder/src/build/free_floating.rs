@@ -115,6 +115,7 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
         rotation: Some(RotationTerms { g: rot.g, o_mat: rot.o_mat, o_vec: rot.o_vec }),
         stiffening: None,
         free_floating: true,
+        dynamic_cutoff: crate::reduce::cutoff::dynamic_cutoff(&spec, &basis).0,
     };
     reduced.guid = guid(&reduced);
     let accuracy = free_free_accuracy(&model, &solver, shift, &rigid, &basis)?;

@@ -321,6 +321,7 @@ pub fn reduce(
         rotation,
         stiffening,
         free_floating: false,
+        dynamic_cutoff: crate::reduce::cutoff::dynamic_cutoff(&spec, &basis).0,
     };
     reduced.guid = guid(&reduced);
 

@@ -88,6 +88,7 @@ pub fn sweep(spec: &Spec, file: &Path) -> Result<Vec<SweepRow>> {
                 expansion_points: Some(points.clone()),
                 moments: Some(k),
                 real_expansion_points: spec.reduction.real_expansion_points.clone(),
+                dynamic_cutoff: spec.reduction.dynamic_cutoff,
             },
         ));
     }
@@ -141,6 +142,7 @@ fn cb(modes: usize) -> Reduction {
         expansion_points: None,
         moments: None,
         real_expansion_points: None,
+        dynamic_cutoff: None,
     }
 }
 

@@ -256,6 +256,9 @@ pub struct Reduction {
     pub moments: Option<usize>,
     #[serde(default)]
     pub real_expansion_points: Option<Vec<f64>>,
+    /// Modes above this frequency [Hz] are quasi-static in Model Exchange.
+    #[serde(default)]
+    pub dynamic_cutoff: Option<f64>,
 }
 
 /// JSON pointer `/flanges/1/nodes` -> `flanges[1].nodes`, the way users read their file.

@@ -54,13 +54,26 @@ td,th{{border:1px solid #bbb;padding:0.2em 0.6em;text-align:right}}th{{backgroun
     let _ = write!(
         h,
         "<h2>Reduction</h2>\n<p>{} with {} fixed-interface normal modes and {} constraint modes: reduced order {} \
-(states q, qd: {}).</p>\n",
+(Co-Simulation propagates all of them exactly).</p>\n",
         esc(&r.method),
         r.fixed_interface_modes,
         r.constraint_modes,
         r.order,
-        2 * r.order
     );
+    let _ = match r.dynamic_cutoff_hz {
+        Some(hz) if r.dynamic_modes < r.order => write!(
+            h,
+            "<p>Model Exchange: the {} modes up to {hz:.4} Hz ({}) are states (q, qd: {} states); the {} modes above \
+are quasi-static, solved from the loads and the dynamic modes at every evaluation, so static responses stay exact and \
+the host's integrator sees no frequency above the cutoff. Set <code>reduction.dynamic_cutoff</code> [Hz] to choose \
+another cutoff.</p>\n",
+            r.dynamic_modes,
+            esc(&r.dynamic_cutoff_rule),
+            2 * r.dynamic_modes,
+            r.order - r.dynamic_modes
+        ),
+        _ => write!(h, "<p>Model Exchange: all {} modes are states (q, qd: {} states).</p>\n", r.order, 2 * r.order),
+    };
     h.push_str("<h3>Eigenfrequencies of the mounted body</h3>\n<table><tr><th>mode</th><th>reduced [Hz]</th><th>full FE [Hz]</th><th>relative error</th></tr>\n");
     let a = &r.accuracy;
     for i in 0..a.reduced_hz.len() {
@@ -302,6 +315,9 @@ mod tests {
             fixed_interface_modes: 4,
             constraint_modes: 6,
             order: 10,
+            dynamic_modes: 4,
+            dynamic_cutoff_hz: Some(500.0),
+            dynamic_cutoff_rule: "the highest fixed-interface mode".into(),
             flanges: vec![FlangeReport {
                 name: "tip".into(),
                 role: "force".into(),

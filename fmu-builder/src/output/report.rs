@@ -7,6 +7,7 @@ use crate::model::part::Part;
 use crate::model::rigid_coupling::Assembled;
 use crate::reduce::accuracy::Accuracy;
 use crate::reduce::basis::Basis;
+use crate::reduce::cutoff::dynamic_cutoff;
 use fmu_runtime::reduced::ReducedBody;
 use serde::Serialize;
 
@@ -39,6 +40,13 @@ pub struct Report {
     pub fixed_interface_modes: usize,
     pub constraint_modes: usize,
     pub order: usize,
+    /// Modes that are states in Model Exchange (at or below the cutoff); the rest are
+    /// quasi-static there.
+    pub dynamic_modes: usize,
+    /// The cutoff between dynamic and quasi-static modes [Hz]; None: every mode dynamic.
+    pub dynamic_cutoff_hz: Option<f64>,
+    /// How the cutoff was chosen.
+    pub dynamic_cutoff_rule: String,
     pub flanges: Vec<FlangeReport>,
     pub accuracy: Accuracy,
 }
@@ -74,6 +82,9 @@ pub fn report_of(
         fixed_interface_modes: basis.n_normal,
         constraint_modes: static_shapes,
         order: basis.omega.len(),
+        dynamic_modes: reduced.n_dynamic(),
+        dynamic_cutoff_hz: reduced.dynamic_cutoff.is_finite().then(|| reduced.dynamic_cutoff / (2.0 * std::f64::consts::PI)),
+        dynamic_cutoff_rule: dynamic_cutoff(spec, basis).1.into(),
         flanges: flanges
             .iter()
             .map(|f| FlangeReport {

@@ -29,6 +29,15 @@ pub fn text(r: &Report) -> String {
         "  {}: {} normal modes + {} static/Krylov shapes = order {}",
         r.method, r.fixed_interface_modes, r.constraint_modes, r.order
     );
+    let quasi_static = r.order - r.dynamic_modes;
+    let _ = match r.dynamic_cutoff_hz {
+        Some(hz) if quasi_static > 0 => writeln!(
+            s,
+            "  Model Exchange: {} dynamic modes (states) up to {hz:.4} Hz ({}), {quasi_static} quasi-static above",
+            r.dynamic_modes, r.dynamic_cutoff_rule
+        ),
+        _ => writeln!(s, "  Model Exchange: all {} modes dynamic (states)", r.order),
+    };
     let a = &r.accuracy;
     let shown = a.reduced_hz.len().min(8);
     let freqs: Vec<String> = a.reduced_hz[..shown].iter().map(|f| format!("{f:.4}")).collect();

@@ -50,6 +50,11 @@ impl<T: Scalar> FlexibleBody<T> {
         self.rot = a;
         // modal load of the flange loads and the centrifugal o_ab terms (C_t = 0, c_a = 0 here)
         self.modal_load();
+        // the modes that carry the dynamics: all of them, or (Model Exchange) those below the cutoff
+        let nd = if self.quasi_static { self.n_dynamic } else { n };
+        if nd < n {
+            self.free_quasi_static(w)?;
+        }
         let (alpha, beta) = (self.params.alpha, self.params.beta);
         let rhs_q = &mut self.eval.qdd;
         for (j, rhs) in rhs_q.iter_mut().enumerate() {
@@ -115,20 +120,22 @@ impl<T: Scalar> FlexibleBody<T> {
                 k3::add(torque, k3::add(k3::cross(k3::add(flange.position.map(c), u), f_b), k3::mul_t(&a, load.t)));
         }
         let rhs_w = k3::sub(k3::sub(torque, k3::cross(w, h)), k3::mul(&j_rate, w));
-        // Schur complement: (J - C_r C_r^T) W' = rhs_w - C_r rhs_q
+        // quasi-static modes have no acceleration: they neither load the frame nor take its share
+        self.eval.qdd[nd..].fill(T::zero());
+        // Schur complement over the accelerated modes: (J - C_r C_r^T) W' = rhs_w - C_r rhs_q
         let mut s = j;
         let mut rhs = rhs_w;
         for p in 0..3 {
-            let cp = &self.cr_q[p * n..(p + 1) * n];
-            rhs[p] -= dot(cp, &self.eval.qdd);
+            let cp = &self.cr_q[p * n..p * n + nd];
+            rhs[p] -= dot(cp, &self.eval.qdd[..nd]);
             for q_ in 0..3 {
-                let cq = &self.cr_q[q_ * n..(q_ + 1) * n];
+                let cq = &self.cr_q[q_ * n..q_ * n + nd];
                 s[3 * p + q_] -= dot(cp, cq);
             }
         }
         let mut w_dot = rhs;
         solve_dense(&mut s, &mut w_dot, 3).map_err(|_| "the body's inertia matrix became singular".to_string())?;
-        for r in 0..n {
+        for r in 0..nd {
             let f = self.cr_q[r] * w_dot[0] + self.cr_q[n + r] * w_dot[1] + self.cr_q[2 * n + r] * w_dot[2];
             self.eval.qdd[r] -= f;
         }
@@ -145,6 +152,41 @@ impl<T: Scalar> FlexibleBody<T> {
         ];
         self.frame_rate = FrameState { r: frame.v, quat: quat_rate, v: accel, w_body: w_dot };
         Ok(())
+    }
+
+    /// q_s of a free body's quasi-static modes: their rows of the rotating-frame coupling at the
+    /// frame's spin W (C_k = sum W_a W_b O_ab, C_d = 2 sum W_a G_a). The load of the frame's own
+    /// angular acceleration through the deformation, (G_a q)_s W'_a, is of second order and left
+    /// out: W' is solved after q_s and depends on it.
+    fn free_quasi_static(&mut self, w: Vec3<T>) -> Result<(), String> {
+        if w.iter().all(|x| x.is_zero()) {
+            return self.solve_quasi_static(None);
+        }
+        let (n, nd) = (self.q.len(), self.n_dynamic);
+        let nn = n * n;
+        let b = self.body.clone();
+        let rot_terms = b.rotation.as_ref().ok_or("a free-floating body needs its rotation invariants")?;
+        let mut c_k = std::mem::take(&mut self.qs_work.c_k);
+        let mut c_d = std::mem::take(&mut self.qs_work.c_d);
+        c_k.fill(T::zero());
+        c_d.fill(T::zero());
+        for a in 0..3 {
+            let g_rows = &rot_terms.g[a * nn + nd * n..(a + 1) * nn];
+            for (t, g) in c_d.iter_mut().zip(g_rows) {
+                *t += w[a] * 2.0 * *g;
+            }
+            for k in 0..3 {
+                let ww = w[a] * w[k];
+                let o_rows = &rot_terms.o_mat[(3 * a + k) * nn + nd * n..(3 * a + k + 1) * nn];
+                for (t, o) in c_k.iter_mut().zip(o_rows) {
+                    *t += ww * *o;
+                }
+            }
+        }
+        let solved = self.solve_quasi_static(Some((&c_k, &c_d)));
+        self.qs_work.c_k = c_k;
+        self.qs_work.c_d = c_d;
+        solved
     }
 
     /// Energy and momenta of a free-floating body (gravity's potential included).

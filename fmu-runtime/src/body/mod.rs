@@ -20,6 +20,7 @@ mod cosim_step;
 mod dense;
 mod free_floating;
 mod mounted;
+mod quasi_static;
 mod reaction;
 mod statics;
 
@@ -29,6 +30,7 @@ use crate::propagator::ModalPropagator;
 use crate::reduced::ReducedBody;
 use crate::scalar::{Dual, Scalar, c};
 use dense::shape_dot;
+use quasi_static::QuasiStaticWork;
 use std::sync::Arc;
 
 /// Prescribed motion of the mount flange, resolved in the world frame.
@@ -248,6 +250,11 @@ pub struct FlexibleBody<T = f64> {
     /// the modal load's rate they give.
     rates: InputRates,
     load_rate: Vec<f64>,
+    /// Modes 0..n_dynamic are below the dynamic cutoff; with `quasi_static` (Model Exchange) the
+    /// others are solved algebraically at every evaluation instead of integrated.
+    n_dynamic: usize,
+    quasi_static: bool,
+    qs_work: QuasiStaticWork<T>,
 }
 
 /// Time derivatives of the inputs over the next step (first-order hold); zero means held.
@@ -320,6 +327,9 @@ impl FlexibleBody {
                 any: false,
             },
             load_rate: vec![0.0; n],
+            n_dynamic: body.n_dynamic(),
+            quasi_static: false,
+            qs_work: QuasiStaticWork::new(n, body.n_dynamic(), body.free_floating),
             body,
         }
     }
@@ -360,6 +370,9 @@ impl FlexibleBody {
             warning: None,
             rates: self.rates.clone(),
             load_rate: Vec::new(),
+            n_dynamic: self.n_dynamic,
+            quasi_static: self.quasi_static,
+            qs_work: QuasiStaticWork::new(n, self.n_dynamic, self.frame.is_some()),
         }
     }
 
@@ -403,6 +416,7 @@ impl FlexibleBody {
             ));
         }
         let mut b = FlexibleBody::new(Arc::clone(&self.body));
+        b.quasi_static = self.quasi_static;
         b.mount = state.mount;
         b.loads = state.loads;
         b.params = state.params;
@@ -477,9 +491,10 @@ impl<T: Scalar> FlexibleBody<T> {
         self.coupling.valid = false;
         &mut self.params
     }
+    /// Set the leading modes' q, q' (all of them, or Model Exchange's dynamic ones).
     pub fn set_state(&mut self, q: &[T], qd: &[T]) {
-        self.q.copy_from_slice(q);
-        self.qd.copy_from_slice(qd);
+        self.q[..q.len()].copy_from_slice(q);
+        self.qd[..qd.len()].copy_from_slice(qd);
         self.eval.valid = false;
     }
     pub fn q_mut(&mut self) -> &mut [T] {
@@ -546,11 +561,11 @@ impl<T: Scalar> FlexibleBody<T> {
         }
     }
 
-    /// d/dt (q, q') into `dq`, `dqd`.
+    /// d/dt (q, q') of the leading modes (as many as `dq` holds) into `dq`, `dqd`.
     pub fn derivatives(&mut self, dq: &mut [T], dqd: &mut [T]) -> Result<(), String> {
         self.evaluate()?;
-        dq.copy_from_slice(&self.qd);
-        dqd.copy_from_slice(&self.eval.qdd);
+        dq.copy_from_slice(&self.qd[..dq.len()]);
+        dqd.copy_from_slice(&self.eval.qdd[..dqd.len()]);
         Ok(())
     }
 

@@ -105,6 +105,15 @@ impl<T: Scalar> FlexibleBody<T> {
         self.modal_load();
         self.prepare_coupling();
         let n = self.q.len();
+        if self.quasi_static {
+            // the coupling's rows are lent to the solve (moving the vectors allocates nothing)
+            let coupling = std::mem::take(&mut self.coupling);
+            let nd = self.n_dynamic;
+            let rows = coupling.active.then(|| (&coupling.c_k[nd * n..], &coupling.c_d[nd * n..]));
+            let solved = self.solve_quasi_static(rows);
+            self.coupling = coupling;
+            solved?;
+        }
         let (alpha, beta) = (self.params.alpha, self.params.beta);
         for j in 0..n {
             let w2 = self.body.omega[j] * self.body.omega[j];
@@ -116,6 +125,9 @@ impl<T: Scalar> FlexibleBody<T> {
                 let f = self.coupling_force(i);
                 self.eval.qdd[i] -= f;
             }
+        }
+        if self.quasi_static {
+            self.eval.qdd[self.n_dynamic..].fill(T::zero());
         }
         Ok(())
     }
