@@ -15,7 +15,6 @@ from scipy.integrate import solve_ivp
 
 from conftest import _build, run_builder
 from fmu_access import Fmu
-from test_large_motion import FREE_BLOCK
 
 # FMPy's default relative tolerance for Model Exchange when an FMU names none: a host's
 # default, not one picked for these FMUs
@@ -35,6 +34,26 @@ def flange_outputs(md, flange):
     wanted = [f"{flange}.{q}[{i}]" for q in ("u", "phi", "v", "w") for i in (1, 2, 3)]
     wanted += [f"base.{q}[{i}]" for q in ("f", "t") for i in (1, 2, 3)]
     return [n for n in wanted if n in names]
+
+
+def relative_errors(outputs, me, cs):
+    """Per output, max |ME - CS| over the run relative to the swing of its vector (the largest
+    swing of the three components of tip.u, base.f, ...): a component the load barely moves is
+    judged against the quantity's own size, not against its round-off. Returns {name: error}
+    for the vectors that move."""
+    assert me.shape == cs.shape and me.shape[1] == len(outputs), (me.shape, cs.shape, len(outputs))
+    swing = np.max(np.abs(cs - cs[0]), axis=0)
+    groups = {}
+    for j, name in enumerate(outputs):
+        groups.setdefault(name.split("[")[0], []).append(j)
+    errors = {}
+    for cols in groups.values():
+        peak = swing[cols].max()
+        if peak == 0.0:
+            continue
+        for j in cols:
+            errors[outputs[j]] = np.max(np.abs(me[:, j] - cs[:, j])) / peak
+    return errors
 
 
 def run_me(path, t_end, inputs, start, outputs, grid):
@@ -91,6 +110,11 @@ def run_cs(path, t_end, inputs, start, outputs, h):
         f.close()
 
 
+def ramp(t, magnitude, rise):
+    """A force rising smoothly (half cosine) from 0 to `magnitude` over `rise` seconds."""
+    return magnitude * (0.5 - 0.5 * np.cos(np.pi * min(t, rise) / rise))
+
+
 CASES = {
     # name: (example or spec, start values, inputs(t), force flange, t_end, CS step)
     "beam force step": ("beam.json", {}, lambda t: {"tip.f[3]": 100.0}, "tip", 0.3, 1e-4),
@@ -98,6 +122,12 @@ CASES = {
         "beam.json", {}, lambda t: {"tip.f[2]": 50.0 * np.sin(2 * np.pi * 8.0 * t)}, "tip", 0.3, 1e-5),
     "t-square spinning, force step": (
         "t-square.json", {}, lambda t: {"base.w[3]": 20.0, "left.f[3]": 10.0}, "left", 0.2, 1e-4),
+    # modes to 83 kHz at 1 % damping: BDF failed here before the high modes became quasi-static;
+    # static start under gravity, then the force rises within 1 ms (a step would ring the
+    # quasi-static modes in Co-Simulation, whose exact step propagates them, and not in ME)
+    "bracket under gravity, force ramp": (
+        "bracket/bracket.json", {"g[3]": -9.81, "static_start": True}, lambda t: {"arm.f[1]": ramp(t, 200.0, 1e-3)},
+        "arm", 0.02, 1e-5),
 }
 
 
@@ -122,22 +152,16 @@ def test_generic_bdf_host_agrees_with_co_simulation(case, build_dir):
     grid = np.linspace(0.0, t_end, int(round(t_end / h)) + 1)[:: max(1, int(round(1e-3 / h)))]
     me, nfev = run_me(path, t_end, inputs, start, outputs, grid)
     cs = run_cs(path, t_end, inputs, start, outputs, h)[:: max(1, int(round(1e-3 / h)))]
-    assert me.shape == cs.shape, (me.shape, cs.shape)
-    worst, compared = 0.0, 0
-    for j, name in enumerate(outputs):
-        swing = cs[:, j] - cs[0, j]
-        peak = np.max(np.abs(swing))
-        if peak == 0.0:
-            continue
-        compared += 1
-        err = np.max(np.abs(me[:, j] - cs[:, j])) / peak
-        worst = max(worst, err)
+    errors = relative_errors(outputs, me, cs)
     # the load moves the flange: a case whose outputs all stay put would test nothing
-    assert compared >= 3, f"only {compared} of {outputs} move"
+    assert len(errors) >= 3, f"only {list(errors)} of {outputs} move"
+    worst_name = max(errors, key=errors.get)
+    worst = errors[worst_name]
     print(f"\n{case}: BDF rtol {RTOL:g}, atol from nominals: {nfev} derivative calls, worst flange output "
-          f"error {worst:.2e} of its swing")
-    # the issue's acceptance figure: 1e-3 of the swing (measured 3.7e-4, 8.3e-4, 1.9e-4; with
-    # every nominal 1 the same host gave 1.5e-3, 3.5e-3, 2.6e-2)
+          f"error {worst:.2e} of its vector's swing ({worst_name})")
+    # the issue's acceptance figure: 1e-3 of the vector's swing (measured 3.2e-4, 3.5e-4, 1.6e-4,
+    # 3.0e-4 with quasi-static high modes; with every nominal 1 the same host gave 1.5e-3,
+    # 3.5e-3, 2.6e-2, and the bracket 9.6 before the split)
     assert worst < 1e-3
 
 
@@ -171,7 +195,10 @@ def test_nominals_are_the_static_response_to_unit_loads(build_dir):
     (static_start) over those nine load cases. XML and C API give the same numbers."""
     path = build_case("beam.json", build_dir)
     f = Fmu(path, "ModelExchange")
-    xml = np.array([float(v.nominal) for v in f.md.modelVariables if v.name.startswith("q[")])
+    # the states' nominals: q of the dynamic modes (the quasi-static ones are not states)
+    xml = np.array([float(d.variable.derivative.nominal) for d in f.md.derivatives
+                    if d.variable.derivative.name.startswith("q[")])
+    assert len(xml) > 0
     f.close(terminate=False)
     cases = [{f"tip.{k}[{i}]": 1.0} for k in ("f", "t") for i in (1, 2, 3)]
     cases += [{f"g[{i}]": 9.81} for i in (1, 2, 3)]

@@ -10,7 +10,7 @@
 //! largest response to a natural-size change of any known (entries that small are rounding
 //! noise in the finite difference, not a test of the derivative).
 
-use fmi2::{Causality, Model};
+use fmi2::{Causality, Interface, Model};
 use fmu_builder::build::reduce_spec;
 use fmu_builder::input::spec::Spec;
 use fmu_runtime::fmu::BodyFmu;
@@ -163,7 +163,7 @@ fn check_jacobian(fmu: &mut BodyFmu, table: &VariableTable, what: &str) -> f64 {
 fn excite(fmu: &mut BodyFmu, scale: f64) {
     let mut x = vec![0.0; fmu.n_states()];
     fmu.get_continuous_states(&mut x);
-    let n = fmu.body().n_modes();
+    let n = fmu.body().n_dynamic();
     for j in 0..n {
         x[j] += scale * (0.7 * j as f64 + 0.3).sin();
         x[n + j] += 30.0 * scale * (1.3 * j as f64 + 0.1).cos();
@@ -188,7 +188,7 @@ fn spinning_beam_jacobian_equals_finite_differences() {
     }"#,
     );
     let table = VariableTable::new(&reduced);
-    let mut fmu = BodyFmu::from_reduced(reduced);
+    let mut fmu = BodyFmu::for_interface(reduced, Interface::ModelExchange);
     let set = |fmu: &mut BodyFmu, name: &str, x: f64| fmu.set_real(table.value_reference(name).unwrap(), x).unwrap();
     // tilted about an oblique axis, spinning and spinning up, accelerating, loaded
     let rot = {
@@ -287,7 +287,7 @@ fn free_block_jacobian_equals_finite_differences() {
     }"#,
     );
     let table = VariableTable::new(&reduced);
-    let mut fmu = BodyFmu::from_reduced(reduced);
+    let mut fmu = BodyFmu::for_interface(reduced, Interface::ModelExchange);
     let set = |fmu: &mut BodyFmu, name: &str, x: f64| fmu.set_real(table.value_reference(name).unwrap(), x).unwrap();
     for (name, x) in [
         ("initial.r[1]", 0.3),

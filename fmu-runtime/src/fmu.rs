@@ -27,9 +27,19 @@ pub struct BodyFmu {
 }
 
 impl BodyFmu {
+    /// The model of a reduced body for Co-Simulation (every mode integrated by the exact step).
     pub fn from_reduced(reduced: ReducedBody) -> Self {
         let table = Arc::new(VariableTable::new(&reduced));
         Self { table, body: FlexibleBody::new(Arc::new(reduced)), static_start: false }
+    }
+
+    /// The model for `interface`: Model Exchange hands the modes above the cutoff to no
+    /// integrator (they are solved at every evaluation); Co-Simulation's exact transition
+    /// integrates every mode at any step.
+    pub fn for_interface(reduced: ReducedBody, interface: Interface) -> Self {
+        let mut fmu = Self::from_reduced(reduced);
+        fmu.body.set_quasi_static(interface == Interface::ModelExchange);
+        fmu
     }
 
     pub fn body(&self) -> &FlexibleBody {
@@ -60,11 +70,7 @@ impl Model for BodyFmu {
         let path = dir.join(RESOURCE_FILE);
         let bytes = std::fs::read(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
         let reduced = ReducedBody::from_bytes(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
-        let mut fmu = Self::from_reduced(reduced);
-        // Model Exchange hands the modes above the cutoff to no integrator: they are solved at
-        // every evaluation; Co-Simulation's exact transition integrates every mode at any step
-        fmu.body.set_quasi_static(interface == Interface::ModelExchange);
-        Ok(fmu)
+        Ok(Self::for_interface(reduced, interface))
     }
 
     fn guid(&self) -> &str {

@@ -61,18 +61,18 @@ td,th{{border:1px solid #bbb;padding:0.2em 0.6em;text-align:right}}th{{backgroun
         r.order,
     );
     let _ = match r.dynamic_cutoff_hz {
-        Some(hz) if r.dynamic_modes < r.order => write!(
+        Some(hz) if r.dynamic_modes < r.order => writeln!(
             h,
             "<p>Model Exchange: the {} modes up to {hz:.4} Hz ({}) are states (q, qd: {} states); the {} modes above \
 are quasi-static, solved from the loads and the dynamic modes at every evaluation, so static responses stay exact and \
 the host's integrator sees no frequency above the cutoff. Set <code>reduction.dynamic_cutoff</code> [Hz] to choose \
-another cutoff.</p>\n",
+another cutoff.</p>",
             r.dynamic_modes,
             esc(&r.dynamic_cutoff_rule),
             2 * r.dynamic_modes,
             r.order - r.dynamic_modes
         ),
-        _ => write!(h, "<p>Model Exchange: all {} modes are states (q, qd: {} states).</p>\n", r.order, 2 * r.order),
+        _ => writeln!(h, "<p>Model Exchange: all {} modes are states (q, qd: {} states).</p>", r.order, 2 * r.order),
     };
     h.push_str("<h3>Eigenfrequencies of the mounted body</h3>\n<table><tr><th>mode</th><th>reduced [Hz]</th><th>full FE [Hz]</th><th>relative error</th></tr>\n");
     let a = &r.accuracy;

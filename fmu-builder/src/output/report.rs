@@ -83,7 +83,10 @@ pub fn report_of(
         constraint_modes: static_shapes,
         order: basis.omega.len(),
         dynamic_modes: reduced.n_dynamic(),
-        dynamic_cutoff_hz: reduced.dynamic_cutoff.is_finite().then(|| reduced.dynamic_cutoff / (2.0 * std::f64::consts::PI)),
+        dynamic_cutoff_hz: reduced
+            .dynamic_cutoff
+            .is_finite()
+            .then(|| reduced.dynamic_cutoff / (2.0 * std::f64::consts::PI)),
         dynamic_cutoff_rule: dynamic_cutoff(spec, basis).1.into(),
         flanges: flanges
             .iter()

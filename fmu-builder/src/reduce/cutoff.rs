@@ -4,7 +4,7 @@
 //! scene's dynamics rather than by the highest reduced frequency (constraint modes of a stiff part
 //! reach 1e5 Hz, where a lightly damped mode defeats BDF and explicit hosts alike).
 
-use crate::input::spec::{Method, Spec};
+use crate::input::spec::{Method, Role, Spec};
 use crate::reduce::basis::Basis;
 use std::f64::consts::PI;
 
@@ -32,7 +32,9 @@ pub fn dynamic_cutoff(spec: &Spec, basis: &Basis) -> (f64, &'static str) {
     let kept = basis.n_normal.min(basis.fixed_interface_omega.len());
     if kept > 0 {
         let highest = basis.fixed_interface_omega[..kept].iter().fold(0.0f64, |m, &w| m.max(w));
+        let mounted = spec.flanges.iter().any(|f| f.role == Role::Motion);
         let what = match spec.reduction.method {
+            _ if !mounted => "the highest free-free mode",
             Method::CraigBampton => "the highest fixed-interface mode",
             _ => "the highest kept normal mode",
         };
