@@ -56,7 +56,8 @@ impl<T: Scalar> FlexibleBody<T> {
             self.free_quasi_static(w)?;
         }
         let (alpha, beta) = (self.params.alpha, self.params.beta);
-        let rhs_q = &mut self.eval.qdd;
+        // the quasi-static rows stay at zero acceleration: no right-hand side for them
+        let rhs_q = &mut self.eval.qdd[..nd];
         for (j, rhs) in rhs_q.iter_mut().enumerate() {
             let w2 = b.omega[j] * b.omega[j];
             *rhs = self.load[j] - self.qd[j] * (alpha + beta * w2 + b.modal_damping[j]) - self.q[j] * w2;
@@ -64,7 +65,7 @@ impl<T: Scalar> FlexibleBody<T> {
         for i in 0..3 {
             let g = &rot_terms.g[i * nn..(i + 1) * nn];
             if !w[i].is_zero() {
-                for r in 0..n {
+                for r in 0..nd {
                     let s = shape_dot(&g[r * n..(r + 1) * n], &self.qd);
                     rhs_q[r] -= w[i] * 2.0 * s;
                 }
@@ -73,7 +74,7 @@ impl<T: Scalar> FlexibleBody<T> {
                 let ww = w[i] * w[k];
                 if !ww.is_zero() {
                     let o = &rot_terms.o_mat[(3 * i + k) * nn..(3 * i + k + 1) * nn];
-                    for r in 0..n {
+                    for r in 0..nd {
                         let s = shape_dot(&o[r * n..(r + 1) * n], &self.q);
                         rhs_q[r] -= ww * s;
                     }

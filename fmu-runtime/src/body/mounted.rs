@@ -114,21 +114,21 @@ impl<T: Scalar> FlexibleBody<T> {
             self.coupling = coupling;
             solved?;
         }
+        // the accelerated modes: all, or (Model Exchange) the dynamic ones; the rest are at rest
+        let na = if self.quasi_static { self.n_dynamic } else { n };
         let (alpha, beta) = (self.params.alpha, self.params.beta);
-        for j in 0..n {
+        for j in 0..na {
             let w2 = self.body.omega[j] * self.body.omega[j];
             self.eval.qdd[j] =
                 self.load[j] - self.qd[j] * (alpha + beta * w2 + self.body.modal_damping[j]) - self.q[j] * w2;
         }
         if self.coupling.active {
-            for i in 0..n {
+            for i in 0..na {
                 let f = self.coupling_force(i);
                 self.eval.qdd[i] -= f;
             }
         }
-        if self.quasi_static {
-            self.eval.qdd[self.n_dynamic..].fill(T::zero());
-        }
+        self.eval.qdd[na..].fill(T::zero());
         Ok(())
     }
 }
