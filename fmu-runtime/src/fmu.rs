@@ -46,6 +46,11 @@ impl BodyFmu {
         &self.body
     }
 
+    /// Model Exchange's modal states: q, q' of the dynamic modes and q of the relaxing ones.
+    fn n_modal_states(&self) -> usize {
+        2 * self.body.n_dynamic() + self.body.n_relaxing()
+    }
+
     fn name(&self, vr: u32) -> String {
         self.table.get(vr).map_or_else(|| format!("value reference {vr}"), |v| v.name.clone())
     }
@@ -277,7 +282,7 @@ impl Model for BodyFmu {
     }
 
     fn n_states(&self) -> usize {
-        2 * self.body.n_dynamic() + if self.body.frame().is_some() { FRAME_STATES } else { 0 }
+        self.n_modal_states() + if self.body.frame().is_some() { FRAME_STATES } else { 0 }
     }
     fn n_event_indicators(&self) -> usize {
         0
@@ -286,20 +291,23 @@ impl Model for BodyFmu {
         // autonomous: time enters only through the inputs
     }
 
+    // state order: q, q' of the dynamic modes, q of the relaxing modes, a free body's frame
     fn get_continuous_states(&self, x: &mut [f64]) {
-        let n = self.body.n_dynamic();
+        let (n, nr) = (self.body.n_dynamic(), self.body.n_relaxing());
         x[..n].copy_from_slice(&self.body.q()[..n]);
         x[n..2 * n].copy_from_slice(&self.body.qd()[..n]);
+        x[2 * n..2 * n + nr].copy_from_slice(&self.body.q()[n..n + nr]);
         if let Some(f) = self.body.frame() {
-            write_frame(&mut x[2 * n..], f);
+            write_frame(&mut x[2 * n + nr..], f);
         }
     }
 
     fn set_continuous_states(&mut self, x: &[f64]) {
-        let n = self.body.n_dynamic();
+        let (n, nr) = (self.body.n_dynamic(), self.body.n_relaxing());
         self.body.set_state(&x[..n], &x[n..2 * n]);
+        self.body.set_relaxing(&x[2 * n..2 * n + nr]);
         if let Some(f) = self.body.frame_mut() {
-            let y = &x[2 * n..];
+            let y = &x[2 * n + nr..];
             *f = FrameState {
                 r: [y[0], y[1], y[2]],
                 quat: [y[3], y[4], y[5], y[6]],
@@ -310,10 +318,13 @@ impl Model for BodyFmu {
     }
 
     fn get_derivatives(&mut self, dx: &mut [f64]) -> Result<(), String> {
-        let n = self.body.n_dynamic();
-        let (modal, frame_part) = dx.split_at_mut(2 * n);
-        let (dq, dqd) = modal.split_at_mut(n);
+        let (n, nr) = (self.body.n_dynamic(), self.body.n_relaxing());
+        let (modal, frame_part) = dx.split_at_mut(2 * n + nr);
+        let (dq, rest) = modal.split_at_mut(n);
+        let (dqd, dr) = rest.split_at_mut(n);
         self.body.derivatives(dq, dqd)?;
+        // a relaxing mode's rate is its q', solved with the evaluation
+        dr.copy_from_slice(&self.body.qd()[n..n + nr]);
         if self.body.frame().is_some() {
             let rate = self.body.frame_rate()?;
             write_frame(frame_part, &rate);

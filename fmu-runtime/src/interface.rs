@@ -112,6 +112,9 @@ pub struct VariableTable {
     /// Modes 1..=n_dynamic are states; the rest are quasi-static (Model Exchange solves them from
     /// the inputs and the states at every evaluation).
     pub n_dynamic: usize,
+    /// Modes n_dynamic+1..=n_dynamic+n_relaxing are relaxing: their q is a state whose rate
+    /// q' is solved from their damping without inertia.
+    pub n_relaxing: usize,
     /// The body has rotating-frame terms, through which q'_d loads the quasi-static modes.
     rotates: bool,
 }
@@ -311,12 +314,22 @@ impl VariableTable {
         }
         let n = body.n_modes();
         let nd = body.n_dynamic();
+        let nr = body.n_relaxing();
         let nominal = modal_nominals(body);
         // a dynamic mode's q, q' are states with start values; a quasi-static mode's are
-        // calculated (its equilibrium with the inputs and the dynamic modes, at rest)
+        // calculated (its equilibrium with the inputs and the dynamic modes, at rest), a
+        // relaxing mode's q a state that starts there
         let initial = |j: usize| Some(if j < nd { Initial::Approx } else { Initial::Calculated });
         let start = |j: usize| (j < nd).then_some(Start::Real(0.0));
-        let kind = |j: usize| if j < nd { "" } else { ", quasi-static in Model Exchange" };
+        let kind = |j: usize| {
+            if j < nd {
+                ""
+            } else if j < nd + nr {
+                ", relaxing in Model Exchange: damped without inertia"
+            } else {
+                ", quasi-static in Model Exchange"
+            }
+        };
         let mut q_vr = Vec::with_capacity(n);
         for j in 0..n {
             q_vr.push(b.push(
@@ -334,7 +347,7 @@ impl VariableTable {
                 None,
                 Quantity::ModalCoordinate(j),
             ));
-            if j < nd {
+            if j < nd + nr {
                 b.variables[q_vr[j] as usize - 1].nominal = Some(nominal[j]);
             }
         }
@@ -350,8 +363,10 @@ impl VariableTable {
                 Some("1/s"),
                 Quantity::ModalVelocity(j),
             );
-            if j < nd {
+            if j < nd + nr {
                 b.variables[vr as usize - 1].derivative_of = Some(q_vr_j);
+            }
+            if j < nd {
                 b.variables[vr as usize - 1].nominal = Some(body.omega[j] * nominal[j]);
             }
             qd_vr.push(vr);
@@ -376,7 +391,7 @@ impl VariableTable {
         }
         // modal coordinates carry sqrt(kg) m, left unitless in the XML; their rates are then
         // 1/s and 1/s2
-        Self { variables: b.variables, n_dynamic: nd, rotates: body.rotation.is_some() }
+        Self { variables: b.variables, n_dynamic: nd, n_relaxing: nr, rotates: body.rotation.is_some() }
     }
 
     fn free_body_parameters(b: &mut Builder) {
@@ -564,25 +579,29 @@ impl VariableTable {
         self.variable(name).map(|v| v.vr)
     }
 
-    /// State value references in state order: q[1..n] then qd[1..n].
+    /// State value references in state order (`state_variables`).
     pub fn states(&self) -> Vec<u32> {
         self.state_variables().map(|v| v.vr).collect()
     }
 
-    /// The state variables in state order (q, qd of the dynamic modes, then a free body's
-    /// frame), without allocating.
+    /// The state variables in state order (q, qd of the dynamic modes, q of the relaxing ones,
+    /// then a free body's frame), without allocating.
     pub fn state_variables(&self) -> impl Iterator<Item = &Variable> {
-        let nd = self.n_dynamic;
-        let of = move |f: fn(&Quantity, usize) -> bool| self.variables.iter().filter(move |v| f(&v.quantity, nd));
-        of(|q, nd| matches!(q, Quantity::ModalCoordinate(j) if *j < nd))
-            .chain(of(|q, nd| matches!(q, Quantity::ModalVelocity(j) if *j < nd)))
-            .chain(of(|q, _| Self::is_frame_state(q)))
+        let (nd, ns) = (self.n_dynamic, self.n_dynamic + self.n_relaxing);
+        let of =
+            move |f: fn(&Quantity, usize, usize) -> bool| self.variables.iter().filter(move |v| f(&v.quantity, nd, ns));
+        of(|q, nd, _| matches!(q, Quantity::ModalCoordinate(j) if *j < nd))
+            .chain(of(|q, nd, _| matches!(q, Quantity::ModalVelocity(j) if *j < nd)))
+            .chain(of(|q, nd, ns| matches!(q, Quantity::ModalCoordinate(j) if *j >= nd && *j < ns)))
+            .chain(of(|q, _, _| Self::is_frame_state(q)))
     }
 
-    /// Whether the quantity is a continuous state: q, q' of a dynamic mode or a frame state.
+    /// Whether the quantity is a continuous state: q, q' of a dynamic mode, q of a relaxing
+    /// one or a frame state.
     pub fn is_state(&self, q: Quantity) -> bool {
         match q {
-            Quantity::ModalCoordinate(j) | Quantity::ModalVelocity(j) => j < self.n_dynamic,
+            Quantity::ModalCoordinate(j) => j < self.n_dynamic + self.n_relaxing,
+            Quantity::ModalVelocity(j) => j < self.n_dynamic,
             _ => Self::is_frame_state(&q),
         }
     }
@@ -598,11 +617,12 @@ impl VariableTable {
     }
 
     /// Derivative value references in state order: qd (= der(q)) then der(qd) of the dynamic
-    /// modes, then a free body's frame rates.
+    /// modes, qd of the relaxing ones, then a free body's frame rates.
     pub fn derivatives(&self) -> Vec<u32> {
-        let nd = self.n_dynamic;
+        let (nd, ns) = (self.n_dynamic, self.n_dynamic + self.n_relaxing);
         let mut d = self.select(|q| matches!(q, Quantity::ModalVelocity(j) if *j < nd));
         d.extend(self.select(|q| matches!(q, Quantity::ModalAcceleration(j) if *j < nd)));
+        d.extend(self.select(|q| matches!(q, Quantity::ModalVelocity(j) if *j >= nd && *j < ns)));
         // frame: d/dt r = v (the state frame.v), then the quaternion, velocity and spin rates
         d.extend(self.variables.iter().filter(|v| matches!(v.quantity, Quantity::FrameVelocity(_))).map(|v| v.vr));
         d.extend(
@@ -630,6 +650,7 @@ impl VariableTable {
         let mount_z = |q: &Q| matches!(q, Q::MountAngularAcceleration(_));
         let loads = |q: &Q| matches!(q, Q::FlangeForce(..) | Q::FlangeTorque(..));
         let nd = self.n_dynamic;
+        let ns = nd + self.n_relaxing;
         let quasi_static = self.variables.iter().any(|v| matches!(v.quantity, Q::ModalCoordinate(j) if j >= nd));
         let qd_all = |q: &Q| matches!(q, Q::ModalVelocity(j) if *j < nd);
         // q: the dynamic modes' states, and what the quasi-static modes are solved from (the
@@ -637,7 +658,7 @@ impl VariableTable {
         // through the gyroscopic terms the dynamic modes' velocities)
         let rotates = self.rotates;
         let q_all = move |q: &Q| {
-            matches!(q, Q::ModalCoordinate(j) if *j < nd)
+            matches!(q, Q::ModalCoordinate(j) if *j < ns)
                 || quasi_static
                     && (mount_a(q)
                         || mount_rot(q)
@@ -646,6 +667,9 @@ impl VariableTable {
         };
         // q'' = p(a, R, loads) - d q' - w^2 q
         let accel = |q: &Q| mount_a(q) || mount_rot(q) || loads(q) || q_all(q) || qd_all(q);
+        // d_r q'_r = p_r - w_r^2 q_r - (C_k q + C_d q'_d)_r
+        let relaxing = self.n_relaxing > 0;
+        let relaxing_rate = |q: &Q| accel(q) || mount_w(q) || mount_z(q);
         if self.variables.iter().any(|v| Self::is_frame_state(&v.quantity)) {
             // free-floating: every output and derivative may depend on every state and load
             let mut deps = self.select(|q| self.is_state(*q) || loads(q));
@@ -657,16 +681,20 @@ impl VariableTable {
                 FlangeOutput::Position(_) => self.select(|q| mount_r(q) || mount_rot(q) || q_all(q)),
                 FlangeOutput::Rotation(..) => self.select(|q| mount_rot(q) || q_all(q)),
                 FlangeOutput::Displacement(_) | FlangeOutput::RotationVector(_) => self.select(q_all),
-                FlangeOutput::Velocity(_) => {
-                    self.select(|q| mount_v(q) || mount_w(q) || mount_rot(q) || q_all(q) || qd_all(q))
+                // the relaxing modes' rates follow the loads and motion as their accelerations do
+                FlangeOutput::Velocity(_) => self.select(|q| {
+                    mount_v(q) || mount_w(q) || mount_rot(q) || q_all(q) || qd_all(q) || relaxing && relaxing_rate(q)
+                }),
+                FlangeOutput::AngularVelocity(_) => {
+                    self.select(|q| mount_w(q) || mount_rot(q) || qd_all(q) || relaxing && relaxing_rate(q))
                 }
-                FlangeOutput::AngularVelocity(_) => self.select(|q| mount_w(q) || mount_rot(q) || qd_all(q)),
                 FlangeOutput::Acceleration(_) | FlangeOutput::AngularAcceleration(_) => {
                     self.select(|q| accel(q) || mount_w(q) || mount_z(q))
                 }
             },
             // the rotating-frame terms couple all modes and bring in the spin
             Q::MountForce(_) | Q::MountTorque(_) => self.select(|q| accel(q) || mount_w(q) || mount_z(q)),
+            Q::ModalVelocity(j) if j >= nd && j < ns => self.select(relaxing_rate),
             Q::ModalVelocity(j) => self.select(|q| *q == Q::ModalVelocity(j)),
             Q::ModalAcceleration(_) => self.select(|q| accel(q) || mount_w(q) || mount_z(q)),
             _ => Vec::new(),

@@ -85,6 +85,26 @@ impl ReducedBody {
         self.omega.iter().take_while(|&&w| w <= self.dynamic_cutoff).count()
     }
 
+    /// Rate [1/s] at which mode j settles once its inertia is dropped and its damping kept,
+    /// omega^2 / (alpha + beta omega^2 + 2 zeta omega); infinite for an undamped mode.
+    pub fn relaxation_rate(&self, j: usize, alpha: f64, beta: f64) -> f64 {
+        let w2 = self.omega[j] * self.omega[j];
+        let d = alpha + beta * w2 + self.modal_damping[j];
+        if d > 0.0 { w2 / d } else { f64::INFINITY }
+    }
+
+    /// Number of relaxing modes: the quasi-static modes, next after the dynamic ones, that
+    /// settle slower than the cutoff (overdamped by stiffness-proportional damping, whose
+    /// relaxation tends to 1/beta whatever their frequency). Model Exchange keeps them as
+    /// first-order states (damping without inertia) instead of solving them algebraically,
+    /// so a load change creeps through them as the material damping says. The rate grows
+    /// with omega for Rayleigh and constant modal damping, so they are the leading ones.
+    pub fn n_relaxing(&self) -> usize {
+        (self.n_dynamic()..self.n_modes())
+            .take_while(|&j| self.relaxation_rate(j, self.alpha, self.beta) < self.dynamic_cutoff)
+            .count()
+    }
+
     pub fn to_container(&self) -> Container {
         let n = self.n_modes();
         let mut c = Container::new();

@@ -65,12 +65,16 @@ td,th{{border:1px solid #bbb;padding:0.2em 0.6em;text-align:right}}th{{backgroun
             h,
             "<p>Model Exchange: the {} modes up to {hz:.4} Hz ({}) are states (q, qd: {} states); the {} modes above \
 are quasi-static, solved from the loads and the dynamic modes at every evaluation, so static responses stay exact and \
-the host's integrator sees no frequency above the cutoff. Set <code>reduction.dynamic_cutoff</code> [Hz] to choose \
-another cutoff.</p>",
+the host's integrator sees no frequency above the cutoff. {} of the quasi-static modes settle slower than the cutoff \
+through their damping (stiffness-proportional damping makes high modes creep at about 1/beta): they keep one state \
+each, q, whose rate follows from their damping without inertia ({} states in all). Set \
+<code>reduction.dynamic_cutoff</code> [Hz] to choose another cutoff.</p>",
             r.dynamic_modes,
             esc(&r.dynamic_cutoff_rule),
             2 * r.dynamic_modes,
-            r.order - r.dynamic_modes
+            r.order - r.dynamic_modes,
+            r.relaxing_modes,
+            2 * r.dynamic_modes + r.relaxing_modes
         ),
         _ => writeln!(h, "<p>Model Exchange: all {} modes are states (q, qd: {} states).</p>", r.order, 2 * r.order),
     };
@@ -316,6 +320,7 @@ mod tests {
             constraint_modes: 6,
             order: 10,
             dynamic_modes: 4,
+            relaxing_modes: 0,
             dynamic_cutoff_hz: Some(500.0),
             dynamic_cutoff_rule: "the highest fixed-interface mode".into(),
             flanges: vec![FlangeReport {

@@ -43,6 +43,9 @@ pub struct Report {
     /// Modes that are states in Model Exchange (at or below the cutoff); the rest are
     /// quasi-static there.
     pub dynamic_modes: usize,
+    /// Quasi-static modes that settle slower than the cutoff through their damping: first-order
+    /// states in Model Exchange (q only, its rate from damping without inertia).
+    pub relaxing_modes: usize,
     /// The cutoff between dynamic and quasi-static modes [Hz]; None: every mode dynamic.
     pub dynamic_cutoff_hz: Option<f64>,
     /// How the cutoff was chosen.
@@ -83,6 +86,7 @@ pub fn report_of(
         constraint_modes: static_shapes,
         order: basis.omega.len(),
         dynamic_modes: reduced.n_dynamic(),
+        relaxing_modes: reduced.n_relaxing(),
         dynamic_cutoff_hz: reduced
             .dynamic_cutoff
             .is_finite()

@@ -33,8 +33,18 @@ pub fn text(r: &Report) -> String {
     let _ = match r.dynamic_cutoff_hz {
         Some(hz) if quasi_static > 0 => writeln!(
             s,
-            "  Model Exchange: {} dynamic modes (states) up to {hz:.4} Hz ({}), {quasi_static} quasi-static above",
-            r.dynamic_modes, r.dynamic_cutoff_rule
+            "  Model Exchange: {} dynamic modes (states) up to {hz:.4} Hz ({}), {quasi_static} quasi-static above{}",
+            r.dynamic_modes,
+            r.dynamic_cutoff_rule,
+            if r.relaxing_modes > 0 {
+                format!(
+                    " ({} of them relaxing: damped slower than the cutoff, one state each; {} states)",
+                    r.relaxing_modes,
+                    2 * r.dynamic_modes + r.relaxing_modes
+                )
+            } else {
+                String::new()
+            }
         ),
         _ => writeln!(s, "  Model Exchange: all {} modes dynamic (states)", r.order),
     };

@@ -253,7 +253,12 @@ pub struct FlexibleBody<T = f64> {
     /// Modes 0..n_dynamic are below the dynamic cutoff; with `quasi_static` (Model Exchange) the
     /// others are solved algebraically at every evaluation instead of integrated.
     n_dynamic: usize,
+    /// Quasi-static modes nd..nd + n_relaxing settle through their damping (first-order states
+    /// in Model Exchange); the rest are algebraic.
+    n_relaxing: usize,
     quasi_static: bool,
+    /// Set while the quasi-static modes are put in equilibrium (relaxing ones included).
+    settling: bool,
     qs_work: QuasiStaticWork<T>,
 }
 
@@ -328,7 +333,9 @@ impl FlexibleBody {
             },
             load_rate: vec![0.0; n],
             n_dynamic: body.n_dynamic(),
+            n_relaxing: body.n_relaxing(),
             quasi_static: false,
+            settling: false,
             qs_work: QuasiStaticWork::new(n, body.n_dynamic(), body.free_floating),
             body,
         }
@@ -371,7 +378,9 @@ impl FlexibleBody {
             rates: self.rates.clone(),
             load_rate: Vec::new(),
             n_dynamic: self.n_dynamic,
+            n_relaxing: self.n_relaxing,
             quasi_static: self.quasi_static,
+            settling: false,
             qs_work: QuasiStaticWork::new(n, self.n_dynamic, self.frame.is_some()),
         }
     }

@@ -48,8 +48,10 @@ impl<T: Scalar> FlexibleBody<T> {
         }
         let was = self.quasi_static;
         self.quasi_static = true;
+        self.settling = true;
         self.eval.valid = false;
         let settled = self.evaluate();
+        self.settling = false;
         self.quasi_static = was;
         self.eval.valid = false;
         settled
@@ -60,38 +62,88 @@ impl<T: Scalar> FlexibleBody<T> {
         self.eval.valid = false;
     }
 
-    /// Solve q_s from the modal load in `self.load` and the rows s of the coupling (`rows`: C_k and
-    /// C_d, n_s x n each; None: no coupling), then q'_s = 0.
+    /// Solve the quasi-static modes from the modal load in `self.load` and the rows s of the
+    /// coupling (`rows`: C_k and C_d, n_s x n each; None: no coupling). The algebraic ones get
+    /// q_a from their equilibrium with every other coordinate and q'_a = 0; the relaxing ones
+    /// (states in Model Exchange) keep their q_r and get the rate of their damping without
+    /// inertia, d_r q'_r = p_r - omega_r^2 q_r - (C_k q)_r - (C_d q'_d)_r. The spin's
+    /// gyroscopic coupling among the quasi-static modes' own rates is left out (their creep is
+    /// slow, the spin's coupling of it second order); statics are exact.
     pub(super) fn solve_quasi_static(&mut self, rows: Option<(&[T], &[T])>) -> Result<(), String> {
         let (n, nd) = (self.q.len(), self.n_dynamic);
-        let ns = n - nd;
-        if ns == 0 {
+        if nd == n {
             return Ok(());
         }
+        // settling puts every quasi-static mode in equilibrium, the relaxing ones included
+        let nr = if self.settling { 0 } else { self.n_relaxing };
+        let known = nd + nr;
+        let na = n - known;
         let omega = &self.body.omega;
         self.qd[nd..].fill(T::zero());
-        let Some((c_k, c_d)) = rows else {
-            for j in nd..n {
-                self.q[j] = self.load[j] / (omega[j] * omega[j]);
+        match rows {
+            None => {
+                for j in known..n {
+                    self.q[j] = self.load[j] / (omega[j] * omega[j]);
+                }
             }
-            return Ok(());
-        };
-        let a = &mut self.qs_work.matrix;
-        for i in 0..ns {
-            let (rk, rd) = (&c_k[i * n..(i + 1) * n], &c_d[i * n..(i + 1) * n]);
-            let mut rhs = self.load[nd + i];
-            for j in 0..nd {
-                rhs -= rk[j] * self.q[j] + rd[j] * self.qd[j];
+            Some((c_k, c_d)) if na > 0 => {
+                let a = &mut self.qs_work.matrix;
+                for i in 0..na {
+                    let row = (nr + i) * n;
+                    let (rk, rd) = (&c_k[row..row + n], &c_d[row..row + n]);
+                    let mut rhs = self.load[known + i];
+                    for j in 0..known {
+                        rhs -= rk[j] * self.q[j];
+                    }
+                    for j in 0..nd {
+                        rhs -= rd[j] * self.qd[j];
+                    }
+                    self.q[known + i] = rhs;
+                    a[i * na..(i + 1) * na].copy_from_slice(&rk[known..]);
+                    a[i * na + i] += c(omega[known + i] * omega[known + i]);
+                }
+                solve_dense(&mut a[..na * na], &mut self.q[known..], na).map_err(|_| {
+                    "the quasi-static modes have no equilibrium: the effective stiffness above the dynamic cutoff is \
+                     singular at the present spin and loads (raise reduction.dynamic_cutoff so that these modes are \
+                     integrated)"
+                        .to_string()
+                })?;
             }
-            self.q[nd + i] = rhs;
-            a[i * ns..(i + 1) * ns].copy_from_slice(&rk[nd..]);
-            a[i * ns + i] += c(omega[nd + i] * omega[nd + i]);
+            Some(_) => {}
         }
-        solve_dense(a, &mut self.q[nd..], ns).map_err(|_| {
-            "the quasi-static modes have no equilibrium: the effective stiffness above the dynamic cutoff is singular \
-             at the present spin and loads (raise reduction.dynamic_cutoff so that these modes are integrated)"
-                .to_string()
-        })
+        let (alpha, beta) = (self.params.alpha, self.params.beta);
+        let cutoff = self.body.dynamic_cutoff;
+        for l in 0..nr {
+            let j = nd + l;
+            let w2 = omega[j] * omega[j];
+            let mut force = self.load[j] - self.q[j] * w2;
+            if let Some((c_k, c_d)) = rows {
+                let (rk, rd) = (&c_k[l * n..(l + 1) * n], &c_d[l * n..(l + 1) * n]);
+                for k in 0..n {
+                    force -= rk[k] * self.q[k];
+                }
+                for k in 0..nd {
+                    force -= rd[k] * self.qd[k];
+                }
+            }
+            // a mode whose damping was lowered at run time (alpha, beta are parameters)
+            // settles at the cutoff's rate at most: the host never sees a faster one
+            let d = (alpha + beta * w2 + self.body.modal_damping[j]).max(w2 / cutoff);
+            self.qd[j] = force / d;
+        }
+        Ok(())
+    }
+
+    /// Number of relaxing modes (first-order states of Model Exchange after the dynamic ones).
+    pub fn n_relaxing(&self) -> usize {
+        self.n_relaxing
+    }
+
+    /// Set the relaxing modes' q (Model Exchange's states after the dynamic modes' q, q').
+    pub fn set_relaxing(&mut self, q: &[T]) {
+        let nd = self.n_dynamic;
+        self.q[nd..nd + q.len()].copy_from_slice(q);
+        self.eval.valid = false;
     }
 }
 
@@ -170,5 +222,40 @@ mod tests {
         me.qdd().unwrap();
         assert_eq!(me.q(), cs.q());
         assert_eq!(cs.qd(), [0.2, 0.0, 0.0]);
+    }
+
+    /// Relaxing modes: stiffness-proportional damping that makes the quasi-static modes settle
+    /// at about 1/beta, below the cutoff. They keep q as a state whose rate is that of their
+    /// damping without inertia, d q' = p - omega^2 q: zero at the static equilibrium (statics
+    /// exact), -omega^2 dq / d off it.
+    #[test]
+    fn relaxing_modes_creep_at_the_rate_of_their_damping() {
+        let mut reduced = spinning_body();
+        reduced.rotation = None;
+        reduced.alpha = 0.5;
+        reduced.beta = 1e-2;
+        reduced.dynamic_cutoff = 200.0;
+        assert_eq!((reduced.n_dynamic(), reduced.n_relaxing()), (1, 2));
+        reduced.beta = 1e-4; // settling at about 1e4 1/s, above the cutoff: algebraic
+        assert_eq!(reduced.n_relaxing(), 0);
+        reduced.beta = 1e-2;
+        let mut b = FlexibleBody::new(Arc::new(reduced));
+        b.load_mut(0).f = [2.0, -1.0, 4.0];
+        b.settle_static().unwrap();
+        let statics = b.q().to_vec();
+        b.set_quasi_static(true);
+        b.qdd().unwrap();
+        assert_eq!(b.q().len(), 3);
+        // measured 0 (the diagonal solve returns the same quotient)
+        assert!(b.qd()[1..].iter().all(|v| v.abs() < 1e-12), "{:?}", b.qd());
+        let dq = 1e-3 * statics[2].abs().max(1e-6);
+        b.set_relaxing(&[statics[1], statics[2] + dq]);
+        b.qdd().unwrap();
+        let w2 = 5000.0f64 * 5000.0;
+        let expected = -w2 * dq / (0.5 + 1e-2 * w2);
+        // measured 0 and round-off relative to the rate
+        assert!(b.qd()[1].abs() < 1e-12, "{}", b.qd()[1]);
+        assert!((b.qd()[2] - expected).abs() < 1e-9 * expected.abs(), "{} vs {expected}", b.qd()[2]);
+        assert_eq!(b.q()[2], statics[2] + dq, "a relaxing mode keeps its state");
     }
 }
