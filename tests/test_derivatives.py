@@ -92,13 +92,17 @@ def start_free(path, kind):
 
 
 def excite(fmu, scale):
-    """Every dynamic mode displaced and moving (Model Exchange: through the state vector; the
-    quasi-static modes follow from them and the inputs)."""
+    """Every dynamic mode displaced and moving, every relaxing one displaced (Model Exchange:
+    through the state vector; the algebraic modes follow from them and the inputs)."""
     x = fmu.states()
-    n = sum(1 for d in fmu.md.derivatives if d.variable.derivative.name.startswith("q["))
+    names = [d.variable.derivative.name for d in fmu.md.derivatives]
+    # state order: q, qd of the dynamic modes, then q of the relaxing ones
+    n = sum(1 for s in names if s.startswith("qd["))
+    nr = sum(1 for s in names if s.startswith("q[")) - n
     j = np.arange(n)
     x[:n] += scale * np.sin(0.7 * j + 0.3)
     x[n:2 * n] += 30 * scale * np.cos(1.3 * j + 0.1)
+    x[2 * n:2 * n + nr] += scale * np.sin(0.9 * np.arange(nr) + 0.2)
     fmu.set_states(x)
 
 
