@@ -85,6 +85,12 @@ impl ReducedBody {
         self.omega.iter().take_while(|&&w| w <= self.dynamic_cutoff).count()
     }
 
+    /// d of mode j's q'' + d q' + omega^2 q = p at the built damping: alpha + beta omega^2 +
+    /// 2 zeta omega [1/s].
+    pub fn damping_rate(&self, j: usize) -> f64 {
+        self.alpha + self.beta * self.omega[j] * self.omega[j] + self.modal_damping[j]
+    }
+
     /// Rate [1/s] at which mode j settles once its inertia is dropped and its damping kept,
     /// omega^2 / (alpha + beta omega^2 + 2 zeta omega); infinite for an undamped mode.
     pub fn relaxation_rate(&self, j: usize, alpha: f64, beta: f64) -> f64 {

@@ -323,6 +323,8 @@ mod tests {
             relaxing_modes: 0,
             dynamic_cutoff_hz: Some(500.0),
             dynamic_cutoff_rule: "the highest fixed-interface mode".into(),
+            default_tolerance: 1e-6,
+            ringing_periods: 12.0,
             flanges: vec![FlangeReport {
                 name: "tip".into(),
                 role: "force".into(),

@@ -2,6 +2,7 @@
 //! (`summary`), the HTML documentation (`documentation`), the FMU's modelDescription.xml and
 //! archive (`fmu`), and the packaging of it all with the runtime binary (`package`).
 
+pub mod default_experiment;
 pub mod documentation;
 pub mod fmu;
 pub mod package;

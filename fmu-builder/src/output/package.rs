@@ -2,6 +2,7 @@
 
 use crate::error::{BuildError, Result};
 use crate::input::spec::Spec;
+use crate::output::default_experiment::default_experiment;
 use crate::output::documentation;
 use crate::output::fmu;
 use crate::output::report::Report;
@@ -17,8 +18,7 @@ pub const RUNTIME_SO: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/fmu_runt
 pub fn write_fmu(spec: &Spec, reduced: &ReducedBody, report: &Report, output: &Path) -> Result<()> {
     let id = fmu::model_identifier(&spec.name);
     let table = VariableTable::new(reduced);
-    let slowest = reduced.omega.first().copied().unwrap_or(1.0);
-    let period = 2.0 * std::f64::consts::PI / slowest;
+    let experiment = default_experiment(reduced);
     let info = fmu::ModelInfo {
         model_name: spec.name.clone(),
         model_identifier: id.clone(),
@@ -30,9 +30,9 @@ pub fn write_fmu(spec: &Spec, reduced: &ReducedBody, report: &Report, output: &P
         generation_date_time: generation_time()?,
         default_experiment: fmu::DefaultExperiment {
             start: 0.0,
-            stop: (10.0 * period).max(1e-3),
+            stop: experiment.stop,
             step: 1e-3,
-            tolerance: 1e-6,
+            tolerance: experiment.tolerance,
         },
     };
     let xml = fmu::model_description_xml(&info, &table).map_err(|e| BuildError::Numerical(e.to_string()))?;

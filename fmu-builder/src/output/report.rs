@@ -5,6 +5,7 @@ use crate::input::spec::{Role, Spec};
 use crate::model::flange::Flange;
 use crate::model::part::Part;
 use crate::model::rigid_coupling::Assembled;
+use crate::output::default_experiment::default_experiment;
 use crate::reduce::accuracy::Accuracy;
 use crate::reduce::basis::Basis;
 use crate::reduce::cutoff::dynamic_cutoff;
@@ -50,6 +51,11 @@ pub struct Report {
     pub dynamic_cutoff_hz: Option<f64>,
     /// How the cutoff was chosen.
     pub dynamic_cutoff_rule: String,
+    /// The relative tolerance the FMU's default experiment proposes to Model Exchange hosts.
+    pub default_tolerance: f64,
+    /// Periods the longest-ringing dynamic mode completes within the default experiment before
+    /// it has decayed by e: the tolerance falls a decade per decade of them above 10.
+    pub ringing_periods: f64,
     pub flanges: Vec<FlangeReport>,
     pub accuracy: Accuracy,
 }
@@ -68,6 +74,7 @@ pub fn report_of(
     accuracy: Accuracy,
 ) -> Report {
     let props = model.mass_properties;
+    let experiment = default_experiment(reduced);
     Report {
         model_name: spec.name.clone(),
         guid: reduced.guid.clone(),
@@ -92,6 +99,8 @@ pub fn report_of(
             .is_finite()
             .then(|| reduced.dynamic_cutoff / (2.0 * std::f64::consts::PI)),
         dynamic_cutoff_rule: dynamic_cutoff(spec, basis).1.into(),
+        default_tolerance: experiment.tolerance,
+        ringing_periods: experiment.ringing_periods,
         flanges: flanges
             .iter()
             .map(|f| FlangeReport {

@@ -48,6 +48,15 @@ pub fn text(r: &Report) -> String {
         ),
         _ => writeln!(s, "  Model Exchange: all {} modes dynamic (states)", r.order),
     };
+    if r.default_tolerance < crate::output::default_experiment::DAMPED_TOLERANCE {
+        let _ = writeln!(
+            s,
+            "  default tolerance {:.0e}: a dynamic mode rings {:.0} periods over the default experiment \
+             (little or no damping), and a Model Exchange host's error grows with each \
+             (Co-Simulation's step is exact for it)",
+            r.default_tolerance, r.ringing_periods
+        );
+    }
     let a = &r.accuracy;
     let shown = a.reduced_hz.len().min(8);
     let freqs: Vec<String> = a.reduced_hz[..shown].iter().map(|f| format!("{f:.4}")).collect();
