@@ -85,18 +85,17 @@ impl ReducedBody {
         self.omega.iter().take_while(|&&w| w <= self.dynamic_cutoff).count()
     }
 
-    /// d of mode j's q'' + d q' + omega^2 q = p at the built damping: alpha + beta omega^2 +
-    /// 2 zeta omega [1/s].
-    pub fn damping_rate(&self, j: usize) -> f64 {
-        self.alpha + self.beta * self.omega[j] * self.omega[j] + self.modal_damping[j]
+    /// d of mode j's q'' + d q' + omega^2 q = p under Rayleigh alpha, beta (the built ones or
+    /// the run-time parameters) and the modal damping: alpha + beta omega^2 + 2 zeta omega [1/s].
+    pub fn damping_rate(&self, j: usize, alpha: f64, beta: f64) -> f64 {
+        alpha + beta * self.omega[j] * self.omega[j] + self.modal_damping[j]
     }
 
     /// Rate [1/s] at which mode j settles once its inertia is dropped and its damping kept,
     /// omega^2 / (alpha + beta omega^2 + 2 zeta omega); infinite for an undamped mode.
     pub fn relaxation_rate(&self, j: usize, alpha: f64, beta: f64) -> f64 {
-        let w2 = self.omega[j] * self.omega[j];
-        let d = alpha + beta * w2 + self.modal_damping[j];
-        if d > 0.0 { w2 / d } else { f64::INFINITY }
+        let d = self.damping_rate(j, alpha, beta);
+        if d > 0.0 { self.omega[j] * self.omega[j] / d } else { f64::INFINITY }
     }
 
     /// Number of relaxing modes: the quasi-static modes, next after the dynamic ones, that

@@ -36,7 +36,7 @@ pub fn default_experiment(reduced: &ReducedBody) -> DefaultExperiment {
     let slowest = reduced.omega.first().copied().filter(|w| *w > 0.0).unwrap_or(1.0);
     let stop = (10.0 * 2.0 * PI / slowest).max(1e-3);
     let ringing_periods = (0..reduced.n_dynamic())
-        .map(|j| ringing_periods(reduced.omega[j], reduced.damping_rate(j), stop))
+        .map(|j| ringing_periods(reduced.omega[j], reduced.damping_rate(j, reduced.alpha, reduced.beta), stop))
         .fold(0.0, f64::max);
     DefaultExperiment { stop, tolerance: tolerance_for(ringing_periods), ringing_periods }
 }
