@@ -154,8 +154,8 @@ CASES = {
         "l-beam.json", {"g[3]": -9.81, "static_start": True},
         lambda t: {"tip.f[3]": 0.5 * np.sin(2 * np.pi * 2.0 * t)}, "tip", 0.5, 1e-4),
     # modes to 83 kHz at 1 % damping: BDF failed here before the high modes became quasi-static;
-    # static start under gravity, then the force rises within 1 ms (a step would ring the
-    # quasi-static modes in Co-Simulation, whose exact step propagates them, and not in ME)
+    # static start under gravity, then the force rises within 1 ms (the force steps are FMPy's,
+    # test_model_exchange_split.py)
     "bracket under gravity, force ramp": (
         "bracket/bracket.json", {"g[3]": -9.81, "static_start": True}, lambda t: {"arm.f[1]": ramp(t, 200.0, 1e-3)},
         "arm", 0.02, 1e-5),

@@ -53,8 +53,7 @@ td,th{{border:1px solid #bbb;padding:0.2em 0.6em;text-align:right}}th{{backgroun
     h.push_str("</table>\n");
     let _ = write!(
         h,
-        "<h2>Reduction</h2>\n<p>{} with {} fixed-interface normal modes and {} constraint modes: reduced order {} \
-(Co-Simulation propagates all of them exactly).</p>\n",
+        "<h2>Reduction</h2>\n<p>{} with {} fixed-interface normal modes and {} constraint modes: reduced order {}.</p>\n",
         esc(&r.method),
         r.fixed_interface_modes,
         r.constraint_modes,
@@ -65,7 +64,7 @@ td,th{{border:1px solid #bbb;padding:0.2em 0.6em;text-align:right}}th{{backgroun
             h,
             "<p>Model Exchange: the {} modes up to {hz:.4} Hz ({}) are states (q, qd: {} states); the {} modes above \
 are quasi-static, solved from the loads and the dynamic modes at every evaluation, so static responses stay exact and \
-the host's integrator sees no frequency above the cutoff. {} of the quasi-static modes settle slower than the cutoff \
+the host's integrator sees no frequency above the cutoff. Co-Simulation integrates the same split (the dynamic modes exactly, the others quasi-static), so both interfaces are one model. {} of the quasi-static modes settle slower than the cutoff \
 through their damping (stiffness-proportional damping makes high modes creep at about 1/beta): they keep one state \
 each, q, whose rate follows from their damping without inertia ({} states in all). Set \
 <code>reduction.dynamic_cutoff</code> [Hz] to choose another cutoff.</p>",
@@ -76,7 +75,12 @@ each, q, whose rate follows from their damping without inertia ({} states in all
             r.relaxing_modes,
             2 * r.dynamic_modes + r.relaxing_modes
         ),
-        _ => writeln!(h, "<p>Model Exchange: all {} modes are states (q, qd: {} states).</p>", r.order, 2 * r.order),
+        _ => writeln!(
+            h,
+            "<p>Model Exchange: all {} modes are states (q, qd: {} states); Co-Simulation propagates them exactly.</p>",
+            r.order,
+            2 * r.order
+        ),
     };
     let _ = writeln!(
         h,

@@ -43,12 +43,27 @@ impl<T: Scalar> FlexibleBody<T> {
     /// rest: how both interfaces start, so that Co-Simulation begins where Model Exchange does
     /// (their start values are calculated, not set).
     pub fn settle_quasi_static(&mut self) -> Result<(), String> {
+        self.equilibrate_quasi_static(true)
+    }
+
+    /// Co-Simulation's split, around every step: the algebraic modes back on their equilibrium
+    /// with the present inputs and dynamic modes (q'_a = 0), the relaxing ones on the rate of
+    /// their damping. Co-Simulation then is the model Model Exchange integrates: a load change
+    /// moves the modes above the cutoff statically instead of ringing them at frequencies the
+    /// reduction does not resolve (docs/ARCHITECTURE.md, "One model, two interfaces").
+    pub(super) fn project_quasi_static(&mut self) -> Result<(), String> {
+        self.equilibrate_quasi_static(false)
+    }
+
+    /// The quasi-static solve of Model Exchange applied to the body's own state; `settling`: the
+    /// relaxing modes are put in equilibrium too instead of keeping their q.
+    fn equilibrate_quasi_static(&mut self, settling: bool) -> Result<(), String> {
         if self.n_dynamic == self.q.len() {
             return Ok(());
         }
         let was = self.quasi_static;
         self.quasi_static = true;
-        self.settling = true;
+        self.settling = settling;
         self.eval.valid = false;
         let settled = self.evaluate();
         self.settling = false;
