@@ -91,7 +91,13 @@ def test_free_vibration_energy_never_grows(stiff_beam, beta, h):
     assert energy[0] > 0
     if beta == 0.0:
         # exact propagation: conserved to round-off over 10^4 steps (measured drift 8.6e-13)
-        assert drift < 1e-11
+        # from the release on: the release itself moves the modes above the dynamic cutoff to
+        # their new equilibrium (no inertia against a load change, as in Model Exchange), which
+        # takes their strain energy out once
+        after = energy[1:] / energy[1] - 1
+        print(f"  release: {1 - energy[1] / energy[0]:.1e} of E0 in the quasi-static modes; "
+              f"drift after it {np.max(np.abs(after)):.1e}")
+        assert np.max(np.abs(after)) < 1e-11
     else:
         assert growth <= 1e-13  # measured: no step increases it (round-off allowance)
         # the decay, derived: for q'' + 2 zeta w q' + w^2 q = 0 (Rayleigh, alpha = 0:

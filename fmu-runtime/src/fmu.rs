@@ -3,7 +3,7 @@
 
 use crate::body::{
     BodyState, CouplingReference, FlangeLoad, FlexibleBody, FrameState, InitialFrame, InputRates, MountMotion,
-    Parameters,
+    Parameters, SteppedState,
 };
 use crate::format::RESOURCE_FILE;
 use crate::interface::{FlangeOutput, Quantity, VariableTable};
@@ -420,6 +420,18 @@ impl Model for BodyFmu {
             w.f64s(&c.c_d);
             w.f64s(&c.c_k);
         }
+        w.bool(s.stepped_inputs.is_some());
+        if let Some(st) = &s.stepped_inputs {
+            w.f64s(&st.a);
+            w.f64s(&st.z);
+            for l in &st.loads {
+                w.f64s(&l.f);
+                w.f64s(&l.t);
+            }
+            w.f64s(&st.params.g);
+            w.f64(st.params.alpha);
+            w.f64(st.params.beta);
+        }
     }
 
     fn load_state(&mut self, bytes: &[u8]) -> Result<(), String> {
@@ -494,9 +506,25 @@ impl Model for BodyFmu {
         } else {
             None
         };
+        let stepped_inputs = if version >= 3 && r.bool("stepped inputs flag")? {
+            let (a, z) = (r.f64_array("stepped mount a")?, r.f64_array("stepped mount z")?);
+            let mut loads = Vec::with_capacity(nf);
+            for _ in 0..nf {
+                loads.push(FlangeLoad { f: r.f64_array("stepped force")?, t: r.f64_array("stepped torque")? });
+            }
+            let params = Parameters {
+                g: r.f64_array("stepped g")?,
+                alpha: r.f64("stepped damping.alpha")?,
+                beta: r.f64("stepped damping.beta")?,
+            };
+            Some(SteppedState { a, z, loads, params })
+        } else {
+            None
+        };
         r.finish("body state")?;
         let rates = InputRates { mount: rate_mount, loads: rate_loads, any };
-        let state = BodyState { mount, loads, params, q, qd, frame, initial_frame, rates, coupling_reference };
+        let state =
+            BodyState { mount, loads, params, q, qd, frame, initial_frame, rates, coupling_reference, stepped_inputs };
         self.body = self.body.with_state(state)?;
         self.static_start = static_start;
         Ok(())
@@ -597,8 +625,10 @@ fn input_or_state<T: Scalar>(b: &mut FlexibleBody<T>, quantity: Quantity) -> Opt
 /// free-floating only: frame r[3] quaternion[4] v[3] W[3]; then the input derivatives set for
 /// the next step: flag (u8 0/1), mount rates r[3] R[9] v[3] w[3] a[3] z[3], per force flange
 /// f[3] t[3]; since version 2 the coupled transition's reference: flag (u8), then h, alpha,
-/// beta, C_d[n*n], C_k[n*n]. Sizes are checked against the body before any array is read.
-pub const BODY_STATE_VERSION: u32 = 2;
+/// beta, C_d[n*n], C_k[n*n]; since version 3 the loads the last step ended with: flag (u8),
+/// then mount a[3] z[3], per force flange f[3] t[3], g[3], alpha, beta.
+/// Sizes are checked against the body before any array is read.
+pub const BODY_STATE_VERSION: u32 = 3;
 
 fn write_frame_state(w: &mut Writer, f: &FrameState) {
     w.f64s(&f.r);

@@ -73,34 +73,26 @@ impl FlexibleBody {
     /// propagation of the modal diagonal when nothing couples the modes, else of the whole
     /// coupled system (gyroscopic, centrifugal, stiffening terms) by its matrix exponential,
     /// which keeps an undamped spinning body's energy at any step (see `coupled_propagator`).
-    /// The modes above the dynamic cutoff are put back on their quasi-static equilibrium before
-    /// and after (the split Model Exchange integrates; see `project_quasi_static`).
+    /// An input changed since the last step moves the algebraic modes with their equilibrium
+    /// first (`input_jump`).
     pub fn step(&mut self, h: f64) -> Result<(), String> {
         if !(h > 0.0 && h.is_finite()) {
             return Err(format!("step size {h} must be positive and finite"));
         }
-        let split = self.n_dynamic < self.q.len();
         if self.frame.is_some() {
-            if split {
-                self.project_quasi_static()?;
-            }
+            self.follow_input_change()?;
             // free bodies hold their flange loads over the step; the inputs still end the step
             // at their interpolated values
             self.step_free(h)?;
             if self.rates.any {
                 self.extrapolate_inputs(h);
             }
-        } else {
-            self.check_inputs()?;
-            if split {
-                self.project_quasi_static()?;
-            }
-            self.step_mounted(h)?;
+            self.record_stepped_inputs();
+            return Ok(());
         }
-        if split {
-            self.project_quasi_static()?;
-        }
-        Ok(())
+        self.check_inputs()?;
+        self.follow_input_change()?;
+        self.step_mounted(h)
     }
 
     fn step_mounted(&mut self, h: f64) -> Result<(), String> {
@@ -143,9 +135,11 @@ impl FlexibleBody {
             if ramp {
                 self.propagator.advance_ramp(&self.body.omega, &self.load, &self.load_rate, &mut self.q, &mut self.qd);
                 self.extrapolate_inputs(h);
+                self.record_stepped_inputs();
                 self.restore_held_mount(&held);
             } else {
                 self.propagator.advance(&self.body.omega, &self.load, &mut self.q, &mut self.qd);
+                self.record_stepped_inputs();
             }
             self.eval.valid = false;
             return Ok(());
@@ -220,7 +214,10 @@ impl FlexibleBody {
         self.coupled_work = work;
         if ramp {
             self.extrapolate_inputs(h);
+            self.record_stepped_inputs();
             self.restore_held_mount(&held);
+        } else {
+            self.record_stepped_inputs();
         }
         self.eval.valid = false;
         if !(self.q.iter().chain(&self.qd).all(|v| v.is_finite())) {

@@ -19,6 +19,7 @@
 mod cosim_step;
 mod dense;
 mod free_floating;
+mod input_jump;
 mod mounted;
 mod quasi_static;
 mod reaction;
@@ -30,6 +31,7 @@ use crate::propagator::ModalPropagator;
 use crate::reduced::ReducedBody;
 use crate::scalar::{Dual, Scalar, c};
 use dense::shape_dot;
+use input_jump::SteppedInputs;
 use quasi_static::QuasiStaticWork;
 use std::sync::Arc;
 
@@ -191,6 +193,18 @@ pub struct BodyState {
     /// The coupling the exact coupled transition was last made for: later steps depend on it,
     /// so a body restored from this state continues bit-identically.
     pub coupling_reference: Option<CouplingReference>,
+    /// The loads the last Co-Simulation step ended with: the next step moves the algebraic
+    /// modes by the change of their equilibrium from these (None before the first).
+    pub stepped_inputs: Option<SteppedState>,
+}
+
+/// The loads a step ended with: the mount's accelerations, flange loads and parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SteppedState {
+    pub a: Vec3,
+    pub z: Vec3,
+    pub loads: Vec<FlangeLoad>,
+    pub params: Parameters,
 }
 
 /// Step size, Rayleigh coefficients and coupling matrices of a coupled transition.
@@ -260,6 +274,8 @@ pub struct FlexibleBody<T = f64> {
     /// Set while the quasi-static modes are put in equilibrium (relaxing ones included).
     settling: bool,
     qs_work: QuasiStaticWork<T>,
+    /// Co-Simulation: the inputs of the last step, to move the algebraic modes when they change.
+    stepped: SteppedInputs,
 }
 
 /// Time derivatives of the inputs over the next step (first-order hold); zero means held.
@@ -337,6 +353,7 @@ impl FlexibleBody {
             quasi_static: false,
             settling: false,
             qs_work: QuasiStaticWork::new(n, body.n_dynamic(), body.free_floating),
+            stepped: SteppedInputs::new(n, nf),
             body,
         }
     }
@@ -382,6 +399,8 @@ impl FlexibleBody {
             quasi_static: self.quasi_static,
             settling: false,
             qs_work: QuasiStaticWork::new(n, self.n_dynamic, self.frame.is_some()),
+            // stepping is f64 only
+            stepped: SteppedInputs::default(),
         }
     }
 
@@ -399,6 +418,7 @@ impl FlexibleBody {
                 let (c_d, c_k) = self.coupled.reference();
                 CouplingReference { h, alpha, beta, c_d: c_d.to_vec(), c_k: c_k.to_vec() }
             }),
+            stepped_inputs: self.stepped_inputs(),
         }
     }
 
@@ -434,6 +454,9 @@ impl FlexibleBody {
         b.frame = state.frame;
         b.initial_frame = state.initial_frame;
         b.rates = state.rates;
+        if let Some(st) = &state.stepped_inputs {
+            b.set_stepped_inputs(st)?;
+        }
         if let Some(r) = state.coupling_reference {
             let nn = n * n;
             let valid = r.c_d.len() == nn && r.c_k.len() == nn && r.h > 0.0 && r.h.is_finite();

@@ -39,25 +39,14 @@ impl<T: Scalar> FlexibleBody<T> {
         self.quasi_static
     }
 
-    /// Put the quasi-static modes in equilibrium with the present inputs and dynamic modes, at
-    /// rest: how both interfaces start, so that Co-Simulation begins where Model Exchange does
-    /// (their start values are calculated, not set).
-    pub fn settle_quasi_static(&mut self) -> Result<(), String> {
-        self.equilibrate_quasi_static(true)
-    }
-
-    /// Co-Simulation's split, around every step: the algebraic modes back on their equilibrium
-    /// with the present inputs and dynamic modes (q'_a = 0), the relaxing ones on the rate of
-    /// their damping. Co-Simulation then is the model Model Exchange integrates: a load change
-    /// moves the modes above the cutoff statically instead of ringing them at frequencies the
-    /// reduction does not resolve (docs/ARCHITECTURE.md, "One model, two interfaces").
-    pub(super) fn project_quasi_static(&mut self) -> Result<(), String> {
-        self.equilibrate_quasi_static(false)
+    /// The algebraic modes: quasi-static modes that are no state in Model Exchange.
+    pub(super) fn algebraic_range(&self) -> std::ops::Range<usize> {
+        self.n_dynamic + self.n_relaxing..self.q.len()
     }
 
     /// The quasi-static solve of Model Exchange applied to the body's own state; `settling`: the
     /// relaxing modes are put in equilibrium too instead of keeping their q.
-    fn equilibrate_quasi_static(&mut self, settling: bool) -> Result<(), String> {
+    pub(super) fn equilibrate_quasi_static(&mut self, settling: bool) -> Result<(), String> {
         if self.n_dynamic == self.q.len() {
             return Ok(());
         }
