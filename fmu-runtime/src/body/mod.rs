@@ -13,8 +13,9 @@
 //! a body on a prescribed mount (input check, modal load, coupling terms); `reaction` the mount
 //! reaction; `free_floating` the free body's accelerations and invariants; `cosim_step`
 //! Co-Simulation stepping (input rates, exact and predictor-corrector steps, the free body's
-//! substeps); `statics` the static start; `dense` the dense kernels (dot products and the small
-//! in-place solver).
+//! substeps); `input_jump` Co-Simulation's quasi-static modes across load changes; `quasi_static`
+//! Model Exchange's solve of the modes above the cutoff; `statics` the static start; `dense` the
+//! dense kernels (dot products and the small in-place solver).
 
 mod cosim_step;
 mod dense;
