@@ -387,13 +387,8 @@ impl Model for BodyFmu {
         for v in [&m.r[..], &m.rot, &m.v, &m.w, &m.a, &m.z] {
             w.f64s(v);
         }
-        for l in &s.loads {
-            w.f64s(&l.f);
-            w.f64s(&l.t);
-        }
-        w.f64s(&s.params.g);
-        w.f64(s.params.alpha);
-        w.f64(s.params.beta);
+        write_loads(&mut w, &s.loads);
+        write_parameters(&mut w, &s.params);
         w.f64s(&s.q);
         w.f64s(&s.qd);
         let i = &s.initial_frame;
@@ -408,10 +403,7 @@ impl Model for BodyFmu {
         for v in [&rm.r[..], &rm.rot, &rm.v, &rm.w, &rm.a, &rm.z] {
             w.f64s(v);
         }
-        for l in &s.rates.loads {
-            w.f64s(&l.f);
-            w.f64s(&l.t);
-        }
+        write_loads(&mut w, &s.rates.loads);
         w.bool(s.coupling_reference.is_some());
         if let Some(c) = &s.coupling_reference {
             w.f64(c.h);
@@ -424,13 +416,8 @@ impl Model for BodyFmu {
         if let Some(st) = &s.stepped_inputs {
             w.f64s(&st.a);
             w.f64s(&st.z);
-            for l in &st.loads {
-                w.f64s(&l.f);
-                w.f64s(&l.t);
-            }
-            w.f64s(&st.params.g);
-            w.f64(st.params.alpha);
-            w.f64(st.params.beta);
+            write_loads(&mut w, &st.loads);
+            write_parameters(&mut w, &st.params);
         }
     }
 
@@ -629,6 +616,20 @@ fn input_or_state<T: Scalar>(b: &mut FlexibleBody<T>, quantity: Quantity) -> Opt
 /// then mount a[3] z[3], per force flange f[3] t[3], g[3], alpha, beta.
 /// Sizes are checked against the body before any array is read.
 pub const BODY_STATE_VERSION: u32 = 3;
+
+/// Force and torque of every force flange, in flange order.
+fn write_loads(w: &mut Writer, loads: &[FlangeLoad]) {
+    for l in loads {
+        w.f64s(&l.f);
+        w.f64s(&l.t);
+    }
+}
+
+fn write_parameters(w: &mut Writer, p: &Parameters) {
+    w.f64s(&p.g);
+    w.f64(p.alpha);
+    w.f64(p.beta);
+}
 
 fn write_frame_state(w: &mut Writer, f: &FrameState) {
     w.f64s(&f.r);
