@@ -49,6 +49,40 @@ CASES = [
      ["scene.geometric_stiffening", "mounted"]),
     ("unknown element", lambda s: set_path(s, ["geometry", "element"], "tet4"), ["geometry.element"]),
     ("negative damping", lambda s: set_path(s, ["damping", "alpha"], -1.0), ["damping.alpha"]),
+    # found by fuzzing: each used to abort, hang, print a Debug dump or build an FMU of NaNs
+    ("huge box", lambda s: set_path(s, ["geometry", "boxes", 0, "elements"], [100000] * 3),
+     ["geometry.boxes[0].elements", "GiB", "available", "fewer elements"]),
+    ("long huge box, Krylov, mount only",
+     lambda s: (set_path(s, ["geometry", "boxes", 0, "elements"], [100000, 10, 10]), s["flanges"].pop(),
+                s.update(reduction={"method": "krylov", "real_expansion_points": [1e-9]})),
+     ["geometry.boxes[0].elements", "GiB", "fewer elements"]),
+    ("second box touching nothing",
+     lambda s: s["geometry"]["boxes"].append({"min": [2, 0, 0], "max": [3, 0.01, 0.02], "elements": [4, 1, 1]}),
+     ["geometry.boxes", "not held by the mount", "base", "[2.0, 0.0, 0.0]"]),
+    ("free body of two pieces",
+     lambda s: (s["geometry"]["boxes"].append({"min": [2, 0, 0], "max": [3, 0.01, 0.02], "elements": [4, 1, 1]}),
+                set_path(s, ["flanges", 0, "role"], "force")),
+     ["geometry.boxes", "separate bodies"]),
+    ("free body without flanges or modes",
+     lambda s: (s.update(flanges=[]), set_path(s, ["reduction", "modes"], 0)), ["reduction.modes", "no shape"]),
+    ("E = rho = 1e-300", lambda s: s["material"].update(E=1e-300, rho=1e-300), ["material.E", "outside"]),
+    ("rho in t/mm^3", lambda s: set_path(s, ["material", "rho"], 7.85e-9), ["material.rho", "t/mm^3"]),
+    ("nu = 0.4999999999", lambda s: set_path(s, ["material", "nu"], 0.4999999999), ["material.nu", "outside"]),
+    ("alpha = beta = 1e300", lambda s: s["damping"].update(alpha=1e300, beta=1e300), ["damping.alpha", "outside"]),
+    ("beta = 1e300", lambda s: set_path(s, ["damping", "beta"], 1e300), ["damping.beta", "outside"]),
+    ("modal ratio 1e300", lambda s: set_path(s, ["damping", "modal_ratio"], 1e300), ["damping.modal_ratio", "critical"]),
+    ("modal band ratio 1e300", lambda s: set_path(s, ["damping", "modal_bands"], [{"below": 100, "ratio": 1e300}]),
+     ["damping.modal_bands[0].ratio"]),
+    ("selector in millimetres",
+     lambda s: set_path(s, ["flanges", 1, "nodes"], {"plane": {"point": [1000.0, 0, 0], "normal": [1, 0, 0]}}),
+     ["flanges[1].nodes", "selects no node", "spans [0.0, -0.005, -0.01] to [1.0, 0.005, 0.01]"]),
+    ("collinear selector names the part's extent",
+     lambda s: set_path(s, ["flanges", 1, "nodes"], {"plane": {"point": [1.0, 0, 0.01], "normal": [1, 0, 1]}}),
+     ["flanges[1].nodes", "on a line", "spans"]),
+    ("free body's flange named initial",
+     lambda s: (set_path(s, ["flanges", 0, "role"], "force"), set_path(s, ["flanges", 0, "name"], "initial")),
+     ["flanges[0].name", "reserved", "initial"]),
+    ("flange named body", lambda s: set_path(s, ["flanges", 1, "name"], "body"), ["flanges[1].name", "reserved"]),
 ]
 
 
@@ -66,6 +100,50 @@ def test_bad_input_is_named(tmp_path, name, change, expected):
     for text in expected:
         assert text in proc.stderr, f"{name}: {text!r} not in {proc.stderr!r}"
     assert not (tmp_path / "bad.fmu").exists()
+
+
+def test_duplicate_key_is_named_with_its_line(tmp_path):
+    """JSON parsers keep the last of two equal keys without a word: the builder refuses them."""
+    path = tmp_path / "dup.json"
+    text = json.dumps(BASE, indent=2).replace('"E": 200000000000.0,', '"E": 200000000000.0,\n    "E": 200000.0,')
+    assert text.count('"E"') == 2
+    path.write_text(text)
+    line = next(i + 1 for i, l in enumerate(text.splitlines()) if '"E": 200000.0' in l)
+    proc = run_builder([path, "-o", tmp_path / "dup.fmu"], check=False)
+    assert proc.returncode == 1 and "panicked" not in proc.stderr
+    for expected in [str(path), "material.E", "twice", f"line {line}"]:
+        assert expected in proc.stderr, f"{expected!r} not in {proc.stderr!r}"
+
+
+def test_huge_box_is_refused_at_once(tmp_path):
+    """The size estimate comes before any allocation: refused in well under a second."""
+    import time
+    path = tmp_path / "huge.json"
+    path.write_text(json.dumps(variant(lambda s: set_path(s, ["geometry", "boxes", 0, "elements"], [100000] * 3))))
+    start = time.monotonic()
+    proc = run_builder([path, "-o", tmp_path / "huge.fmu"], check=False)
+    assert proc.returncode == 1 and time.monotonic() - start < 5.0, proc.stderr
+
+
+def test_inverted_element_names_file_and_element_id(tmp_path):
+    """An inverted element is named by its id in the mesh file, not by a 0-based index."""
+    nodes = [(1, 0, 0, 0), (2, 1, 0, 0), (3, 1, 1, 0), (4, 0, 1, 0), (5, 0, 0, 1), (6, 1, 0, 1), (7, 1, 1, 1),
+             (8, 0, 1, 1), (9, 2, 0, 0), (10, 2, 1, 0), (11, 2, 0, 1), (12, 2, 1, 1)]
+    deck = ["*NODE"] + [f"{i}, {x}, {y}, {z}" for i, x, y, z in nodes]
+    # element 7 is the right, element 42 the mirrored (inverted) node order
+    deck += ["*ELEMENT, TYPE=C3D8, ELSET=ALL", "7, 1, 2, 3, 4, 5, 6, 7, 8", "42, 2, 3, 10, 9, 6, 7, 12, 11",
+             "*NSET, NSET=BASE", "1, 4, 5, 8", "*NSET, NSET=TIP", "9, 10, 11, 12"]
+    (tmp_path / "part.inp").write_text("\n".join(deck) + "\n")
+    spec = {"name": "P", "geometry": {"mesh": "part.inp"}, "material": {"E": 2e11, "nu": 0.3, "rho": 7850},
+            "flanges": [{"name": "base", "role": "motion", "nodes": {"node_set": "BASE"}},
+                        {"name": "tip", "role": "force", "nodes": {"node_set": "TIP"}}],
+            "reduction": {"modes": 1}}
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(spec))
+    proc = run_builder([path, "-o", tmp_path / "bad.fmu"], check=False)
+    assert proc.returncode == 1 and "panicked" not in proc.stderr
+    for expected in ["part.inp", "element 42", "inverted", "node order"]:
+        assert expected in proc.stderr, f"{expected!r} not in {proc.stderr!r}"
 
 
 def test_missing_file_is_named(tmp_path):

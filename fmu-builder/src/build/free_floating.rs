@@ -56,7 +56,7 @@ fn rigid_deflation(model: &Assembled, nodes: &[[f64; 3]], flanges: &[Flange], or
     let gram = r.transpose() * &mr;
     let l = gram
         .llt(Side::Lower)
-        .map_err(|e| BuildError::Numerical(format!("rigid-body mass matrix is singular: {e:?}")))?
+        .map_err(|e| BuildError::Numerical(format!("the rigid-body mass matrix is singular ({e}): the part has no mass in some direction; check material.rho")))?
         .L()
         .to_owned();
     // Y = R L^-T

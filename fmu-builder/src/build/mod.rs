@@ -10,9 +10,9 @@ pub mod sweep;
 pub use built::Built;
 
 use crate::error::{BuildError, Result};
-use crate::input::spec::Spec;
+use crate::input::spec::{Method, Role, Spec};
 use crate::linalg::eigen;
-use crate::model::{flange, part};
+use crate::model::{connectivity, flange, part};
 use crate::output::package;
 use crate::reduce::basis::ModeCount;
 use std::path::Path;
@@ -21,7 +21,10 @@ use std::path::Path;
 pub fn build(input: &Path, output: &Path) -> Result<Built> {
     let spec = Spec::from_file(input)?;
     let built = reduce_spec(spec, input)?;
-    package::write_fmu(&built.spec, &built.reduced, &built.report, output)?;
+    package::write_fmu(&built.spec, &built.reduced, &built.report, output).map_err(|e| match e {
+        BuildError::Numerical(m) => BuildError::input(input, "", m),
+        other => other,
+    })?;
     Ok(built)
 }
 
@@ -55,18 +58,53 @@ fn check_mode_count(requested: usize, nodes: usize, file: &Path) -> Result<usize
     Ok(requested)
 }
 
+/// A basis needs at least one shape: a mode, a force flange's static shapes or a scene load's.
+fn check_basis_not_empty(spec: &Spec, modes: &ModeCount, file: &Path) -> Result<()> {
+    let force_flanges = spec.flanges.iter().filter(|f| f.role == Role::Force).count();
+    let loads = spec.scene.as_ref().map_or(0, |s| s.loads.len());
+    if !matches!(modes, ModeCount::Count(0)) || force_flanges > 0 || loads > 0 {
+        return Ok(());
+    }
+    let field = if spec.reduction.method == Method::Krylov { "flanges" } else { "reduction.modes" };
+    Err(BuildError::input(
+        file,
+        field,
+        "the reduced body would have no shape at all: no normal modes are requested (reduction.modes is 0 or missing), the body has no force flange whose static shapes would join the basis, and the scene declares no loads; request modes (reduction.modes >= 1 or reduction.max_frequency), add a force flange, or declare scene.loads",
+    ))
+}
+
+/// A numerical failure deep in a stage, put against the input that drives that stage, with what
+/// to change: the user fixes their input, not our code.
+fn against_input(file: &Path, field: &'static str, hint: &'static str) -> impl FnOnce(BuildError) -> BuildError {
+    move |e| match e {
+        BuildError::Numerical(m) => BuildError::input(file, field, format!("{m}; {hint}")),
+        other => other,
+    }
+}
+
 /// Read, mesh, couple, assemble and reduce: everything but writing the FMU.
 pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
     let mut part = part::part_of(&spec, file)?;
     let flanges = flange::select_flanges(&spec, file, &part)?;
-    let free = part.free_free()?;
+    // a part given with its supports (free_free false) is held by them, not only by flanges
+    if spec.geometry.matrices.as_ref().is_none_or(|m| m.free_free) {
+        connectivity::check_connected(file, &part, &flanges)?;
+    }
+    let free = part.free_free().map_err(against_input(
+        file,
+        "geometry",
+        "check the mesh (element shapes, node order) and the material",
+    ))?;
     let modes = match (spec.reduction.modes, spec.reduction.max_frequency) {
         (Some(n), _) => ModeCount::Count(check_mode_count(n, part.mesh.n_nodes(), file)?),
         (None, Some(f)) => ModeCount::Below(f),
         (None, None) => ModeCount::Count(0),
     };
+    check_basis_not_empty(&spec, &modes, file)?;
+    let hint = "change the reduction (method, reduction.modes or max_frequency, expansion points) or check that \
+                the flanges hold the part and the material and damping are those of a real solid";
     let Some(mount) = spec.mount_index() else {
-        return free_floating::reduce(spec, part, free, flanges, modes);
+        return free_floating::reduce(spec, part, free, flanges, modes).map_err(against_input(file, "reduction", hint));
     };
-    mounted::reduce(spec, part, free, flanges, modes, mount)
+    mounted::reduce(spec, part, free, flanges, modes, mount).map_err(against_input(file, "reduction", hint))
 }

@@ -4,5 +4,9 @@
 
 pub mod element;
 pub mod import;
+pub mod json_keys;
 pub mod mesh;
+pub mod ranges;
+pub mod size;
 pub mod spec;
+pub mod variable_names;

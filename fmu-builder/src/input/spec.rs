@@ -5,6 +5,7 @@
 
 use crate::error::{BuildError, Result};
 use crate::input::element::ElementKind;
+use crate::input::{json_keys, ranges, variable_names};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -261,6 +262,20 @@ pub struct Reduction {
     pub dynamic_cutoff: Option<f64>,
 }
 
+/// Flange names the FMU's own variables use, checked before the schema so the message says why
+/// (the schema's `not` would only say the name "is not allowed").
+fn check_flange_names(path: &Path, value: &serde_json::Value) -> Result<()> {
+    let Some(flanges) = value.get("flanges").and_then(|f| f.as_array()) else {
+        return Ok(());
+    };
+    for (k, f) in flanges.iter().enumerate() {
+        if let Some(problem) = f.get("name").and_then(|n| n.as_str()).and_then(variable_names::flange_name_problem) {
+            return Err(BuildError::input(path, format!("flanges[{k}].name"), problem));
+        }
+    }
+    Ok(())
+}
+
 /// JSON pointer `/flanges/1/nodes` -> `flanges[1].nodes`, the way users read their file.
 fn field_path(pointer: &str) -> String {
     let mut out = String::new();
@@ -289,6 +304,8 @@ impl Spec {
         let value: serde_json::Value = serde_json::from_str(text).map_err(|e| {
             BuildError::input(path, format!("line {} column {}", e.line(), e.column()), format!("not valid JSON: {e}"))
         })?;
+        json_keys::check_unique_keys(path, text)?;
+        check_flange_names(path, &value)?;
         let schema: serde_json::Value =
             serde_json::from_str(SCHEMA).map_err(|e| BuildError::Numerical(format!("embedded schema: {e}")))?;
         let validator = jsonschema::validator_for(&schema)
@@ -393,6 +410,7 @@ impl Spec {
             }
         }
         self.check_part(path)?;
+        self.check_ranges(path)?;
         if let Some([lo, hi]) = self.scene.as_ref().and_then(|s| s.band)
             && !(hi > lo)
         {
@@ -414,6 +432,40 @@ impl Spec {
                         ),
                     ));
                 }
+            }
+        }
+        Ok(())
+    }
+
+    /// Materials and damping within the physical ranges of `ranges` (finite but absurd values
+    /// build FMUs whose outputs are NaN).
+    fn check_ranges(&self, path: &Path) -> Result<()> {
+        let named = self.materials.iter().map(|(k, m)| (format!("materials.{k}"), *m));
+        for (field, m) in self.material.map(|m| ("material".to_string(), m)).into_iter().chain(named) {
+            for (name, v) in [("E", m.e), ("nu", m.nu), ("rho", m.rho)] {
+                if let Some(problem) = v.and_then(|v| ranges::material_problem(name, v)) {
+                    return Err(BuildError::input(path, format!("{field}.{name}"), problem));
+                }
+            }
+        }
+        let d = &self.damping;
+        let why = "heavier damping than any structure has, and the reduced equations would overflow to NaN";
+        let bands = d
+            .modal_bands
+            .iter()
+            .flatten()
+            .enumerate()
+            .map(|(i, b)| (format!("damping.modal_bands[{i}].ratio"), b.ratio));
+        let ratios = d.modal_ratio.map(|r| ("damping.modal_ratio".to_string(), r)).into_iter().chain(bands);
+        let checks = [
+            ("damping.alpha".to_string(), d.alpha, ranges::ALPHA_MAX, " 1/s"),
+            ("damping.beta".to_string(), d.beta, ranges::BETA_MAX, " s"),
+        ]
+        .into_iter()
+        .chain(ratios.map(|(f, r)| (f, r, ranges::RATIO_MAX, " (1 is critical damping)")));
+        for (field, v, max, unit) in checks {
+            if !ranges::within(v, (0.0, max)) {
+                return Err(BuildError::input(path, field, format!("{v:e} is outside [0, {max:e}]{unit}: {why}")));
             }
         }
         Ok(())

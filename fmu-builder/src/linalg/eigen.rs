@@ -80,6 +80,10 @@ pub fn lowest_shifted(
     let n_free = n - deflate.map_or(0, |d| d.vectors.ncols());
     let count = count.min(n_free);
     let mut dim = (2 * count + 20).max(count + 30).min(n_free);
+    // restarts grow the space by half; beyond ten vectors per mode (four restarts) Lanczos with
+    // a factored shift-invert operator has failed for a reason more vectors will not cure, and
+    // the dense n x dim blocks would grow towards n x n
+    let max_dim = (10 * count + 200).min(n_free);
     let mut start = start_vector(n);
     loop {
         let (mut pairs, estimated, next_start) = lanczos(k, m, count, dim, &start, tol, deflate)?;
@@ -89,17 +93,17 @@ pub fn lowest_shifted(
         // every returned pair is checked, not assumed: its residual in K and M themselves
         let (worst, at) = worst_residual(k, m, &pairs, shift);
         let converged = estimated && worst <= RESIDUAL_TOL && pairs.values.len() == count;
-        if converged || dim == n_free {
+        if converged || dim >= max_dim {
             if !converged {
                 return Err(BuildError::Numerical(format!(
-                    "eigensolver: {count} modes did not converge even with the full space of {n_free} vectors: mode {} has the residual {worst:.1e} (accepted {RESIDUAL_TOL:.0e}); request fewer modes",
+                    "eigensolver: {count} modes did not converge with {dim} Lanczos vectors (of {n_free} DoFs): mode {} has the residual {worst:.1e} (accepted {RESIDUAL_TOL:.0e}); request fewer modes (reduction.modes, max_frequency) or check the mesh for extreme element proportions",
                     at + 1
                 )));
             }
             return Ok(pairs);
         }
         start = next_start;
-        dim = (dim + dim / 2).min(n_free);
+        dim = (dim + dim / 2).min(max_dim);
     }
 }
 

@@ -2,5 +2,6 @@
 //! Lanczos eigen-solver, and the dense symmetric eigen-solver whose backward error is checked.
 
 pub mod eigen;
+pub mod faer_error;
 pub mod sparse;
 pub mod symmetric_eigen;

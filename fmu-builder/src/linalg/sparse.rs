@@ -1,6 +1,7 @@
 //! Sparse helpers over faer: leading blocks, symmetric products and a factor-once solver.
 
 use crate::error::{BuildError, Result};
+use crate::linalg::faer_error;
 use faer::linalg::solvers::Solve;
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::solvers::Llt;
@@ -22,7 +23,7 @@ pub fn block(a: &Sparse, rows: std::ops::Range<usize>, cols: std::ops::Range<usi
         }
     }
     SparseColMat::try_new_from_triplets(rows.len(), cols.len(), &trip)
-        .map_err(|e| BuildError::Numerical(format!("extracting a sparse block: {e:?}")))
+        .map_err(|e| BuildError::Numerical(format!("extracting a sparse block: {}", faer_error::creation(&e))))
 }
 
 /// out = A x
@@ -109,7 +110,7 @@ pub struct LuSolver {
 
 impl LuSolver {
     pub fn new(a: &Sparse, what: &str) -> Result<Self> {
-        let lu = a.sp_lu().map_err(|e| BuildError::Numerical(format!("{what} is singular ({e:?})")))?;
+        let lu = a.sp_lu().map_err(|e| BuildError::Numerical(format!("{what} is {}", faer_error::lu(&e))))?;
         Ok(Self { lu, matrix: a.clone() })
     }
 
@@ -139,7 +140,7 @@ pub fn add_scaled(a: &Sparse, c: f64, b: &Sparse) -> Result<Sparse> {
         }
     }
     SparseColMat::try_new_from_triplets(a.nrows(), a.ncols(), &trip)
-        .map_err(|e| BuildError::Numerical(format!("adding sparse matrices: {e:?}")))
+        .map_err(|e| BuildError::Numerical(format!("adding sparse matrices: {}", faer_error::creation(&e))))
 }
 
 /// Sparse Cholesky of a symmetric positive definite matrix (fill-reducing ordering inside faer).
@@ -151,11 +152,9 @@ pub struct SpdSolver {
 
 impl SpdSolver {
     pub fn new(a: &Sparse, what: &str) -> Result<Self> {
-        let llt = a.sp_cholesky(Side::Lower).map_err(|e| {
-            BuildError::Numerical(format!(
-                "{what} is not positive definite ({e:?}): the part may be under-constrained (a region not connected to the mount?)"
-            ))
-        })?;
+        let llt = a
+            .sp_cholesky(Side::Lower)
+            .map_err(|e| BuildError::Numerical(format!("{what} is {}", faer_error::llt(&e))))?;
         Ok(Self { llt, matrix: a.clone(), n: a.nrows() })
     }
 

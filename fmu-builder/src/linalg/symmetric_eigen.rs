@@ -39,7 +39,16 @@ pub fn symmetric_eigen(a: &Mat<f64>, what: &str) -> Result<SymmetricEigen> {
     if !sym.iter().all(|v| v.is_finite()) {
         return Err(BuildError::Numerical(format!("{what}: the matrix has non-finite entries")));
     }
-    let evd = sym.clone().symmetric_eigen();
+    // nalgebra's plain `symmetric_eigen` iterates without limit; implicit QR needs a few sweeps
+    // per eigenvalue, so 100 n (and at least 1000) only stops a run that would never end
+    let sweeps = (100 * n).max(1000);
+    let evd = sym.clone().try_symmetric_eigen(f64::EPSILON, sweeps).ok_or_else(|| {
+        BuildError::Numerical(format!(
+            "{what}: the dense eigensolver did not converge in {sweeps} QR iterations (size {n}, entries from {:.1e} to \
+             {scale:.1e}): the model's frequencies span more orders than double precision resolves",
+            sym.iter().filter(|v| **v != 0.0).fold(f64::INFINITY, |m, v| m.min(v.abs()))
+        ))
+    })?;
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&i, &j| evd.eigenvalues[i].total_cmp(&evd.eigenvalues[j]));
     let values: Vec<f64> = order.iter().map(|&i| evd.eigenvalues[i]).collect();

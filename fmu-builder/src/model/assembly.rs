@@ -6,6 +6,7 @@
 use crate::error::{BuildError, Result};
 use crate::input::element::{ElementKind, MAX_NODES_PER_ELEMENT};
 use crate::input::mesh::Mesh;
+use crate::linalg::faer_error;
 use crate::model::fe::{self, Elasticity};
 use faer::sparse::{SparseColMat, Triplet};
 
@@ -41,7 +42,13 @@ pub struct Uncoupled {
 }
 
 /// Free-free stiffness and mass of the mesh, element by element with each element's material.
-pub fn uncoupled(mesh: &Mesh, materials: &[SolidMaterial]) -> Result<Uncoupled> {
+/// `element_error` names an element the formulation refuses the way the user knows it (file id,
+/// box), which only the part knows.
+pub fn uncoupled(
+    mesh: &Mesh,
+    materials: &[SolidMaterial],
+    element_error: &dyn Fn(usize, String) -> BuildError,
+) -> Result<Uncoupled> {
     let n = 3 * mesh.n_nodes();
     let mut ke = vec![0.0; (3 * MAX_NODES_PER_ELEMENT).pow(2)];
     let mut me = vec![0.0; MAX_NODES_PER_ELEMENT.pow(2)];
@@ -58,9 +65,9 @@ pub fn uncoupled(mesh: &Mesh, materials: &[SolidMaterial]) -> Result<Uncoupled> 
         let nodes = mesh.element(e);
         let coords = mesh.element_coords(e, &mut coords_buf);
         fe::element_stiffness(kind, coords, &material.elasticity, &mut ke[..ne * ne])
-            .map_err(|err| BuildError::Numerical(format!("element {e}: {err}")))?;
+            .map_err(|err| element_error(e, err.to_string()))?;
         fe::element_mass(kind, coords, material.rho, &mut me[..nen * nen])
-            .map_err(|err| BuildError::Numerical(format!("element {e}: {err}")))?;
+            .map_err(|err| element_error(e, err.to_string()))?;
         volume += me[..nen * nen].iter().sum::<f64>() / material.rho;
         for a in 0..nen {
             for b in 0..nen {
@@ -74,11 +81,11 @@ pub fn uncoupled(mesh: &Mesh, materials: &[SolidMaterial]) -> Result<Uncoupled> 
         }
     }
     let stiffness = SparseColMat::try_new_from_triplets(n, n, &k_trip)
-        .map_err(|e| BuildError::Numerical(format!("assembling the stiffness: {e:?}")))?;
+        .map_err(|e| BuildError::Numerical(format!("assembling the stiffness: {}", faer_error::creation(&e))))?;
     drop(k_trip);
     let nn = mesh.n_nodes();
     let nodal_mass = SparseColMat::try_new_from_triplets(nn, nn, &nodal_trip)
-        .map_err(|e| BuildError::Numerical(format!("assembling the nodal mass: {e:?}")))?;
+        .map_err(|e| BuildError::Numerical(format!("assembling the nodal mass: {}", faer_error::creation(&e))))?;
     drop(nodal_trip);
     let mass = isotropic_mass(&nodal_mass)?;
     Ok(Uncoupled { stiffness, mass, damping: None, nodal_mass, volume: Some(volume) })
@@ -96,7 +103,7 @@ pub fn isotropic_mass(nodal: &SparseColMat<usize, f64>) -> Result<SparseColMat<u
         }
     }
     SparseColMat::try_new_from_triplets(3 * nn, 3 * nn, &trip)
-        .map_err(|e| BuildError::Numerical(format!("assembling the mass: {e:?}")))
+        .map_err(|e| BuildError::Numerical(format!("assembling the mass: {}", faer_error::creation(&e))))
 }
 
 /// The matrix of the triplets made bit-exactly symmetric, (A + A^T) / 2: coupled elements'
@@ -104,7 +111,7 @@ pub fn isotropic_mass(nodal: &SparseColMat<usize, f64>) -> Result<SparseColMat<u
 /// back by another solver (mirrored from one triangle) must be the very matrix we factor.
 pub(crate) fn symmetric(n: usize, trip: &[Triplet<usize, usize, f64>], what: &str) -> Result<SparseColMat<usize, f64>> {
     let a = SparseColMat::try_new_from_triplets(n, n, trip)
-        .map_err(|e| BuildError::Numerical(format!("assembling the {what}: {e:?}")))?;
+        .map_err(|e| BuildError::Numerical(format!("assembling the {what}: {}", faer_error::creation(&e))))?;
     let mut both = Vec::with_capacity(2 * a.val().len());
     for j in 0..n {
         for (&i, &v) in a.row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
@@ -113,7 +120,7 @@ pub(crate) fn symmetric(n: usize, trip: &[Triplet<usize, usize, f64>], what: &st
         }
     }
     SparseColMat::try_new_from_triplets(n, n, &both)
-        .map_err(|e| BuildError::Numerical(format!("assembling the {what}: {e:?}")))
+        .map_err(|e| BuildError::Numerical(format!("assembling the {what}: {}", faer_error::creation(&e))))
 }
 
 /// Rigid-body mass properties from the scalar nodal mass: exact for the FE interpolation, since

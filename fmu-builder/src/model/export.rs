@@ -129,7 +129,7 @@ pub fn write_free_free_matrices(dir: &Path, part: &Part) -> Result<()> {
         ));
     }
     std::fs::create_dir_all(dir).map_err(|e| BuildError::io(dir, e))?;
-    let free = crate::model::assembly::uncoupled(&part.mesh, &part.materials)?;
+    let free = crate::model::assembly::uncoupled(&part.mesh, &part.materials, &|e, m| part.element_error(e, m))?;
     let write = |name: &str, text: String| {
         let path = dir.join(name);
         std::fs::write(&path, text).map_err(|e| BuildError::io(&path, e))

@@ -20,9 +20,13 @@ pub struct Flange {
 }
 
 fn bounds(mesh: &Mesh) -> ([f64; 3], [f64; 3]) {
+    bounds_of(&mesh.nodes)
+}
+
+fn bounds_of(points: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    for p in &mesh.nodes {
+    for p in points {
         for a in 0..3 {
             lo[a] = lo[a].min(p[a]);
             hi[a] = hi[a].max(p[a]);
@@ -107,7 +111,11 @@ fn planarity(points: &[[f64; 3]]) -> f64 {
         let d = Vector3::from(*p) - c;
         s += d * d.transpose();
     }
-    let mut ev: Vec<f64> = s.symmetric_eigenvalues().iter().copied().collect();
+    // a 3 x 3 of finite coordinates: QR converges in a few sweeps; the limit only guards a hang
+    let Some(evd) = s.try_symmetric_eigen(f64::EPSILON, 1000) else {
+        return 0.0;
+    };
+    let mut ev: Vec<f64> = evd.eigenvalues.iter().copied().collect();
     ev.sort_by(|a, b| b.total_cmp(a));
     if ev[0] <= 0.0 { 0.0 } else { (ev[1].max(0.0) / ev[0]).sqrt() }
 }
@@ -117,29 +125,34 @@ pub fn select_flanges(spec: &Spec, file: &Path, part: &Part) -> Result<Vec<Flang
     let size = model_size(mesh);
     let mut owner: Vec<Option<usize>> = vec![None; mesh.nodes.len()];
     let mut flanges = Vec::with_capacity(spec.flanges.len());
+    // every selector failure states where the part is: a selector in millimetres on a part in
+    // metres (or the other way round) shows at once
+    let (lo, hi) = bounds(mesh);
+    let spans = format!("the part spans {lo:?} to {hi:?} [m]");
     for (k, fs) in spec.flanges.iter().enumerate() {
         let field = format!("flanges[{k}].nodes");
-        let slaves =
-            select(&fs.nodes, part, size).map_err(|m| BuildError::input(file, format!("{field}.node_set"), m))?;
+        let slaves = select(&fs.nodes, part, size)
+            .map_err(|m| BuildError::input(file, format!("{field}.node_set"), format!("{m}; {spans}")))?;
         if slaves.is_empty() {
-            let (lo, hi) = bounds(mesh);
             return Err(BuildError::input(
                 file,
                 field,
                 format!(
-                    "flange \"{}\" selects no node of the part (check the set, face, plane, box, sphere or cylinder and its size; \
-                     the part spans {:?} to {:?})",
-                    fs.name, lo, hi
+                    "flange \"{}\" selects no node of the part (check the set, face, plane, box, sphere or cylinder and its size, \
+                     in metres; {spans})",
+                    fs.name
                 ),
             ));
         }
         let points: Vec<[f64; 3]> = slaves.iter().map(|&i| mesh.nodes[i]).collect();
         if slaves.len() < 3 || planarity(&points) < 1e-8 {
+            let (plo, phi) = bounds_of(&points);
             return Err(BuildError::input(
                 file,
                 field,
                 format!(
-                    "flange \"{}\" selects {} node(s) on a line; a rigid flange needs at least three non-collinear nodes",
+                    "flange \"{}\" selects {} node(s) on a line (from {plo:?} to {phi:?}); a rigid flange needs at least three \
+                     non-collinear nodes: widen the selector (in metres; {spans})",
                     fs.name,
                     slaves.len()
                 ),
@@ -152,7 +165,8 @@ pub fn select_flanges(spec: &Spec, file: &Path, part: &Part) -> Result<Vec<Flang
                     file,
                     field,
                     format!(
-                        "flange \"{}\" shares the node at ({}, {}, {}) with flange \"{}\"; a node can be tied to one flange only",
+                        "flange \"{}\" shares the node at ({}, {}, {}) with flange \"{}\"; a node can be tied to one flange only: \
+                         narrow one of the selectors ({spans})",
                         fs.name, p[0], p[1], p[2], spec.flanges[other].name
                     ),
                 ));

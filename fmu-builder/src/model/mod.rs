@@ -4,6 +4,7 @@
 //! writers of the full model for CalculiX and Matrix Market (`export`).
 
 pub mod assembly;
+pub mod connectivity;
 pub mod export;
 pub mod fe;
 pub mod flange;

@@ -7,7 +7,10 @@ use crate::error::{BuildError, Result};
 use crate::input::element::ElementKind;
 use crate::input::import::{self, ImportError, ImportedMesh};
 use crate::input::mesh::{self, BoxRegion, Mesh, MeshError};
+use crate::input::ranges;
+use crate::input::size::{self, Memory};
 use crate::input::spec::{MaterialSpec, Spec};
+use crate::linalg::faer_error;
 use crate::model::assembly::{self, SolidMaterial, Uncoupled};
 use crate::model::fe::Elasticity;
 use faer::sparse::{SparseColMat, Triplet};
@@ -29,6 +32,12 @@ pub struct Part {
     /// What the part was read from, for reports.
     pub source: String,
     pub from_matrices: bool,
+    /// The file the nodes and elements come from (the mesh or node file; the input file for
+    /// boxes): messages about an element or node name it.
+    pub origin: PathBuf,
+    /// File ids of the nodes and elements (empty for boxes: they have none).
+    pub node_ids: Vec<u64>,
+    pub element_ids: Vec<u64>,
 }
 
 impl From<ImportError> for BuildError {
@@ -53,8 +62,47 @@ impl Part {
     pub fn free_free(&mut self) -> Result<Uncoupled> {
         match self.matrices.take() {
             Some(m) => Ok(m),
-            None => assembly::uncoupled(&self.mesh, &self.materials),
+            None => assembly::uncoupled(&self.mesh, &self.materials, &|e, m| self.element_error(e, m)),
         }
+    }
+
+    /// Element `e` as the user knows it: its id in the mesh file, or its box and grid position.
+    pub fn element_label(&self, e: usize) -> String {
+        if let Some(id) = self.element_ids.get(e) {
+            return format!("element {id} of {}", self.origin.display());
+        }
+        let mut first = 0usize;
+        for (i, b) in self.boxes.iter().enumerate() {
+            let count = b.divisions.iter().product::<usize>();
+            if e < first + count {
+                let local = e - first;
+                let [nx, ny, _] = b.divisions;
+                let at = [local % nx, (local / nx) % ny, local / (nx * ny)];
+                return format!("element {at:?} (x, y, z from 0) of geometry.boxes[{i}]");
+            }
+            first += count;
+        }
+        format!("element {e}")
+    }
+
+    /// Node `n` as the user knows it: its id in the file, or its coordinates.
+    pub fn node_label(&self, n: usize) -> String {
+        let p = self.mesh.nodes[n];
+        match self.node_ids.get(n) {
+            Some(id) => format!("node {id} at ({}, {}, {})", p[0], p[1], p[2]),
+            None => format!("node at ({}, {}, {})", p[0], p[1], p[2]),
+        }
+    }
+
+    /// An element the FE formulation refuses (inverted, degenerate), named for the user.
+    pub fn element_error(&self, e: usize, message: String) -> BuildError {
+        let hint = if self.boxes.is_empty() {
+            "fix its node order or coordinates in the mesh file (CalculiX node order, positive volume)"
+        } else {
+            "the box is too thin or too long for its element count: give geometry.boxes elements closer to the box's proportions"
+        };
+        let field = if self.element_ids.is_empty() { "geometry.boxes".to_string() } else { String::new() };
+        BuildError::input(&self.origin, field, format!("{}: {message}; {hint}", self.element_label(e)))
     }
 
     /// Whether the part has elements (stresses, a deck to export).
@@ -75,6 +123,8 @@ pub fn part_of(spec: &Spec, file: &Path) -> Result<Part> {
 
 fn box_part(spec: &Spec, file: &Path) -> Result<Part> {
     let kind = spec.geometry.element;
+    let counts: Vec<[usize; 3]> = spec.geometry.boxes.iter().map(|b| b.elements).collect();
+    size::check_boxes(file, &counts, kind, Memory::of_this_machine())?;
     let boxes: Vec<BoxRegion> =
         spec.geometry.boxes.iter().map(|b| BoxRegion { min: b.min, max: b.max, divisions: b.elements }).collect();
     let mesh = mesh::mesh_boxes(&boxes, kind).map_err(|e| {
@@ -102,6 +152,9 @@ fn box_part(spec: &Spec, file: &Path) -> Result<Part> {
         rigid_body_residual: None,
         source: format!("{} boxes", spec.geometry.boxes.len()),
         from_matrices: false,
+        origin: file.to_path_buf(),
+        node_ids: Vec::new(),
+        element_ids: Vec::new(),
     })
 }
 
@@ -135,6 +188,7 @@ fn mesh_file_part(spec: &Spec, file: &Path, mesh_path: &Path) -> Result<Part> {
             format!("no solid elements (supported: {})", ElementKind::supported_names()),
         ));
     }
+    check_imported_size(file, mesh_path, &imported.nodes, &imported.element_types, None)?;
     for name in spec.materials.keys() {
         if imported.material(name).is_none() {
             let known: Vec<&str> = imported.materials.iter().map(|m| m.name.as_str()).collect();
@@ -185,6 +239,8 @@ fn mesh_file_part(spec: &Spec, file: &Path, mesh_path: &Path) -> Result<Part> {
         materials.push(m);
     }
     let (nodes, new_index) = compact(&imported);
+    let kept_ids: Vec<u64> =
+        imported.node_ids.iter().zip(&new_index).filter(|(_, k)| k.is_some()).map(|(id, _)| *id).collect();
     let mut mesh = Mesh::nodes_only(nodes);
     let mut conn = Vec::with_capacity(20);
     for (e, c) in imported.connectivity.iter().enumerate() {
@@ -206,6 +262,43 @@ fn mesh_file_part(spec: &Spec, file: &Path, mesh_path: &Path) -> Result<Part> {
         matrices: None,
         rigid_body_residual: None,
         from_matrices: false,
+        origin: mesh_path.to_path_buf(),
+        node_ids: kept_ids,
+        element_ids: imported.element_ids.clone(),
+    })
+}
+
+/// A mesh or matrix file's model against the machine's memory, before assembly and factoring
+/// (the readers' own allocations are bounded by the file's size). The factor fill is estimated
+/// on a lattice of the part's bounding box.
+fn check_imported_size(
+    file: &Path,
+    source: &Path,
+    nodes: &[[f64; 3]],
+    kinds: &[ElementKind],
+    stiffness_nonzeros: Option<f64>,
+) -> Result<()> {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in nodes {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    let n = nodes.len() as f64;
+    let mut per_kind: Vec<(ElementKind, f64)> = Vec::new();
+    for &k in kinds {
+        match per_kind.iter_mut().find(|(kind, _)| *kind == k) {
+            Some((_, c)) => *c += 1.0,
+            None => per_kind.push((k, 1.0)),
+        }
+    }
+    let fill = size::nested_dissection_fill(size::lattice_of(n, [0, 1, 2].map(|a| hi[a] - lo[a])));
+    let estimate = size::SizeEstimate::new(n, &per_kind, stiffness_nonzeros, fill);
+    estimate.fits(Memory::of_this_machine()).map_err(|m| {
+        let field = if stiffness_nonzeros.is_some() { "geometry.matrices" } else { "geometry.mesh" };
+        BuildError::input(file, field, format!("{}: {m} (coarsen the mesh)", source.display()))
     })
 }
 
@@ -245,14 +338,15 @@ fn resolve_material(
     let e = e.ok_or_else(|| missing("E"))?;
     let nu = nu.ok_or_else(|| missing("nu"))?;
     let rho = rho.ok_or_else(|| missing("rho"))?;
-    if !(e > 0.0 && e.is_finite() && nu > -1.0 && nu < 0.5 && rho > 0.0 && rho.is_finite()) {
-        return Err(BuildError::input(
-            mesh_path,
-            "",
-            format!(
-                "{what}: E = {e} Pa, nu = {nu}, rho = {rho} kg/m^3 is not a valid material (E > 0, -1 < nu < 0.5, rho > 0)"
-            ),
-        ));
+    for (prop, v) in [("E", e), ("nu", nu), ("rho", rho)] {
+        if let Some(problem) = ranges::material_problem(prop, v) {
+            // the input's checks ran already: a value out of range here comes from the file
+            return Err(BuildError::input(
+                mesh_path,
+                "",
+                format!("{what}: {problem}; override it with material.{prop} in {}", file.display()),
+            ));
+        }
     }
     Ok(SolidMaterial { name: section.unwrap_or("material").to_string(), elasticity: Elasticity { e, nu }, rho })
 }
@@ -261,6 +355,7 @@ fn matrix_part(_spec: &Spec, file: &Path, m: &crate::input::spec::MatrixSpec) ->
     let path = |name: &str| -> PathBuf { Spec::resolve(file, name) };
     let (k, mm, d, dofs, nodes) =
         (path(&m.stiffness), path(&m.mass), m.damping.as_deref().map(path), path(&m.dofs), path(&m.nodes));
+    let nodes_path = nodes.clone();
     let files = import::matrices::MatrixFiles {
         stiffness: &k,
         mass: &mm,
@@ -269,6 +364,8 @@ fn matrix_part(_spec: &Spec, file: &Path, m: &crate::input::spec::MatrixSpec) ->
         nodes: &nodes,
     };
     let model = import::matrices::read_matrix_model(&files, m.free_free)?;
+    let nonzeros = model.stiffness.val().len() as f64;
+    check_imported_size(file, &k, &model.nodes, &[], Some(nonzeros))?;
     let nodal_mass = nodal_mass(&model.mass, &mm)?;
     let mesh = Mesh::nodes_only(model.nodes);
     Ok(Part {
@@ -286,6 +383,9 @@ fn matrix_part(_spec: &Spec, file: &Path, m: &crate::input::spec::MatrixSpec) ->
         }),
         rigid_body_residual: Some(model.rigid_body_residual),
         from_matrices: true,
+        origin: nodes_path,
+        node_ids: model.node_ids,
+        element_ids: Vec::new(),
     })
 }
 
@@ -331,7 +431,8 @@ fn nodal_mass(mass: &SparseColMat<usize, f64>, file: &Path) -> Result<SparseColM
         }
         trip.push(Triplet::new(a, b, m[0][0]));
     }
-    SparseColMat::try_new_from_triplets(n, n, &trip).map_err(|e| BuildError::Numerical(format!("nodal mass: {e:?}")))
+    SparseColMat::try_new_from_triplets(n, n, &trip)
+        .map_err(|e| BuildError::Numerical(format!("nodal mass: {}", faer_error::creation(&e))))
 }
 
 #[cfg(test)]

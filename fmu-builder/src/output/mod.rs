@@ -1,9 +1,11 @@
 //! Stage 5, output: what the user gets. The report of a build (`report`) and its printed summary
 //! (`summary`), the HTML documentation (`documentation`), the FMU's modelDescription.xml and
-//! archive (`fmu`), and the packaging of it all with the runtime binary (`package`).
+//! archive (`fmu`), the check that everything it carries is finite (`finite`), and the packaging
+//! of it all with the runtime binary (`package`).
 
 pub mod default_experiment;
 pub mod documentation;
+pub mod finite;
 pub mod fmu;
 pub mod package;
 pub mod plot;

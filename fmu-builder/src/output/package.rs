@@ -4,6 +4,7 @@ use crate::error::{BuildError, Result};
 use crate::input::spec::Spec;
 use crate::output::default_experiment::default_experiment;
 use crate::output::documentation;
+use crate::output::finite;
 use crate::output::fmu;
 use crate::output::report::Report;
 use fmu_runtime::format::RESOURCE_FILE;
@@ -16,6 +17,11 @@ pub const RUNTIME_SO: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/fmu_runt
 
 /// The FMU of a reduced body.
 pub fn write_fmu(spec: &Spec, reduced: &ReducedBody, report: &Report, output: &Path) -> Result<()> {
+    // nothing non-finite leaves the builder: not in the report, not in the body, not in the
+    // FMU's first steps
+    finite::check_report(report)?;
+    finite::check_reduced(reduced)?;
+    finite::smoke_step(reduced)?;
     let id = fmu::model_identifier(&spec.name);
     let table = VariableTable::new(reduced);
     let experiment = default_experiment(reduced);
@@ -35,7 +41,11 @@ pub fn write_fmu(spec: &Spec, reduced: &ReducedBody, report: &Report, output: &P
             tolerance: experiment.tolerance,
         },
     };
-    let xml = fmu::model_description_xml(&info, &table).map_err(|e| BuildError::Numerical(e.to_string()))?;
+    let xml = fmu::model_description_xml(&info, &table).map_err(|e| {
+        BuildError::Numerical(format!(
+            "{e}: a flange's name (flanges[].name) collides with another variable of the FMU; rename the flange"
+        ))
+    })?;
     let report_json =
         serde_json::to_vec_pretty(report).map_err(|e| BuildError::Numerical(format!("serialising the report: {e}")))?;
     let archive = fmu::FmuArchive {

@@ -146,7 +146,11 @@ pub fn orthonormalise(model: &Assembled, v: Mat<f64>) -> Result<(Mat<f64>, Vec<f
         kept.push(j);
     }
     if kept.is_empty() {
-        return Err(BuildError::Numerical("the reduction basis is empty or massless".into()));
+        return Err(BuildError::Numerical(
+            "the reduction basis is empty: every candidate shape (modes, static flange and load shapes) depends on the \
+             others or has no mass; request modes (reduction.modes or max_frequency) or a force flange, and check material.rho"
+                .into(),
+        ));
     }
     let w = basis.subcols(0, kept.len()).to_owned();
     let kw = mul_compensated(None, 1.0, &k, w.as_ref());

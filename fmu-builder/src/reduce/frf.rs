@@ -4,6 +4,7 @@
 //! frequency, and in closed form for the reduced model (its matrices are diagonal).
 
 use crate::error::{BuildError, Result};
+use crate::linalg::faer_error;
 use crate::linalg::sparse::{block, mul_compensated};
 use crate::model::rigid_coupling::Assembled;
 use crate::reduce::basis::{Basis, flange_unit_loads};
@@ -99,9 +100,11 @@ impl FullResponse {
             }
         }
         let union = SparseColMat::<usize, f64>::try_new_from_triplets(nc, nc, &trip)
-            .map_err(|e| BuildError::Numerical(format!("pattern of K + M: {e:?}")))?;
-        let pattern =
-            union.symbolic().to_owned().map_err(|e| BuildError::Numerical(format!("pattern of K + M: {e:?}")))?;
+            .map_err(|e| BuildError::Numerical(format!("pattern of K + M: {}", faer_error::creation(&e))))?;
+        let pattern = union
+            .symbolic()
+            .to_owned()
+            .map_err(|e| BuildError::Numerical(format!("pattern of K + M: {}", faer_error::generic(&e))))?;
         let slots = |a: &crate::linalg::sparse::Sparse| -> Vec<usize> {
             let mut out = Vec::with_capacity(a.val().len());
             for j in 0..nc {
@@ -151,12 +154,12 @@ impl FullResponse {
         if self.symbolic.is_none() {
             self.symbolic = Some(
                 faer::sparse::linalg::solvers::SymbolicLu::try_new(z.symbolic())
-                    .map_err(|e| BuildError::Numerical(format!("symbolic LU: {e:?}")))?,
+                    .map_err(|e| BuildError::Numerical(format!("symbolic LU: {}", faer_error::generic(&e))))?,
             );
         }
         let symbolic = self.symbolic.clone().ok_or_else(|| BuildError::Numerical("symbolic LU missing".into()))?;
         let lu = faer::sparse::linalg::solvers::Lu::try_new_with_symbolic(symbolic, z.as_ref())
-            .map_err(|e| BuildError::Numerical(format!("dynamic stiffness at {hz} Hz is singular: {e:?}")))?;
+            .map_err(|e| BuildError::Numerical(format!("dynamic stiffness at {hz} Hz is {}", faer_error::lu(&e))))?;
         // Z = S^-1 Zs S^-1: x = S Zs^-1 S b
         let sc = &self.scale;
         let mut x = Mat::<c64>::from_fn(nc, self.b.ncols(), |i, j| c64::new(self.b[(i, j)] * sc[i], 0.0));

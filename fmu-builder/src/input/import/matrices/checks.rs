@@ -76,8 +76,9 @@ pub(super) fn check_mass_semidefinite(mass: &SparseColMat<usize, f64>, path: &Pa
                 }
             }
         }
-        SparseColMat::try_new_from_triplets(mass.nrows(), mass.ncols(), &t)
-            .map_err(|e| ImportError::new(path, 0, format!("mass matrix: {e:?}")))?
+        SparseColMat::try_new_from_triplets(mass.nrows(), mass.ncols(), &t).map_err(|e| {
+            ImportError::new(path, 0, format!("mass matrix: {}", crate::linalg::faer_error::creation(&e)))
+        })?
     };
     if let Err(e) = lifted.sp_cholesky(Side::Lower) {
         let why = match e {

@@ -46,8 +46,13 @@ impl SymMatrix {
                 trip.push(Triplet::new(b, a, e.v));
             }
         }
-        SparseColMat::try_new_from_triplets(self.n, self.n, &trip)
-            .map_err(|e| ImportError::new(path, 0, format!("cannot build the sparse matrix: {e:?}")))
+        SparseColMat::try_new_from_triplets(self.n, self.n, &trip).map_err(|e| {
+            ImportError::new(
+                path,
+                0,
+                format!("cannot build the sparse matrix: {}", crate::linalg::faer_error::creation(&e)),
+            )
+        })
     }
 }
 
