@@ -1,0 +1,18 @@
+"""Fuzzing in CI, short: the FMI call-sequence fuzzer (tests/fuzz/fmi_sequences.py) on the mounted
+beam, the spinning T-square and a free-floating beam for about 15 s. The readers' and the
+reduced-model loader's fuzz targets are Rust tests (`cargo test`). Long runs: docs/FUZZING.md."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+
+
+def test_fmi_call_sequences(tmp_path):
+    proc = subprocess.run(
+        [sys.executable, str(HERE / "fuzz" / "fmi_sequences.py"), "--seconds", "15", "--seed", "1",
+         "--build-dir", str(tmp_path), "--shrink-seconds", "20"],
+        capture_output=True, text=True, timeout=1200)
+    print(proc.stdout[-20000:], proc.stderr[-5000:])
+    assert proc.returncode == 0, proc.stdout[-20000:]
