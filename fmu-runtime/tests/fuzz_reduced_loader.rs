@@ -340,15 +340,15 @@ enum Raw {
 fn edit() -> impl Strategy<Value = Edit> {
     let e = any::<usize>();
     prop_oneof![
-        4 => (e.clone(), any::<usize>(), select(VALUES)).prop_map(|(entry, index, value)| Edit::SetValue { entry, index, value }),
-        2 => (e.clone(), select(VALUES)).prop_map(|(entry, value)| Edit::Fill { entry, value }),
-        2 => (e.clone(), 0..4usize, prop_oneof![0..6u64, Just(1000u64)]).prop_map(|(entry, dim, to)| Edit::Resize { entry, dim, to }),
-        1 => (e.clone(), 0..4usize, select(WORDS)).prop_map(|(entry, dim, to)| Edit::Dims { entry, dim, to }),
-        2 => e.clone().prop_map(|entry| Edit::Remove { entry }),
-        1 => e.clone().prop_map(|entry| Edit::Duplicate { entry }),
-        1 => (e.clone(), select(NAMES)).prop_map(|(entry, to)| Edit::Rename { entry, to }),
-        1 => (e.clone(), select(TEXTS)).prop_map(|(entry, text)| Edit::ToText { entry, text }),
-        1 => (e.clone(), select(VALUES)).prop_map(|(entry, value)| Edit::ToScalar { entry, value }),
+        4 => (e, any::<usize>(), select(VALUES)).prop_map(|(entry, index, value)| Edit::SetValue { entry, index, value }),
+        2 => (e, select(VALUES)).prop_map(|(entry, value)| Edit::Fill { entry, value }),
+        2 => (e, 0..4usize, prop_oneof![0..6u64, Just(1000u64)]).prop_map(|(entry, dim, to)| Edit::Resize { entry, dim, to }),
+        1 => (e, 0..4usize, select(WORDS)).prop_map(|(entry, dim, to)| Edit::Dims { entry, dim, to }),
+        2 => e.prop_map(|entry| Edit::Remove { entry }),
+        1 => e.prop_map(|entry| Edit::Duplicate { entry }),
+        1 => (e, select(NAMES)).prop_map(|(entry, to)| Edit::Rename { entry, to }),
+        1 => (e, select(TEXTS)).prop_map(|(entry, text)| Edit::ToText { entry, text }),
+        1 => (e, select(VALUES)).prop_map(|(entry, value)| Edit::ToScalar { entry, value }),
         2 => (select(NAMES), select(VALUES)).prop_map(|(name, value)| Edit::Add { name, value }),
         1 => (e, any::<usize>(), any::<usize>()).prop_map(|(entry, a, b)| Edit::Swap { entry, a, b }),
     ]
