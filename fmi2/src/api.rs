@@ -15,7 +15,7 @@ use std::ffi::{CStr, CString, c_char};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use super::access::check_settable;
-use super::instance::{Instance, Snapshot};
+use super::instance::{Instance, SNAPSHOT_MAGIC, Snapshot};
 use super::logger::{Category, Logger};
 use super::resource::parse_resource_location;
 use super::serial;
@@ -32,6 +32,10 @@ pub enum Failure {
     Usage(String),
     /// The model returned Err: its state is unknown, so the instance enters Error.
     Model(String),
+    /// Model Exchange: the equations gave a non-finite number at the states and inputs the host
+    /// set. Nothing changed in the instance; the standard's answer is fmi2Discard, so an
+    /// integrator can retry with a smaller step (FMI 2.0.x, section 2.1.3).
+    Discard(String),
 }
 
 type Outcome = Result<fmi2Status, Failure>;
@@ -88,6 +92,10 @@ unsafe fn guarded<M: Model>(
             inst.state = ModelState::Error;
             inst.logger.error(&format!("{}: {msg}", rules.name));
             fmi2Error
+        }
+        Ok(Err(Failure::Discard(msg))) => {
+            inst.logger.discard(&format!("{}: {msg}", rules.name));
+            fmi2Discard
         }
         Err(payload) => {
             let msg = format!("{}: panic in the model: {}", rules.name, panic_message(&*payload));
@@ -160,6 +168,33 @@ fn settable<M: Model>(inst: &Instance<M>, vr: u32, expected: VarType) -> Result<
 
 fn model_err(vr: u32) -> impl FnOnce(String) -> Failure {
     move |e| Failure::Model(format!("value reference {vr}: {e}"))
+}
+
+/// A non-finite number the model computed is never handed out with fmi2OK. In Model Exchange
+/// it comes from states or inputs the host chose (the host may retry: fmi2Discard); in
+/// Co-Simulation the FMU's own state produced it, which is no state to go on from (fmi2Error).
+fn non_finite<M: Model>(inst: &Instance<M>, what: String, value: f64) -> Failure {
+    let msg = format!("{what} evaluates to {value} at the present states and inputs");
+    match inst.interface {
+        Interface::ModelExchange => Failure::Discard(msg),
+        Interface::CoSimulation => Failure::Model(msg),
+    }
+}
+
+/// The first non-finite entry of `values` as a failure, naming `what[i]`.
+fn check_finite<M: Model>(inst: &Instance<M>, values: &[f64], what: &str) -> Result<(), Failure> {
+    match values.iter().position(|v| !v.is_finite()) {
+        Some(i) => Err(non_finite(inst, format!("{what}[{i}]"), values[i])),
+        None => Ok(()),
+    }
+}
+
+/// A Real value from the host: finite, and within the model's range for `vr`.
+fn admissible<M: Model>(model: &M, vr: u32, value: f64) -> Result<(), Failure> {
+    if !value.is_finite() {
+        return Err(usage(format!("{}: {value} is not a finite number", describe(model, vr))));
+    }
+    model.admissible_real(vr, value).map_err(|e| usage(format!("{}: {e}", describe(model, vr))))
 }
 
 fn to_bool(b: fmi2Boolean) -> bool {
@@ -290,6 +325,14 @@ pub unsafe fn fmi2SetupExperiment<M: Model>(
             if !startTime.is_finite() {
                 return Err(usage(format!("startTime must be finite but is {startTime}")));
             }
+            if to_bool(toleranceDefined) && !(tolerance > 0.0 && tolerance.is_finite()) {
+                return Err(usage(format!("tolerance must be a positive number but is {tolerance}")));
+            }
+            if to_bool(stopTimeDefined) && !(stopTime.is_finite() && stopTime >= startTime) {
+                return Err(usage(format!(
+                    "stopTime = {stopTime} must be finite and not before startTime = {startTime}"
+                )));
+            }
             inst.logger.trace(|| format!("fmi2SetupExperiment: startTime {startTime}"));
             inst.tolerance = to_bool(toleranceDefined).then_some(tolerance);
             inst.start_time = startTime;
@@ -362,7 +405,11 @@ pub unsafe fn fmi2GetReal<M: Model>(
             let values = out_slice(value, nvr, "value[]")?;
             for (&r, v) in vrs.iter().zip(values) {
                 var_of_type(&inst.model, r, VarType::Real)?;
-                *v = inst.model.get_real(r).map_err(model_err(r))?;
+                let x = inst.model.get_real(r).map_err(model_err(r))?;
+                if !x.is_finite() {
+                    return Err(non_finite(inst, describe(&inst.model, r), x));
+                }
+                *v = x;
             }
             Ok(fmi2OK)
         })
@@ -443,8 +490,12 @@ pub unsafe fn fmi2SetReal<M: Model>(
         guarded::<M>(c, &spec::fmi2SetReal, |inst| {
             let vrs = in_slice(vr, nvr, "vr[]")?;
             let values = in_slice(value, nvr, "value[]")?;
+            // all checked before any is set: a refused call changes nothing
             for (&r, &v) in vrs.iter().zip(values) {
                 settable(inst, r, VarType::Real)?;
+                admissible(&inst.model, r, v)?;
+            }
+            for (&r, &v) in vrs.iter().zip(values) {
                 inst.model.set_real(r, v).map_err(model_err(r))?;
             }
             Ok(fmi2OK)
@@ -528,6 +579,7 @@ pub unsafe fn fmi2GetFMUstate<M: Model>(c: fmi2Component, FMUstate: *mut fmi2FMU
                 *slot = Box::into_raw(Box::new(snapshot)).cast();
             } else {
                 // The standard lets the host hand back a state to be overwritten in place.
+                snapshot_ref::<M>(*slot)?;
                 *slot.cast::<Snapshot<M>>() = snapshot;
             }
             Ok(fmi2OK)
@@ -539,6 +591,15 @@ pub unsafe fn fmi2SetFMUstate<M: Model>(c: fmi2Component, FMUstate: fmi2FMUstate
     unsafe {
         guarded::<M>(c, &spec::fmi2SetFMUstate, |inst| {
             let snapshot = snapshot_ref::<M>(FMUstate)?;
+            // a state of another FMU's instance has the same layout when that FMU carries this
+            // runtime too: only the GUID tells them apart
+            if snapshot.model.guid() != inst.model.guid() {
+                return Err(usage(format!(
+                    "the FMU state belongs to the model with GUID {}, not this FMU's {}",
+                    snapshot.model.guid(),
+                    inst.model.guid()
+                )));
+            }
             if snapshot.interface != inst.interface {
                 return Err(usage(format!(
                     "the FMU state is of a {:?} instance; this instance was instantiated for {:?}",
@@ -557,6 +618,7 @@ pub unsafe fn fmi2FreeFMUstate<M: Model>(c: fmi2Component, FMUstate: *mut fmi2FM
         guarded::<M>(c, &spec::fmi2FreeFMUstate, |_inst| {
             let slot = out_ref(FMUstate, "FMUstate")?;
             if !slot.is_null() {
+                snapshot_ref::<M>(*slot)?;
                 drop(Box::from_raw(slot.cast::<Snapshot<M>>()));
                 *slot = std::ptr::null_mut();
             }
@@ -571,8 +633,20 @@ pub unsafe fn fmi2FreeFMUstate<M: Model>(c: fmi2Component, FMUstate: *mut fmi2FM
 // instance stays in its state (it can go on, restore another state, reset or be freed).
 
 unsafe fn snapshot_ref<'a, M>(FMUstate: fmi2FMUstate) -> Result<&'a Snapshot<M>, Failure> {
-    // SAFETY: a non-null fmi2FMUstate is one we returned from fmi2GetFMUstate/fmi2DeSerializeFMUstate.
-    unsafe { FMUstate.cast::<Snapshot<M>>().as_ref() }.ok_or_else(|| usage("argument FMUstate must not be NULL"))
+    let p = FMUstate.cast::<Snapshot<M>>();
+    if p.is_null() {
+        return Err(usage("argument FMUstate must not be NULL"));
+    }
+    // SAFETY: the host passes a pointer to readable memory of at least a state's size; only the
+    // leading u64 is read before it is known to be one of our states.
+    let magic = unsafe { std::ptr::addr_of!((*p).magic).read_unaligned() };
+    if magic != SNAPSHOT_MAGIC {
+        return Err(usage(
+            "argument FMUstate is not an FMU state of this runtime (fmi2GetFMUstate or fmi2DeSerializeFMUstate make them)",
+        ));
+    }
+    // SAFETY: the magic marks a Snapshot<M> made by fmi2GetFMUstate/fmi2DeSerializeFMUstate.
+    Ok(unsafe { &*p })
 }
 
 pub unsafe fn fmi2SerializedFMUstateSize<M: Model>(
@@ -629,6 +703,7 @@ pub unsafe fn fmi2DeSerializeFMUstate<M: Model>(
                 *slot = Box::into_raw(Box::new(snapshot)).cast();
             } else {
                 // As fmi2GetFMUstate: a state handed back is overwritten in place.
+                snapshot_ref::<M>(*slot)?;
                 *slot.cast::<Snapshot<M>>() = snapshot;
             }
             Ok(fmi2OK)
@@ -725,6 +800,7 @@ pub unsafe fn fmi2GetDirectionalDerivative<M: Model>(
             }
             inst.logger.trace(|| format!("fmi2GetDirectionalDerivative: {nUnknown} unknowns, {nKnown} knowns"));
             inst.model.directional_derivative(unknowns, knowns, seed, result).map_err(Failure::Model)?;
+            check_finite(inst, result, "dvUnknown")?;
             Ok(fmi2OK)
         })
     }
@@ -789,6 +865,9 @@ pub unsafe fn fmi2CompletedIntegratorStep<M: Model>(
 pub unsafe fn fmi2SetTime<M: Model>(c: fmi2Component, time: fmi2Real) -> fmi2Status {
     unsafe {
         guarded::<M>(c, &spec::fmi2SetTime, |inst| {
+            if !time.is_finite() {
+                return Err(usage(format!("time = {time} is not a finite number")));
+            }
             inst.time = time;
             inst.model.set_time(time);
             Ok(fmi2OK)
@@ -800,7 +879,11 @@ pub unsafe fn fmi2SetContinuousStates<M: Model>(c: fmi2Component, x: *const fmi2
     unsafe {
         guarded::<M>(c, &spec::fmi2SetContinuousStates, |inst| {
             check_len(nx, inst.model.n_states(), "nx")?;
-            inst.model.set_continuous_states(in_slice(x, nx, "x[]")?);
+            let x = in_slice(x, nx, "x[]")?;
+            if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+                return Err(usage(format!("x[{i}] = {} is not a finite number; no state was set", x[i])));
+            }
+            inst.model.set_continuous_states(x);
             Ok(fmi2OK)
         })
     }
@@ -812,6 +895,7 @@ pub unsafe fn fmi2GetDerivatives<M: Model>(c: fmi2Component, derivatives: *mut f
             check_len(nx, inst.model.n_states(), "nx")?;
             let dx = out_slice(derivatives, nx, "derivatives[]")?;
             inst.model.get_derivatives(dx).map_err(Failure::Model)?;
+            check_finite(inst, dx, "derivatives")?;
             Ok(fmi2OK)
         })
     }
@@ -827,6 +911,7 @@ pub unsafe fn fmi2GetEventIndicators<M: Model>(
             check_len(ni, inst.model.n_event_indicators(), "ni")?;
             let z = out_slice(eventIndicators, ni, "eventIndicators[]")?;
             inst.model.get_event_indicators(z).map_err(Failure::Model)?;
+            check_finite(inst, z, "eventIndicators")?;
             Ok(fmi2OK)
         })
     }
@@ -836,7 +921,9 @@ pub unsafe fn fmi2GetContinuousStates<M: Model>(c: fmi2Component, x: *mut fmi2Re
     unsafe {
         guarded::<M>(c, &spec::fmi2GetContinuousStates, |inst| {
             check_len(nx, inst.model.n_states(), "nx")?;
-            inst.model.get_continuous_states(out_slice(x, nx, "x[]")?);
+            let x = out_slice(x, nx, "x[]")?;
+            inst.model.get_continuous_states(x);
+            check_finite(inst, x, "x")?;
             Ok(fmi2OK)
         })
     }
@@ -850,7 +937,9 @@ pub unsafe fn fmi2GetNominalsOfContinuousStates<M: Model>(
     unsafe {
         guarded::<M>(c, &spec::fmi2GetNominalsOfContinuousStates, |inst| {
             check_len(nx, inst.model.n_states(), "nx")?;
-            inst.model.get_nominals(out_slice(x_nominal, nx, "x_nominal[]")?);
+            let nominals = out_slice(x_nominal, nx, "x_nominal[]")?;
+            inst.model.get_nominals(nominals);
+            check_finite(inst, nominals, "x_nominal")?;
             Ok(fmi2OK)
         })
     }
@@ -934,7 +1023,11 @@ pub unsafe fn fmi2GetRealOutputDerivatives<M: Model>(
             }
             inst.logger.trace(|| format!("fmi2GetRealOutputDerivatives: {nvr} values"));
             for ((&r, &k), v) in vrs.iter().zip(orders).zip(values) {
-                *v = inst.model.get_real_output_derivative(r, k).map_err(model_err(r))?;
+                let x = inst.model.get_real_output_derivative(r, k).map_err(model_err(r))?;
+                if !x.is_finite() {
+                    return Err(non_finite(inst, format!("derivative {k} of {}", describe(&inst.model, r)), x));
+                }
+                *v = x;
             }
             Ok(fmi2OK)
         })
@@ -962,6 +1055,12 @@ pub unsafe fn fmi2DoStep<M: Model>(
             let scale = inst.time.abs().max(t.abs()).max(inst.start_time.abs()).max(h);
             if !t.is_finite() || (t - inst.time).abs() > TIME_TOLERANCE * scale {
                 return Err(usage(format!("currentCommunicationPoint = {t} but the FMU is at time {}", inst.time)));
+            }
+            if !(inst.time + h).is_finite() {
+                return Err(usage(format!(
+                    "communicationStepSize = {h} takes the time {} beyond any finite number",
+                    inst.time
+                )));
             }
             inst.logger.trace(|| format!("fmi2DoStep: t = {t}, h = {h}"));
             let result = inst.model.do_step(inst.time, h);

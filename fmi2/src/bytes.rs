@@ -50,6 +50,10 @@ impl<'a> Writer<'a> {
     }
 }
 
+fn finite(v: f64, what: &str) -> Result<f64, String> {
+    if v.is_finite() { Ok(v) } else { Err(format!("{what} = {v} is not a finite number")) }
+}
+
 /// Reads what [`Writer`] wrote; every method names the field in its error.
 pub struct Reader<'a> {
     bytes: &'a [u8],
@@ -100,8 +104,10 @@ impl<'a> Reader<'a> {
     pub fn u64(&mut self, what: &str) -> Result<u64, String> {
         Ok(u64::from_le_bytes(self.array(what)?))
     }
+    /// A real of a saved state: a non-finite one was never written (every value a state holds
+    /// is finite), so it is crafted or corrupt bytes and refused.
     pub fn f64(&mut self, what: &str) -> Result<f64, String> {
-        Ok(f64::from_le_bytes(self.array(what)?))
+        finite(f64::from_le_bytes(self.array(what)?), what)
     }
     /// Fills `out` (its length is the count: sizes come from the reader's side, never the bytes).
     pub fn f64s_into(&mut self, out: &mut [f64], what: &str) -> Result<(), String> {
@@ -110,7 +116,7 @@ impl<'a> Reader<'a> {
         for (x, c) in out.iter_mut().zip(raw.chunks_exact(8)) {
             let mut a = [0u8; 8];
             a.copy_from_slice(c);
-            *x = f64::from_le_bytes(a);
+            *x = finite(f64::from_le_bytes(a), what)?;
         }
         Ok(())
     }
@@ -160,7 +166,7 @@ mod tests {
         w.u8(7);
         w.bool(true);
         w.u32(0xdead_beef);
-        w.f64(f64::from_bits(0x7ff8_0000_0000_1234));
+        w.f64(f64::from_bits(0x0000_0000_0000_1234)); // a denormal: bits kept
         w.f64s(&[1.5, -0.0]);
         w.str("{guid}");
         w.len(2);
@@ -182,7 +188,7 @@ mod tests {
             Ok(v)
         };
         let (a, b, c, d, e, f, _) = read(&out).unwrap();
-        assert_eq!((a, b, c, d, f.as_str()), (7, true, 0xdead_beef, 0x7ff8_0000_0000_1234, "{guid}"));
+        assert_eq!((a, b, c, d, f.as_str()), (7, true, 0xdead_beef, 0x0000_0000_0000_1234, "{guid}"));
         assert_eq!(e[1].to_bits(), (-0.0f64).to_bits());
         for cut in 0..out.len() {
             assert!(read(&out[..cut]).is_err(), "cut at {cut}");
@@ -190,6 +196,12 @@ mod tests {
         let mut bad = out.clone();
         bad[1] = 2;
         assert_eq!(read(&bad).unwrap_err(), "b is 2, not a boolean (0 or 1)");
+        // a saved state never holds a non-finite real: such bytes are crafted and refused
+        for nan in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let mut bad = out.clone();
+            bad[6..14].copy_from_slice(&nan.to_le_bytes());
+            assert_eq!(read(&bad).unwrap_err(), format!("d = {nan} is not a finite number"));
+        }
     }
 
     #[test]

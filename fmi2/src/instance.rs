@@ -56,6 +56,7 @@ impl<M: Model> Instance<M> {
 
     pub fn snapshot(&self) -> Snapshot<M> {
         Snapshot {
+            magic: SNAPSHOT_MAGIC,
             model: self.model.clone(),
             interface: self.interface,
             state: self.state,
@@ -77,9 +78,16 @@ impl<M: Model> Instance<M> {
     }
 }
 
+/// The first field of every [`Snapshot`]: a host that hands back a pointer that is no FMU state
+/// of this runtime (another tool's state, an instance, freed memory that was reused) is refused
+/// in the common cases instead of being read as one.
+pub const SNAPSHOT_MAGIC: u64 = u64::from_le_bytes(*b"FLEXSNAP");
+
 /// What an fmi2FMUstate points to: everything that evolves during a simulation,
 /// but not the host's callbacks or logging settings.
+#[repr(C)]
 pub struct Snapshot<M> {
+    pub magic: u64,
     pub model: M,
     /// The interface of the instance it was taken from: states do not cross interfaces.
     pub interface: Interface,
@@ -88,4 +96,14 @@ pub struct Snapshot<M> {
     pub start_time: f64,
     pub stop_time: Option<f64>,
     pub last_do_step_status: fmi2Status,
+}
+
+impl<M> Drop for Snapshot<M> {
+    fn drop(&mut self) {
+        // a host that frees a state twice or sets a freed one meets a cleared magic (while the
+        // allocator has not reused the memory) instead of a stale model; volatile, since the
+        // compiler would drop a plain store to memory about to be freed
+        // SAFETY: `self.magic` is a valid, aligned u64 for the duration of drop.
+        unsafe { std::ptr::write_volatile(&mut self.magic, 0) };
+    }
 }

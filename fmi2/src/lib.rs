@@ -94,6 +94,13 @@ pub trait Model: Sized + Clone {
         None
     }
     fn get_real(&mut self, vr: u32) -> Result<f64, String>;
+    /// Whether the finite `value` may be given to Real variable `vr` (the layer has refused
+    /// non-finite values already): Err with the reason refuses it before anything is set, and the
+    /// instance stays usable. For the model's physical range (a negative damping, a load whose
+    /// square overflows); the same rule applies to restored FMU states.
+    fn admissible_real(&self, _vr: u32, _value: f64) -> Result<(), String> {
+        Ok(())
+    }
     fn set_real(&mut self, vr: u32, value: f64) -> Result<(), String>;
     fn get_integer(&mut self, vr: u32) -> Result<i32, String>;
     fn set_integer(&mut self, vr: u32, value: i32) -> Result<(), String>;

@@ -105,6 +105,12 @@ impl Logger {
         self.log(fmi2Status::fmi2Error, Category::LogStatusError, text);
     }
 
+    /// A refused evaluation (fmi2Discard): logged whatever the debug logging, as errors are, since
+    /// the host needs the reason to act on it (a smaller step, other states).
+    pub fn discard(&self, text: &str) {
+        self.log(fmi2Status::fmi2Discard, Category::LogStatusError, text);
+    }
+
     pub fn fatal(&self, text: &str) {
         self.log(fmi2Status::fmi2Fatal, Category::LogStatusError, text);
     }

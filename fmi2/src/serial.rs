@@ -175,6 +175,7 @@ pub fn deserialize<M: Model>(bytes: &[u8], current: &M, interface: Interface) ->
     let mut model = current.clone();
     model.load_state(section).map_err(|e| format!("model state: {e}"))?;
     Ok(Snapshot {
+        magic: super::instance::SNAPSHOT_MAGIC,
         model,
         interface,
         state,

@@ -19,6 +19,9 @@
 //!
 //! All storage is allocated at construction; `prepare` and `advance` allocate nothing.
 
+/// More squarings than any finite |A h| needs (log2(f64::MAX) = 1024).
+const MAX_SQUARINGS: f64 = 1100.0;
+
 /// Result of preparing a step: whether the cached transition was recomputed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Prepared {
@@ -150,7 +153,10 @@ impl CoupledPropagator {
         let norm = (0..m).map(|j| (0..m).map(|i| a[i * m + j].abs()).sum::<f64>()).fold(0.0, f64::max);
         // the load blocks have norm h, like A h's time scale: scale them alike
         let norm = norm.max(h);
-        let s = if norm > SCALED_NORM { (norm / SCALED_NORM).log2().ceil() as i32 } else { 0 };
+        // a finite norm needs at most log2(f64::MAX) squarings; an overflowing one (a step of
+        // 1e308 s) would ask for i32::MAX of them: its transition is non-finite whatever the
+        // count, which the step reports, so the count stays bounded
+        let s = if norm > SCALED_NORM { (norm / SCALED_NORM).log2().ceil().min(MAX_SQUARINGS) as i32 } else { 0 };
         let tau = h * 0.5f64.powi(s);
         let scale = 0.5f64.powi(s);
         for v in a.iter_mut() {

@@ -11,7 +11,7 @@ use crate::kinematics as k3;
 use crate::reduced::ReducedBody;
 use crate::scalar::{Scalar, c};
 use fmi2::bytes::{Reader, Writer};
-use fmi2::{Interface, Model, VarInfo};
+use fmi2::{Causality, Interface, Model, VarInfo, VarType};
 use std::sync::Arc;
 
 /// Capabilities the model implements; the builder writes them into modelDescription.xml.
@@ -60,6 +60,37 @@ impl BodyFmu {
     }
 }
 
+/// Largest reduced-model file read: the largest models we build (hundreds of modes with
+/// rotation and stiffening terms, 3 x 3 x r x r each) stay far below it.
+const MAX_RESOURCE_BYTES: u64 = 1 << 30;
+
+/// The reduced-model file's bytes: a regular file (a FIFO would block fmi2Instantiate, a link
+/// to a device would read without end) of at most [`MAX_RESOURCE_BYTES`].
+fn read_resource(path: &std::path::Path) -> Result<Vec<u8>, String> {
+    use std::io::Read;
+    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    if !meta.is_file() {
+        return Err(format!("{} is not a regular file", path.display()));
+    }
+    if meta.len() > MAX_RESOURCE_BYTES {
+        return Err(format!(
+            "{} has {} bytes, more than any reduced model ({MAX_RESOURCE_BYTES} at most)",
+            path.display(),
+            meta.len()
+        ));
+    }
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    // the file may grow between the check and the read: never read past the limit
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    file.take(MAX_RESOURCE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    if bytes.len() as u64 > MAX_RESOURCE_BYTES {
+        return Err(format!("{} grew beyond {MAX_RESOURCE_BYTES} bytes while it was read", path.display()));
+    }
+    Ok(bytes)
+}
+
 fn frame<T: Scalar>(b: &FlexibleBody<T>) -> Result<FrameState<T>, String> {
     b.frame().copied().ok_or_else(|| "not a free-floating body".to_string())
 }
@@ -73,8 +104,8 @@ impl Model for BodyFmu {
         let dir =
             resources.ok_or("no resource location given: the reduced body lives in the FMU's resources folder")?;
         let path = dir.join(RESOURCE_FILE);
-        let bytes = std::fs::read(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-        let reduced = ReducedBody::from_bytes(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+        let bytes = read_resource(&path)?;
+        let reduced = ReducedBody::from_sealed_bytes(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
         Ok(Self::for_interface(reduced, interface))
     }
 
@@ -217,12 +248,14 @@ impl Model for BodyFmu {
         Ok(())
     }
 
+    fn admissible_real(&self, vr: u32, value: f64) -> Result<(), String> {
+        admissible(self.quantity(vr)?, value)
+    }
+
     fn set_real(&mut self, vr: u32, value: f64) -> Result<(), String> {
         use Quantity as Q;
         let name = || self.table.get(vr).map(|v| v.name.clone()).unwrap_or_default();
-        if !value.is_finite() {
-            return Err(format!("{} = {value} is not a finite number", name()));
-        }
+        // the FMI layer has checked `admissible` (finite, in range) before
         let q = self.quantity(vr)?;
         let b = &mut self.body;
         match q {
@@ -235,9 +268,6 @@ impl Model for BodyFmu {
             Q::FlangeForce(k, i) => b.load_mut(k).f[i] = value,
             Q::FlangeTorque(k, i) => b.load_mut(k).t[i] = value,
             Q::Gravity(i) => b.parameters_mut().g[i] = value,
-            Q::RayleighAlpha | Q::RayleighBeta if value < 0.0 => {
-                return Err(format!("{} = {value} must not be negative", name()));
-            }
             Q::RayleighAlpha => b.parameters_mut().alpha = value,
             Q::RayleighBeta => b.parameters_mut().beta = value,
             Q::ModalCoordinate(j) => b.q_mut()[j] = value,
@@ -514,7 +544,43 @@ impl Model for BodyFmu {
             BodyState { mount, loads, params, q, qd, frame, initial_frame, rates, coupling_reference, stepped_inputs };
         self.body = self.body.with_state(state)?;
         self.static_start = static_start;
+        // what the host can set, restored from bytes, obeys the rule fmi2SetReal applies
+        for v in self.table.variables.iter().filter(|v| matches!(v.causality, Causality::Input | Causality::Parameter))
+        {
+            if v.var_type == VarType::Real {
+                let value = value_of(&mut self.body, v.quantity)?;
+                admissible(v.quantity, value).map_err(|e| format!("{} = {value}: {e}", v.name))?;
+            }
+        }
         Ok(())
+    }
+}
+
+/// Largest magnitude of a Real the host sets: beyond any load, speed, acceleration or damping
+/// in SI units by scores of orders of magnitude, and small enough that products of three such
+/// values (a centrifugal load w^2 r) stay finite. A value past it is a unit or host error that
+/// would otherwise surface as NaN outputs many calls later.
+const REAL_LIMIT: f64 = 1e100;
+
+/// Whether `value` is in the physical range of `quantity` (the host's values are finite: the
+/// FMI layer has checked).
+fn admissible(quantity: Quantity, value: f64) -> Result<(), String> {
+    use Quantity as Q;
+    if !value.is_finite() {
+        return Err(format!("{value} is not a finite number"));
+    }
+    if value.abs() > REAL_LIMIT {
+        return Err(format!("|{value:e}| is beyond {REAL_LIMIT:e}, the range of any physical quantity in SI units"));
+    }
+    match quantity {
+        Q::RayleighAlpha | Q::RayleighBeta if value < 0.0 => {
+            Err(format!("{value} is negative: damping must not feed energy into the body"))
+        }
+        // an entry of a rotation matrix: |R_ij| <= 1 (rounding leaves far less than 1e-6)
+        Q::MountRotation(..) if value.abs() > 1.0 + 1e-6 => {
+            Err(format!("{value} is no entry of a rotation matrix (each lies in [-1, 1])"))
+        }
+        _ => Ok(()),
     }
 }
 

@@ -16,6 +16,22 @@ pub const MAGIC: &[u8; 8] = b"FLEXBODY";
 pub const FORMAT_VERSION: u32 = 1;
 /// Name of the file inside the FMU's `resources/` folder.
 pub const RESOURCE_FILE: &str = "reduced_body.bin";
+/// The text entry holding the content's GUID (see [`Container::content_guid`]).
+pub const GUID_ENTRY: &str = "guid";
+
+/// RFC 9562 version-5 UUID of `bytes` in this tool's namespace, braced as FMI writes GUIDs.
+pub fn name_based_uuid(bytes: &[u8]) -> String {
+    const NAMESPACE: [u8; 16] = 0x6f4d_2a61_8e3b_4c57_9a0e_52b1_c3d8_f7e4u128.to_be_bytes();
+    let mut sha = sha1_smol::Sha1::new();
+    sha.update(&NAMESPACE);
+    sha.update(bytes);
+    let mut u = [0u8; 16];
+    u.copy_from_slice(&sha.digest().bytes()[..16]);
+    u[6] = (u[6] & 0x0f) | 0x50; // version 5
+    u[8] = (u[8] & 0x3f) | 0x80; // RFC 9562 variant
+    let h: String = u.iter().map(|b| format!("{b:02x}")).collect();
+    format!("{{{}-{}-{}-{}-{}}}", &h[..8], &h[8..12], &h[12..16], &h[16..20], &h[20..])
+}
 
 #[derive(Debug, Clone, PartialEq)]
 pub enum Entry {
@@ -160,6 +176,17 @@ impl Container {
         out
     }
 
+    /// The GUID of this content: a name-based UUID (RFC 9562 version 5, SHA-1) of the
+    /// container's bytes with the `guid` entry empty, in a namespace of this tool. The builder
+    /// stores it as the FMU's GUID and the runtime recomputes it on loading, so any change of a
+    /// resource file after the build (even one that keeps its CRC valid) no longer matches the
+    /// GUID of modelDescription.xml, and the same model gets the same GUID on every machine.
+    pub fn content_guid(&self) -> String {
+        let mut unnamed = self.clone();
+        unnamed.put_text(GUID_ENTRY, "");
+        name_based_uuid(&unnamed.to_bytes())
+    }
+
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, FormatError> {
         let mut r = Reader { bytes, pos: 0 };
         if r.take(8).map_err(|_| FormatError::BadMagic)? != MAGIC {
@@ -173,8 +200,10 @@ impl Container {
         let payload_start = r.pos;
         let payload_end =
             payload_start.checked_add(len).ok_or_else(|| FormatError::Malformed("payload length overflows".into()))?;
-        if payload_end + 4 > bytes.len() {
-            return Err(FormatError::Truncated { at: bytes.len(), needed: payload_end + 4 - bytes.len() });
+        let file_end =
+            payload_end.checked_add(4).ok_or_else(|| FormatError::Malformed("payload length overflows".into()))?;
+        if file_end > bytes.len() {
+            return Err(FormatError::Truncated { at: bytes.len(), needed: file_end - bytes.len() });
         }
         let stored = u32::from_le_bytes(bytes[payload_end..payload_end + 4].try_into().unwrap_or([0; 4]));
         let computed = crc32fast::hash(&bytes[..payload_end]);
@@ -212,8 +241,15 @@ impl Container {
                         .checked_mul(8)
                         .ok_or_else(|| FormatError::Malformed(format!("size of '{name}' overflows")))?;
                     let raw = r.take(nbytes)?;
-                    let values =
+                    let values: Vec<f64> =
                         raw.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8]))).collect();
+                    // the builder writes finite numbers only: anything else is damage or forgery
+                    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+                        return Err(FormatError::Malformed(format!(
+                            "entry '{name}' holds {} at index {i}, not a finite number",
+                            values[i]
+                        )));
+                    }
                     Entry::Array { dims, values }
                 }
                 1 => {

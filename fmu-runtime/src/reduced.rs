@@ -3,7 +3,7 @@
 //! Everything is resolved in the body frame B, whose origin is the mount flange's reference point
 //! and whose axes are the world axes of the undeformed part.
 
-use crate::format::{Container, FormatError};
+use crate::format::{Container, FormatError, GUID_ENTRY};
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct FlangeShapes {
@@ -226,6 +226,19 @@ impl ReducedBody {
         } else {
             None
         };
+        // the builder never writes these (finiteness is the container's check)
+        let mass = c.scalar("mass")?;
+        if !(mass > 0.0) {
+            return Err(FormatError::Malformed(format!("mass = {mass} is not positive")));
+        }
+        for name in ["damping.alpha", "damping.beta"] {
+            if c.scalar(name)? < 0.0 {
+                return Err(FormatError::Malformed(format!("{name} = {} is negative", c.scalar(name)?)));
+            }
+        }
+        if let Some(j) = c.array("damping.modal", &[n])?.iter().position(|&d| d < 0.0) {
+            return Err(FormatError::Malformed(format!("damping.modal[{j}] is negative")));
+        }
         let mut inertia = [0.0; 9];
         inertia.copy_from_slice(c.array("inertia", &[3, 3])?);
         Ok(Self {
@@ -236,7 +249,7 @@ impl ReducedBody {
             alpha: c.scalar("damping.alpha")?,
             beta: c.scalar("damping.beta")?,
             modal_damping: c.array("damping.modal", &[n])?.to_vec(),
-            mass: c.scalar("mass")?,
+            mass,
             first_moment: to3(c.array("first_moment", &[3])?),
             inertia,
             c_t: c.array("c_t", &[3, n])?.to_vec(),
@@ -255,6 +268,26 @@ impl ReducedBody {
 
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, FormatError> {
         Self::from_container(&Container::from_bytes(bytes)?)
+    }
+
+    /// Give the body the GUID of its content (what the builder does before writing it).
+    pub fn seal(&mut self) {
+        self.guid.clear();
+        self.guid = self.to_container().content_guid();
+    }
+
+    /// [`Self::from_bytes`] for a file of an FMU: the stored GUID must be the content's, so a
+    /// file changed after the build (however consistent) is refused rather than run under the
+    /// modelDescription.xml of another model.
+    pub fn from_sealed_bytes(bytes: &[u8]) -> Result<Self, FormatError> {
+        let c = Container::from_bytes(bytes)?;
+        let (stored, computed) = (c.text(GUID_ENTRY)?, c.content_guid());
+        if stored != computed {
+            return Err(FormatError::Malformed(format!(
+                "its content does not match its GUID {stored} (the content's is {computed}): the file was changed after the build"
+            )));
+        }
+        Self::from_container(&c)
     }
 }
 

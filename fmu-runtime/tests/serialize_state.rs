@@ -60,7 +60,9 @@ fn rotation_terms(n: usize) -> RotationTerms {
 }
 
 fn install(mut body: ReducedBody, name: &str, inputs: Inputs, start: Vec<(&'static str, f64)>) -> Case {
-    body.guid = format!("{{{name}}}");
+    // a GUID per case (the runtime checks it is the content's): states must not cross cases
+    body.model_name = name.to_owned();
+    body.seal();
     // one directory per case and test: the tests run in parallel and each removes its own
     static COUNT: AtomicUsize = AtomicUsize::new(0);
     let k = COUNT.fetch_add(1, Ordering::Relaxed);
@@ -353,6 +355,7 @@ fn model_exchange_states_and_derivatives_are_identical_after_restore() {
 fn snapshot(case: &Case, model: BodyFmu) -> Snapshot<BodyFmu> {
     let _ = case;
     Snapshot {
+        magic: fmi2::instance::SNAPSHOT_MAGIC,
         model,
         interface: Interface::CoSimulation,
         state: ModelState::StepComplete,

@@ -10,6 +10,10 @@ use crate::bytes::{Reader, Writer};
 use crate::{Causality as C, Initial as I, Interface, Model, VarInfo, VarType as T, Variability as V};
 
 pub const GUID: &str = "{8c4e810f-3df3-4a00-8276-176fa3c9f000}";
+/// The GUID of another FMU carrying the same runtime (resources containing "other-model").
+pub const OTHER_GUID: &str = "{8c4e810f-3df3-4a00-8276-176fa3c9f001}";
+/// The input's physical range: |u| beyond it is refused by `admissible_real`.
+pub const U_LIMIT: f64 = 1e100;
 
 pub const X: u32 = 0;
 pub const V_: u32 = 1;
@@ -109,7 +113,13 @@ impl Model for Spring {
         Ok(Spring::start(resources))
     }
     fn guid(&self) -> &str {
-        GUID
+        if self.resources.contains("other-model") { OTHER_GUID } else { GUID }
+    }
+    fn admissible_real(&self, vr: u32, value: f64) -> Result<(), String> {
+        if vr == U && value.abs() > U_LIMIT {
+            return Err(format!("|u| = {value:e} is beyond the input's range {U_LIMIT:e}"));
+        }
+        Ok(())
     }
     fn var_info(&self, vr: u32) -> Option<VarInfo> {
         VARS.get(vr as usize).copied()

@@ -1251,3 +1251,116 @@ fn derivative_failures_of_the_model_enter_the_error_state() {
     assert_eq!(model_state_of(c), ModelState::Error);
     unsafe { api::fmi2FreeInstance::<Spring>(c) };
 }
+
+/// The minimal reproducers: a non-finite value set by the host is refused with the
+/// variable named and the instance left usable; a non-finite value the equations produce never
+/// leaves with fmi2OK.
+#[test]
+fn non_finite_inputs_are_refused_and_the_instance_stays_usable() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2CoSimulation);
+    for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        assert_eq!(set_real(c, U, bad), fmi2Error);
+        assert!(
+            log.last().contains("value reference 3 (u)") && log.last().contains("not a finite number"),
+            "{}",
+            log.last()
+        );
+    }
+    // finite but beyond the model's range: the model's reason, and nothing set
+    assert_eq!(set_real(c, U, -1e308), fmi2Error);
+    assert!(log.last().contains("(u)") && log.last().contains("beyond the input's range"), "{}", log.last());
+    // one refused value refuses the whole call: nothing of it is set
+    let (vrs, values) = ([K, U], [3.0, f64::NAN]);
+    assert_eq!(unsafe { api::fmi2SetReal::<Spring>(c, vrs.as_ptr(), 2, values.as_ptr()) }, fmi2Error);
+    assert_eq!(model_state_of(c), crate::state::ModelState::Instantiated);
+    unsafe {
+        assert_eq!(api::fmi2SetupExperiment::<Spring>(c, fmi2True, -1.0, 0.0, fmi2False, 0.0), fmi2Error);
+        assert!(log.last().contains("tolerance"), "{}", log.last());
+        assert_eq!(api::fmi2SetupExperiment::<Spring>(c, fmi2False, 0.0, 0.0, fmi2True, f64::NAN), fmi2Error);
+        assert!(log.last().contains("stopTime"), "{}", log.last());
+        assert_eq!(api::fmi2SetupExperiment::<Spring>(c, fmi2False, 0.0, 1e308, fmi2False, 0.0), fmi2OK);
+        assert_eq!(api::fmi2EnterInitializationMode::<Spring>(c), fmi2OK);
+        assert_eq!(api::fmi2ExitInitializationMode::<Spring>(c), fmi2OK);
+        assert_eq!((get_real(c, U), get_real(c, K)), (0.0, 1.0), "nothing of the refused calls was set");
+        // t + h overflows
+        assert_eq!(api::fmi2DoStep::<Spring>(c, 1e308, 1e308, fmi2True), fmi2Error);
+        assert!(log.last().contains("beyond any finite number"), "{}", log.last());
+        assert_eq!(api::fmi2DoStep::<Spring>(c, 1e308, 1e-3, fmi2True), fmi2OK, "{}", log.last());
+        api::fmi2FreeInstance::<Spring>(c);
+    }
+}
+
+#[test]
+fn non_finite_results_in_model_exchange_are_discarded_with_the_reason() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2ModelExchange);
+    assert_eq!(set_real(c, D, 2.0), fmi2OK);
+    initialize(c, 0.0);
+    unsafe {
+        assert_eq!(api::fmi2EnterContinuousTimeMode::<Spring>(c), fmi2OK);
+        assert_eq!(api::fmi2SetTime::<Spring>(c, f64::NAN), fmi2Error);
+        assert!(log.last().contains("fmi2SetTime: time = NaN is not a finite number"), "{}", log.last());
+        let nan = [0.5, f64::NAN];
+        assert_eq!(api::fmi2SetContinuousStates::<Spring>(c, nan.as_ptr(), 2), fmi2Error);
+        assert!(log.last().contains("x[1] = NaN is not a finite number"), "{}", log.last());
+        let mut x = [0.0; 2];
+        assert_eq!(api::fmi2GetContinuousStates::<Spring>(c, x.as_mut_ptr(), 2), fmi2OK);
+        assert_eq!(x, [1.0, 0.0], "a refused call sets no state");
+
+        // finite states whose derivative overflows: -d v = -2e308
+        let huge = [0.0, 1e308];
+        assert_eq!(api::fmi2SetContinuousStates::<Spring>(c, huge.as_ptr(), 2), fmi2OK);
+        let mut dx = [0.0; 2];
+        let status = api::fmi2GetDerivatives::<Spring>(c, dx.as_mut_ptr(), 2);
+        assert_eq!(status, fmi2Discard, "{dx:?}");
+        assert!(log.last().contains("fmi2GetDerivatives: derivatives[1] evaluates to -inf"), "{}", log.last());
+        let (vr, mut a) = (A, 0.0);
+        assert_eq!(api::fmi2GetReal::<Spring>(c, &vr, 1, &mut a), fmi2Discard);
+        assert!(log.last().contains("value reference 4 (a) evaluates to -inf"), "{}", log.last());
+        assert_eq!(model_state_of(c), crate::state::ModelState::ContinuousTimeMode, "the host may retry");
+        let fine = [0.0, 1.0];
+        assert_eq!(api::fmi2SetContinuousStates::<Spring>(c, fine.as_ptr(), 2), fmi2OK);
+        assert_eq!(api::fmi2GetDerivatives::<Spring>(c, dx.as_mut_ptr(), 2), fmi2OK);
+        assert_eq!(dx, [1.0, -2.0]);
+        api::fmi2FreeInstance::<Spring>(c);
+    }
+}
+
+/// A state of another FMU carrying this runtime has the same layout: the GUID must refuse it.
+/// Memory that is no state at all is refused by its first word.
+#[test]
+fn fmu_states_of_another_model_or_no_state_at_all_are_refused() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2CoSimulation);
+    let other = instantiate_with(&log, fmi2CoSimulation, OTHER_GUID, Some("file:///tmp/other-model/resources"), false);
+    assert!(!other.is_null(), "{}", log.last());
+    initialize(c, 0.0);
+    initialize(other, 0.0);
+    let foreign = get_state(other);
+    unsafe {
+        assert_eq!(api::fmi2SetFMUstate::<Spring>(c, foreign), fmi2Error);
+        assert!(
+            log.last().contains("belongs to the model with GUID {8c4e810f-3df3-4a00-8276-176fa3c9f001}"),
+            "{}",
+            log.last()
+        );
+        assert_eq!(model_state_of(c), crate::state::ModelState::StepComplete);
+        // the serialized form is refused as well
+        let bytes = serialize(other, foreign);
+        assert_eq!(deserialize(c, &bytes).err(), Some(fmi2Error));
+        assert!(log.last().contains("GUID"), "{}", log.last());
+
+        let not_a_state = vec![0u64; 64];
+        let p = not_a_state.as_ptr() as fmi2FMUstate;
+        assert_eq!(api::fmi2SetFMUstate::<Spring>(c, p), fmi2Error);
+        assert!(log.last().contains("not an FMU state of this runtime"), "{}", log.last());
+        let mut slot = p;
+        assert_eq!(api::fmi2FreeFMUstate::<Spring>(c, &mut slot), fmi2Error);
+        assert_eq!(api::fmi2GetFMUstate::<Spring>(c, &mut slot), fmi2Error, "a foreign handle is not overwritten");
+        assert_eq!(not_a_state, vec![0u64; 64]);
+        free_state(other, foreign);
+        api::fmi2FreeInstance::<Spring>(other);
+        api::fmi2FreeInstance::<Spring>(c);
+    }
+}

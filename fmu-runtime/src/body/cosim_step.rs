@@ -222,7 +222,9 @@ impl FlexibleBody {
         self.eval.valid = false;
         if !(self.q.iter().chain(&self.qd).all(|v| v.is_finite())) {
             return Err(if self.coupled.definite() {
-                "the modal state became non-finite in this step".into()
+                format!(
+                    "the modal state became non-finite in this step of h = {h} s (a step or load beyond the body's range)"
+                )
             } else {
                 format!("the deformation grew without bound: {UNSTABLE_STIFFNESS}")
             });

@@ -2,17 +2,16 @@
 
 use fmu_runtime::reduced::ReducedBody;
 
-/// The FMU's GUID: a name-based UUID (RFC 9562 version 5, SHA-1) of the reduced model's bytes in
-/// a namespace of this tool, so the same model gives the same GUID on every machine and Rust
-/// release, and any change of the model gives another.
+/// A name-based UUID (RFC 9562 version 5, SHA-1) of `bytes` in a namespace of this tool.
 pub fn guid_of(bytes: &[u8]) -> String {
-    const NAMESPACE: uuid::Uuid = uuid::Uuid::from_u128(0x6f4d_2a61_8e3b_4c57_9a0e_52b1_c3d8_f7e4);
-    format!("{{{}}}", uuid::Uuid::new_v5(&NAMESPACE, bytes).hyphenated())
+    fmu_runtime::format::name_based_uuid(bytes)
 }
 
-/// The GUID of a reduced body: the same model always gets the same GUID.
+/// The FMU's GUID: the UUID of the reduced model's content (its bytes with the GUID left
+/// empty), so the same model gets the same GUID on every machine and Rust release, any change
+/// of the model gives another, and the runtime recomputes it to detect a changed resource file.
 pub fn guid(reduced: &ReducedBody) -> String {
-    guid_of(&reduced.to_bytes())
+    reduced.to_container().content_guid()
 }
 
 #[cfg(test)]
