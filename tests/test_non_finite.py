@@ -3,6 +3,7 @@ absurd value from the host is refused with the variable named and the instance s
 state of another FMU or forged bytes are refused; a resource file changed after the build, a
 FIFO or a device in its place is refused at fmi2Instantiate. The issue's minimal reproducers."""
 
+import ctypes
 import math
 import os
 import shutil
@@ -23,10 +24,11 @@ def tsquare(build_dir):
     return _build("t-square.json", build_dir)
 
 
-def instance(fmu_path, kind, directory=None, name="nonfinite"):
+def instance(fmu_path, kind, name="nonfinite", rec=None):
     md = read_model_description(str(fmu_path))
-    directory = directory or extract(str(fmu_path))
-    rec = Recorder()
+    directory = extract(str(fmu_path))
+    # FMPy's logger proxy has one global target: instances logging together share a recorder
+    rec = rec or Recorder()
     cls, ident = (FMU2Model, md.modelExchange) if kind == "me" else (FMU2Slave, md.coSimulation)
     fmu = cls(guid=md.guid, unzipDirectory=directory, modelIdentifier=ident.modelIdentifier, instanceName=name)
     fmu.instantiate(callbacks=rec.callbacks)
@@ -35,6 +37,22 @@ def instance(fmu_path, kind, directory=None, name="nonfinite"):
 
 def outputs(md):
     return [v.valueReference for v in md.modelVariables if v.causality == "output" and v.type == "Real"]
+
+
+def doubles(values):
+    return (ctypes.c_double * len(values))(*values)
+
+
+def states(fmu, n):
+    x = doubles([0.0] * n)
+    fmu.getContinuousStates(x, n)
+    return list(x)
+
+
+def derivatives(fmu, n):
+    dx = doubles([0.0] * n)
+    fmu.getDerivatives(dx, n)
+    return list(dx)
 
 
 def initialized(fmu):
@@ -48,25 +66,27 @@ def test_model_exchange_refuses_a_nan_state_and_outputs_stay_finite(beam):
     try:
         initialized(fmu)
         fmu.enterContinuousTimeMode()
-        x = fmu.getContinuousStates()
+        n = md.numberOfContinuousStates
+        x = states(fmu, n)
         bad = list(x)
         bad[0] = float("nan")
         with refused("fmi2SetContinuousStates"):
-            fmu.setContinuousStates(bad, len(bad))
+            fmu.setContinuousStates(doubles(bad), n)
         assert "x[0] = NaN is not a finite number" in rec.messages[-1], rec.text()
         with refused("fmi2SetTime"):
             fmu.setTime(float("nan"))
         assert "not a finite number" in rec.messages[-1], rec.text()
+        assert states(fmu, n) == x, "a refused call sets no state"
         values = fmu.getReal(outputs(md))
         assert len(values) == len(outputs(md)) and all(math.isfinite(v) for v in values)
         # absurd but finite states: the derivatives are refused with fmi2Discard, never NaN with fmi2OK
-        fmu.setContinuousStates([1e308] * len(x), len(x))
+        fmu.setContinuousStates(doubles([1e308] * n), n)
         with pytest.raises(FMICallException, match=r"status 2 \(discard\)"):
-            fmu.getDerivatives()
+            derivatives(fmu, n)
         assert "evaluates to" in rec.messages[-1], rec.text()
         # the instance goes on from finite states
-        fmu.setContinuousStates(list(x), len(x))
-        assert all(math.isfinite(v) for v in fmu.getDerivatives())
+        fmu.setContinuousStates(doubles(x), n)
+        assert all(math.isfinite(v) for v in derivatives(fmu, n))
         fmu.terminate()
         fmu.freeInstance()
     finally:
@@ -94,7 +114,7 @@ def test_co_simulation_refuses_absurd_inputs_with_the_variable_named(beam):
 
 def test_a_state_of_another_fmu_is_refused(beam, tsquare):
     beam_fmu, rec, _, d1 = instance(beam[0], "cs", name="beam")
-    other, _, _, d2 = instance(tsquare[0], "cs", name="tsquare")
+    other, _, _, d2 = instance(tsquare[0], "cs", name="tsquare", rec=rec)
     try:
         initialized(beam_fmu)
         initialized(other)
