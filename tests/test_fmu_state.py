@@ -189,7 +189,10 @@ def test_bad_bytes_are_refused_and_the_instance_keeps_working(cases):
         t_blob = t
         t, after_refusals = run_cs(a, inputs, t_blob, 5)
         # and a good state still restores, also out of the Error state a failed step leaves
-        a.set(**{"base.R[1,1]": 2.0})
+        with refused("fmi2SetReal"):
+            a.set(**{"base.R[1,1]": 2.0})  # no entry of a rotation: refused at once
+        assert "base.R[1,1]" in rec.messages[-1] and "rotation" in rec.messages[-1], rec.messages[-1]
+        a.set(**{"base.R[1,1]": 0.5})  # each entry possible, the matrix no rotation: the step fails
         with refused("fmi2DoStep"):
             a.fmu.doStep(t, H)
         assert "base.R" in rec.messages[-1]
