@@ -83,6 +83,17 @@ CASES = [
      lambda s: (set_path(s, ["flanges", 0, "role"], "force"), set_path(s, ["flanges", 0, "name"], "initial")),
      ["flanges[0].name", "reserved", "initial"]),
     ("flange named body", lambda s: set_path(s, ["flanges", 1, "name"], "body"), ["flanges[1].name", "reserved"]),
+    ("element aspect ratio 1e7", lambda s: set_path(s, ["geometry", "boxes", 0, "max"], [1e6, 0.005, 0.01]),
+     ["geometry.boxes[0].elements", "aspect ratio"]),
+    ("a thousand Krylov points", lambda s: s.update(reduction={"method": "krylov", "expansion_points": list(range(1, 1001))}),
+     ["reduction.expansion_points", "factorisation"]),
+    ("Krylov basis too large",
+     lambda s: s.update(reduction={"method": "krylov", "expansion_points": list(range(10, 200, 10)), "moments": 50}),
+     ["reduction.moments", "basis vectors"]),
+    ("box far from the origin",
+     lambda s: (set_path(s, ["geometry", "boxes", 0, "min"], [1e15, 0, 0]),
+                set_path(s, ["geometry", "boxes", 0, "max"], [1e15 + 1, 0.01, 0.02])),
+     ["geometry.boxes[0]", "origin"]),
 ]
 
 

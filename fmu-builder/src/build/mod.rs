@@ -58,6 +58,48 @@ fn check_mode_count(requested: usize, nodes: usize, file: &Path) -> Result<usize
     Ok(requested)
 }
 
+/// Expansion points of a Krylov reduction, at most: each costs a sparse LU factorisation of
+/// K + s^2 M, and ten points resolve any band a system simulation needs.
+const MAX_EXPANSION_POINTS: usize = 100;
+
+/// A Krylov basis grows by one block (six columns per force flange) per point and moment; it
+/// must stay within the dense reduced problems' `eigen::MAX_MODES`, and its factorisations
+/// within minutes, before they are made.
+fn check_krylov_size(spec: &Spec, file: &Path) -> Result<()> {
+    let r = &spec.reduction;
+    if r.method != Method::Krylov {
+        return Ok(());
+    }
+    let points =
+        1 + r.expansion_points.as_ref().map_or(0, Vec::len) + r.real_expansion_points.as_ref().map_or(0, Vec::len);
+    if points > MAX_EXPANSION_POINTS {
+        return Err(BuildError::input(
+            file,
+            "reduction.expansion_points",
+            format!(
+                "{points} expansion points (with s = 0 and the real ones): at most {MAX_EXPANSION_POINTS}, since each costs a \
+                 sparse factorisation; a few points across the band match it (add moments instead)"
+            ),
+        ));
+    }
+    let force_flanges = spec.flanges.iter().filter(|f| f.role == Role::Force).count().max(1);
+    let moments = r.moments.unwrap_or(2);
+    let columns = points.saturating_mul(moments).saturating_mul(6 * force_flanges);
+    if columns > eigen::MAX_MODES {
+        return Err(BuildError::input(
+            file,
+            "reduction.moments",
+            format!(
+                "{points} expansion points x {moments} moments x {} flange load directions = {columns} basis vectors, more than \
+                 the {} a reduced body supports: use fewer points or moments",
+                6 * force_flanges,
+                eigen::MAX_MODES
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// A basis needs at least one shape: a mode, a force flange's static shapes or a scene load's.
 fn check_basis_not_empty(spec: &Spec, modes: &ModeCount, file: &Path) -> Result<()> {
     let force_flanges = spec.flanges.iter().filter(|f| f.role == Role::Force).count();
@@ -101,10 +143,29 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
         (None, None) => ModeCount::Count(0),
     };
     check_basis_not_empty(&spec, &modes, file)?;
-    let hint = "change the reduction (method, reduction.modes or max_frequency, expansion points) or check that \
-                the flanges hold the part and the material and damping are those of a real solid";
+    check_krylov_size(&spec, file)?;
     let Some(mount) = spec.mount_index() else {
-        return free_floating::reduce(spec, part, free, flanges, modes).map_err(against_input(file, "reduction", hint));
+        return free_floating::reduce(spec, part, free, flanges, modes).map_err(|e| against_stage(file, e));
     };
-    mounted::reduce(spec, part, free, flanges, modes, mount).map_err(against_input(file, "reduction", hint))
+    mounted::reduce(spec, part, free, flanges, modes, mount).map_err(|e| against_stage(file, e))
+}
+
+/// A failure of the reduction, against the input most likely behind it: a factorisation that
+/// fails is the model's (mesh, flanges), anything else the reduction's settings.
+fn against_stage(file: &Path, e: BuildError) -> BuildError {
+    let BuildError::Numerical(m) = &e else { return e };
+    if m.contains("positive definite") || m.contains("singular") {
+        against_input(
+            file,
+            "geometry",
+            "check the mesh for mechanisms and extreme element proportions, and that the mount flange (flanges[].nodes) holds the part",
+        )(e)
+    } else {
+        against_input(
+            file,
+            "reduction",
+            "change the reduction (method, reduction.modes or max_frequency, expansion points, scene.band and tolerance) or check \
+             that the flanges hold the part and the material and damping are those of a real solid",
+        )(e)
+    }
 }

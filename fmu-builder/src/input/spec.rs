@@ -262,6 +262,54 @@ pub struct Reduction {
     pub dynamic_cutoff: Option<f64>,
 }
 
+/// Longest over shortest element edge of a box mesh. A solid element's stiffness conditioning
+/// grows with the square of its aspect ratio: at 1e4 that is 1e8 on top of the part's own
+/// (1e6 to 1e10 for slender parts), which leaves double precision nothing for the residual
+/// checks, and the factorisation reports the part as a mechanism.
+const MAX_ELEMENT_ASPECT: f64 = 1e4;
+
+/// Coordinates this many box sizes from the origin keep fewer than 16 - 8 digits of the element
+/// edges: Jacobians turn negative by round-off alone.
+const MAX_OFFSET_IN_SIZES: f64 = 1e8;
+
+fn check_box_proportions(path: &Path, i: usize, b: &BoxSpec) -> Result<()> {
+    let edge: Vec<f64> = (0..3).map(|a| (b.max[a] - b.min[a]) / b.elements[a].max(1) as f64).collect();
+    let (short, long) = edge.iter().fold((f64::INFINITY, 0.0f64), |(s, l), &e| (s.min(e), l.max(e)));
+    if long > MAX_ELEMENT_ASPECT * short {
+        let suggest: Vec<String> = (0..3)
+            .map(|a| format!("{:.0}", ((b.max[a] - b.min[a]) / (MAX_ELEMENT_ASPECT.sqrt() * short)).ceil().max(1.0)))
+            .collect();
+        return Err(BuildError::input(
+            path,
+            format!("geometry.boxes[{i}].elements"),
+            format!(
+                "{:?} elements give edges of {:.3e}, {:.3e} and {:.3e} m: an aspect ratio of {:.1e}, above {MAX_ELEMENT_ASPECT:.0e}, \
+                 where the stiffness loses the digits the solver needs; choose counts in the box's proportions \
+                 (e.g. [{}]) or check the box's min and max",
+                b.elements,
+                edge[0],
+                edge[1],
+                edge[2],
+                long / short,
+                suggest.join(", ")
+            ),
+        ));
+    }
+    let size = (0..3).map(|a| b.max[a] - b.min[a]).fold(f64::INFINITY, f64::min);
+    let far = b.min.iter().chain(&b.max).fold(0.0f64, |m, c| m.max(c.abs()));
+    if far > MAX_OFFSET_IN_SIZES * size {
+        return Err(BuildError::input(
+            path,
+            format!("geometry.boxes[{i}]"),
+            format!(
+                "the box lies {far:.3e} m from the origin, more than {MAX_OFFSET_IN_SIZES:.0e} times its smallest side {size:.3e} m: \
+                 its coordinates keep too few digits for the element shapes; move the part near the origin"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Flange names the FMU's own variables use, checked before the schema so the message says why
 /// (the schema's `not` would only say the name "is not allowed").
 fn check_flange_names(path: &Path, value: &serde_json::Value) -> Result<()> {
@@ -433,6 +481,7 @@ impl Spec {
                     ));
                 }
             }
+            check_box_proportions(path, i, b)?;
         }
         Ok(())
     }
@@ -575,6 +624,18 @@ mod tests {
 
     fn err(text: &str) -> String {
         Spec::from_str(Path::new("in.json"), text).unwrap_err().to_string()
+    }
+
+    /// The schema refuses the reserved flange names too, so editors flag them while the user types.
+    #[test]
+    fn the_schema_lists_the_reserved_names() {
+        let schema: serde_json::Value = serde_json::from_str(SCHEMA).unwrap();
+        let listed = &schema["properties"]["flanges"]["items"]["properties"]["name"]["not"]["enum"];
+        let mut got: Vec<&str> = listed.as_array().unwrap().iter().map(|v| v.as_str().unwrap()).collect();
+        got.sort_unstable();
+        let mut want = variable_names::RESERVED.to_vec();
+        want.sort_unstable();
+        assert_eq!(got, want);
     }
 
     #[test]

@@ -143,3 +143,44 @@ pub fn check_connected(file: &Path, part: &Part, flanges: &[Flange]) -> Result<(
     };
     Err(BuildError::input(file, field, message))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::input::spec::Spec;
+    use crate::model::{flange, part};
+
+    fn check(boxes: &str, flanges: &str) -> Result<()> {
+        let text = format!(
+            r#"{{"name": "P", "geometry": {{"element": "hex8", "boxes": [{boxes}]}},
+                "material": {{"E": 1e9, "nu": 0.3, "rho": 1000}}, "flanges": [{flanges}], "reduction": {{"modes": 1}}}}"#
+        );
+        let file = Path::new("in.json");
+        let spec = Spec::from_str(file, &text).unwrap();
+        let part = part::part_of(&spec, file).unwrap();
+        let flanges = flange::select_flanges(&spec, file, &part).unwrap();
+        check_connected(file, &part, &flanges)
+    }
+
+    const A: &str = r#"{"min": [0,0,0], "max": [1,1,1], "elements": [1,1,1]}"#;
+    const B: &str = r#"{"min": [2,0,0], "max": [3,1,1], "elements": [1,1,1]}"#;
+    const MOUNT: &str = r#"{"name": "base", "role": "motion", "nodes": {"box_face": {"box": 0, "face": "-x"}}}"#;
+
+    #[test]
+    fn a_piece_the_mount_does_not_hold_is_named_and_a_flange_can_join_it() {
+        check(A, MOUNT).unwrap();
+        let e = check(&format!("{A}, {B}"), MOUNT).unwrap_err().to_string();
+        assert!(e.contains("geometry.boxes") && e.contains("\"base\"") && e.contains("[2.0, 0.0, 0.0]"), "{e}");
+        // a force flange alone does not hold the second box
+        let tip = r#"{"name": "tip", "role": "force", "nodes": {"box_face": {"box": 1, "face": "+x"}}}"#;
+        let e = check(&format!("{A}, {B}"), &format!("{MOUNT}, {tip}")).unwrap_err().to_string();
+        assert!(e.contains("flange(s) tip"), "{e}");
+        // a flange tying both boxes' facing faces joins them rigidly
+        let bridge =
+            r#"{"name": "bridge", "role": "force", "nodes": {"box": {"min": [0.9, -1, -1], "max": [2.1, 2, 2]}}}"#;
+        check(&format!("{A}, {B}"), &format!("{MOUNT}, {bridge}")).unwrap();
+        // a free body of two pieces is two bodies
+        let e = check(&format!("{A}, {B}"), "").unwrap_err().to_string();
+        assert!(e.contains("separate bodies"), "{e}");
+    }
+}
