@@ -212,7 +212,7 @@ pub fn reduce(
     let nc = model.dofs.n_clamped();
     let k_cc = sparse::block(&model.stiffness, 0..nc, 0..nc)?;
     const MOUNTED: &str = "the stiffness of the mounted body";
-    let mut solver = Some(SpdSolver::new(&k_cc, MOUNTED)?);
+    let mut solver = Some(SpdSolver::new(&k_cc, MOUNTED).map_err(|e| with_pivot(e, &k_cc, &model, &part, &flanges))?);
 
     // the scene's inertial loads: static shapes in the basis, prestress for stiffening
     let mut cases = Vec::new();
@@ -353,4 +353,18 @@ pub fn reduce(
     let statics = basis.omega.len() - basis.n_normal;
     let report = report_of(&spec, &part, &flanges, &model, &basis, &reduced, &method, statics, accuracy);
     Ok(Built { spec, part, flanges, model, basis, reduced, report })
+}
+
+/// A mounted stiffness that does not factor, with the DoF where it fails: the connectivity
+/// check ran before, so this is a mechanism inside the mesh or lost digits, and the node (file
+/// id or coordinates) and direction tell the user where to look.
+fn with_pivot(e: BuildError, k_cc: &sparse::Sparse, model: &Assembled, part: &Part, flanges: &[Flange]) -> BuildError {
+    let BuildError::Numerical(message) = e else { return e };
+    match sparse::nonpositive_pivot_row(k_cc) {
+        Some(d) => {
+            let at = model.dofs.describe(d, flanges, &|n| part.node_label(n));
+            BuildError::Numerical(format!("{message}; the factorisation fails at {at}"))
+        }
+        None => BuildError::Numerical(message),
+    }
 }

@@ -193,8 +193,93 @@ impl SpdSolver {
     }
 }
 
+/// The row of `a` (in its own order) where a Cholesky factorisation meets a pivot that is not
+/// positive, or None when it factors (or fails otherwise). Only for messages after a failed
+/// `SpdSolver::new`: faer reports the pivot in its fill-reducing order, which this repeats with
+/// the symbolic factorisation in hand to map it back.
+pub fn nonpositive_pivot_row(a: &Sparse) -> Option<usize> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::cholesky::llt::factor::LltError;
+    use faer::sparse::linalg::cholesky::{SymbolicCholeskyRaw, factorize_symbolic_cholesky};
+    let symbolic =
+        factorize_symbolic_cholesky(a.symbolic(), Side::Lower, Default::default(), Default::default()).ok()?;
+    let mut values = Vec::new();
+    values.try_reserve_exact(symbolic.len_val()).ok()?;
+    values.resize(symbolic.len_val(), 0.0);
+    let mut mem =
+        MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())).ok()?;
+    let outcome = symbolic.factorize_numeric_llt::<f64>(
+        &mut values,
+        a.as_ref(),
+        Side::Lower,
+        Default::default(),
+        Par::Seq,
+        MemStack::new(&mut mem),
+        Default::default(),
+    );
+    match outcome {
+        Err(LltError::NonPositivePivot { index }) => {
+            // faer 0.24 counts the simplicial pivot from 1 (k + 1) and the supernodal one from 0
+            let position = match symbolic.raw() {
+                SymbolicCholeskyRaw::Simplicial(_) => index.checked_sub(1)?,
+                SymbolicCholeskyRaw::Supernodal(_) => index,
+            };
+            // the fill-reducing order: its forward array names the matrix row eliminated at each
+            // position (AMD's perm[k] = i)
+            match symbolic.perm() {
+                Some(p) => p.arrays().0.get(position).copied(),
+                None => Some(position),
+            }
+        }
+        _ => None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    /// A chain of 50 rows, row 37 indefinite: whatever order the factorisation chooses, every
+    /// other pivot stays positive, so the failure maps back to row 37.
+    #[test]
+    fn the_failing_pivot_is_found_in_the_matrix_order() {
+        use faer::sparse::{SparseColMat, Triplet};
+        let chain = |bad: Option<usize>| {
+            let mut t = Vec::new();
+            for i in 0..50 {
+                t.push(Triplet::new(i, i, if Some(i) == bad { -1.0 } else { 4.0 }));
+                if i + 1 < 50 {
+                    t.push(Triplet::new(i, i + 1, 1.0));
+                    t.push(Triplet::new(i + 1, i, 1.0));
+                }
+            }
+            SparseColMat::try_new_from_triplets(50, 50, &t).unwrap()
+        };
+        assert!(super::SpdSolver::new(&chain(Some(37)), "test").is_err());
+        assert_eq!(super::nonpositive_pivot_row(&chain(Some(37))), Some(37));
+        assert_eq!(super::nonpositive_pivot_row(&chain(None)), None);
+        // a 3D grid (supernodal factor, reordered): every principal block without the bad row is
+        // diagonally dominant, so the failure is that row whatever the order
+        let k = 12;
+        let mut t = Vec::new();
+        let id = |x: usize, y: usize, z: usize| x + k * (y + k * z);
+        for z in 0..k {
+            for y in 0..k {
+                for x in 0..k {
+                    let i = id(x, y, z);
+                    t.push(Triplet::new(i, i, if i == 1000 { -100.0 } else { 7.0 }));
+                    for (dx, dy, dz) in [(1, 0, 0), (0, 1, 0), (0, 0, 1)] {
+                        if x + dx < k && y + dy < k && z + dz < k {
+                            let j = id(x + dx, y + dy, z + dz);
+                            t.push(Triplet::new(i, j, -1.0));
+                            t.push(Triplet::new(j, i, -1.0));
+                        }
+                    }
+                }
+            }
+        }
+        let grid = SparseColMat::try_new_from_triplets(k * k * k, k * k * k, &t).unwrap();
+        assert_eq!(super::nonpositive_pivot_row(&grid), Some(1000));
+    }
+
     #[test]
     fn product_error_is_exact() {
         for (a, b) in [(0.1, 0.3), (1e10 / 3.0, 7.0 / 3.0), (-2.5e-8, 1.0 / 7.0), (123456.789, -9.87654321e-5)] {

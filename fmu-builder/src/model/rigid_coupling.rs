@@ -61,6 +61,24 @@ impl DofMap {
         Self { node, flange_first, n_interior, n_dofs: next, mount }
     }
 
+    /// What DoF `d` of the constrained model is, for messages: a node's direction (the node
+    /// named by `node_label`) or a flange master's component.
+    pub fn describe(&self, d: usize, flanges: &[Flange], node_label: &dyn Fn(usize) -> String) -> String {
+        const DIR: [&str; 3] = ["x", "y", "z"];
+        const MASTER: [&str; 6] = ["u_x", "u_y", "u_z", "theta_x", "theta_y", "theta_z"];
+        if d < self.n_interior {
+            let node = self.node.iter().position(|n| *n == NodeDofs::Free(d - d % 3));
+            return match node {
+                Some(n) => format!("the {} direction of {}", DIR[d % 3], node_label(n)),
+                None => format!("DoF {d}"),
+            };
+        }
+        match self.flange_first.iter().position(|&f| (f..f + 6).contains(&d)) {
+            Some(k) => format!("{} of flange \"{}\"'s master", MASTER[d - self.flange_first[k]], flanges[k].name),
+            None => format!("DoF {d}"),
+        }
+    }
+
     /// Size of the model with the mount held (all DoFs for a free-floating body).
     pub fn n_clamped(&self) -> usize {
         self.n_dofs - if self.mount.is_some() { 6 } else { 0 }
