@@ -188,7 +188,7 @@ fn mesh_file_part(spec: &Spec, file: &Path, mesh_path: &Path) -> Result<Part> {
             format!("no solid elements (supported: {})", ElementKind::supported_names()),
         ));
     }
-    check_imported_size(file, mesh_path, &imported.nodes, &imported.element_types, None)?;
+    check_imported_size(file, mesh_path, &imported.nodes, &imported.element_types, None, Memory::of_this_machine())?;
     for name in spec.materials.keys() {
         if imported.material(name).is_none() {
             let known: Vec<&str> = imported.materials.iter().map(|m| m.name.as_str()).collect();
@@ -277,6 +277,7 @@ fn check_imported_size(
     nodes: &[[f64; 3]],
     kinds: &[ElementKind],
     stiffness_nonzeros: Option<f64>,
+    memory: Memory,
 ) -> Result<()> {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
@@ -296,7 +297,7 @@ fn check_imported_size(
     }
     let fill = size::nested_dissection_fill(size::lattice_of(n, [0, 1, 2].map(|a| hi[a] - lo[a])));
     let estimate = size::SizeEstimate::new(n, &per_kind, stiffness_nonzeros, fill);
-    estimate.fits(Memory::of_this_machine()).map_err(|m| {
+    estimate.fits(memory).map_err(|m| {
         let field = if stiffness_nonzeros.is_some() { "geometry.matrices" } else { "geometry.mesh" };
         BuildError::input(file, field, format!("{}: {m} (coarsen the mesh)", source.display()))
     })
@@ -365,7 +366,7 @@ fn matrix_part(_spec: &Spec, file: &Path, m: &crate::input::spec::MatrixSpec) ->
     };
     let model = import::matrices::read_matrix_model(&files, m.free_free)?;
     let nonzeros = model.stiffness.val().len() as f64;
-    check_imported_size(file, &k, &model.nodes, &[], Some(nonzeros))?;
+    check_imported_size(file, &k, &model.nodes, &[], Some(nonzeros), Memory::of_this_machine())?;
     let nodal_mass = nodal_mass(&model.mass, &mm)?;
     let mesh = Mesh::nodes_only(model.nodes);
     Ok(Part {
@@ -509,6 +510,20 @@ mod tests {
             let e = part_of(&s, Path::new("in.json")).err().unwrap().to_string();
             assert!(e.contains("geometry.element") && e.contains(&format!("cannot build {kind} elements")), "{e}");
         }
+    }
+
+    /// A mesh file's model is held against the memory before assembly, named by its field.
+    #[test]
+    fn an_imported_mesh_too_large_for_the_memory_is_refused() {
+        let nodes: Vec<[f64; 3]> = (0..1000).map(|i| [i as f64, (i % 10) as f64, (i % 100) as f64]).collect();
+        let kinds = vec![ElementKind::Tet10; 500];
+        let small = Memory { bytes: 1e6, source: "a test's 1 MB" };
+        let e = check_imported_size(Path::new("in.json"), Path::new("big.msh"), &nodes, &kinds, None, small)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("in.json: geometry.mesh") && e.contains("big.msh") && e.contains("coarsen"), "{e}");
+        let large = Memory { bytes: 1e10, source: "a test's 10 GB" };
+        check_imported_size(Path::new("in.json"), Path::new("big.msh"), &nodes, &kinds, None, large).unwrap();
     }
 
     #[test]

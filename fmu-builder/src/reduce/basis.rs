@@ -159,7 +159,9 @@ pub fn orthonormalise(model: &Assembled, v: Mat<f64>) -> Result<(Mat<f64>, Vec<f
     let c = Mat::<f64>::from_fn(r, r, |i, j| 0.5 * (kr[(i, j)] + kr[(j, i)]));
     let evd = graded_spd_eigen(&c, "the reduced stiffness").map_err(|_| {
         BuildError::Numerical(
-            "the reduced stiffness is not positive definite: the part is not held by its mount".into(),
+            "the reduced stiffness is not positive definite: the part can move without deforming (a mounted part not held \
+             by its mount, or a mechanism: pieces joined only at a node or an edge)"
+                .into(),
         )
     })?;
     let s = &evd.values;
@@ -168,7 +170,8 @@ pub fn orthonormalise(model: &Assembled, v: Mat<f64>) -> Result<(Mat<f64>, Vec<f
         let lambda = s[i];
         if !(lambda > 0.0) {
             return Err(BuildError::Numerical(format!(
-                "reduced stiffness has a non-positive eigenvalue {lambda:e}: the part is not held by its mount"
+                "reduced stiffness has a non-positive eigenvalue {lambda:e}: the part can move without deforming (a mounted \
+                 part not held by its mount, or a mechanism: pieces joined only at a node or an edge)"
             )));
         }
         omega.push(lambda.sqrt());
