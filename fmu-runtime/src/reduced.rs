@@ -326,6 +326,68 @@ pub fn two_mode_body() -> ReducedBody {
     }
 }
 
+/// [`two_mode_body`] with rotating-frame terms and geometric stiffening: a spinning mount's
+/// gyroscopic coupling and prestress for tests.
+#[cfg(any(test, feature = "fixtures"))]
+#[doc(hidden)]
+pub fn rotating_two_mode_body() -> ReducedBody {
+    let mut body = two_mode_body();
+    let n = body.n_modes();
+    body.rotation = Some(fixture_rotation_terms(n));
+    let diag = |scale: f64, blocks: usize| {
+        let mut k = vec![0.0; blocks * n * n];
+        for b in 0..blocks {
+            for j in 0..n {
+                k[b * n * n + j * n + j] = scale * (b + 1) as f64;
+            }
+        }
+        k
+    };
+    body.stiffening = Some(Stiffening {
+        centrifugal: Some(diag(0.05, 9)),
+        euler: Some(diag(0.01, 3)),
+        translation: Some(diag(0.002, 3)),
+        flanges: vec![diag(0.003, 6)],
+    });
+    body
+}
+
+/// [`two_mode_body`] free-floating: no mount, body frame at the centre of mass, rotation terms.
+#[cfg(any(test, feature = "fixtures"))]
+#[doc(hidden)]
+pub fn free_two_mode_body() -> ReducedBody {
+    let mut body = two_mode_body();
+    let n = body.n_modes();
+    body.free_floating = true;
+    body.mount = String::new();
+    body.c_t = vec![0.0; 3 * n];
+    body.c_r = vec![0.0; 3 * n];
+    body.first_moment = [0.0; 3];
+    body.rotation = Some(fixture_rotation_terms(n));
+    body
+}
+
+/// Rotating-frame invariants of the right structure (G skew, O symmetric per mode pair).
+#[cfg(any(test, feature = "fixtures"))]
+fn fixture_rotation_terms(n: usize) -> RotationTerms {
+    let nn = n * n;
+    let mut g = vec![0.0; 3 * nn];
+    for (a, s) in [0.05, 0.1, 0.02].into_iter().enumerate() {
+        g[a * nn + 1] = s;
+        g[a * nn + n] = -s;
+    }
+    let mut o_mat = vec![0.0; 9 * nn];
+    for a in 0..3 {
+        for b in 0..3 {
+            for j in 0..n {
+                o_mat[(3 * a + b) * nn + j * n + j] = if a == b { 0.3 / (j + 1) as f64 } else { 0.01 };
+            }
+        }
+    }
+    let o_vec = (0..9 * n).map(|i| 0.01 * ((i % 5) as f64 - 2.0)).collect();
+    RotationTerms { g, o_mat, o_vec }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

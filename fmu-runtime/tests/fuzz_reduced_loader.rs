@@ -30,7 +30,7 @@ use fmi2::{Causality, Interface, Model, VarType};
 use fmu_runtime::fmu::BodyFmu;
 use fmu_runtime::format::{FORMAT_VERSION, MAGIC, RESOURCE_FILE};
 use fmu_runtime::interface::VariableTable;
-use fmu_runtime::reduced::{ReducedBody, RotationTerms, Stiffening, two_mode_body};
+use fmu_runtime::reduced::{ReducedBody, free_two_mode_body, rotating_two_mode_body, two_mode_body};
 use proptest::prelude::*;
 use proptest::sample::select;
 use proptest::test_runner::{Config, RngSeed};
@@ -63,53 +63,10 @@ fn limit_memory() {
 // ---------------------------------------------------------------------------------------------
 // seeds
 
-fn rotation_terms(n: usize) -> RotationTerms {
-    let nn = n * n;
-    let mut g = vec![0.0; 3 * nn];
-    for (a, s) in [0.05, 0.1, 0.02].into_iter().enumerate() {
-        g[a * nn + 1] = s;
-        g[a * nn + n] = -s;
-    }
-    let mut o_mat = vec![0.0; 9 * nn];
-    for a in 0..3 {
-        for b in 0..3 {
-            for j in 0..n {
-                o_mat[(3 * a + b) * nn + j * n + j] = if a == b { 0.3 / (j + 1) as f64 } else { 0.01 };
-            }
-        }
-    }
-    let o_vec = (0..9 * n).map(|i| 0.01 * ((i % 5) as f64 - 2.0)).collect();
-    RotationTerms { g, o_mat, o_vec }
-}
-
-fn diag(n: usize, scale: f64, blocks: usize) -> Vec<f64> {
-    let mut k = vec![0.0; blocks * n * n];
-    for b in 0..blocks {
-        for j in 0..n {
-            k[b * n * n + j * n + j] = scale * (b + 1) as f64;
-        }
-    }
-    k
-}
-
 fn seeds() -> Vec<Vec<u8>> {
     let mounted = two_mode_body();
-    let n = mounted.n_modes();
-    let mut rotating = two_mode_body();
-    rotating.rotation = Some(rotation_terms(n));
-    rotating.stiffening = Some(Stiffening {
-        centrifugal: Some(diag(n, 0.05, 9)),
-        euler: Some(diag(n, 0.01, 3)),
-        translation: Some(diag(n, 0.002, 3)),
-        flanges: vec![diag(n, 0.003, 6)],
-    });
-    let mut free = two_mode_body();
-    free.free_floating = true;
-    free.mount = String::new();
-    free.c_t = vec![0.0; 3 * n];
-    free.c_r = vec![0.0; 3 * n];
-    free.first_moment = [0.0; 3];
-    free.rotation = Some(rotation_terms(n));
+    let rotating = rotating_two_mode_body();
+    let free = free_two_mode_body();
     let mut split = two_mode_body();
     split.dynamic_cutoff = 100.0;
     split.modal_damping = vec![0.02, 0.05];

@@ -18,7 +18,7 @@ use fmi2::{Causality, Interface, Model, VarType};
 use fmu_runtime::fmu::BodyFmu;
 use fmu_runtime::format::RESOURCE_FILE;
 use fmu_runtime::interface::VariableTable;
-use fmu_runtime::reduced::{ReducedBody, RotationTerms, Stiffening, two_mode_body};
+use fmu_runtime::reduced::{ReducedBody, free_two_mode_body, rotating_two_mode_body, two_mode_body};
 
 type Inputs = fn(f64) -> Vec<(&'static str, f64)>;
 
@@ -38,25 +38,6 @@ impl Drop for Case {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.dir);
     }
-}
-
-fn rotation_terms(n: usize) -> RotationTerms {
-    let nn = n * n;
-    let mut g = vec![0.0; 3 * nn];
-    for (a, s) in [0.05, 0.1, 0.02].into_iter().enumerate() {
-        g[a * nn + 1] = s;
-        g[a * nn + n] = -s;
-    }
-    let mut o_mat = vec![0.0; 9 * nn];
-    for a in 0..3 {
-        for b in 0..3 {
-            for j in 0..n {
-                o_mat[(3 * a + b) * nn + j * n + j] = if a == b { 0.3 / (j + 1) as f64 } else { 0.01 };
-            }
-        }
-    }
-    let o_vec = (0..9 * n).map(|i| 0.01 * ((i % 5) as f64 - 2.0)).collect();
-    RotationTerms { g, o_mat, o_vec }
 }
 
 fn install(mut body: ReducedBody, name: &str, inputs: Inputs, start: Vec<(&'static str, f64)>) -> Case {
@@ -84,24 +65,7 @@ fn mounted() -> Case {
 }
 
 fn rotating() -> Case {
-    let mut body = two_mode_body();
-    let n = body.n_modes();
-    body.rotation = Some(rotation_terms(n));
-    let diag = |scale: f64, blocks: usize| {
-        let mut k = vec![0.0; blocks * n * n];
-        for b in 0..blocks {
-            for j in 0..n {
-                k[b * n * n + j * n + j] = scale * (b + 1) as f64;
-            }
-        }
-        k
-    };
-    body.stiffening = Some(Stiffening {
-        centrifugal: Some(diag(0.05, 9)),
-        euler: Some(diag(0.01, 3)),
-        translation: Some(diag(0.002, 3)),
-        flanges: vec![diag(0.003, 6)],
-    });
+    let body = rotating_two_mode_body();
     install(
         body,
         "rotating",
@@ -124,14 +88,7 @@ fn rotating() -> Case {
 }
 
 fn free() -> Case {
-    let mut body = two_mode_body();
-    let n = body.n_modes();
-    body.free_floating = true;
-    body.mount = String::new();
-    body.c_t = vec![0.0; 3 * n];
-    body.c_r = vec![0.0; 3 * n];
-    body.first_moment = [0.0; 3];
-    body.rotation = Some(rotation_terms(n));
+    let body = free_two_mode_body();
     install(
         body,
         "free",
