@@ -99,6 +99,8 @@ CASES = [
     ("Krylov basis too large",
      lambda s: s.update(reduction={"method": "krylov", "expansion_points": list(range(10, 200, 10)), "moments": 50}),
      ["reduction.moments", "basis vectors"]),
+    ("reference point a light year away", lambda s: s["flanges"][1].update(reference_point=[1e16, 0, 0]),
+     ["flanges[1].reference_point", "joint"]),
     ("box far from the origin",
      lambda s: (set_path(s, ["geometry", "boxes", 0, "min"], [1e15, 0, 0]),
                 set_path(s, ["geometry", "boxes", 0, "max"], [1e15 + 1, 0.01, 0.02])),

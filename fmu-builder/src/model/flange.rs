@@ -120,6 +120,11 @@ fn planarity(points: &[[f64; 3]]) -> f64 {
     if ev[0] <= 0.0 { 0.0 } else { (ev[1].max(0.0) / ev[0]).sqrt() }
 }
 
+/// A reference point this many part sizes from its flange's nodes is a unit slip or a typo: the
+/// rigid tie's lever arms scale the flange's stiffness and inertia terms by its square (1e6 at
+/// this distance), the most a reduction checked to 1e-8 can take.
+const MAX_LEVER_IN_SIZES: f64 = 1e3;
+
 pub fn select_flanges(spec: &Spec, file: &Path, part: &Part) -> Result<Vec<Flange>> {
     let mesh = &part.mesh;
     let size = model_size(mesh);
@@ -174,6 +179,18 @@ pub fn select_flanges(spec: &Spec, file: &Path, part: &Part) -> Result<Vec<Flang
             owner[s] = Some(k);
         }
         let reference = fs.reference_point.unwrap_or_else(|| centroid(&points).into());
+        let lever = (Vector3::from(reference) - centroid(&points)).norm();
+        if !(lever <= MAX_LEVER_IN_SIZES * size) {
+            return Err(BuildError::input(
+                file,
+                format!("flanges[{k}].reference_point"),
+                format!(
+                    "the reference point {reference:?} lies {lever:.3e} m from the flange's nodes, more than {MAX_LEVER_IN_SIZES:.0e} \
+                     times the part's size ({size:.3e} m): the rigid lever to it swamps the part's own stiffness and mass in \
+                     double precision; put it at the joint the flange stands for (in metres; {spans})"
+                ),
+            ));
+        }
         flanges.push(Flange { name: fs.name.clone(), role: fs.role, reference, slaves });
     }
     Ok(flanges)
