@@ -103,7 +103,10 @@ def test_a_non_rotation_base_R_is_refused(beam):
     rec = Recorder()
     fmu = Fmu(beam[0], "ModelExchange", callbacks=rec.callbacks)
     try:
-        fmu.set(**{"base.R[1,1]": 2.0})
+        with pytest.raises(FMICallException):
+            fmu.set(**{"base.R[1,1]": 2.0})  # no entry of any rotation: refused at once
+        assert "base.R[1,1]" in rec.text() and "rotation matrix" in rec.text(), rec.text()
+        fmu.set(**{"base.R[1,1]": 0.5})  # possible entries, but no rotation: refused at initialisation
         with pytest.raises(FMICallException):
             fmu.initialize()
     finally:
