@@ -6,11 +6,15 @@ round-off, not approximation), Euler-Bernoulli beam theory (1 %: shear and the 3
 (h/l)^2 ~ 4e-4 and local effects), and the CalculiX C3D20 result on the same 50x2x2 mesh quoted in
 docs/REFERENCES.md section 3 (5 significant digits, so 1e-4)."""
 
+import json
+import re
+
 import numpy as np
 import pytest
 from fmpy import simulate_fmu
 from fmpy.validation import validate_fmu
 
+from conftest import EXAMPLES, run_builder
 from fmu_access import Fmu
 
 E, NU, RHO, L, B, H = 2e11, 0.3, 7850.0, 1.0, 0.01, 0.02
@@ -112,3 +116,38 @@ def test_cosimulation_settles_on_the_full_fe_static_solution(beam):
     print(f"\nsettled vs full FE: {max(abs(res[TIP[i]][-1] / full[i] - 1) for i in [2, 3, 4]):.1e}")
     for i in [2, 3, 4]:  # measured 8.1e-14, as the static start
         assert res[TIP[i]][-1] == pytest.approx(full[i], rel=1e-12, abs=0), TIP[i]
+
+
+def test_timings_profile_every_phase_of_the_build(tmp_path):
+    """`--timings` prints the build's phases in the order they ran, nested phases indented, each
+    with a wall time and a peak resident memory: the profile users size machines by and the
+    benchmarks read. (No time is asserted: speed is measured in the benchmarks.)"""
+    spec = json.loads((EXAMPLES / "beam.json").read_text())
+    spec["geometry"]["boxes"][0]["elements"] = [20, 2, 2]
+    path = tmp_path / "beam.json"
+    path.write_text(json.dumps(spec))
+    proc = run_builder([path, "-o", tmp_path / "Beam.fmu", "--timings", "-q"])
+    lines = proc.stdout.splitlines()
+    assert lines[0].split() == ["phase", "wall", "[s]", "peak", "[MiB]", "detail"], proc.stdout
+    rows = []
+    for line in lines[1:]:
+        m = re.match(r"^( *)(\S.*?)\s+(\d+\.\d{3})\s+(\d+)\s*(.*)$", line)
+        assert m, line
+        rows.append((len(m.group(1)) // 2, m.group(2), float(m.group(3)), float(m.group(4)), m.group(5)))
+    names = [r[1] for r in rows]
+    for expected in ["read and check the input", "mesh or import", "assembly (free-free K, M)",
+                     "rigid coupling of the flanges", "Cholesky factorisation: the stiffness of the mounted body",
+                     "reduction basis", "constraint modes", "eigen-solve (shift-invert Lanczos)", "invariants",
+                     "accuracy comparison with the full model", "checks and packaging"]:
+        assert expected in names, (expected, names)
+    assert names[0] == "read and check the input" and names[-1] == "checks and packaging"
+    depth = dict((r[1], r[0]) for r in rows)
+    assert depth["reduction basis"] == 0 and depth["constraint modes"] == 1
+    assert all(r[2] >= 0 and r[3] > 0 for r in rows)
+    assert any("Lanczos vectors" in r[4] for r in rows) and any("DoFs" in r[4] for r in rows)
+    # a parent's peak covers its children's
+    for i, r in enumerate(rows):
+        for child in rows[i + 1:]:
+            if child[0] <= r[0]:
+                break
+            assert r[3] >= child[3], (r, child)

@@ -38,6 +38,11 @@ struct Args {
     /// Print nothing but errors
     #[arg(short, long)]
     quiet: bool,
+    /// Also print where the build spent its time and memory: every phase (import, assembly,
+    /// coupling, factorisations, eigen-solves, shapes, invariants, accuracy comparison, packaging)
+    /// with wall time, peak resident memory and its counts
+    #[arg(long)]
+    timings: bool,
 }
 
 fn main() -> ExitCode {
@@ -112,6 +117,9 @@ fn build(args: &Args, output: &Path) -> ExitCode {
                     println!("peak memory {mib:.0} MiB");
                 }
                 println!("wrote {}", output.display());
+            }
+            if args.timings {
+                print!("{}", fmu_builder::profile::table(&built.profile));
             }
             ExitCode::SUCCESS
         }

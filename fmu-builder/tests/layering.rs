@@ -1,13 +1,22 @@
 //! The builder's layout, checked on its sources: a stage uses only the stages before it (input,
-//! model, reduce, ffrf, output, then the driver `build`; `error` and `linalg` serve all), and no
+//! model, reduce, ffrf, output, then the driver `build`; `error`, `linalg` and `profile` serve all), and no
 //! module imports a module that imports it back. docs/ARCHITECTURE.md describes the stages.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// Top-level modules and their place in the data flow.
-const STAGES: [(&str, usize); 8] =
-    [("error", 0), ("linalg", 0), ("input", 1), ("model", 2), ("reduce", 3), ("ffrf", 4), ("output", 5), ("build", 6)];
+const STAGES: [(&str, usize); 9] = [
+    ("error", 0),
+    ("linalg", 0),
+    ("profile", 0),
+    ("input", 1),
+    ("model", 2),
+    ("reduce", 3),
+    ("ffrf", 4),
+    ("output", 5),
+    ("build", 6),
+];
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     for entry in std::fs::read_dir(dir).expect("readable source directory") {

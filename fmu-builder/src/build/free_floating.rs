@@ -17,6 +17,7 @@ use crate::model::part::Part;
 use crate::model::rigid_coupling::{self, Assembled};
 use crate::output::fmu::guid::guid;
 use crate::output::report::report_of;
+use crate::profile;
 use crate::reduce::accuracy::{enforce, free_free_accuracy};
 use crate::reduce::basis::{self, ModeCount};
 use crate::reduce::damping::{modal_damping, with_user_damping};
@@ -69,7 +70,9 @@ fn rigid_deflation(model: &Assembled, nodes: &[[f64; 3]], flanges: &[Flange], or
 
 pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, modes: ModeCount) -> Result<Built> {
     let mesh = &part.mesh;
-    let mut model = rigid_coupling::rigid_coupling(&free, &mesh.nodes, &flanges, [0.0; 3])?;
+    let mut model = profile::phase("rigid coupling of the flanges", || {
+        rigid_coupling::rigid_coupling(&free, &mesh.nodes, &flanges, [0.0; 3])
+    })?;
     drop(free);
     let (origin, props) = about_centre_of_mass(model.mass_properties);
     model.mass_properties = props;
@@ -86,8 +89,8 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
         other => other,
     })?;
     let rigid = rigid_deflation(&model, &mesh.nodes, &flanges, origin)?;
-    let basis = basis::free_free(&model, &solver, shift, &rigid, modes)?;
-    let inv = invariants::invariants(&model, &mesh.nodes, &flanges, origin, &basis);
+    let basis = profile::phase("reduction basis", || basis::free_free(&model, &solver, shift, &rigid, modes))?;
+    let inv = profile::phase("invariants", || invariants::invariants(&model, &mesh.nodes, &flanges, origin, &basis));
     // mean axes: the elastic shapes carry no momentum
     let scale = props.mass.sqrt() * (1.0 + props.inertia[0].abs().sqrt());
     let drift = inv.c_t.iter().chain(&inv.c_r).fold(0.0f64, |m, v| m.max(v.abs()));
@@ -97,7 +100,9 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
         )));
     }
     let phi_mesh = inertia::expand(&model, &mesh.nodes, &flanges, basis.phi.as_ref());
-    let rot = inertia::rotation_invariants(&model, &mesh.nodes, origin, phi_mesh.as_ref());
+    let rot = profile::phase("rotation invariants", || {
+        inertia::rotation_invariants(&model, &mesh.nodes, origin, phi_mesh.as_ref())
+    });
     let r = basis.omega.len();
     let mut reduced = ReducedBody {
         guid: String::new(),
@@ -128,7 +133,9 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
         dynamic_cutoff: crate::reduce::cutoff::dynamic_cutoff(&spec, &basis).0,
     };
     reduced.guid = guid(&reduced);
-    let accuracy = free_free_accuracy(&model, &solver, shift, &rigid, &basis)?;
+    let accuracy = profile::phase("accuracy comparison with the full model", || {
+        free_free_accuracy(&model, &solver, shift, &rigid, &basis)
+    })?;
     enforce(&accuracy)?;
     let statics = basis.omega.len() - basis.n_normal;
     let report = report_of(
@@ -142,5 +149,5 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
         statics,
         accuracy,
     );
-    Ok(Built { spec, part, flanges, model, basis, reduced, report })
+    Ok(Built { spec, part, flanges, model, basis, reduced, report, profile: Vec::new() })
 }

@@ -14,17 +14,21 @@ use crate::input::spec::{Method, Role, Spec};
 use crate::linalg::eigen;
 use crate::model::{connectivity, flange, part};
 use crate::output::package;
+use crate::profile;
 use crate::reduce::basis::ModeCount;
 use std::path::Path;
 
 /// Read `input`, reduce, write the FMU to `output`.
 pub fn build(input: &Path, output: &Path) -> Result<Built> {
-    let spec = Spec::from_file(input)?;
-    let built = reduce_spec(spec, input)?;
-    package::write_fmu(&built.spec, &built.reduced, &built.report, output).map_err(|e| match e {
+    profile::take();
+    let spec = profile::phase("read and check the input", || Spec::from_file(input))?;
+    let mut built = reduce_spec(spec, input)?;
+    profile::phase("checks and packaging", || package::write_fmu(&built.spec, &built.reduced, &built.report, output))
+        .map_err(|e| match e {
         BuildError::Numerical(m) => BuildError::input(input, "", m),
         other => other,
     })?;
+    built.profile = profile::take();
     Ok(built)
 }
 
@@ -126,17 +130,17 @@ fn against_input(file: &Path, field: &'static str, hint: &'static str) -> impl F
 
 /// Read, mesh, couple, assemble and reduce: everything but writing the FMU.
 pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
-    let mut part = part::part_of(&spec, file)?;
-    let flanges = flange::select_flanges(&spec, file, &part)?;
+    let mut part = profile::phase("mesh or import", || part::part_of(&spec, file))?;
+    let flanges = profile::phase("flange selection", || flange::select_flanges(&spec, file, &part))?;
     // a part given with its supports (free_free false) is held by them, not only by flanges
     if spec.geometry.matrices.as_ref().is_none_or(|m| m.free_free) {
-        connectivity::check_connected(file, &part, &flanges)?;
+        profile::phase("connectivity", || connectivity::check_connected(file, &part, &flanges))?;
     }
-    let free = part.free_free().map_err(against_input(
-        file,
-        "geometry",
-        "check the mesh (element shapes, node order) and the material",
-    ))?;
+    let free = profile::phase("assembly (free-free K, M)", || {
+        profile::note(|| format!("{} nodes, {} DoFs", part.mesh.n_nodes(), 3 * part.mesh.n_nodes()));
+        part.free_free()
+    })
+    .map_err(against_input(file, "geometry", "check the mesh (element shapes, node order) and the material"))?;
     let modes = match (spec.reduction.modes, spec.reduction.max_frequency) {
         (Some(n), _) => ModeCount::Count(check_mode_count(n, part.mesh.n_nodes(), file)?),
         (None, Some(f)) => ModeCount::Below(f),

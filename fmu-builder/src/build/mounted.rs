@@ -17,6 +17,7 @@ use crate::model::part::Part;
 use crate::model::rigid_coupling::{self, Assembled};
 use crate::output::fmu::guid::guid;
 use crate::output::report::report_of;
+use crate::profile;
 use crate::reduce::accuracy;
 use crate::reduce::basis::{self, Basis, ModeCount};
 use crate::reduce::damping::{modal_damping, with_user_damping};
@@ -206,7 +207,9 @@ pub fn reduce(
     mount: usize,
 ) -> Result<Built> {
     let origin = flanges[mount].reference;
-    let model = rigid_coupling::rigid_coupling(&free, &part.mesh.nodes, &flanges, origin)?;
+    let model = profile::phase("rigid coupling of the flanges", || {
+        rigid_coupling::rigid_coupling(&free, &part.mesh.nodes, &flanges, origin)
+    })?;
     drop(free);
     let mesh = &part.mesh;
     let nc = model.dofs.n_clamped();
@@ -235,55 +238,64 @@ pub fn reduce(
         }
         Some(u)
     };
-    let (basis, method) = match spec.reduction.method {
-        Method::CraigBampton => {
-            // Craig-Bampton factors the stiffness with every flange held; one sparse factor at a
-            // time keeps 1e5-DoF parts within a few GiB (each factor costs ~1.5 GB there)
-            solver = None;
-            (basis::craig_bampton(&model, modes, load_shapes.as_ref())?, "Craig-Bampton".to_string())
-        }
-        Method::Modal => (
-            basis::modal(&model, solver_of(&solver)?, modes, load_shapes.as_ref())?,
-            "modal with residual flexibility".to_string(),
-        ),
-        Method::Krylov => {
-            let points = spec.reduction.expansion_points.clone().unwrap_or_default();
-            let moments = spec.reduction.moments.unwrap_or(2);
-            let real = spec.reduction.real_expansion_points.clone().unwrap_or_default();
-            let name =
-                format!("second-order Krylov, {moments} block moments at s = 0, 2 pi i {points:?} Hz, {real:?} 1/s");
-            (basis::krylov(&model, solver_of(&solver)?, &points, &real, moments, load_shapes.as_ref())?, name)
-        }
-    };
+    let (basis, method) = profile::phase("reduction basis", || -> Result<_> {
+        Ok(match spec.reduction.method {
+            Method::CraigBampton => {
+                // Craig-Bampton factors the stiffness with every flange held; one sparse factor at a
+                // time keeps 1e5-DoF parts within a few GiB (each factor costs ~1.5 GB there)
+                solver = None;
+                (basis::craig_bampton(&model, modes, load_shapes.as_ref())?, "Craig-Bampton".to_string())
+            }
+            Method::Modal => (
+                basis::modal(&model, solver_of(&solver)?, modes, load_shapes.as_ref())?,
+                "modal with residual flexibility".to_string(),
+            ),
+            Method::Krylov => {
+                let points = spec.reduction.expansion_points.clone().unwrap_or_default();
+                let moments = spec.reduction.moments.unwrap_or(2);
+                let real = spec.reduction.real_expansion_points.clone().unwrap_or_default();
+                let name = format!(
+                    "second-order Krylov, {moments} block moments at s = 0, 2 pi i {points:?} Hz, {real:?} 1/s"
+                );
+                (basis::krylov(&model, solver_of(&solver)?, &points, &real, moments, load_shapes.as_ref())?, name)
+            }
+        })
+    })?;
     let solver = match solver {
         Some(s) => s,
         None => SpdSolver::new(&k_cc, MOUNTED)?,
     };
     let basis = match spec.scene.as_ref().and_then(|s| s.tolerance) {
         Some(tol) if !model.dofs.flange_first.is_empty() && spec.scene.is_some() => {
-            choose_order(&spec, &model, mesh, &flanges, &solver, origin, &cases, basis, tol)?
+            profile::phase("order selection", || {
+                choose_order(&spec, &model, mesh, &flanges, &solver, origin, &cases, basis, tol)
+            })?
         }
         _ => basis,
     };
-    let inv = invariants::invariants(&model, &mesh.nodes, &flanges, origin, &basis);
+    let inv = profile::phase("invariants", || invariants::invariants(&model, &mesh.nodes, &flanges, origin, &basis));
     let phi_mesh = inertia::expand(&model, &mesh.nodes, &flanges, basis.phi.as_ref());
     let rotation = spec.rotates().then(|| {
-        let r = inertia::rotation_invariants(&model, &mesh.nodes, origin, phi_mesh.as_ref());
-        RotationTerms { g: r.g, o_mat: r.o_mat, o_vec: r.o_vec }
+        profile::phase("rotation invariants", || {
+            let r = inertia::rotation_invariants(&model, &mesh.nodes, origin, phi_mesh.as_ref());
+            RotationTerms { g: r.g, o_mat: r.o_mat, o_vec: r.o_vec }
+        })
     });
     let stiffening = if spec.stiffening() {
-        Some(stiffening_terms(
-            &spec,
-            mesh,
-            &flanges,
-            &model,
-            &solver,
-            origin,
-            &part.materials,
-            &cases,
-            load_shapes.as_ref(),
-            phi_mesh.as_ref(),
-        )?)
+        Some(profile::phase("geometric stiffening", || {
+            stiffening_terms(
+                &spec,
+                mesh,
+                &flanges,
+                &model,
+                &solver,
+                origin,
+                &part.materials,
+                &cases,
+                load_shapes.as_ref(),
+                phi_mesh.as_ref(),
+            )
+        })?)
     } else {
         None
     };
@@ -327,15 +339,18 @@ pub fn reduce(
 
     let force_dofs: Vec<(String, usize)> =
         force.iter().map(|&k| (flanges[k].name.clone(), model.dofs.flange_first[k])).collect();
-    let mut accuracy = accuracy::accuracy(&model, &solver, &basis, &force_dofs, basis.omega.len().max(10))?;
+    let mut accuracy = profile::phase("accuracy comparison with the full model", || {
+        accuracy::accuracy(&model, &solver, &basis, &force_dofs, basis.omega.len().max(10))
+    })?;
     accuracy::enforce(&accuracy)?;
     // the transfer-function comparison costs a complex factorization per sampled frequency:
     // done when the scene names its band
     if !force.is_empty() && spec.scene.as_ref().is_some_and(|s| s.band.is_some() || s.tolerance.is_some()) {
         let band = band_of(&spec, &accuracy.full_hz);
         let damping = frf::ComparisonDamping::new(spec.damping.alpha, spec.damping.beta);
-        accuracy.frequency_response =
-            Some(frf::compare(&model, &basis, damping, band, &accuracy.full_hz, &accuracy.compliance_full)?);
+        accuracy.frequency_response = Some(profile::phase("frequency-response comparison", || {
+            frf::compare(&model, &basis, damping, band, &accuracy.full_hz, &accuracy.compliance_full)
+        })?);
     }
     if let Some(shapes) = &load_shapes {
         let axis = ["x", "y", "z"];
@@ -352,7 +367,7 @@ pub fn reduce(
     }
     let statics = basis.omega.len() - basis.n_normal;
     let report = report_of(&spec, &part, &flanges, &model, &basis, &reduced, &method, statics, accuracy);
-    Ok(Built { spec, part, flanges, model, basis, reduced, report })
+    Ok(Built { spec, part, flanges, model, basis, reduced, report, profile: Vec::new() })
 }
 
 /// A mounted stiffness that does not factor, with the DoF where it fails: the connectivity

@@ -72,6 +72,17 @@ pub fn lowest_shifted(
     shift: f64,
     deflate: Option<&Deflation>,
 ) -> Result<Eigenpairs> {
+    crate::profile::phase("eigen-solve (shift-invert Lanczos)", || lowest_shifted_in(k, m, count, tol, shift, deflate))
+}
+
+fn lowest_shifted_in(
+    k: &SpdSolver,
+    m: &Sparse,
+    count: usize,
+    tol: f64,
+    shift: f64,
+    deflate: Option<&Deflation>,
+) -> Result<Eigenpairs> {
     let n = k.n();
     let count = count.min(n);
     if count == 0 {
@@ -87,6 +98,7 @@ pub fn lowest_shifted(
     let mut start = start_vector(n);
     loop {
         let (mut pairs, estimated, next_start) = lanczos(k, m, count, dim, &start, tol, deflate)?;
+        crate::profile::note(|| format!("{count} modes: {dim} Lanczos vectors (as many solves)"));
         for v in pairs.values.iter_mut() {
             *v -= shift;
         }

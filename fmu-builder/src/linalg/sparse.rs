@@ -110,7 +110,11 @@ pub struct LuSolver {
 
 impl LuSolver {
     pub fn new(a: &Sparse, what: &str) -> Result<Self> {
-        let lu = a.sp_lu().map_err(|e| BuildError::Numerical(format!("{what} is {}", faer_error::lu(&e))))?;
+        let lu = crate::profile::phase(format!("LU factorisation: {what}"), || {
+            crate::profile::note(|| format!("n {}, nnz(A) {}", a.nrows(), a.compute_nnz()));
+            a.sp_lu()
+        })
+        .map_err(|e| BuildError::Numerical(format!("{what} is {}", faer_error::lu(&e))))?;
         Ok(Self { lu, matrix: a.clone() })
     }
 
@@ -152,9 +156,11 @@ pub struct SpdSolver {
 
 impl SpdSolver {
     pub fn new(a: &Sparse, what: &str) -> Result<Self> {
-        let llt = a
-            .sp_cholesky(Side::Lower)
-            .map_err(|e| BuildError::Numerical(format!("{what} is {}", faer_error::llt(&e))))?;
+        let llt = crate::profile::phase(format!("Cholesky factorisation: {what}"), || {
+            crate::profile::note(|| format!("n {}, nnz(A) {}", a.nrows(), a.compute_nnz()));
+            a.sp_cholesky(Side::Lower)
+        })
+        .map_err(|e| BuildError::Numerical(format!("{what} is {}", faer_error::llt(&e))))?;
         Ok(Self { llt, matrix: a.clone(), n: a.nrows() })
     }
 

@@ -50,7 +50,8 @@ pub fn craig_bampton(model: &Assembled, modes: ModeCount, static_shapes: Option<
 
     // constraint modes: [-K_ii^-1 K_ib; I]
     let mut psi = Mat::<f64>::zeros(ni, nb);
-    {
+    crate::profile::phase("constraint modes", || {
+        crate::profile::note(|| format!("{nb} flange DoFs, as many solves"));
         let identity = Mat::<f64>::identity(nb, nb);
         let rhs = mul_new(&k_ib, identity.as_ref());
         psi.copy_from(&rhs);
@@ -60,7 +61,7 @@ pub fn craig_bampton(model: &Assembled, modes: ModeCount, static_shapes: Option<
                 psi[(i, j)] = -psi[(i, j)];
             }
         }
-    }
+    });
 
     let normal = match modes {
         ModeCount::Count(c) => eigen::lowest(&solver, &m_ii, c, EIGEN_TOL)?,
