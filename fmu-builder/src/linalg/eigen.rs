@@ -72,51 +72,42 @@ pub fn lowest_shifted(
     shift: f64,
     deflate: Option<&Deflation>,
 ) -> Result<Eigenpairs> {
-    crate::profile::phase("eigen-solve (shift-invert Lanczos)", || lowest_shifted_in(k, m, count, tol, shift, deflate))
-}
-
-fn lowest_shifted_in(
-    k: &SpdSolver,
-    m: &Sparse,
-    count: usize,
-    tol: f64,
-    shift: f64,
-    deflate: Option<&Deflation>,
-) -> Result<Eigenpairs> {
-    let n = k.n();
-    let count = count.min(n);
-    if count == 0 {
-        return Ok(Eigenpairs { values: Vec::new(), vectors: Mat::zeros(n, 0) });
-    }
-    let n_free = n - deflate.map_or(0, |d| d.vectors.ncols());
-    let count = count.min(n_free);
-    let mut dim = (2 * count + 20).max(count + 30).min(n_free);
-    // restarts grow the space by half; beyond ten vectors per mode (four restarts) Lanczos with
-    // a factored shift-invert operator has failed for a reason more vectors will not cure, and
-    // the dense n x dim blocks would grow towards n x n
-    let max_dim = (10 * count + 200).min(n_free);
-    let mut start = start_vector(n);
-    loop {
-        let (mut pairs, estimated, next_start) = lanczos(k, m, count, dim, &start, tol, deflate)?;
-        crate::profile::note(|| format!("{count} modes: {dim} Lanczos vectors (as many solves)"));
-        for v in pairs.values.iter_mut() {
-            *v -= shift;
+    crate::profile::phase("eigen-solve (shift-invert Lanczos)", || {
+        let n = k.n();
+        let count = count.min(n);
+        if count == 0 {
+            return Ok(Eigenpairs { values: Vec::new(), vectors: Mat::zeros(n, 0) });
         }
-        // every returned pair is checked, not assumed: its residual in K and M themselves
-        let (worst, at) = worst_residual(k, m, &pairs, shift);
-        let converged = estimated && worst <= RESIDUAL_TOL && pairs.values.len() == count;
-        if converged || dim >= max_dim {
-            if !converged {
-                return Err(BuildError::Numerical(format!(
-                    "eigensolver: {count} modes did not converge with {dim} Lanczos vectors (of {n_free} DoFs): mode {} has the residual {worst:.1e} (accepted {RESIDUAL_TOL:.0e}); request fewer modes (reduction.modes, max_frequency) or check the mesh for extreme element proportions",
-                    at + 1
-                )));
+        let n_free = n - deflate.map_or(0, |d| d.vectors.ncols());
+        let count = count.min(n_free);
+        let mut dim = (2 * count + 20).max(count + 30).min(n_free);
+        // restarts grow the space by half; beyond ten vectors per mode (four restarts) Lanczos with
+        // a factored shift-invert operator has failed for a reason more vectors will not cure, and
+        // the dense n x dim blocks would grow towards n x n
+        let max_dim = (10 * count + 200).min(n_free);
+        let mut start = start_vector(n);
+        loop {
+            let (mut pairs, estimated, next_start) = lanczos(k, m, count, dim, &start, tol, deflate)?;
+            crate::profile::note(|| format!("{count} modes: {dim} Lanczos vectors (as many solves)"));
+            for v in pairs.values.iter_mut() {
+                *v -= shift;
             }
-            return Ok(pairs);
+            // every returned pair is checked, not assumed: its residual in K and M themselves
+            let (worst, at) = worst_residual(k, m, &pairs, shift);
+            let converged = estimated && worst <= RESIDUAL_TOL && pairs.values.len() == count;
+            if converged || dim >= max_dim {
+                if !converged {
+                    return Err(BuildError::Numerical(format!(
+                        "eigensolver: {count} modes did not converge with {dim} Lanczos vectors (of {n_free} DoFs): mode {} has the residual {worst:.1e} (accepted {RESIDUAL_TOL:.0e}); request fewer modes (reduction.modes, max_frequency) or check the mesh for extreme element proportions",
+                        at + 1
+                    )));
+                }
+                return Ok(pairs);
+            }
+            start = next_start;
+            dim = (dim + dim / 2).min(max_dim);
         }
-        start = next_start;
-        dim = (dim + dim / 2).min(max_dim);
-    }
+    })
 }
 
 /// One Lanczos run of `dim` steps. Returns the `count` lowest Ritz pairs, whether they converged,
