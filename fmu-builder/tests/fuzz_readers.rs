@@ -30,37 +30,12 @@ use fmu_builder::input::import::{ImportedMesh, read_inp, read_msh};
 use fmu_builder::input::spec::Spec;
 use proptest::prelude::*;
 use proptest::sample::select;
-use proptest::test_runner::{Config, RngSeed};
+#[path = "../../fmu-runtime/tests/common/fuzz.rs"]
+mod fuzz;
+use fuzz::{env_u64, limit_memory};
 
 // ---------------------------------------------------------------------------------------------
-// configuration
-
-fn env_u64(name: &str, default: u64) -> u64 {
-    std::env::var(name).ok().and_then(|v| v.trim().parse().ok()).unwrap_or(default)
-}
-
-fn config() -> Config {
-    Config {
-        cases: env_u64("FUZZ_CASES", 64) as u32,
-        fork: true,
-        timeout: env_u64("FUZZ_TIMEOUT_MS", 20_000) as u32,
-        rng_seed: RngSeed::Fixed(env_u64("FUZZ_SEED", 1)),
-        failure_persistence: None,
-        max_shrink_iters: 4096,
-        ..Config::default()
-    }
-}
-
-/// The child's ceiling on its address space: an allocation sized from the file beyond it aborts
-/// the child (a counted crash) instead of taking the machine's memory.
-fn limit_memory() {
-    let bytes = env_u64("FUZZ_MEMORY_MB", 3072) << 20;
-    let limit = libc::rlimit { rlim_cur: bytes as libc::rlim_t, rlim_max: bytes as libc::rlim_t };
-    // SAFETY: plain system call on a valid struct; lowering the limit is always permitted.
-    unsafe {
-        libc::setrlimit(libc::RLIMIT_AS, &limit);
-    }
-}
+// case directories
 
 /// A fresh directory per case (the child runs many cases; a crash restarts it).
 fn case_dir(target: &str) -> PathBuf {
@@ -598,7 +573,7 @@ fn generated() -> &'static Generated {
 // targets
 
 proptest! {
-    #![proptest_config(config())]
+    #![proptest_config(fuzz::config(64))]
 
     /// The JSON input: the examples and a matrices spec, read from a file.
     #[test]

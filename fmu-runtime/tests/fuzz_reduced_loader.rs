@@ -33,32 +33,9 @@ use fmu_runtime::interface::VariableTable;
 use fmu_runtime::reduced::{ReducedBody, free_two_mode_body, rotating_two_mode_body, two_mode_body};
 use proptest::prelude::*;
 use proptest::sample::select;
-use proptest::test_runner::{Config, RngSeed};
-
-fn env_u64(name: &str, default: u64) -> u64 {
-    std::env::var(name).ok().and_then(|v| v.trim().parse().ok()).unwrap_or(default)
-}
-
-fn config() -> Config {
-    Config {
-        cases: env_u64("FUZZ_CASES", 96) as u32,
-        fork: true,
-        timeout: env_u64("FUZZ_TIMEOUT_MS", 20_000) as u32,
-        rng_seed: RngSeed::Fixed(env_u64("FUZZ_SEED", 1)),
-        failure_persistence: None,
-        max_shrink_iters: 4096,
-        ..Config::default()
-    }
-}
-
-fn limit_memory() {
-    let bytes = env_u64("FUZZ_MEMORY_MB", 3072) << 20;
-    let limit = libc::rlimit { rlim_cur: bytes as libc::rlim_t, rlim_max: bytes as libc::rlim_t };
-    // SAFETY: plain system call on a valid struct; lowering the limit is always permitted.
-    unsafe {
-        libc::setrlimit(libc::RLIMIT_AS, &limit);
-    }
-}
+#[path = "common/fuzz.rs"]
+mod fuzz;
+use fuzz::limit_memory;
 
 // ---------------------------------------------------------------------------------------------
 // seeds
@@ -612,7 +589,7 @@ fn exercise(body: &ReducedBody, bytes: &[u8], kind: fmi2Type) -> Vec<String> {
 // ---------------------------------------------------------------------------------------------
 
 proptest! {
-    #![proptest_config(config())]
+    #![proptest_config(fuzz::config(96))]
 
     #[test]
     fn reduced_model_loader(c in case()) {
