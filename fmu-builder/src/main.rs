@@ -47,6 +47,7 @@ struct Args {
 
 fn main() -> ExitCode {
     let args = Args::parse();
+    fmu_builder::profile::per_phase_memory(args.timings);
     // clap lets exactly one of --output and --sweep through
     match args.output.clone() {
         Some(output) => build(&args, &output),
@@ -113,7 +114,7 @@ fn build(args: &Args, output: &Path) -> ExitCode {
             }
             if !args.quiet {
                 print!("{}", fmu_builder::output::summary::text(&built.report));
-                if let Some(mib) = peak_memory_mib() {
+                if let Some(mib) = fmu_builder::profile::process_peak_mib() {
                     println!("peak memory {mib:.0} MiB");
                 }
                 println!("wrote {}", output.display());
@@ -130,11 +131,3 @@ fn build(args: &Args, output: &Path) -> ExitCode {
     }
 }
 
-/// Peak resident memory of this process (Linux: VmHWM of /proc/self/status), for users sizing
-/// machines for large models.
-fn peak_memory_mib() -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib / 1024.0)
-}

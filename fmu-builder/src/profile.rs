@@ -8,11 +8,32 @@
 //! resident set (VmHWM), which writing "5" to /proc/self/clear_refs resets. A phase resets it
 //! when it starts, after folding the mark so far into every enclosing phase, and reads it when
 //! it ends; so each phase's peak is its own, and an enclosing phase's peak covers its children.
-//! Where the reset is not possible, a phase reports the process's peak so far (never less than
-//! its own).
+//! The reset also lowers what outside tools (`/usr/bin/time`, getrusage's ru_maxrss) see, so it
+//! happens only when per-phase memory is asked for (`per_phase_memory(true)`, `--timings`); every
+//! mark is folded into the process's own peak first (`process_peak_mib`). Without the reset, or
+//! where it is not possible, a phase reports the process's peak so far (never less than its own).
 
 use std::cell::RefCell;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
+
+/// Whether phases reset the high-water mark (per-phase peaks) or not (the process's peak stays
+/// visible to outside tools).
+static PER_PHASE_MEMORY: AtomicBool = AtomicBool::new(false);
+/// The largest high-water mark read before any reset [KiB].
+static PROCESS_PEAK_KIB: AtomicU64 = AtomicU64::new(0);
+
+/// Ask for each phase's own peak memory (resets the process's high-water mark between phases).
+pub fn per_phase_memory(on: bool) {
+    PER_PHASE_MEMORY.store(on, Ordering::Relaxed);
+}
+
+/// Peak resident memory of the whole process so far [MiB], resets included.
+pub fn process_peak_mib() -> Option<f64> {
+    let now = high_water_kib();
+    let folded = PROCESS_PEAK_KIB.load(Ordering::Relaxed);
+    now.map(|k| k.max(folded) as f64 / 1024.0)
+}
 
 /// One finished phase.
 #[derive(Debug, Clone, PartialEq)]
@@ -51,8 +72,12 @@ fn high_water_kib() -> Option<u64> {
     line.split_whitespace().nth(1)?.parse().ok()
 }
 
-/// Reset the high-water mark to the present resident set; false where not possible.
+/// Reset the high-water mark to the present resident set, after folding it into the process's
+/// peak; false where not possible.
 pub fn reset_high_water() -> bool {
+    if let Some(mark) = high_water_kib() {
+        PROCESS_PEAK_KIB.fetch_max(mark, Ordering::Relaxed);
+    }
     std::fs::write("/proc/self/clear_refs", "5").is_ok()
 }
 
@@ -72,7 +97,9 @@ pub fn phase<T>(name: impl Into<String>, f: impl FnOnce() -> T) -> T {
         for open in r.open.iter_mut() {
             open.peak_kib = max_opt(open.peak_kib, mark);
         }
-        reset_high_water();
+        if PER_PHASE_MEMORY.load(Ordering::Relaxed) {
+            reset_high_water();
+        }
         let index = r.finished.len();
         let depth = r.open.len();
         // placed now so that phases list in the order they started

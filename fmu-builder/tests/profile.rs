@@ -1,11 +1,12 @@
 //! The build profile's recorder on its own (one test per process: the resident-set high-water
 //! mark it resets is the process's, so no other test may allocate meanwhile).
 
-use fmu_builder::profile::{note, phase, reset_high_water, table, take};
+use fmu_builder::profile::{note, per_phase_memory, phase, process_peak_mib, reset_high_water, table, take};
 
 #[test]
 fn nested_phases_keep_their_order_depth_time_and_own_peaks() {
     take();
+    per_phase_memory(true);
     const MIB: usize = 1 << 20;
     let outer = phase("outer", || {
         note(|| "first".into());
@@ -32,6 +33,10 @@ fn nested_phases_keep_their_order_depth_time_and_own_peaks() {
         if reset_high_water() {
             assert!(small < inner - 100.0, "small phase peak {small} MiB vs inner {inner}");
         }
+    }
+    // the resets do not hide the process's own peak: the inner phase's 200 MiB stay in it
+    if let (Some(process), Some(inner)) = (process_peak_mib(), phases[1].peak_mib) {
+        assert!(process >= inner, "process peak {process} MiB below the inner phase's {inner}");
     }
     assert!(take().is_empty());
     assert!(table(&phases).lines().count() == 4 && table(&phases).contains("  inner"));
