@@ -9,7 +9,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-BUILDER = ROOT / "target" / "release" / "fmu-builder"
+# CARGO_TARGET_DIR as cargo reads it: a build elsewhere is tested where it was built
+BUILDER = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target")) / "release" / "fmu-builder"
 EXAMPLES = ROOT / "examples"
 
 

@@ -42,7 +42,8 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-BUILDER = ROOT / "target" / "release" / "fmu-builder"
+# CARGO_TARGET_DIR as cargo reads it: a build elsewhere is tested where it was built
+BUILDER = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target")) / "release" / "fmu-builder"
 
 VALUES = [float("nan"), float("inf"), float("-inf"), 1e308, -1e308, 0.0, -0.0, 5e-324, 2.2250738585072014e-308,
           -1.0, 1.0, 0.5, 3.0, 10.0, 1e3, 1e6, -1e6, 1e-9]
