@@ -8,9 +8,10 @@
 
 use crate::error::Result;
 use crate::input::spec::Role;
-use crate::model::assembly::{MassProperties, Uncoupled, mass_properties, symmetric};
+use crate::model::assembly::{MassProperties, Uncoupled, mass_properties};
+use crate::model::congruence::{DofImage, symmetric_congruence};
 use crate::model::flange::Flange;
-use faer::sparse::{SparseColMat, Triplet};
+use faer::sparse::SparseColMat;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum NodeDofs {
@@ -103,57 +104,26 @@ fn coupling_block(d: [f64; 3]) -> [[f64; 6]; 3] {
     [[1.0, 0.0, 0.0, 0.0, d[2], -d[1]], [0.0, 1.0, 0.0, -d[2], 0.0, d[0]], [0.0, 0.0, 1.0, d[1], -d[0], 0.0]]
 }
 
-/// Where a DoF of the free-free model goes in the constrained model: at most three
+/// Where each DoF of the free-free model goes in the constrained model: at most three
 /// (constrained DoF, coefficient) pairs (a slave's translation is u + theta x d).
-fn dof_images(dofs: &DofMap, nodes: &[[f64; 3]], flanges: &[Flange]) -> Vec<([(usize, f64); 3], u8)> {
+fn dof_images(dofs: &DofMap, nodes: &[[f64; 3]], flanges: &[Flange]) -> Vec<DofImage> {
     let mut images = Vec::with_capacity(3 * nodes.len());
     for (n, p) in nodes.iter().enumerate() {
         for i in 0..3 {
-            let mut img = [(0, 0.0); 3];
-            let mut len = 0;
-            match dofs.node[n] {
-                NodeDofs::Free(d) => {
-                    img[0] = (d + i, 1.0);
-                    len = 1;
-                }
+            images.push(match dofs.node[n] {
+                NodeDofs::Free(d) => DofImage::NONE.with(d + i, 1.0),
                 NodeDofs::Slave(k) => {
                     let r = flanges[k].reference;
                     let block = coupling_block([p[0] - r[0], p[1] - r[1], p[2] - r[2]]);
                     let f = dofs.flange_first[k];
-                    for (j, &c) in block[i].iter().enumerate() {
-                        if c != 0.0 {
-                            img[len] = (f + j, c);
-                            len += 1;
-                        }
-                    }
+                    // the row's zeros are left out: a slave on the reference's axis keeps fewer terms
+                    let terms = block[i].iter().enumerate().filter(|(_, c)| **c != 0.0);
+                    terms.fold(DofImage::NONE, |image, (j, &c)| image.with(f + j, c))
                 }
-            }
-            images.push((img, len as u8));
+            });
         }
     }
     images
-}
-
-/// T^T A T for the rigid-coupling map T, made bit-exactly symmetric.
-fn couple_matrix(
-    a: &SparseColMat<usize, f64>,
-    images: &[([(usize, f64); 3], u8)],
-    n: usize,
-    what: &str,
-) -> Result<SparseColMat<usize, f64>> {
-    let mut trip = Vec::with_capacity(a.val().len() + a.val().len() / 4);
-    for j in 0..a.ncols() {
-        let (img_j, len_j) = &images[j];
-        for (&i, &v) in a.row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
-            let (img_i, len_i) = &images[i];
-            for &(gi, ci) in &img_i[..*len_i as usize] {
-                for &(gj, cj) in &img_j[..*len_j as usize] {
-                    trip.push(Triplet::new(gi, gj, ci * v * cj));
-                }
-            }
-        }
-    }
-    symmetric(n, &trip, what)
 }
 
 /// Tie the flanges to the free-free part: the constrained K, M (and D) and the rigid-body mass
@@ -162,9 +132,81 @@ pub fn rigid_coupling(part: &Uncoupled, nodes: &[[f64; 3]], flanges: &[Flange], 
     let dofs = DofMap::new(nodes.len(), flanges);
     let images = dof_images(&dofs, nodes, flanges);
     let n = dofs.n_dofs;
-    let stiffness = couple_matrix(&part.stiffness, &images, n, "stiffness")?;
-    let mass = couple_matrix(&part.mass, &images, n, "mass")?;
-    let damping = part.damping.as_ref().map(|d| couple_matrix(d, &images, n, "damping")).transpose()?;
+    let stiffness = symmetric_congruence(&part.stiffness, &images, n, "stiffness")?;
+    let mass = symmetric_congruence(&part.mass, &images, n, "mass")?;
+    let damping = part.damping.as_ref().map(|d| symmetric_congruence(d, &images, n, "damping")).transpose()?;
     let mass_properties = mass_properties(&part.nodal_mass, nodes, origin, part.volume);
     Ok(Assembled { dofs, stiffness, mass, nodal_mass: part.nodal_mass.clone(), mass_properties, damping })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::error::BuildError;
+    use crate::model::assembly::tests::mixed_mesh;
+    use crate::model::assembly::uncoupled;
+    use faer::Mat;
+
+    /// The mixed mesh's x = 0 face held by the mount (its reference on the face's midline, so
+    /// some slaves' lever arms have zero components), the hex8's x = 3 face by a force flange.
+    fn flanges(nodes: &[[f64; 3]]) -> Vec<Flange> {
+        let on = |x: f64| (0..nodes.len()).filter(|&n| nodes[n][0] == x).collect::<Vec<_>>();
+        vec![
+            Flange { name: "arm".into(), role: Role::Force, reference: [3.2, 0.5, 0.5], slaves: on(3.0) },
+            Flange { name: "base".into(), role: Role::Motion, reference: [0.0, 0.5, 0.0], slaves: on(0.0) },
+        ]
+    }
+
+    /// The coupling map densely, from its definition: T[3n + i, d + i] = 1 for a free node,
+    /// T[3n + i, f + j] = [I | S](i, j) for a slave of the flange whose master DoFs start at f.
+    fn dense_map(dofs: &DofMap, nodes: &[[f64; 3]], flanges: &[Flange]) -> Mat<f64> {
+        let mut t = Mat::zeros(3 * nodes.len(), dofs.n_dofs);
+        for (n, p) in nodes.iter().enumerate() {
+            for i in 0..3 {
+                match dofs.node[n] {
+                    NodeDofs::Free(d) => t[(3 * n + i, d + i)] = 1.0,
+                    NodeDofs::Slave(k) => {
+                        let r = flanges[k].reference;
+                        let block = coupling_block([p[0] - r[0], p[1] - r[1], p[2] - r[2]]);
+                        (0..6).for_each(|j| t[(3 * n + i, dofs.flange_first[k] + j)] = block[i][j]);
+                    }
+                }
+            }
+        }
+        t
+    }
+
+    fn assert_exactly_symmetric(s: &SparseColMat<usize, f64>, what: &str) {
+        for j in 0..s.ncols() {
+            for (&i, &v) in s.row_idx_of_col_raw(j).iter().zip(s.val_of_col(j)) {
+                let p = s.row_idx_of_col_raw(i).binary_search(&j).expect("mirror in the pattern");
+                assert_eq!(s.val_of_col(i)[p].to_bits(), v.to_bits(), "{what} ({i}, {j})");
+            }
+        }
+    }
+
+    #[test]
+    fn coupled_matrices_are_the_congruence_and_exactly_symmetric() {
+        let (mesh, materials) = mixed_mesh();
+        let mut free = uncoupled(&mesh, &materials, &|e, m| BuildError::Numerical(format!("{e}: {m}"))).unwrap();
+        free.damping = Some(free.mass.clone());
+        let flanges = flanges(&mesh.nodes);
+        let model = rigid_coupling(&free, &mesh.nodes, &flanges, [1.0, 0.5, 0.5]).unwrap();
+        assert_eq!(model.dofs.n_dofs, model.dofs.n_interior + 12);
+        let t = dense_map(&model.dofs, &mesh.nodes, &flanges);
+        for (coupled, a, what) in [(&model.stiffness, &free.stiffness, "stiffness"), (&model.mass, &free.mass, "mass")]
+        {
+            assert_exactly_symmetric(coupled, what);
+            let b = t.transpose() * a.to_dense() * &t;
+            let dense = coupled.to_dense();
+            // round-off of sums of a few hundred products in another order, against the largest
+            let scale = b.norm_max();
+            for (i, j) in (0..b.nrows()).flat_map(|i| (0..b.ncols()).map(move |j| (i, j))) {
+                assert!((dense[(i, j)] - b[(i, j)]).abs() <= 1e-13 * scale, "{what} ({i}, {j})");
+            }
+        }
+        let damping = model.damping.unwrap();
+        assert_eq!(damping.val(), model.mass.val());
+        assert_eq!(damping.symbolic().row_idx(), model.mass.symbolic().row_idx());
+    }
 }
