@@ -136,8 +136,9 @@ def test_timings_profile_every_phase_of_the_build(tmp_path):
         rows.append((len(m.group(1)) // 2, m.group(2), float(m.group(3)), float(m.group(4)), m.group(5)))
     names = [r[1] for r in rows]
     for expected in ["read and check the input", "mesh or import", "assembly (free-free K, M)",
-                     "rigid coupling of the flanges", "Cholesky factorisation: the stiffness of the mounted body",
-                     "reduction basis", "constraint modes", "eigen-solve (shift-invert Lanczos)", "invariants",
+                     "rigid coupling of the flanges", "ordering: the stiffness of the mounted body",
+                     "Cholesky factorisation: the stiffness of the mounted body",
+                     "reduction basis", "constraint modes", "eigen-solve (block shift-invert Lanczos)", "invariants",
                      "accuracy comparison with the full model", "checks and packaging"]:
         assert expected in names, (expected, names)
     assert names[0] == "read and check the input" and names[-1] == "checks and packaging"
@@ -145,6 +146,8 @@ def test_timings_profile_every_phase_of_the_build(tmp_path):
     assert depth["reduction basis"] == 0 and depth["constraint modes"] == 1
     assert all(r[2] >= 0 and r[3] > 0 for r in rows)
     assert any("Lanczos vectors" in r[4] for r in rows) and any("DoFs" in r[4] for r in rows)
+    # the factor's size is known (and shown) before it is computed
+    assert any(re.search(r"nnz\(L\) \d+ \(\d+ MiB", r[4]) for r in rows), rows
     # a parent's peak covers its children's
     for i, r in enumerate(rows):
         for child in rows[i + 1:]:

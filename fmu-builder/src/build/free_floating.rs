@@ -77,16 +77,9 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
     let (origin, props) = about_centre_of_mass(model.mass_properties);
     model.mass_properties = props;
     let (k_shifted, shift) = shifted(&model.stiffness, &model.mass)?;
-    let solver = SpdSolver::new(&k_shifted, "K + s M of the free body").map_err(|e| match e {
-        // where it fails tells the user where the mesh has its mechanism
-        BuildError::Numerical(m) => match crate::linalg::sparse::nonpositive_pivot_row(&k_shifted) {
-            Some(d) => BuildError::Numerical(format!(
-                "{m}; the factorisation fails at {}",
-                model.dofs.describe(d, &flanges, &|n| part.node_label(n))
-            )),
-            None => BuildError::Numerical(m),
-        },
-        other => other,
+    // where it fails tells the user where the mesh has its mechanism
+    let solver = SpdSolver::new(k_shifted, "K + s M of the free body", &|d| {
+        model.dofs.describe(d, &flanges, &|n| part.node_label(n))
     })?;
     let rigid = rigid_deflation(&model, &mesh.nodes, &flanges, origin)?;
     let basis = profile::phase("reduction basis", || basis::free_free(&model, &solver, shift, &rigid, modes))?;

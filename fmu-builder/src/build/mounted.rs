@@ -10,7 +10,7 @@ use crate::ffrf::stiffening::reduced_geometric_stiffness;
 use crate::input::mesh::Mesh;
 use crate::input::spec::{Method, Role, SceneLoad, Spec};
 use crate::linalg::eigen;
-use crate::linalg::sparse::{self, SpdSolver};
+use crate::linalg::sparse::{self, SpdSolve, SpdSolver};
 use crate::model::assembly::{SolidMaterial, Uncoupled};
 use crate::model::flange::Flange;
 use crate::model::part::Part;
@@ -108,10 +108,6 @@ fn stiffening_terms(
         out.flanges.push(blocks);
     }
     Ok(out)
-}
-
-fn solver_of(solver: &Option<SpdSolver>) -> Result<&SpdSolver> {
-    solver.as_ref().ok_or_else(|| BuildError::Numerical("internal: the mounted body's factor was released".into()))
 }
 
 /// The band of the scene, or 0 to the tenth eigenfrequency of the mounted body.
@@ -214,8 +210,11 @@ pub fn reduce(
     let mesh = &part.mesh;
     let nc = model.dofs.n_clamped();
     let k_cc = sparse::block(&model.stiffness, 0..nc, 0..nc)?;
-    const MOUNTED: &str = "the stiffness of the mounted body";
-    let mut solver = Some(SpdSolver::new(&k_cc, MOUNTED).map_err(|e| with_pivot(e, &k_cc, &model, &part, &flanges))?);
+    // one factor serves every solve of the build: the mounted body's statics and modes, the
+    // Craig-Bampton shapes with the flanges held (`held::HeldSolver`), the accuracy comparison
+    let solver = SpdSolver::new(k_cc, "the stiffness of the mounted body", &|d| {
+        model.dofs.describe(d, &flanges, &|n| part.node_label(n))
+    })?;
 
     // the scene's inertial loads: static shapes in the basis, prestress for stiffening
     let mut cases = Vec::new();
@@ -233,21 +232,16 @@ pub fn reduce(
             f.as_mut().col_mut(c).copy_from(inertia::inertial_load(&model, &mesh.nodes, origin, *case).col(0));
         }
         let mut u = inertia::restrict(&model, &mesh.nodes, &flanges, f.as_ref());
-        if let Some(solver) = &solver {
-            solver.solve_refined(u.as_mut());
-        }
+        solver.solve_refined(u.as_mut());
         Some(u)
     };
     let (basis, method) = profile::phase("reduction basis", || -> Result<_> {
         Ok(match spec.reduction.method {
             Method::CraigBampton => {
-                // Craig-Bampton factors the stiffness with every flange held; one sparse factor at a
-                // time keeps 1e5-DoF parts within a few GiB (each factor costs ~1.5 GB there)
-                solver = None;
-                (basis::craig_bampton(&model, modes, load_shapes.as_ref())?, "Craig-Bampton".to_string())
+                (basis::craig_bampton(&model, &solver, modes, load_shapes.as_ref())?, "Craig-Bampton".to_string())
             }
             Method::Modal => (
-                basis::modal(&model, solver_of(&solver)?, modes, load_shapes.as_ref())?,
+                basis::modal(&model, &solver, modes, load_shapes.as_ref())?,
                 "modal with residual flexibility".to_string(),
             ),
             Method::Krylov => {
@@ -257,14 +251,10 @@ pub fn reduce(
                 let name = format!(
                     "second-order Krylov, {moments} block moments at s = 0, 2 pi i {points:?} Hz, {real:?} 1/s"
                 );
-                (basis::krylov(&model, solver_of(&solver)?, &points, &real, moments, load_shapes.as_ref())?, name)
+                (basis::krylov(&model, &solver, &points, &real, moments, load_shapes.as_ref())?, name)
             }
         })
     })?;
-    let solver = match solver {
-        Some(s) => s,
-        None => SpdSolver::new(&k_cc, MOUNTED)?,
-    };
     let basis = match spec.scene.as_ref().and_then(|s| s.tolerance) {
         Some(tol) if !model.dofs.flange_first.is_empty() && spec.scene.is_some() => {
             profile::phase("order selection", || {
@@ -368,18 +358,4 @@ pub fn reduce(
     let statics = basis.omega.len() - basis.n_normal;
     let report = report_of(&spec, &part, &flanges, &model, &basis, &reduced, &method, statics, accuracy);
     Ok(Built { spec, part, flanges, model, basis, reduced, report, profile: Vec::new() })
-}
-
-/// A mounted stiffness that does not factor, with the DoF where it fails: the connectivity
-/// check ran before, so this is a mechanism inside the mesh or lost digits, and the node (file
-/// id or coordinates) and direction tell the user where to look.
-fn with_pivot(e: BuildError, k_cc: &sparse::Sparse, model: &Assembled, part: &Part, flanges: &[Flange]) -> BuildError {
-    let BuildError::Numerical(message) = e else { return e };
-    match sparse::nonpositive_pivot_row(k_cc) {
-        Some(d) => {
-            let at = model.dofs.describe(d, flanges, &|n| part.node_label(n));
-            BuildError::Numerical(format!("{message}; the factorisation fails at {at}"))
-        }
-        None => BuildError::Numerical(message),
-    }
 }

@@ -3,5 +3,7 @@
 
 pub mod eigen;
 pub mod faer_error;
+pub mod held;
+pub mod ordering;
 pub mod sparse;
 pub mod symmetric_eigen;

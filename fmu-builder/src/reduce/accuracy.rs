@@ -5,7 +5,7 @@
 
 use crate::error::{BuildError, Result};
 use crate::linalg::eigen::{self, Deflation};
-use crate::linalg::sparse::{SpdSolver, block};
+use crate::linalg::sparse::{SpdSolve, SpdSolver, block};
 use crate::model::rigid_coupling::Assembled;
 use crate::reduce::basis::{self, Basis, EIGEN_TOL};
 use faer::Mat;

@@ -1,0 +1,144 @@
+//! Solves with the leading block K_ii of a factored K = [K_ii K_ib; K_bi K_bb], the trailing
+//! DoFs held at zero, from the factor of K and a rank-h correction: no second factorisation.
+//!
+//! With G = K^-1 E (E the unit columns of the h held DoFs) and S = E^T G (their compliance),
+//! z = K^-1 [b; 0] and f = -S^-1 z_b, the vector z + G f vanishes at the held DoFs and
+//! K (z + G f) = [b; 0] + E f: its leading part x solves K_ii x = b exactly. Craig-Bampton
+//! (flanges held) then shares the mounted body's factor, which on a 249k-DoF bracket saved two
+//! factorisations of 10-13 s and 1.3 GB each.
+
+use crate::error::{BuildError, Result};
+use crate::linalg::sparse::{SpdSolve, SpdSolver, mul_compensated};
+use faer::linalg::solvers::Solve;
+use faer::reborrow::ReborrowMut;
+use faer::{Mat, MatMut, MatRef, Side};
+
+pub struct HeldSolver<'a> {
+    whole: &'a SpdSolver,
+    /// Rows kept free (the leading ones).
+    n: usize,
+    /// K^-1 E, n_whole x h.
+    g: Mat<f64>,
+    /// Cholesky factor of the held DoFs' compliance S = E^T K^-1 E.
+    compliance: faer::linalg::solvers::Llt<f64>,
+}
+
+impl<'a> HeldSolver<'a> {
+    /// Hold every row of `whole`'s matrix from `n` on.
+    pub fn new(whole: &'a SpdSolver, n: usize) -> Result<Self> {
+        let total = whole.n();
+        let h = total - n;
+        let mut g = Mat::<f64>::zeros(total, h);
+        for j in 0..h {
+            g[(n + j, j)] = 1.0;
+        }
+        whole.solve_refined(g.as_mut());
+        let s = Mat::<f64>::from_fn(h, h, |i, j| 0.5 * (g[(n + i, j)] + g[(n + j, i)]));
+        let compliance = s.llt(Side::Lower).map_err(|_| {
+            BuildError::Numerical(
+                "the compliance of the held flange DoFs is not positive definite: a flange master without stiffness"
+                    .into(),
+            )
+        })?;
+        Ok(Self { whole, n, g, compliance })
+    }
+
+    /// x = K_ii^-1 b for the columns of `rhs` (n rows), without refinement.
+    fn solve(&self, mut rhs: MatMut<'_, f64>) {
+        let (n, total) = (self.n, self.whole.n());
+        let mut z = Mat::<f64>::zeros(total, rhs.ncols());
+        z.as_mut().subrows_mut(0, n).copy_from(rhs.as_ref());
+        self.whole.solve_in_place(z.as_mut());
+        let zb = z.subrows(n, total - n).to_owned();
+        let f = self.compliance.solve(&zb);
+        z -= &self.g * &f;
+        rhs.copy_from(z.subrows(0, n));
+    }
+}
+
+impl SpdSolve for HeldSolver<'_> {
+    fn n(&self) -> usize {
+        self.n
+    }
+
+    fn apply_compensated(&self, x: MatRef<'_, f64>) -> Mat<f64> {
+        let mut padded = Mat::<f64>::zeros(self.whole.n(), x.ncols());
+        padded.as_mut().subrows_mut(0, self.n).copy_from(x);
+        let full = mul_compensated(None, 1.0, self.whole.matrix(), padded.as_ref());
+        full.subrows(0, self.n).to_owned()
+    }
+
+    fn solve_refined_steps(&self, mut rhs: MatMut<'_, f64>, steps: usize) -> f64 {
+        let (n, total) = (self.n, self.whole.n());
+        let mut b = Mat::<f64>::zeros(total, rhs.ncols());
+        b.as_mut().subrows_mut(0, n).copy_from(rhs.as_ref());
+        self.solve(rhs.rb_mut());
+        let mut x = Mat::<f64>::zeros(total, rhs.ncols());
+        let mut correction = 0.0;
+        for _ in 0..steps {
+            // K [x; 0] has K_ii x in its leading rows: the residual of the held system
+            x.as_mut().subrows_mut(0, n).copy_from(rhs.as_ref());
+            let mut r = mul_compensated(Some(b.as_ref()), -1.0, self.whole.matrix(), x.as_ref());
+            let mut r = r.as_mut().subrows_mut(0, n);
+            self.solve(r.rb_mut());
+            correction = r.norm_max() / rhs.norm_max();
+            for j in 0..rhs.ncols() {
+                for i in 0..n {
+                    rhs[(i, j)] += r[(i, j)];
+                }
+            }
+        }
+        correction
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linalg::sparse::{Sparse, block};
+    use faer::sparse::Triplet;
+
+    /// A 3D grid Laplacian plus a diagonal: solves with its leading block through the whole
+    /// factor equal solves with the block's own factor to round-off (consistency: both are ours;
+    /// the physics of the held flanges is checked against CalculiX in the Python tests).
+    #[test]
+    fn held_solves_equal_the_blocks_own_factor() {
+        let k = 9;
+        let id = |x: usize, y: usize, z: usize| x + k * (y + k * z);
+        let mut t = Vec::new();
+        for z in 0..k {
+            for y in 0..k {
+                for x in 0..k {
+                    let i = id(x, y, z);
+                    t.push(Triplet::new(i, i, 6.0 + 1e-3 * i as f64));
+                    for (dx, dy, dz) in [(1, 0, 0), (0, 1, 0), (0, 0, 1)] {
+                        if x + dx < k && y + dy < k && z + dz < k {
+                            let j = id(x + dx, y + dy, z + dz);
+                            t.push(Triplet::new(i, j, -1.0));
+                            t.push(Triplet::new(j, i, -1.0));
+                        }
+                    }
+                }
+            }
+        }
+        let total = k * k * k;
+        let a = Sparse::try_new_from_triplets(total, total, &t).unwrap();
+        let n = total - 7;
+        let a_ii = block(&a, 0..n, 0..n).unwrap();
+        let name = |d: usize| format!("row {d}");
+        let whole = SpdSolver::new(a, "whole", &name).unwrap();
+        let own = SpdSolver::new(a_ii, "block", &name).unwrap();
+        let held = HeldSolver::new(&whole, n).unwrap();
+        assert_eq!(held.n(), n);
+        let b = Mat::<f64>::from_fn(n, 3, |i, j| ((i * 7 + 3 * j) % 11) as f64 - 5.0);
+        let mut x_held = b.clone();
+        held.solve_refined(x_held.as_mut());
+        let mut x_own = b.clone();
+        own.solve_refined(x_own.as_mut());
+        let scale = x_own.norm_max();
+        let diff = (&x_held - &x_own).norm_max();
+        // both refined in double-double to round-off of the solution (measured 1e-16 relative);
+        // a wrong correction (held rows not zero) shows as order 1
+        assert!(diff <= 1e-13 * scale, "held vs own factor: {diff:e} of {scale:e}");
+    }
+}

@@ -1,0 +1,120 @@
+//! Fill-reducing ordering of a symmetric sparse matrix for its Cholesky factor: METIS's nested
+//! dissection (METIS_NodeND, built from source by the metis-sys crate).
+//!
+//! Why not faer's own AMD: on 3D solid meshes nested dissection leaves far less fill. On a
+//! 249k-DoF tet10 bracket AMD gave 246 M entries in L (9.2 s to factor on 2 cores, 0.26 s per
+//! solve), METIS 160 M (6.7 s, 0.21 s). METIS also compresses the three DoFs of a node (identical
+//! adjacency) into one vertex, so the graph it partitions is the mesh's node graph.
+
+use faer::sparse::SymbolicSparseColMatRef;
+
+/// A permutation as faer takes it: `forward[k]` is the row eliminated k-th, `inverse` its inverse.
+pub struct Ordering {
+    pub forward: Vec<usize>,
+    pub inverse: Vec<usize>,
+}
+
+/// Nested-dissection order of the pattern `a` (both triangles stored), or None where METIS
+/// cannot take it (more than i32 entries, or it reports an error): faer's AMD then orders.
+pub fn nested_dissection(a: SymbolicSparseColMatRef<'_, usize>) -> Option<Ordering> {
+    let n = a.ncols();
+    if n < 2 {
+        return None;
+    }
+    // the adjacency graph: every off-diagonal entry of the pattern, by column
+    let mut xadj: Vec<i32> = Vec::with_capacity(n + 1);
+    let mut adjncy: Vec<i32> = Vec::new();
+    adjncy.try_reserve(a.compute_nnz()).ok()?;
+    xadj.push(0);
+    for j in 0..n {
+        for &i in a.row_idx_of_col_raw(j) {
+            if i != j {
+                adjncy.push(i32::try_from(i).ok()?);
+            }
+        }
+        xadj.push(i32::try_from(adjncy.len()).ok()?);
+    }
+    let mut nvtxs = i32::try_from(n).ok()?;
+    let mut options = [0; metis_sys::METIS_NOPTIONS as usize];
+    let mut perm = vec![0i32; n];
+    let mut iperm = vec![0i32; n];
+    // SAFETY: the arrays have the lengths METIS_NodeND reads and writes (n + 1, nnz, n, n, and
+    // METIS_NOPTIONS options), a null vertex-weight pointer is documented as "no weights", and
+    // METIS keeps no pointer after returning.
+    let status = unsafe {
+        metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
+        metis_sys::METIS_NodeND(
+            &mut nvtxs,
+            xadj.as_mut_ptr(),
+            adjncy.as_mut_ptr(),
+            std::ptr::null_mut(),
+            options.as_mut_ptr(),
+            perm.as_mut_ptr(),
+            iperm.as_mut_ptr(),
+        )
+    };
+    if status != metis_sys::rstatus_et_METIS_OK {
+        return None;
+    }
+    // METIS: perm[k] is the vertex numbered k (the row eliminated k-th), iperm its inverse
+    let forward: Vec<usize> = perm.iter().map(|&p| usize::try_from(p).ok()).collect::<Option<_>>()?;
+    let inverse: Vec<usize> = iperm.iter().map(|&p| usize::try_from(p).ok()).collect::<Option<_>>()?;
+    let valid = forward.iter().all(|&p| p < n) && inverse.iter().enumerate().all(|(i, &k)| k < n && forward[k] == i);
+    valid.then_some(Ordering { forward, inverse })
+}
+
+#[cfg(test)]
+mod tests {
+    use faer::sparse::{SparseColMat, Triplet};
+
+    /// A 3D grid Laplacian: nested dissection must return a permutation and leave less fill than
+    /// the natural order (a band of k^2 per column).
+    #[test]
+    fn a_grid_gets_a_valid_permutation_with_less_fill() {
+        let k = 14;
+        let id = |x: usize, y: usize, z: usize| x + k * (y + k * z);
+        let mut t = Vec::new();
+        for z in 0..k {
+            for y in 0..k {
+                for x in 0..k {
+                    let i = id(x, y, z);
+                    t.push(Triplet::new(i, i, 6.0));
+                    for (dx, dy, dz) in [(1, 0, 0), (0, 1, 0), (0, 0, 1)] {
+                        if x + dx < k && y + dy < k && z + dz < k {
+                            let j = id(x + dx, y + dy, z + dz);
+                            t.push(Triplet::new(i, j, -1.0));
+                            t.push(Triplet::new(j, i, -1.0));
+                        }
+                    }
+                }
+            }
+        }
+        let n = k * k * k;
+        let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &t).unwrap();
+        let order = super::nested_dissection(a.symbolic()).expect("METIS orders a grid");
+        assert_eq!(order.forward.len(), n);
+        let mut seen = vec![false; n];
+        for &p in &order.forward {
+            assert!(!seen[p]);
+            seen[p] = true;
+        }
+        use faer::sparse::linalg::cholesky::{SymmetricOrdering, factorize_symbolic_cholesky};
+        let perm = faer::perm::PermRef::new_checked(&order.forward, &order.inverse, n);
+        let nd = factorize_symbolic_cholesky(
+            a.symbolic(),
+            faer::Side::Lower,
+            SymmetricOrdering::Custom(perm),
+            Default::default(),
+        )
+        .unwrap();
+        let natural = factorize_symbolic_cholesky(
+            a.symbolic(),
+            faer::Side::Lower,
+            SymmetricOrdering::Identity,
+            Default::default(),
+        )
+        .unwrap();
+        // measured: 1.3e5 vs 5.2e5 entries; half is far outside what the order can change by chance
+        assert!(2 * nd.len_val() < natural.len_val(), "ND fill {} vs natural {}", nd.len_val(), natural.len_val());
+    }
+}
