@@ -130,4 +130,3 @@ fn build(args: &Args, output: &Path) -> ExitCode {
         }
     }
 }
-
