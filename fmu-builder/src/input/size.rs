@@ -5,37 +5,35 @@
 //! estimate and the memory this machine has.
 //!
 //! Where the memory goes (bytes, n = DoFs):
-//! - assembly: every element's 3N x 3N stiffness and N x N mass entries as triplets (24 B each),
-//!   and as much again while faer sorts them into compressed columns;
-//! - the free-free and the coupled K and M in compressed columns (16 B per non-zero, six
-//!   matrices of that size alive at once: K, M, their coupled forms and the shifted matrix);
-//! - one sparse Cholesky factor (16 B per non-zero with its row index, plus half again for
-//!   faer's supernodal workspace), the LU of Krylov's complex points counted alike;
-//! - about a hundred FE-sized vectors (Lanczos space, static shapes, the basis).
+//! - the coupled K and M, the mounted body's K (the factored copy) and one clamped M block, in
+//!   compressed columns (16 B per non-zero each; assembly fills them in place, without triplets);
+//! - one sparse Cholesky factor (8 B per entry, plus its indices and faer's supernodal workspace:
+//!   10 B per entry), the LU of Krylov's complex points counted alike;
+//! - the Lanczos space and its M-products, static shapes and the basis: a few hundred FE-sized
+//!   vectors.
 //!
-//! Factor fill: faer orders by approximate minimum degree, which on 3D meshes fills like nested
-//! dissection (George 1973; Lipton, Rose and Tarjan 1979: O(n^{4/3}) non-zeros for 3D grids,
-//! O(n w) for a slender part with w DoFs in a cross-section). `nested_dissection_fill` follows
-//! that recursion on a lattice of the part's shape: a separator of s DoFs (a cross-section
-//! perpendicular to the longest side) costs s^2 (its dense triangle and its coupling to the
-//! enclosing separators), then both halves recurse. On a cube of k^3 nodes this gives about
-//! 31 k^4; `FILL_SAFETY` covers minimum degree's larger fill and the shifted factors.
+//! Factor fill: the builder orders by METIS nested dissection (George 1973; Lipton, Rose and
+//! Tarjan 1979: O(n^{4/3}) non-zeros for 3D grids, O(n w) for a slender part with w DoFs in a
+//! cross-section). `nested_dissection_fill` follows that recursion on a lattice of the part's
+//! shape: a separator of s DoFs (a cross-section perpendicular to the longest side) costs s^2
+//! (its dense triangle and its coupling to the enclosing separators), then both halves recurse.
+//! On a cube of k^3 nodes this gives about 31 k^4; `FILL_SAFETY` covers what METIS leaves more.
 
 use crate::error::{BuildError, Result};
 use crate::input::element::ElementKind;
 use std::path::Path;
 
-/// Minimum degree fills more than nested dissection, and the eigensolver's shifted matrices
-/// have factors of their own: calibrated so that the estimate is at or above the measured peak
-/// (VmHWM) of hex20 builds with 4 modes (faer 0.24): cube 12^3 852 MiB estimated vs 722
-/// measured, 16^3 2 220 vs 2 171, plate 40 x 40 x 2 1 490 vs 1 184, rod 400 x 4 x 4 2 750 vs 2 133.
-const FILL_SAFETY: f64 = 4.0;
+/// METIS's factor against the lattice recursion: the tet10 bracket (an L of plates, its lattice
+/// the bounding box) measured 1.57 times the estimate at 80k DoF (30.1 M entries) and 1.85 at
+/// 249k (159.7 M); the factor leaves room for the trend to larger meshes.
+const FILL_SAFETY: f64 = 2.5;
 
 /// Memory assumed when /proc/meminfo cannot be read (not Linux, a sandbox): a small machine.
 const FALLBACK_BYTES: f64 = 8.0 * (1u64 << 30) as f64;
 
-/// FE-sized vectors alive at once (Lanczos space of twice the modes, static shapes, basis).
-const VECTORS: f64 = 100.0;
+/// FE-sized vectors alive at once: the Lanczos space and its M-products (266 for 26 modes in
+/// blocks of 7 at 249k DoF), static shapes, the basis.
+const VECTORS: f64 = 300.0;
 
 /// The model's size, estimated from counts (f64: the counts of absurd inputs overflow usize
 /// products, and an estimate needs no more than 16 digits).
@@ -100,7 +98,6 @@ impl SizeEstimate {
     pub fn new(nodes: f64, elements: &[(ElementKind, f64)], stiffness_nonzeros: Option<f64>, factor_fill: f64) -> Self {
         let dofs = 3.0 * nodes;
         let element_count: f64 = elements.iter().map(|(_, n)| n).sum();
-        let entries: f64 = elements.iter().map(|(k, n)| n * (k.nodes_per_element() as f64).powi(2)).sum();
         let nnz_k = stiffness_nonzeros.unwrap_or_else(|| {
             let mean = if element_count > 0.0 {
                 elements.iter().map(|(k, n)| n * neighbours(*k)).sum::<f64>() / element_count
@@ -110,11 +107,10 @@ impl SizeEstimate {
             9.0 * nodes * mean
         });
         let factor = (FILL_SAFETY * factor_fill).max(nnz_k / 2.0);
-        // triplets: 9 stiffness + 1 nodal mass entry per element node pair, 24 B, twice
-        let assembly = 2.0 * 24.0 * 10.0 * entries;
-        let matrices = 6.0 * 16.0 * nnz_k;
-        let solve = 24.0 * factor + 8.0 * VECTORS * dofs;
-        let bytes = matrices + assembly.max(solve);
+        // assembly fills the free-free K and M in place; the element matrices go a batch at a time
+        let matrices = 4.0 * 16.0 * nnz_k;
+        let solve = 10.0 * factor + 8.0 * VECTORS * dofs;
+        let bytes = matrices + solve;
         SizeEstimate { nodes, dofs, elements: element_count, stiffness_nonzeros: nnz_k, factor_nonzeros: factor, bytes }
     }
 
