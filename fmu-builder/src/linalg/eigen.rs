@@ -522,30 +522,11 @@ pub fn below_shifted(
 mod tests {
     use super::*;
     use crate::linalg::sparse::SpdSolver;
-    use faer::sparse::Triplet;
 
     /// A 3D grid: K the 7-point Laplacian plus a small diagonal, M a varying diagonal.
     fn grid(k: usize) -> (Sparse, Sparse) {
-        let id = |x: usize, y: usize, z: usize| x + k * (y + k * z);
-        let (mut tk, mut tm) = (Vec::new(), Vec::new());
-        for z in 0..k {
-            for y in 0..k {
-                for x in 0..k {
-                    let i = id(x, y, z);
-                    tk.push(Triplet::new(i, i, 6.01));
-                    tm.push(Triplet::new(i, i, 1.0 + 0.5 * ((i * 7) % 5) as f64));
-                    for (dx, dy, dz) in [(1, 0, 0), (0, 1, 0), (0, 0, 1)] {
-                        if x + dx < k && y + dy < k && z + dz < k {
-                            let j = id(x + dx, y + dy, z + dz);
-                            tk.push(Triplet::new(i, j, -1.0));
-                            tk.push(Triplet::new(j, i, -1.0));
-                        }
-                    }
-                }
-            }
-        }
-        let n = k * k * k;
-        (Sparse::try_new_from_triplets(n, n, &tk).unwrap(), Sparse::try_new_from_triplets(n, n, &tm).unwrap())
+        use crate::linalg::test_grids::{diagonal, laplacian};
+        (laplacian(k, |_| 6.01), diagonal(k, |i| 1.0 + 0.5 * ((i * 7) % 5) as f64))
     }
 
     /// Every mode below a frequency, found in one growing space, equals the same number of

@@ -95,8 +95,7 @@ impl SpdSolve for HeldSolver<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::linalg::sparse::{Sparse, block};
-    use faer::sparse::Triplet;
+    use crate::linalg::sparse::block;
 
     /// A 3D grid Laplacian plus a diagonal: solves with its leading block through the whole
     /// factor equal solves with the block's own factor to round-off (consistency: both are ours;
@@ -104,25 +103,8 @@ mod tests {
     #[test]
     fn held_solves_equal_the_blocks_own_factor() {
         let k = 9;
-        let id = |x: usize, y: usize, z: usize| x + k * (y + k * z);
-        let mut t = Vec::new();
-        for z in 0..k {
-            for y in 0..k {
-                for x in 0..k {
-                    let i = id(x, y, z);
-                    t.push(Triplet::new(i, i, 6.0 + 1e-3 * i as f64));
-                    for (dx, dy, dz) in [(1, 0, 0), (0, 1, 0), (0, 0, 1)] {
-                        if x + dx < k && y + dy < k && z + dz < k {
-                            let j = id(x + dx, y + dy, z + dz);
-                            t.push(Triplet::new(i, j, -1.0));
-                            t.push(Triplet::new(j, i, -1.0));
-                        }
-                    }
-                }
-            }
-        }
         let total = k * k * k;
-        let a = Sparse::try_new_from_triplets(total, total, &t).unwrap();
+        let a = crate::linalg::test_grids::laplacian(k, |i| 6.0 + 1e-3 * i as f64);
         let n = total - 7;
         let a_ii = block(&a, 0..n, 0..n).unwrap();
         let name = |d: usize| format!("row {d}");

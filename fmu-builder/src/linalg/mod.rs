@@ -7,3 +7,5 @@ pub mod held;
 pub mod ordering;
 pub mod sparse;
 pub mod symmetric_eigen;
+#[cfg(test)]
+pub(crate) mod test_grids;

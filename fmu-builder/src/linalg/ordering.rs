@@ -65,32 +65,14 @@ pub fn nested_dissection(a: SymbolicSparseColMatRef<'_, usize>) -> Option<Orderi
 
 #[cfg(test)]
 mod tests {
-    use faer::sparse::{SparseColMat, Triplet};
 
     /// A 3D grid Laplacian: nested dissection must return a permutation and leave less fill than
     /// the natural order (a band of k^2 per column).
     #[test]
     fn a_grid_gets_a_valid_permutation_with_less_fill() {
         let k = 14;
-        let id = |x: usize, y: usize, z: usize| x + k * (y + k * z);
-        let mut t = Vec::new();
-        for z in 0..k {
-            for y in 0..k {
-                for x in 0..k {
-                    let i = id(x, y, z);
-                    t.push(Triplet::new(i, i, 6.0));
-                    for (dx, dy, dz) in [(1, 0, 0), (0, 1, 0), (0, 0, 1)] {
-                        if x + dx < k && y + dy < k && z + dz < k {
-                            let j = id(x + dx, y + dy, z + dz);
-                            t.push(Triplet::new(i, j, -1.0));
-                            t.push(Triplet::new(j, i, -1.0));
-                        }
-                    }
-                }
-            }
-        }
         let n = k * k * k;
-        let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &t).unwrap();
+        let a = crate::linalg::test_grids::laplacian(k, |_| 6.0);
         let order = super::nested_dissection(a.symbolic()).expect("METIS orders a grid");
         assert_eq!(order.forward.len(), n);
         let mut seen = vec![false; n];

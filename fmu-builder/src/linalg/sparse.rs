@@ -399,25 +399,7 @@ mod tests {
         assert_eq!(failure(chain(None)), "factored");
         // a 3D grid (supernodal factor, reordered): every principal block without the bad row is
         // diagonally dominant, so the failure is that row whatever the order
-        let k = 12;
-        let mut t = Vec::new();
-        let id = |x: usize, y: usize, z: usize| x + k * (y + k * z);
-        for z in 0..k {
-            for y in 0..k {
-                for x in 0..k {
-                    let i = id(x, y, z);
-                    t.push(Triplet::new(i, i, if i == 1000 { -100.0 } else { 7.0 }));
-                    for (dx, dy, dz) in [(1, 0, 0), (0, 1, 0), (0, 0, 1)] {
-                        if x + dx < k && y + dy < k && z + dz < k {
-                            let j = id(x + dx, y + dy, z + dz);
-                            t.push(Triplet::new(i, j, -1.0));
-                            t.push(Triplet::new(j, i, -1.0));
-                        }
-                    }
-                }
-            }
-        }
-        let grid = SparseColMat::try_new_from_triplets(k * k * k, k * k * k, &t).unwrap();
+        let grid = crate::linalg::test_grids::laplacian(12, |i| if i == 1000 { -100.0 } else { 7.0 });
         assert!(failure(grid.clone()).contains("fails at row 1000."), "{}", failure(grid));
     }
 
