@@ -1,11 +1,12 @@
-//! Lowest eigenpairs of K x = lambda M x (K positive definite, M positive semidefinite) by
+//! Lowest eigenpairs of K x = lambda M x (K positive definite, M positive semidefinite) by block
 //! shift-invert Lanczos in the M inner product: the operator K^-1 M is self-adjoint in it, its
 //! largest eigenvalues 1/lambda are the modes we want, and one sparse Cholesky of K serves every
-//! iteration. Full re-orthogonalisation (twice) keeps the basis M-orthonormal to round-off; the
-//! tridiagonal projection is solved by the checked dense eigensolver (`symmetric_eigen`), and
-//! every returned pair's residual is measured with a fresh solve (`worst_residual`), not taken
-//! from the Lanczos estimate. When the space is too small for the accuracy it is enlarged and the
-//! run repeated from the best Ritz combination; a request the full space cannot meet is an error
+//! iteration, a block of right-hand sides per read of the factor. Full re-orthogonalisation
+//! (twice) keeps the basis M-orthonormal to round-off; the space grows a block at a time until
+//! the projection (solved by the checked dense eigensolver, `symmetric_eigen`) estimates every
+//! wanted pair converged. The eigenvalues returned are Rayleigh quotients of K and M, and every
+//! pair's residual is measured with a fresh refined solve (`worst_residual`), not taken from the
+//! Lanczos estimate; a request the space cannot meet within ten vectors per mode is an error
 //! with the residual found.
 
 use crate::error::{BuildError, Result};
