@@ -26,13 +26,33 @@ pub struct HeldSolver<'a> {
 impl<'a> HeldSolver<'a> {
     /// Hold every row of `whole`'s matrix from `n` on.
     pub fn new(whole: &'a SpdSolver, n: usize) -> Result<Self> {
+        Self::with_shapes(whole, n, Self::unit_responses(whole, n))
+    }
+
+    /// K^-1 E for the rows from `n` on, refined: the static shapes of unit loads at the held DoFs
+    /// (for a mounted body's force flanges, what the compliance comparison solves for too).
+    pub fn unit_responses(whole: &SpdSolver, n: usize) -> Mat<f64> {
         let total = whole.n();
-        let h = total - n;
-        let mut g = Mat::<f64>::zeros(total, h);
-        for j in 0..h {
+        let mut g = Mat::<f64>::zeros(total, total - n);
+        for j in 0..total - n {
             g[(n + j, j)] = 1.0;
         }
         whole.solve_refined(g.as_mut());
+        g
+    }
+
+    /// As `new`, with `g` = K^-1 E already solved (`unit_responses`: column j the response to a
+    /// unit load at row n + j).
+    pub fn with_shapes(whole: &'a SpdSolver, n: usize, g: Mat<f64>) -> Result<Self> {
+        let total = whole.n();
+        let h = total - n;
+        if g.nrows() != total || g.ncols() != h {
+            return Err(BuildError::Numerical(format!(
+                "held solves: {} x {} unit responses for {total} rows with {h} held",
+                g.nrows(),
+                g.ncols()
+            )));
+        }
         let s = Mat::<f64>::from_fn(h, h, |i, j| 0.5 * (g[(n + i, j)] + g[(n + j, i)]));
         let compliance = s.llt(Side::Lower).map_err(|_| {
             BuildError::Numerical(
@@ -41,6 +61,15 @@ impl<'a> HeldSolver<'a> {
             )
         })?;
         Ok(Self { whole, n, g, compliance })
+    }
+
+    /// The constraint modes [-K_ii^-1 K_ib; I] (all rows, one column per held DoF): the response
+    /// to unit displacements of the held DoFs with no load on the others, G S^-1, since K G S^-1
+    /// = E S^-1 loads the held DoFs only and E^T G S^-1 = I. No solve beyond those of G.
+    pub fn constraint_modes(&self) -> Mat<f64> {
+        let mut psi = self.g.transpose().to_owned();
+        self.compliance.solve_in_place(psi.as_mut());
+        psi.transpose().to_owned()
     }
 
     /// x = K_ii^-1 b for the columns of `rhs` (n rows), without refinement.

@@ -31,9 +31,22 @@ pub fn block(a: &Sparse, rows: std::ops::Range<usize>, cols: std::ops::Range<usi
         .map_err(|e| BuildError::Numerical(format!("extracting a sparse block: {}", faer_error::creation(&e))))
 }
 
-/// out = A x
+/// out = A x. Two or more columns are split between two threads: faer's product runs on one
+/// (its parallel setting changes nothing here) and reads A once per column, which leaves half
+/// the memory bandwidth unused (249k-DoF bracket's mass, 6.4M entries, 5 columns: 36 ms ->
+/// 24 ms; 20 columns: 145 ms -> 91 ms).
 pub fn mul(out: MatMut<'_, f64>, a: &Sparse, x: MatRef<'_, f64>) {
-    faer::sparse::linalg::matmul::sparse_dense_matmul(out, faer::Accum::Replace, a.as_ref(), x, 1.0, Par::Seq);
+    let k = x.ncols();
+    let product = |out: MatMut<'_, f64>, x: MatRef<'_, f64>| {
+        faer::sparse::linalg::matmul::sparse_dense_matmul(out, faer::Accum::Replace, a.as_ref(), x, 1.0, Par::Seq)
+    };
+    if k >= 2 && rayon::current_num_threads() >= 2 {
+        let (o1, o2) = out.split_at_col_mut(k.div_ceil(2));
+        let (x1, x2) = x.split_at_col(k.div_ceil(2));
+        rayon::join(|| product(o1, x1), || product(o2, x2));
+    } else {
+        product(out, x);
+    }
 }
 
 /// A[0..k, 0..k] x for x of k rows, without forming the leading block (a copy of the matrix):
@@ -298,8 +311,22 @@ impl SpdSolver {
         self.values.len()
     }
 
+    /// Solve in place. Two or more right-hand sides are split between two threads, each solving
+    /// its half through the whole factor: a solve streams the factor from memory with little
+    /// arithmetic per entry, which faer's parallel dense kernels inside the supernodes cannot
+    /// spread over the cores, and one core does not draw the memory's whole bandwidth (249k-DoF
+    /// bracket, 1.2 GB factor: 33 right-hand sides 1.2 s -> 0.6 s, 5: 0.40 s -> 0.30 s).
     pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
-        let par = faer::get_global_parallelism();
+        let nc = rhs.ncols();
+        if nc >= 2 && rayon::current_num_threads() >= 2 {
+            let (a, b) = rhs.split_at_col_mut(nc.div_ceil(2));
+            rayon::join(|| self.solve_with(a, Par::Seq), || self.solve_with(b, Par::Seq));
+        } else {
+            self.solve_with(rhs, faer::get_global_parallelism());
+        }
+    }
+
+    fn solve_with(&self, rhs: MatMut<'_, f64>, par: Par) {
         let mut scratch = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(rhs.ncols(), par));
         LltRef::<'_, usize, f64>::new(&self.symbolic, &self.values).solve_in_place_with_conj(
             faer::Conj::No,

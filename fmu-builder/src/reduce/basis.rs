@@ -40,10 +40,13 @@ pub const EIGEN_TOL: f64 = 1e-8;
 /// `static_shapes` (n_clamped x s): static responses to the scene's inertial loads, appended to
 /// the basis so that those loads, too, are reproduced exactly in statics.
 /// `mounted` factors the stiffness of the mounted body (n_clamped rows); the flanges are held
-/// through it (`HeldSolver`), without a factor of their own.
+/// through it (`HeldSolver`), without a factor of their own. `flange_shapes` = K^-1 B, the
+/// mounted body's refined static response to unit loads at the force flanges
+/// (`flange_unit_loads`), from which the held solves and the constraint modes follow.
 pub fn craig_bampton(
     model: &Assembled,
     mounted: &SpdSolver,
+    flange_shapes: &Mat<f64>,
     modes: ModeCount,
     static_shapes: Option<&Mat<f64>>,
 ) -> Result<Basis> {
@@ -52,22 +55,13 @@ pub fn craig_bampton(
     let nc = d.n_clamped();
     let nb = nc - ni;
     let m_ii = block(&model.mass, 0..ni, 0..ni)?;
-    let k_ib = block(&model.stiffness, 0..ni, ni..nc)?;
-    let solver = HeldSolver::new(mounted, ni)?;
+    // the force flanges' masters are the rows from ni on, in the order of their unit loads
+    let solver = HeldSolver::with_shapes(mounted, ni, flange_shapes.clone())?;
 
-    // constraint modes: [-K_ii^-1 K_ib; I]
-    let mut psi = Mat::<f64>::zeros(ni, nb);
-    crate::profile::phase("constraint modes", || {
-        crate::profile::note(|| format!("{nb} flange DoFs, as many solves"));
-        let identity = Mat::<f64>::identity(nb, nb);
-        let rhs = mul_new(&k_ib, identity.as_ref());
-        psi.copy_from(&rhs);
-        solver.solve_refined(psi.as_mut());
-        for j in 0..nb {
-            for i in 0..ni {
-                psi[(i, j)] = -psi[(i, j)];
-            }
-        }
+    // constraint modes: [-K_ii^-1 K_ib; I], from the flange shapes
+    let psi = crate::profile::phase("constraint modes", || {
+        crate::profile::note(|| format!("{nb} flange DoFs, from their unit-load shapes (no further solve)"));
+        solver.constraint_modes()
     });
 
     let normal = match modes {
@@ -79,10 +73,7 @@ pub fn craig_bampton(
     let r = nm + nb + ns;
     // static shapes first (see `orthonormalise`): constraint modes, load shapes, then the modes
     let mut v = Mat::<f64>::zeros(nc, r);
-    v.as_mut().submatrix_mut(0, 0, ni, nb).copy_from(&psi);
-    for j in 0..nb {
-        v[(ni + j, j)] = 1.0;
-    }
+    v.as_mut().submatrix_mut(0, 0, nc, nb).copy_from(&psi);
     if let Some(shapes) = static_shapes {
         v.as_mut().submatrix_mut(0, nb, nc, ns).copy_from(shapes);
     }
