@@ -78,7 +78,7 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
     model.mass_properties = props;
     let (k_shifted, shift) = shifted(&model.stiffness, &model.mass)?;
     // where it fails tells the user where the mesh has its mechanism
-    let solver = SpdSolver::new(k_shifted, "K + s M of the free body", &|d| {
+    let solver = SpdSolver::new(std::borrow::Cow::Owned(k_shifted), "K + s M of the free body", &|d| {
         model.dofs.describe(d, &flanges, &|n| part.node_label(n))
     })?;
     let rigid = rigid_deflation(&model, &mesh.nodes, &flanges, origin)?;

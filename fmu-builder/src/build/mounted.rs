@@ -203,18 +203,22 @@ pub fn reduce(
     mount: usize,
 ) -> Result<Built> {
     let origin = flanges[mount].reference;
-    let model = profile::phase("rigid coupling of the flanges", || {
+    let mut model = profile::phase("rigid coupling of the flanges", || {
         rigid_coupling::rigid_coupling(&free, &part.mesh.nodes, &flanges, origin)
     })?;
     drop(free);
     let mesh = &part.mesh;
     let nc = model.dofs.n_clamped();
-    let k_cc = sparse::block(&model.stiffness, 0..nc, 0..nc)?;
+    // the mount is held: its rows of K take part in nothing after this, and the model keeps the
+    // mounted body's stiffness once, the factor's refinement borrowing it
+    model.stiffness = sparse::block(&model.stiffness, 0..nc, 0..nc)?;
+    let model = model;
     // one factor serves every solve of the build: the mounted body's statics and modes, the
     // Craig-Bampton shapes with the flanges held (`held::HeldSolver`), the accuracy comparison
-    let solver = SpdSolver::new(k_cc, "the stiffness of the mounted body", &|d| {
-        model.dofs.describe(d, &flanges, &|n| part.node_label(n))
-    })?;
+    let solver =
+        SpdSolver::new(std::borrow::Cow::Borrowed(&model.stiffness), "the stiffness of the mounted body", &|d| {
+            model.dofs.describe(d, &flanges, &|n| part.node_label(n))
+        })?;
 
     // the scene's inertial loads: static shapes in the basis, prestress for stiffening
     let mut cases = Vec::new();

@@ -14,7 +14,7 @@ use faer::reborrow::ReborrowMut;
 use faer::{Mat, MatMut, MatRef, Side};
 
 pub struct HeldSolver<'a> {
-    whole: &'a SpdSolver,
+    whole: &'a SpdSolver<'a>,
     /// Rows kept free (the leading ones).
     n: usize,
     /// K^-1 E, n_whole x h.
@@ -25,7 +25,7 @@ pub struct HeldSolver<'a> {
 
 impl<'a> HeldSolver<'a> {
     /// Hold every row of `whole`'s matrix from `n` on.
-    pub fn new(whole: &'a SpdSolver, n: usize) -> Result<Self> {
+    pub fn new(whole: &'a SpdSolver<'a>, n: usize) -> Result<Self> {
         Self::with_shapes(whole, n, Self::unit_responses(whole, n))
     }
 
@@ -43,7 +43,7 @@ impl<'a> HeldSolver<'a> {
 
     /// As `new`, with `g` = K^-1 E already solved (`unit_responses`: column j the response to a
     /// unit load at row n + j).
-    pub fn with_shapes(whole: &'a SpdSolver, n: usize, g: Mat<f64>) -> Result<Self> {
+    pub fn with_shapes(whole: &'a SpdSolver<'a>, n: usize, g: Mat<f64>) -> Result<Self> {
         let total = whole.n();
         let h = total - n;
         if g.nrows() != total || g.ncols() != h {
@@ -137,8 +137,8 @@ mod tests {
         let n = total - 7;
         let a_ii = block(&a, 0..n, 0..n).unwrap();
         let name = |d: usize| format!("row {d}");
-        let whole = SpdSolver::new(a, "whole", &name).unwrap();
-        let own = SpdSolver::new(a_ii, "block", &name).unwrap();
+        let whole = SpdSolver::new(std::borrow::Cow::Owned(a), "whole", &name).unwrap();
+        let own = SpdSolver::new(std::borrow::Cow::Owned(a_ii), "block", &name).unwrap();
         let held = HeldSolver::new(&whole, n).unwrap();
         assert_eq!(held.n(), n);
         let b = Mat::<f64>::from_fn(n, 3, |i, j| ((i * 7 + 3 * j) % 11) as f64 - 5.0);
