@@ -189,14 +189,12 @@ fn search(
 
 /// Columns per Lanczos block. A solve reads the whole factor from memory whatever the number of
 /// right-hand sides, so a block costs less per vector: on a 249k-DoF bracket one right-hand side
-/// took 0.21 s, 4 took 0.45 s, 8 0.65 s. Larger blocks need more vectors for the same modes
+/// took 0.21 s, 4 took 0.45 s, 8 0.65 s (one thread; split over two, 5 take 0.30 s and 33
+/// 0.6 s, but blocks of 8 and 12 then measured no faster overall than a quarter of the modes). Larger blocks need more vectors for the same modes
 /// (20 modes of the 17k-DoF bracket: 45 vectors one by one, 72 in blocks of 4, 104 in blocks of
 /// 8), and the vectors' memory and re-orthogonalisation grow with them: a quarter of the modes,
 /// at most 8, costs least.
 fn block_size(count: usize) -> usize {
-    if let Ok(v) = std::env::var("BLOCK") {
-        return v.parse().unwrap();
-    }
     count.div_ceil(4).clamp(1, 8)
 }
 
