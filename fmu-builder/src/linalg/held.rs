@@ -152,4 +152,36 @@ mod tests {
         // a wrong correction (held rows not zero) shows as order 1
         assert!(diff <= 1e-13 * scale, "held vs own factor: {diff:e} of {scale:e}");
     }
+
+    /// The constraint modes from the unit-load responses (G S^-1) equal -K_ii^-1 K_ib solved with
+    /// the block's own factor, and are the identity at the held rows (consistency of two routes
+    /// of ours; Craig-Bampton's physics is checked against CalculiX in the Python tests).
+    #[test]
+    fn constraint_modes_equal_the_interior_solve() {
+        let k = 8;
+        let total = k * k * k;
+        let a = crate::linalg::test_grids::laplacian(k, |i| 6.0 + 1e-3 * i as f64);
+        let n = total - 6;
+        let a_ii = block(&a, 0..n, 0..n).unwrap();
+        let a_ib = block(&a, 0..n, n..total).unwrap();
+        let name = |d: usize| format!("row {d}");
+        let whole = SpdSolver::new(std::borrow::Cow::Borrowed(&a), "whole", &name).unwrap();
+        let own = SpdSolver::new(std::borrow::Cow::Owned(a_ii), "block", &name).unwrap();
+        let psi = HeldSolver::new(&whole, n).unwrap().constraint_modes();
+        assert_eq!((psi.nrows(), psi.ncols()), (total, 6));
+        let mut direct = crate::linalg::sparse::mul_new(&a_ib, Mat::<f64>::identity(6, 6).as_ref());
+        own.solve_refined(direct.as_mut());
+        let scale = direct.norm_max();
+        for j in 0..6 {
+            for i in 0..n {
+                // both refined to round-off (measured 1e-16 of the largest entry); a wrong sign or
+                // a missing S^-1 shows as order 1
+                assert!((psi[(i, j)] + direct[(i, j)]).abs() <= 1e-13 * scale, "({i}, {j})");
+            }
+            for h in 0..6 {
+                let expected = if h == j { 1.0 } else { 0.0 };
+                assert!((psi[(n + h, j)] - expected).abs() <= 1e-13, "held row {h} of mode {j}");
+            }
+        }
+    }
 }
