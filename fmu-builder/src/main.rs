@@ -47,11 +47,24 @@ struct Args {
 
 fn main() -> ExitCode {
     let args = Args::parse();
+    return_freed_memory();
     fmu_builder::profile::per_phase_memory(args.timings);
     // clap lets exactly one of --output and --sweep through
     match args.output.clone() {
         Some(output) => build(&args, &output),
         None => sweep(&args),
+    }
+}
+
+/// Blocks of a megabyte and more come from the system and go back to it when freed. glibc
+/// otherwise raises its threshold for that to 32 MB after the first large free, and the n x k
+/// blocks of the eigen-solves (10-50 MB each, freed within a phase) then stay in the process's
+/// resident set: 1043 MiB instead of 957 at the peak of a 106k-DoF build.
+fn return_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only sets an allocator parameter; called before any thread is started
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 1 << 20);
     }
 }
 

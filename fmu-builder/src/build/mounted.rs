@@ -247,12 +247,23 @@ pub fn reduce(
         solver.solve_refined(g.as_mut());
         g
     });
+    // the accuracy comparison's full modes, as many as the basis will have columns (at least
+    // ten): Craig-Bampton with a mode count finds them in the same space as its own modes
+    let whole_modes = match modes {
+        ModeCount::Count(c) => {
+            Some((c + basis::flange_unit_loads_count(&model) + load_shapes.as_ref().map_or(0, |s| s.ncols())).max(10))
+        }
+        ModeCount::Below(_) => None,
+    };
+    let mut whole = None;
     let (basis, method) = profile::phase("reduction basis", || -> Result<_> {
         Ok(match spec.reduction.method {
-            Method::CraigBampton => (
-                basis::craig_bampton(&model, &solver, &flange_shapes, modes, load_shapes.as_ref())?,
-                "Craig-Bampton".to_string(),
-            ),
+            Method::CraigBampton => {
+                let (basis, full) =
+                    basis::craig_bampton(&model, &solver, &flange_shapes, modes, load_shapes.as_ref(), whole_modes)?;
+                whole = full;
+                (basis, "Craig-Bampton".to_string())
+            }
             Method::Modal => (
                 basis::modal(&model, &solver, modes, load_shapes.as_ref())?,
                 "modal with residual flexibility".to_string(),
@@ -343,7 +354,7 @@ pub fn reduce(
     let force_dofs: Vec<(String, usize)> =
         force.iter().map(|&k| (flanges[k].name.clone(), model.dofs.flange_first[k])).collect();
     let mut accuracy = profile::phase("accuracy comparison with the full model", || {
-        accuracy::accuracy(&model, &solver, &flange_shapes, &basis, &force_dofs, basis.omega.len().max(10))
+        accuracy::accuracy(&model, &solver, &flange_shapes, &basis, &force_dofs, basis.omega.len().max(10), whole)
     })?;
     accuracy::enforce(&accuracy)?;
     // the transfer-function comparison costs a complex factorization per sampled frequency:

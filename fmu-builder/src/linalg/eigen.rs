@@ -10,9 +10,11 @@
 //! with the residual found.
 
 use crate::error::{BuildError, Result};
+use crate::linalg::held::HeldSolver;
 use crate::linalg::sparse::{Sparse, SpdSolve, mul_new};
 use crate::linalg::symmetric_eigen::symmetric_eigen;
-use faer::Mat;
+use faer::reborrow::ReborrowMut;
+use faer::{Mat, MatMut, MatRef};
 
 pub struct Eigenpairs {
     /// Ascending eigenvalues lambda = omega^2.
@@ -74,6 +76,157 @@ pub fn lowest_shifted(
     deflate: Option<&Deflation>,
 ) -> Result<Eigenpairs> {
     search(k, m, Want::Lowest(count), tol, shift, deflate)
+}
+
+/// The mounted body's `count` lowest modes and, from the same block Krylov space, the `held`
+/// problem's `count_held` lowest (the rows from `held.n()` on fixed, `m_held` its mass): what
+/// Craig-Bampton (fixed-interface modes) and the accuracy comparison (the full model's modes)
+/// each solved for on their own, 16 and 19 block solves on a 249k-DoF bracket. The held
+/// operator differs from the whole one by the rank-h correction through G = K^-1 E, so with G in
+/// the start block the space holds the held problem's Krylov space too (`ritz_held`). Both sets
+/// are checked as a search of their own checks them: Rayleigh quotients, measured residuals.
+pub fn lowest_and_held(
+    k: &dyn SpdSolve,
+    m: &Sparse,
+    count: usize,
+    held: &HeldSolver<'_>,
+    count_held: usize,
+    tol: f64,
+) -> Result<(Eigenpairs, Eigenpairs)> {
+    let n = k.n();
+    let first = held.n();
+    let g = held.unit_shapes();
+    let h = g.ncols();
+    let (count, count_held) = (count.min(n), count_held.min(first));
+    let wanted = count.max(count_held);
+    if count == 0 || count_held == 0 || h == 0 || 4 * (wanted + h) > n {
+        // nothing to share (or a problem too small for it): each on its own
+        let m_held = crate::linalg::sparse::block(m, 0..first, 0..first)?;
+        return Ok((lowest(k, m, count, tol)?, lowest(held, &m_held, count_held, tol)?));
+    }
+    let padded = HeldPadded { held, rows: n };
+    crate::profile::phase("eigen-solve (block shift-invert Lanczos)", || {
+        // half a search's own random columns: the unit-load responses fill the block (26 and 20
+        // modes of the 249k-DoF bracket: 3 + 6 columns, 14 block solves, 126 vectors, 15.2 s;
+        // 7 + 6: 12 solves, 156 vectors, 15.3 s and 30 MB more per 1e5 DoFs)
+        let p = (block_size(wanted) / 2).max(2);
+        // start: pseudo-random columns and the held DoFs' unit-load responses, each of unit
+        // M-norm (the responses of stiff directions are 1e-9 of the rest)
+        let mut start = start_block(n, p + h);
+        let m_g = mul_new(m, g.as_ref());
+        for (j, norm) in column_dots(g, &m_g).into_iter().enumerate() {
+            if !(norm > 0.0) {
+                return Err(BuildError::Numerical("eigensolver: a held DoF's unit-load response has no mass".into()));
+            }
+            let norm = norm.sqrt();
+            for i in 0..n {
+                start[(i, p + j)] = g[(i, j)] / norm;
+            }
+        }
+        let pt = p + h;
+        let max_dim = (10 * wanted + 200).max(wanted + 2 * pt).min(n);
+        let first_check = 2 * wanted + 2 * pt;
+        let mut adaptive = true;
+        let mut estimate_tol = tol;
+        loop {
+            // the space is dropped before the pairs are checked (its memory is what the check's
+            // products need), so a check that fails starts a new space: refined solves if the
+            // plain ones were used, else a tighter estimate
+            let mut lanczos = BlockLanczos::new(m, &start, None, adaptive, max_dim)?;
+            let mut next_check = first_check;
+            let (whole, held_pairs, estimated, at_limit, refine, solves, dim) = loop {
+                let exhausted = !lanczos.extend(k)?;
+                let dim = lanczos.dim();
+                if dim < next_check && !exhausted && dim < max_dim {
+                    continue;
+                }
+                next_check = dim + dim.div_ceil(7);
+                let (values, y, whole_estimated) = lanczos.ritz(count, estimate_tol, exhausted)?;
+                let (held_values, held_y, held_estimated) =
+                    lanczos.ritz_held(first, &m_g, held, count_held, estimate_tol, exhausted)?;
+                let estimated = whole_estimated && held_estimated;
+                let at_limit = exhausted || dim >= max_dim;
+                if !estimated && !at_limit {
+                    continue;
+                }
+                let whole = Eigenpairs { vectors: lanczos.vectors(&y), values };
+                // the held pairs' vectors vanish at the held rows, to round-off
+                let held_pairs = Eigenpairs { vectors: lanczos.vectors(&held_y), values: held_values };
+                break (whole, held_pairs, estimated, at_limit, lanczos.refine, lanczos.blocks(), dim);
+            };
+            drop(lanczos);
+            let values = rayleigh_quotients(k, m, &whole.vectors, &whole.values);
+            let whole = Eigenpairs { values, ..whole };
+            let values = rayleigh_quotients(&padded, m, &held_pairs.vectors, &held_pairs.values);
+            let held_pairs = Eigenpairs { values, ..held_pairs };
+            let refine = usize::from(refine > 0);
+            let (worst_whole, at_whole) = worst_residual(k, m, &whole, 0.0, refine);
+            let (worst_held, at_held) = worst_residual(&padded, m, &held_pairs, 0.0, refine);
+            let converged = estimated
+                && worst_whole <= RESIDUAL_TOL
+                && worst_held <= RESIDUAL_TOL
+                && whole.values.len() == count
+                && held_pairs.values.len() == count_held;
+            if !converged && refine == 0 {
+                adaptive = false;
+                estimate_tol = tol;
+                continue;
+            }
+            if !converged && !at_limit {
+                adaptive = false;
+                estimate_tol *= 1e-2;
+                continue;
+            }
+            crate::profile::note(|| {
+                format!(
+                    "{count} modes of the whole and {count_held} held, in one space: {solves} block solves of {pt} ({dim} Lanczos vectors)"
+                )
+            });
+            if !converged {
+                let (worst, at, which) =
+                    if worst_held > worst_whole { (worst_held, at_held, "held ") } else { (worst_whole, at_whole, "") };
+                return Err(BuildError::Numerical(format!(
+                    "eigensolver: {count} modes and {count_held} held modes did not converge with {dim} Lanczos vectors (of {n} DoFs): {which}mode {} has the residual {worst:.1e} (accepted {RESIDUAL_TOL:.0e}); request fewer modes (reduction.modes) or check the mesh for extreme element proportions",
+                    at + 1
+                )));
+            }
+            return Ok((whole, free_rows(held_pairs, first)));
+        }
+    })
+}
+
+/// The held problem on vectors of the whole's rows, zero at the held ones: solves through the
+/// held solver, products with K zeroed at the held rows. Its pairs are checked with the whole
+/// mass (x^T M x = x_i^T M_ii x_i for such vectors), so no copy of the mass's free block is
+/// needed.
+struct HeldPadded<'a> {
+    held: &'a HeldSolver<'a>,
+    rows: usize,
+}
+
+impl SpdSolve for HeldPadded<'_> {
+    fn n(&self) -> usize {
+        self.rows
+    }
+
+    fn solve_refined_steps(&self, mut rhs: MatMut<'_, f64>, steps: usize) -> f64 {
+        let first = self.held.n();
+        let correction = self.held.solve_refined_steps(rhs.rb_mut().subrows_mut(0, first), steps);
+        rhs.subrows_mut(first, self.rows - first).fill(0.0);
+        correction
+    }
+
+    fn apply_compensated(&self, x: MatRef<'_, f64>) -> Mat<f64> {
+        let first = self.held.n();
+        let mut kx = Mat::<f64>::zeros(self.rows, x.ncols());
+        kx.as_mut().subrows_mut(0, first).copy_from(self.held.apply_compensated(x.subrows(0, first)));
+        kx
+    }
+}
+
+/// The pairs' vectors restricted to their first `rows` rows.
+fn free_rows(pairs: Eigenpairs, rows: usize) -> Eigenpairs {
+    Eigenpairs { vectors: pairs.vectors.subrows(0, rows).to_owned(), values: pairs.values }
 }
 
 /// What a search is for: a number of modes, or every mode below a frequency.
@@ -324,7 +477,15 @@ impl<'a> BlockLanczos<'a> {
     fn project_out(&self, w: &mut Mat<f64>) -> Mat<f64> {
         let mw = mul_new(self.m, w.as_ref());
         let c = self.v.transpose() * &mw;
-        *w -= &self.v * &c;
+        // in place: no n x p temporary per pass
+        faer::linalg::matmul::matmul(
+            w.as_mut(),
+            faer::Accum::Add,
+            self.v.as_ref(),
+            c.as_ref(),
+            -1.0,
+            faer::get_global_parallelism(),
+        );
         c
     }
 
@@ -347,11 +508,14 @@ impl<'a> BlockLanczos<'a> {
     /// R zero); None when no fresh direction is left.
     fn orthonormalise(&self, w: Mat<f64>) -> Option<(Mat<f64>, Mat<f64>, Mat<f64>)> {
         let mw = mul_new(self.m, w.as_ref());
-        if let Some((q, mq, r1)) = cholesky_qr(&w, &mw)
-            && let Some((q, mq, r2)) = cholesky_qr(&q, &mq)
-        {
-            return Some((q, mq, &r2 * &r1));
-        }
+        let (w, mw) = match cholesky_qr(w, mw) {
+            Ok((q, mq, r1)) => match cholesky_qr(q, mq) {
+                Ok((q, mq, r2)) => return Some((q, mq, &r2 * &r1)),
+                // the first pass's Q and M Q span the same space: Gram-Schmidt continues from them
+                Err((q, mq)) => (q, mq),
+            },
+            Err(unchanged) => unchanged,
+        };
         let (q, r1) = self.gram_schmidt(w, mw)?;
         let mut q = q;
         self.project_out(&mut q);
@@ -430,18 +594,7 @@ impl<'a> BlockLanczos<'a> {
     fn ritz(&self, count: usize, tol: f64, exact: bool) -> Result<(Vec<f64>, Mat<f64>, bool)> {
         let p = self.p;
         let dim = self.dim();
-        let t = Mat::<f64>::from_fn(dim, dim, |i, j| {
-            let (bi, bj) = (i / p, j / p);
-            let upper = if bi <= bj { self.t[bj][(i, j % p)] } else { 0.0 };
-            let lower = if bj <= bi { self.t[bi][(j, i % p)] } else { 0.0 };
-            // T is symmetric; each entry is known from both sides unless one is outside the band
-            match (bi <= bj, bj <= bi) {
-                (true, true) => 0.5 * (upper + lower),
-                (true, false) => upper,
-                _ => lower,
-            }
-        });
-        let evd = symmetric_eigen(&t, "eigensolver: the block Lanczos projection")?;
+        let evd = symmetric_eigen(&self.projection(), "eigensolver: the block Lanczos projection")?;
         let (s, u) = (&evd.values, &evd.vectors);
         let count = count.min(dim);
         let mut values = Vec::with_capacity(count);
@@ -464,46 +617,118 @@ impl<'a> BlockLanczos<'a> {
         Ok((values, y, converged))
     }
 
+    /// The `count` lowest Ritz pairs of the held problem (rows from `first` on held) in the same
+    /// space, as `ritz` gives them for the whole: coordinates Y with V Y vanishing at the held
+    /// rows. With G = K^-1 E in the space (`m_g` = M G), the held operator is
+    /// A_h = A - G S^-1 G^T M, so A_h V = V T' + V_next R E_last^T with T' = T - C S^-1 C^T and
+    /// C = V^T M G: the held problem's projection onto the null space of the held rows of V is
+    /// Z^T T' Z, and a pair's residual is |T' y - theta y| beside the coupling term, both exact in
+    /// the M norm (V and V_next M-orthonormal).
+    fn ritz_held(
+        &self,
+        first: usize,
+        m_g: &Mat<f64>,
+        held: &HeldSolver<'_>,
+        count: usize,
+        tol: f64,
+        exact: bool,
+    ) -> Result<(Vec<f64>, Mat<f64>, bool)> {
+        let (p, dim, h) = (self.p, self.dim(), m_g.ncols());
+        let v = self.v.subcols(0, dim);
+        let t = self.projection();
+        let c = v.transpose() * m_g;
+        let mut sc = c.transpose().to_owned();
+        held.compliance_solve(sc.as_mut());
+        let cs = &c * &sc;
+        let tp = Mat::<f64>::from_fn(dim, dim, |i, j| t[(i, j)] - 0.5 * (cs[(i, j)] + cs[(j, i)]));
+        // coordinates whose vectors vanish at the held rows: the complement of the held rows'
+        // span in a full QR of their transpose (G in the space gives those rows full rank)
+        let q = v.subrows(first, h).transpose().to_owned().qr().compute_Q();
+        let z = q.subcols(h, dim - h);
+        let th = z.transpose() * &tp * z;
+        let evd = symmetric_eigen(&th, "eigensolver: the held block Lanczos projection")?;
+        let free = dim - h;
+        let count = count.min(free);
+        let mut values = Vec::with_capacity(count);
+        let mut y = Mat::<f64>::zeros(dim, count);
+        let mut converged = true;
+        for c in 0..count {
+            let idx = free - 1 - c;
+            let theta = evd.values[idx];
+            if !(theta > 0.0) {
+                return Err(BuildError::Numerical(format!("eigensolver: non-positive held Ritz value {theta:e}")));
+            }
+            let yc = z * evd.vectors.col(idx).as_mat();
+            let inside = (&tp * &yc - &yc * faer::Scale(theta)).norm_l2();
+            let outside = (&self.coupling * yc.subrows(dim - p, p)).norm_l2();
+            if !exact && inside.hypot(outside) > tol * theta {
+                converged = false;
+            }
+            values.push(1.0 / theta);
+            y.as_mut().col_mut(c).copy_from(yc.col(0));
+        }
+        Ok((values, y, converged))
+    }
+
+    /// The block Lanczos projection T = V^T M K^-1 M V, symmetric, from its stored blocks.
+    fn projection(&self) -> Mat<f64> {
+        let p = self.p;
+        let dim = self.dim();
+        Mat::<f64>::from_fn(dim, dim, |i, j| {
+            let (bi, bj) = (i / p, j / p);
+            let upper = if bi <= bj { self.t[bj][(i, j % p)] } else { 0.0 };
+            let lower = if bj <= bi { self.t[bi][(j, i % p)] } else { 0.0 };
+            // T is symmetric; each entry is known from both sides unless one is outside the band
+            match (bi <= bj, bj <= bi) {
+                (true, true) => 0.5 * (upper + lower),
+                (true, false) => upper,
+                _ => lower,
+            }
+        })
+    }
+
     /// The Ritz vectors V Y of coordinates `y`.
     fn vectors(&self, y: &Mat<f64>) -> Mat<f64> {
         self.v.subcols(0, y.nrows()) * y
     }
 }
 
-/// One Cholesky QR step in the M inner product: W = Q R with Q^T M Q = I, R upper triangular
-/// from the Gram matrix W^T M W = R^T R, and M Q = (M W) R^-1 by the same triangular solve; None
-/// when a column's part independent of those before it is below 1e-4 of its length (the Gram
+/// One Cholesky QR step in the M inner product, in place: W = Q R with Q^T M Q = I, R upper
+/// triangular from the Gram matrix W^T M W = R^T R, and M Q = (M W) R^-1 by the same triangular
+/// solve; W and M W back unchanged when a column's part independent of those before it is below 1e-4 of its length (the Gram
 /// matrix's condition above 1e8, where its Cholesky factor keeps too few digits).
-fn cholesky_qr(w: &Mat<f64>, mw: &Mat<f64>) -> Option<(Mat<f64>, Mat<f64>, Mat<f64>)> {
+fn cholesky_qr(
+    mut w: Mat<f64>,
+    mut mw: Mat<f64>,
+) -> std::result::Result<(Mat<f64>, Mat<f64>, Mat<f64>), (Mat<f64>, Mat<f64>)> {
     let p = w.ncols();
-    let gram = w.transpose() * mw;
+    let gram = w.transpose() * &mw;
     let gram = Mat::<f64>::from_fn(p, p, |i, j| 0.5 * (gram[(i, j)] + gram[(j, i)]));
-    let llt = gram.llt(faer::Side::Lower).ok()?;
+    let Ok(llt) = gram.llt(faer::Side::Lower) else { return Err((w, mw)) };
     let l = llt.L();
     let independent = |i: usize| l[(i, i)].is_finite() && l[(i, i)] > 1e-4 * gram[(i, i)].max(0.0).sqrt();
     if !(0..p).all(independent) {
-        return None;
+        return Err((w, mw));
     }
-    // Q = W R^-1 with R = L^T, i.e. L Q^T = W^T; the same for M Q
-    let (mut q, mut mq) = (w.clone(), mw.clone());
-    for x in [&mut q, &mut mq] {
+    // Q = W R^-1 with R = L^T, i.e. L Q^T = W^T; the same for M Q; in place
+    for x in [&mut w, &mut mw] {
         faer::linalg::triangular_solve::solve_lower_triangular_in_place(l, x.as_mut().transpose_mut(), faer::Par::Seq);
     }
-    Some((q, mq, l.transpose().to_owned()))
+    Ok((w, mw, l.transpose().to_owned()))
 }
 
 /// mu = x^T A x / x^T M x for every column x (A the solved matrix, K + shift M), with A x summed
 /// in double-double; `fallback` where a column has no mass.
 fn rayleigh_quotients(k: &dyn SpdSolve, m: &Sparse, x: &Mat<f64>, fallback: &[f64]) -> Vec<f64> {
-    let ax = k.apply_compensated(x.as_ref());
-    let mx = mul_new(m, x.as_ref());
-    (0..x.ncols())
-        .map(|c| {
-            let num: f64 = (0..x.nrows()).map(|i| x[(i, c)] * ax[(i, c)]).sum();
-            let den: f64 = (0..x.nrows()).map(|i| x[(i, c)] * mx[(i, c)]).sum();
-            if den > 0.0 && num.is_finite() { num / den } else { fallback[c] }
-        })
-        .collect()
+    // one n x count product alive at a time: at 249k DoFs and 26 modes each is 52 MB
+    let den = column_dots(x, &mul_new(m, x.as_ref()));
+    let num = column_dots(x, &k.apply_compensated(x.as_ref()));
+    (0..x.ncols()).map(|c| if den[c] > 0.0 && num[c].is_finite() { num[c] / den[c] } else { fallback[c] }).collect()
+}
+
+/// a_c . b_c for every column c.
+fn column_dots(a: &Mat<f64>, b: &Mat<f64>) -> Vec<f64> {
+    (0..a.ncols()).map(|c| a.col(c).iter().zip(b.col(c).iter()).map(|(x, y)| x * y).sum()).collect()
 }
 
 /// Component `i` of the deterministic pseudo-random vector `seed`, in [-0.5, 0.5) (SplitMix64).
@@ -531,15 +756,20 @@ pub fn worst_residual(k: &dyn SpdSolve, m: &Sparse, pairs: &Eigenpairs, shift: f
         return (0.0, 0);
     }
     let x = &pairs.vectors;
-    let mx = mul_new(m, x.as_ref());
-    let mut y = mx.clone();
-    k.solve_refined_steps(y.as_mut(), refine);
-    let r = Mat::<f64>::from_fn(x.nrows(), x.ncols(), |i, c| x[(i, c)] - (pairs.values[c] + shift) * y[(i, c)]);
-    let mr = mul_new(m, r.as_ref());
+    // two n x count matrices alive at a time (the residual overwrites the solve)
+    let mut r = mul_new(m, x.as_ref());
+    let x2 = column_dots(x, &r);
+    k.solve_refined_steps(r.as_mut(), refine);
+    for c in 0..x.ncols() {
+        let mu = pairs.values[c] + shift;
+        for (r, x) in r.col_mut(c).iter_mut().zip(x.col(c).iter()) {
+            *r = x - mu * *r;
+        }
+    }
+    let r2 = column_dots(&r, &mul_new(m, r.as_ref()));
     let mut worst = (0.0f64, 0);
     for c in 0..x.ncols() {
-        let r2: f64 = (0..x.nrows()).map(|i| r[(i, c)] * mr[(i, c)]).sum();
-        let x2: f64 = (0..x.nrows()).map(|i| x[(i, c)] * mx[(i, c)]).sum();
+        let (r2, x2) = (r2[c], x2[c]);
         let rel = if x2 > 0.0 { (r2.max(0.0) / x2).sqrt() } else { f64::INFINITY };
         if !(rel <= worst.0) {
             worst = (rel, c);

@@ -63,6 +63,16 @@ impl<'a> HeldSolver<'a> {
         Ok(Self { whole, n, g, compliance })
     }
 
+    /// G = K^-1 E, the unit-load responses of the held DoFs (all rows).
+    pub fn unit_shapes(&self) -> &Mat<f64> {
+        &self.g
+    }
+
+    /// x = S^-1 x in place for h rows (S = E^T G, the held DoFs' compliance).
+    pub fn compliance_solve(&self, x: MatMut<'_, f64>) {
+        self.compliance.solve_in_place(x);
+    }
+
     /// The constraint modes [-K_ii^-1 K_ib; I] (all rows, one column per held DoF): the response
     /// to unit displacements of the held DoFs with no load on the others, G S^-1, since K G S^-1
     /// = E S^-1 loads the held DoFs only and E^T G S^-1 = I. No solve beyond those of G.

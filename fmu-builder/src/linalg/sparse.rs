@@ -403,6 +403,10 @@ impl SpdSolve for SpdSolver<'_> {
     }
 
     fn solve_refined_steps(&self, mut rhs: MatMut<'_, f64>, steps: usize) -> f64 {
+        if steps == 0 {
+            self.solve_in_place(rhs);
+            return 0.0;
+        }
         let b = rhs.to_owned();
         self.solve_in_place(rhs.rb_mut());
         let mut correction = 0.0;

@@ -43,18 +43,21 @@ pub const EIGEN_TOL: f64 = 1e-8;
 /// through it (`HeldSolver`), without a factor of their own. `flange_shapes` = K^-1 B, the
 /// mounted body's refined static response to unit loads at the force flanges
 /// (`flange_unit_loads`), from which the held solves and the constraint modes follow.
+/// `whole_modes`: also compute that many of the mounted body's own lowest modes (for the
+/// accuracy comparison), in the same Krylov space as the fixed-interface modes where their
+/// count is given (`eigen::lowest_and_held`); they come back beside the basis.
 pub fn craig_bampton(
     model: &Assembled,
     mounted: &SpdSolver,
     flange_shapes: &Mat<f64>,
     modes: ModeCount,
     static_shapes: Option<&Mat<f64>>,
-) -> Result<Basis> {
+    whole_modes: Option<usize>,
+) -> Result<(Basis, Option<eigen::Eigenpairs>)> {
     let d = &model.dofs;
     let ni = d.n_interior;
     let nc = d.n_clamped();
     let nb = nc - ni;
-    let m_ii = block(&model.mass, 0..ni, 0..ni)?;
     // the force flanges' masters are the rows from ni on, in the order of their unit loads
     let solver = HeldSolver::with_shapes(mounted, ni, flange_shapes.clone())?;
 
@@ -64,9 +67,20 @@ pub fn craig_bampton(
         solver.constraint_modes()
     });
 
-    let normal = match modes {
-        ModeCount::Count(c) => eigen::lowest(&solver, &m_ii, c, EIGEN_TOL)?,
-        ModeCount::Below(f) => eigen::below(&solver, &m_ii, 2.0 * std::f64::consts::PI * f, 0, EIGEN_TOL)?,
+    let (normal, whole) = match (modes, whole_modes) {
+        (ModeCount::Count(c), Some(count)) => {
+            let m = block(&model.mass, 0..nc, 0..nc)?;
+            let (whole, normal) = eigen::lowest_and_held(mounted, &m, count, &solver, c, EIGEN_TOL)?;
+            // the comparison needs the frequencies only: the vectors' memory goes now
+            (normal, Some(eigen::Eigenpairs { values: whole.values, vectors: Mat::zeros(nc, 0) }))
+        }
+        (ModeCount::Count(c), None) => {
+            (eigen::lowest(&solver, &block(&model.mass, 0..ni, 0..ni)?, c, EIGEN_TOL)?, None)
+        }
+        (ModeCount::Below(f), _) => {
+            let m_ii = block(&model.mass, 0..ni, 0..ni)?;
+            (eigen::below(&solver, &m_ii, 2.0 * std::f64::consts::PI * f, 0, EIGEN_TOL)?, None)
+        }
     };
     let nm = normal.values.len();
     let ns = static_shapes.map_or(0, |m| m.ncols());
@@ -79,7 +93,9 @@ pub fn craig_bampton(
     }
     v.as_mut().submatrix_mut(0, nb + ns, ni, nm).copy_from(&normal.vectors);
     let (phi, omega) = orthonormalise(model, v)?;
-    Ok(Basis { phi, omega, n_normal: nm, fixed_interface_omega: normal.values.iter().map(|l| l.sqrt()).collect() })
+    let basis =
+        Basis { phi, omega, n_normal: nm, fixed_interface_omega: normal.values.iter().map(|l| l.sqrt()).collect() };
+    Ok((basis, whole))
 }
 
 /// Rayleigh-Ritz on span(V): an M-orthonormal basis W of the span first (twice, dropping
@@ -115,12 +131,15 @@ pub fn orthonormalise(model: &Assembled, v: Mat<f64>) -> Result<(Mat<f64>, Vec<f
     // mass coupling, from which the Cholesky takes m^T Lambda m away again: a cancellation of
     // 1e6 on a slender part, which cost the 200-mode L-beam's compliance its tenth digit
     // (1.6e-9). A symmetric orthonormalisation would mix every column into every other.
-    let mw_all = m_times(w.as_ref());
+    let norms0: Vec<f64> = {
+        let mw = m_times(w.as_ref());
+        (0..w.ncols()).map(|j| (0..w.nrows()).map(|i| w[(i, j)] * mw[(i, j)]).sum::<f64>().max(0.0).sqrt()).collect()
+    };
     let mut kept: Vec<usize> = Vec::with_capacity(w.ncols());
     let mut basis = Mat::<f64>::zeros(w.nrows(), w.ncols());
     let mut m_basis = Mat::<f64>::zeros(w.nrows(), w.ncols());
     for j in 0..w.ncols() {
-        let norm0 = (0..w.nrows()).map(|i| w[(i, j)] * mw_all[(i, j)]).sum::<f64>().max(0.0).sqrt();
+        let norm0 = norms0[j];
         if !(norm0 > 0.0) {
             continue;
         }
@@ -253,6 +272,12 @@ pub fn inertia_relief_solve(
         }
     }
     u
+}
+
+/// Columns of `flange_unit_loads`: six per force flange.
+pub fn flange_unit_loads_count(model: &Assembled) -> usize {
+    let d = &model.dofs;
+    6 * (0..d.flange_first.len()).filter(|&k| Some(k) != d.mount).count()
 }
 
 /// Unit loads at the force flanges' master DoFs (n_clamped x 6 per flange).
