@@ -704,14 +704,14 @@ impl<'a> BlockLanczos<'a> {
     }
 }
 
+/// An M-orthonormal block Q, M Q and R with W = Q R.
+type Orthonormal = (Mat<f64>, Mat<f64>, Mat<f64>);
+
 /// One Cholesky QR step in the M inner product, in place: W = Q R with Q^T M Q = I, R upper
 /// triangular from the Gram matrix W^T M W = R^T R, and M Q = (M W) R^-1 by the same triangular
 /// solve; W and M W back unchanged when a column's part independent of those before it is below 1e-4 of its length (the Gram
 /// matrix's condition above 1e8, where its Cholesky factor keeps too few digits).
-fn cholesky_qr(
-    mut w: Mat<f64>,
-    mut mw: Mat<f64>,
-) -> std::result::Result<(Mat<f64>, Mat<f64>, Mat<f64>), (Mat<f64>, Mat<f64>)> {
+fn cholesky_qr(mut w: Mat<f64>, mut mw: Mat<f64>) -> std::result::Result<Orthonormal, (Mat<f64>, Mat<f64>)> {
     let p = w.ncols();
     let gram = w.transpose() * &mw;
     let gram = Mat::<f64>::from_fn(p, p, |i, j| 0.5 * (gram[(i, j)] + gram[(j, i)]));
