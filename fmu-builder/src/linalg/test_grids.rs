@@ -1,8 +1,11 @@
 //! Test matrices of the linear algebra's unit tests: the 7-point Laplacian of a k^3 grid, whose
 //! fill, definiteness and spectrum are known.
 
-use crate::linalg::sparse::Sparse;
-use faer::sparse::Triplet;
+use faer::sparse::{SparseColMat, Triplet};
+
+/// `linalg::sparse::Sparse`, named here without importing it: `sparse` and `ordering` use these
+/// grids in their tests, and the import would close a circle.
+type Sparse = SparseColMat<usize, f64>;
 
 /// -1 between grid neighbours, `diagonal(i)` on row i.
 pub fn laplacian(k: usize, diagonal: impl Fn(usize) -> f64) -> Sparse {
