@@ -41,12 +41,12 @@ def test_both_interfaces_simulate(beam):
         assert res["tip.u[3]"].max() > 0  # pushed up, moves up
 
 
-def modal_loads(path):
-    """The largest modal load of LOAD: the state derivatives at rest without the static start
+def modal_loads(path, loads=LOAD):
+    """The largest modal load of `loads`: the state derivatives at rest without the static start
     (q = 0, qd = 0, so der(qd) is the modal load itself)."""
     fmu = Fmu(path, "ModelExchange")
     try:
-        fmu.set(**LOAD)
+        fmu.set(**loads)
         fmu.initialize()
         return np.abs(fmu.derivatives()).max()
     finally:
@@ -70,8 +70,7 @@ def test_static_start_is_at_rest(beam):
     assert scale > 0
     # the static start balances each modal load f by omega^2 q: what is left is the round-off of
     # f (eps |f| = 2.2e-16 |f|; measured 1.2e-17 |f|, 1.3e-29 absolute in an earlier build);
-    # 1e-14 |f| leaves
-    # room, a start that is not static leaves order |f|
+    # 1e-14 |f| leaves room, a start that is not static leaves order |f|
     assert rest <= 1e-14 * scale, "static start is not at rest"
 
 

@@ -18,6 +18,7 @@ import pytest
 import calculix as ccx
 from conftest import EXAMPLES, run_builder
 from fmu_access import Fmu
+from test_beam import modal_loads
 
 F_Z, M_X, M_Y = 1e-4, 1e-4, 1e-4
 TIP_U = ["tip.u[1]", "tip.u[2]", "tip.u[3]"]
@@ -39,12 +40,15 @@ def build_with_deck(input_json, workdir):
 def fmu_static_tip(fmu_path):
     """Static tip displacement and rotation (body frame = global, mount fixed) of the FMU under
     F_z, M_x, M_y at the tip flange, by static_start and FMI calls only."""
+    loads = {"tip.f[3]": F_Z, "tip.t[1]": M_X, "tip.t[2]": M_Y}
+    scale = modal_loads(fmu_path, loads)
     fmu = Fmu(fmu_path, "ModelExchange")
     try:
-        fmu.set(static_start=True, **{"tip.f[3]": F_Z, "tip.t[1]": M_X, "tip.t[2]": M_Y})
+        fmu.set(static_start=True, **loads)
         fmu.initialize()
-        # measured 1.3e-29; round-off of the modal loads (~F_Z) is ~1e-16 F_Z: 1e-15 F_Z
-        assert np.allclose(fmu.derivatives(), 0.0, rtol=0, atol=1e-15 * F_Z), "static start is not at rest"
+        # round-off of the modal loads the static start balances (as test_beam's
+        # test_static_start_is_at_rest: measured 1.2e-17 of the largest, eps is 2.2e-16)
+        assert np.abs(fmu.derivatives()).max() <= 1e-14 * scale, "static start is not at rest"
         return fmu.get(*TIP_U), fmu.get(*TIP_PHI)
     finally:
         fmu.close()
