@@ -13,7 +13,7 @@ use crate::error::{BuildError, Result};
 use crate::linalg::held::HeldSolver;
 use crate::linalg::sparse::{Sparse, SpdSolve, mul_new};
 use crate::linalg::symmetric_eigen::symmetric_eigen;
-use faer::reborrow::ReborrowMut;
+use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{Mat, MatMut, MatRef};
 
 pub struct Eigenpairs {
@@ -537,26 +537,36 @@ impl<'a> BlockLanczos<'a> {
     /// Modified Gram-Schmidt in the M inner product among the columns of `w` (`mw` = M w,
     /// updated alongside: one sparse product per block, not per column).
     fn gram_schmidt(&self, mut w: Mat<f64>, mut mw: Mat<f64>) -> Option<(Mat<f64>, Mat<f64>)> {
-        let (n, p) = (w.nrows(), w.ncols());
+        let p = w.ncols();
         let mut r = Mat::<f64>::zeros(p, p);
-        let col_norm =
-            |w: &Mat<f64>, mw: &Mat<f64>, c: usize| (0..n).map(|i| w[(i, c)] * mw[(i, c)]).sum::<f64>().max(0.0).sqrt();
+        // column slices, not indexing: the same sums in the same order, without a bounds check
+        // per entry (0.3 s a block at 249k DoFs)
+        let col_norm = |w: &Mat<f64>, mw: &Mat<f64>, c: usize| {
+            w.col(c).iter().zip(mw.col(c).iter()).map(|(x, y)| x * y).sum::<f64>().max(0.0).sqrt()
+        };
         for c in 0..p {
             let norm0 = col_norm(&w, &mw, c);
             for j in 0..c {
-                let a: f64 = (0..n).map(|i| mw[(i, j)] * w[(i, c)]).sum();
+                let (left, mut right) = w.as_mut().split_at_col_mut(c);
+                let (mleft, mut mright) = mw.as_mut().split_at_col_mut(c);
+                let (wj, mwj) = (left.rb().col(j), mleft.rb().col(j));
+                let a: f64 = mwj.iter().zip(right.rb().col(0).iter()).map(|(x, y)| x * y).sum();
                 r[(j, c)] = a;
-                for i in 0..n {
-                    w[(i, c)] -= a * w[(i, j)];
-                    mw[(i, c)] -= a * mw[(i, j)];
+                for (x, y) in right.rb_mut().col_mut(0).iter_mut().zip(wj.iter()) {
+                    *x -= a * y;
+                }
+                for (x, y) in mright.rb_mut().col_mut(0).iter_mut().zip(mwj.iter()) {
+                    *x -= a * y;
                 }
             }
             let norm = col_norm(&w, &mw, c);
             if norm > 1e-10 * norm0 && norm > 0.0 {
                 r[(c, c)] = norm;
-                for i in 0..n {
-                    w[(i, c)] /= norm;
-                    mw[(i, c)] /= norm;
+                for x in w.as_mut().col_mut(c).iter_mut() {
+                    *x /= norm;
+                }
+                for x in mw.as_mut().col_mut(c).iter_mut() {
+                    *x /= norm;
                 }
                 continue;
             }
