@@ -8,7 +8,8 @@
 //! factorisations of 10-13 s and 1.3 GB each.
 
 use crate::error::{BuildError, Result};
-use crate::linalg::sparse::{SpdSolve, SpdSolver, mul_compensated};
+use crate::linalg::sparse::{SpdSolve, SpdSolver};
+use crate::linalg::symmetric_product::mul_compensated;
 use faer::linalg::solvers::Solve;
 use faer::reborrow::ReborrowMut;
 use faer::{Mat, MatMut, MatRef, Side};

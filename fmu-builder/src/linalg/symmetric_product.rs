@@ -1,0 +1,290 @@
+//! Products with exactly symmetric sparse matrices (stiffness, mass and their blocks, which
+//! assembly and rigid coupling make exactly symmetric) in gather form: column i of A is its row
+//! i, so every entry of A X is one sum over a column of A with the rows of X it names, kept in
+//! registers and written once. The general (scatter) products of `sparse` add into every output
+//! row many times over, and the running sums of a compensated product then miss the cache on
+//! each addition (249k-DoF bracket, 26 columns: 1.07 s compensated, 0.20 s plain).
+//!
+//! X goes to the kernel in groups of at most `GROUP` columns, copied row by row so that a
+//! row's group is one cache line pair; the rows of the output are split between the threads by
+//! entries of A, so A is read once per group in all.
+
+use crate::linalg::dot2::add_product;
+use faer::reborrow::ReborrowMut;
+use faer::sparse::SparseColMat;
+use faer::{Mat, MatMut, MatRef};
+
+/// Most columns per group: one row of a group fills two cache lines, and its sums (with their
+/// compensation, four 256-bit registers each) stay in registers.
+const GROUP: usize = 16;
+
+/// out = A x, A exactly symmetric.
+pub fn mul(out: MatMut<'_, f64>, a: &SparseColMat<usize, f64>, x: MatRef<'_, f64>) {
+    product(out, None, 1.0, a, x, false);
+}
+
+pub fn mul_new(a: &SparseColMat<usize, f64>, x: MatRef<'_, f64>) -> Mat<f64> {
+    let mut out = Mat::zeros(a.nrows(), x.ncols());
+    mul(out.as_mut(), a, x);
+    out
+}
+
+/// C + sign * A X, A exactly symmetric, every entry accumulated in double-double and rounded
+/// once (`sparse::mul_compensated`'s arithmetic, Ogita-Rump-Oishi Dot2).
+pub fn mul_compensated(
+    c: Option<MatRef<'_, f64>>,
+    sign: f64,
+    a: &SparseColMat<usize, f64>,
+    x: MatRef<'_, f64>,
+) -> Mat<f64> {
+    let mut out = Mat::zeros(a.nrows(), x.ncols());
+    product(out.as_mut(), c, sign, a, x, true);
+    out
+}
+
+fn product(
+    mut out: MatMut<'_, f64>,
+    c: Option<MatRef<'_, f64>>,
+    sign: f64,
+    a: &SparseColMat<usize, f64>,
+    x: MatRef<'_, f64>,
+    compensated: bool,
+) {
+    let (n, k) = (a.nrows(), x.ncols());
+    debug_assert_eq!(a.ncols(), n, "a symmetric matrix is square");
+    debug_assert_eq!(x.nrows(), n);
+    if k == 0 || n == 0 {
+        return;
+    }
+    let groups = k.div_ceil(GROUP);
+    let threads = rayon::current_num_threads().clamp(1, 8);
+    let col_ptr = a.symbolic().col_ptr();
+    // row ranges of about equal entries of A, one per thread
+    let mut bounds = vec![0usize];
+    for t in 1..threads {
+        let target = col_ptr[n] * t / threads;
+        let row = col_ptr.partition_point(|&p| p < target).min(n);
+        bounds.push(row.max(*bounds.last().unwrap_or(&0)));
+    }
+    bounds.push(n);
+    for g in 0..groups {
+        let (first, end) = (g * k / groups, (g + 1) * k / groups);
+        let w = end - first;
+        let xg = x.subcols(first, w);
+        let cg = c.map(|c| c.subcols(first, w));
+        let og = out.rb_mut().subcols_mut(first, w);
+        // the group's own width: wider rows would be read (and gathered) for nothing
+        match w {
+            0..=1 => group::<1>(og, cg, sign, a, xg, compensated, &bounds),
+            2 => group::<2>(og, cg, sign, a, xg, compensated, &bounds),
+            3 => group::<3>(og, cg, sign, a, xg, compensated, &bounds),
+            4 => group::<4>(og, cg, sign, a, xg, compensated, &bounds),
+            5 => group::<5>(og, cg, sign, a, xg, compensated, &bounds),
+            6 => group::<6>(og, cg, sign, a, xg, compensated, &bounds),
+            7 => group::<7>(og, cg, sign, a, xg, compensated, &bounds),
+            8 => group::<8>(og, cg, sign, a, xg, compensated, &bounds),
+            9 => group::<9>(og, cg, sign, a, xg, compensated, &bounds),
+            10 => group::<10>(og, cg, sign, a, xg, compensated, &bounds),
+            11 => group::<11>(og, cg, sign, a, xg, compensated, &bounds),
+            12 => group::<12>(og, cg, sign, a, xg, compensated, &bounds),
+            13 => group::<13>(og, cg, sign, a, xg, compensated, &bounds),
+            14 => group::<14>(og, cg, sign, a, xg, compensated, &bounds),
+            15 => group::<15>(og, cg, sign, a, xg, compensated, &bounds),
+            _ => group::<GROUP>(og, cg, sign, a, xg, compensated, &bounds),
+        }
+    }
+}
+
+/// One group of at most W columns: X copied row by row (zero beyond its width), the output's
+/// rows split at `bounds` between the threads.
+fn group<const W: usize>(
+    out: MatMut<'_, f64>,
+    c: Option<MatRef<'_, f64>>,
+    sign: f64,
+    a: &SparseColMat<usize, f64>,
+    x: MatRef<'_, f64>,
+    compensated: bool,
+    bounds: &[usize],
+) {
+    let n = x.nrows();
+    let w = x.ncols();
+    // zeroed pages come from the system untouched; the copy touches them, row by row (each
+    // column of X one sequential stream), on every thread
+    let mut rows = vec![[0.0f64; W]; n];
+    let chunk = n.div_ceil(bounds.len() - 1).max(1);
+    rayon::scope(|s| {
+        for (c, part) in rows.chunks_mut(chunk).enumerate() {
+            s.spawn(move |_| {
+                let first = c * chunk;
+                for (r, row) in part.iter_mut().enumerate() {
+                    for (col, v) in row.iter_mut().enumerate().take(w) {
+                        *v = x[(first + r, col)];
+                    }
+                }
+            });
+        }
+    });
+    let rows = &rows;
+    // the output split into the threads' row ranges, each range written by one thread
+    let mut parts = Vec::with_capacity(bounds.len() - 1);
+    let mut rest = out;
+    for pair in bounds.windows(2).rev() {
+        let (head, tail) = rest.split_at_row_mut(pair[0]);
+        parts.push((pair[0], tail));
+        rest = head;
+    }
+    rayon::scope(|s| {
+        for (start, part) in parts {
+            let c = c.map(|c| c.subrows(start, part.nrows()));
+            s.spawn(move |_| {
+                if compensated {
+                    rows_compensated::<W>(part, c, start, sign, a, rows);
+                } else {
+                    rows_plain::<W>(part, start, sign, a, rows);
+                }
+            });
+        }
+    });
+}
+
+fn rows_plain<const W: usize>(
+    out: MatMut<'_, f64>,
+    start: usize,
+    sign: f64,
+    a: &SparseColMat<usize, f64>,
+    x: &[[f64; W]],
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the CPU has the FMA instructions the function is compiled for
+        return unsafe { rows_plain_fma::<W>(out, start, sign, a, x) };
+    }
+    rows_plain_generic::<W>(out, start, sign, a, x)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "fma")]
+unsafe fn rows_plain_fma<const W: usize>(
+    out: MatMut<'_, f64>,
+    start: usize,
+    sign: f64,
+    a: &SparseColMat<usize, f64>,
+    x: &[[f64; W]],
+) {
+    rows_plain_generic::<W>(out, start, sign, a, x)
+}
+
+#[inline(always)]
+fn rows_plain_generic<const W: usize>(
+    mut out: MatMut<'_, f64>,
+    start: usize,
+    sign: f64,
+    a: &SparseColMat<usize, f64>,
+    x: &[[f64; W]],
+) {
+    let col_ptr = a.symbolic().col_ptr();
+    let row_idx = a.symbolic().row_idx();
+    let val = a.val();
+    let w = out.ncols();
+    for r in 0..out.nrows() {
+        let i = start + r;
+        let mut sum = [0.0f64; W];
+        for p in col_ptr[i]..col_ptr[i + 1] {
+            let (aij, xj) = (val[p], &x[row_idx[p]]);
+            for col in 0..W {
+                sum[col] += aij * xj[col];
+            }
+        }
+        for (col, s) in sum.iter().enumerate().take(w) {
+            out[(r, col)] = sign * s;
+        }
+    }
+}
+
+fn rows_compensated<const W: usize>(
+    out: MatMut<'_, f64>,
+    c: Option<MatRef<'_, f64>>,
+    start: usize,
+    sign: f64,
+    a: &SparseColMat<usize, f64>,
+    x: &[[f64; W]],
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the CPU has the FMA instructions the function is compiled for
+        return unsafe { rows_compensated_fma::<W>(out, c, start, sign, a, x) };
+    }
+    rows_compensated_generic::<false, W>(out, c, start, sign, a, x)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "fma")]
+unsafe fn rows_compensated_fma<const W: usize>(
+    out: MatMut<'_, f64>,
+    c: Option<MatRef<'_, f64>>,
+    start: usize,
+    sign: f64,
+    a: &SparseColMat<usize, f64>,
+    x: &[[f64; W]],
+) {
+    rows_compensated_generic::<true, W>(out, c, start, sign, a, x)
+}
+
+#[inline(always)]
+fn rows_compensated_generic<const FMA: bool, const W: usize>(
+    mut out: MatMut<'_, f64>,
+    c: Option<MatRef<'_, f64>>,
+    start: usize,
+    sign: f64,
+    a: &SparseColMat<usize, f64>,
+    x: &[[f64; W]],
+) {
+    let col_ptr = a.symbolic().col_ptr();
+    let row_idx = a.symbolic().row_idx();
+    let val = a.val();
+    let w = out.ncols();
+    for r in 0..out.nrows() {
+        let i = start + r;
+        let mut hi = [0.0f64; W];
+        let mut lo = [0.0f64; W];
+        if let Some(c) = c {
+            for (col, h) in hi.iter_mut().enumerate().take(w) {
+                *h = c[(r, col)];
+            }
+        }
+        for p in col_ptr[i]..col_ptr[i + 1] {
+            // sign is +-1: the scaled entry is exact
+            let (aij, xj) = (sign * val[p], &x[row_idx[p]]);
+            for col in 0..W {
+                add_product::<FMA>(&mut hi[col], &mut lo[col], aij, xj[col]);
+            }
+        }
+        for col in 0..w {
+            out[(r, col)] = hi[col] + lo[col];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use faer::sparse::{SparseColMat, Triplet};
+
+    /// A row whose terms cancel from 1e16 to 1 keeps the 1 when compensated.
+    #[test]
+    fn compensated_gather_recovers_cancellation() {
+        let t = [
+            Triplet::new(0, 0, 1e16),
+            Triplet::new(0, 1, 1.0),
+            Triplet::new(1, 0, 1.0),
+            Triplet::new(0, 2, -1e16),
+            Triplet::new(2, 0, -1e16),
+            Triplet::new(1, 1, 1.0),
+            Triplet::new(2, 2, 1.0),
+        ];
+        let a = SparseColMat::<usize, f64>::try_new_from_triplets(3, 3, &t).unwrap();
+        let ones = Mat::<f64>::from_fn(3, 1, |_, _| 1.0);
+        assert_eq!(mul_compensated(None, 1.0, &a, ones.as_ref())[(0, 0)], 1.0);
+        assert_ne!(mul_new(&a, ones.as_ref())[(0, 0)], 1.0, "plain sums lose the 1 (else the test proves nothing)");
+    }
+}
