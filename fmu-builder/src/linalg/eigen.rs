@@ -4,18 +4,18 @@
 //! iteration, a block of right-hand sides per read of the factor. Full re-orthogonalisation
 //! (twice) keeps the basis M-orthonormal to round-off; the space grows a block at a time until
 //! the projection (solved by the checked dense eigensolver, `symmetric_eigen`) estimates every
-//! wanted pair converged. The eigenvalues returned are Rayleigh quotients of K and M, and every
-//! pair's residual is measured with a fresh refined solve (`worst_residual`), not taken from the
+//! wanted pair converged. Every pair is then measured with a fresh refined solve (`checked`): its
+//! eigenvalue the Rayleigh quotient of the shift-invert operator, its residual not taken from the
 //! Lanczos estimate; a request the space cannot meet within ten vectors per mode is an error
 //! with the residual found.
 
 use crate::error::{BuildError, Result};
-use crate::linalg::held::HeldSolver;
+use crate::linalg::held::{HeldSolver, WholeAndHeld};
 use crate::linalg::sparse::{Sparse, SpdSolve};
 use crate::linalg::symmetric_eigen::symmetric_eigen;
 use crate::linalg::symmetric_product::mul_new;
 use faer::reborrow::{Reborrow, ReborrowMut};
-use faer::{Mat, MatMut, MatRef};
+use faer::Mat;
 
 pub struct Eigenpairs {
     /// Ascending eigenvalues lambda = omega^2.
@@ -25,7 +25,7 @@ pub struct Eigenpairs {
 }
 
 /// Largest accepted residual |x - mu A^-1 M x|_M / |x|_M of a returned mode (see
-/// `worst_residual`). The Ritz estimate asks for 1e-10; converged modes measure 1e-10 and below,
+/// `checked`). The Ritz estimate asks for 1e-10; converged modes measure 1e-10 and below,
 /// the unconverged modes of the failure this check was written for 1e-5 .. 1e-3. At 1e-7 the
 /// eigenvalue is exact to about 1e-14.
 pub const RESIDUAL_TOL: f64 = 1e-7;
@@ -108,7 +108,6 @@ pub fn lowest_and_held(
         // nothing to share, a problem too small for it, or too many modes: each on its own
         return separate();
     }
-    let padded = HeldPadded { held, rows: n };
     let shared = crate::profile::phase("eigen-solve (block shift-invert Lanczos)", || {
         // half a search's own random columns: the unit-load responses fill the block (26 and 20
         // modes of the 249k-DoF bracket: 3 + 6 columns, 14 block solves, 126 vectors, 15.2 s;
@@ -142,7 +141,7 @@ pub fn lowest_and_held(
             // plain ones were used, else a tighter estimate
             let mut lanczos = BlockLanczos::new(m, &start, None, adaptive, max_dim)?;
             let mut next_check = first_check;
-            let (whole, held_pairs, estimated, at_limit, refine, solves, dim) = loop {
+            let (both, count_whole, estimated, at_limit, refine, solves, dim) = loop {
                 let exhausted = !lanczos.extend(k)?;
                 let dim = lanczos.dim();
                 if dim < next_check && !exhausted && dim < max_dim {
@@ -161,18 +160,31 @@ pub fn lowest_and_held(
                 if !estimated && !at_limit {
                     continue;
                 }
-                let whole = Eigenpairs { vectors: lanczos.vectors(&y), values };
-                // the held pairs' vectors vanish at the held rows, to round-off
-                let held_pairs = Eigenpairs { vectors: lanczos.vectors(&held_y), values: held_values };
-                break (whole, held_pairs, estimated, at_limit, lanczos.refine, lanczos.blocks(), dim);
+                // both sets' vectors side by side, checked together below (the held pairs' vanish at
+                // the held rows, to round-off)
+                let mut coordinates = Mat::<f64>::zeros(dim, y.ncols() + held_y.ncols());
+                coordinates.as_mut().subcols_mut(0, y.ncols()).copy_from(&y);
+                coordinates.as_mut().subcols_mut(y.ncols(), held_y.ncols()).copy_from(&held_y);
+                let both = Eigenpairs {
+                    vectors: lanczos.vectors(&coordinates),
+                    values: values.iter().chain(&held_values).copied().collect(),
+                };
+                break (both, values.len(), estimated, at_limit, lanczos.refine, lanczos.blocks(), dim);
             };
             drop(lanczos);
-            let values = rayleigh_quotients(k, m, &whole.vectors, &whole.values);
-            let whole = Eigenpairs { values, ..whole };
-            let values = rayleigh_quotients(&padded, m, &held_pairs.vectors, &held_pairs.values);
-            let held_pairs = Eigenpairs { values, ..held_pairs };
-            let (worst_whole, at_whole) = worst_residual(k, m, &whole, 0.0);
-            let (worst_held, at_held) = worst_residual(&padded, m, &held_pairs, 0.0);
+            // one refined solve checks both: the held columns through the held solver
+            let (both, worst) = checked(&WholeAndHeld { held, whole: count_whole }, m, both, 0.0);
+            let (worst_whole, at_whole) = worst[..count_whole].iter().enumerate().fold((0.0f64, 0), worst_of);
+            let (worst_held, at_held) = worst[count_whole..].iter().enumerate().fold((0.0f64, 0), worst_of);
+            let whole = Eigenpairs {
+                vectors: both.vectors.subcols(0, count_whole).to_owned(),
+                values: both.values[..count_whole].to_vec(),
+            };
+            let held_pairs = Eigenpairs {
+                vectors: both.vectors.subcols(count_whole, both.vectors.ncols() - count_whole).to_owned(),
+                values: both.values[count_whole..].to_vec(),
+            };
+            drop(both);
             let converged = estimated
                 && worst_whole <= RESIDUAL_TOL
                 && worst_held <= RESIDUAL_TOL
@@ -216,35 +228,6 @@ pub fn lowest_and_held(
 /// projection twice (dim^3), and its held projection's round-off grows with the spread of the
 /// modes it resolves (a 600-mode slender beam stalled there); more modes go separately.
 pub const SHARED_MAX_MODES: usize = 100;
-
-/// The held problem on vectors of the whole's rows, zero at the held ones: solves through the
-/// held solver, products with K zeroed at the held rows. Its pairs are checked with the whole
-/// mass (x^T M x = x_i^T M_ii x_i for such vectors), so no copy of the mass's free block is
-/// needed.
-struct HeldPadded<'a> {
-    held: &'a HeldSolver<'a>,
-    rows: usize,
-}
-
-impl SpdSolve for HeldPadded<'_> {
-    fn n(&self) -> usize {
-        self.rows
-    }
-
-    fn solve_refined_steps(&self, mut rhs: MatMut<'_, f64>, steps: usize) -> f64 {
-        let first = self.held.n();
-        let correction = self.held.solve_refined_steps(rhs.rb_mut().subrows_mut(0, first), steps);
-        rhs.subrows_mut(first, self.rows - first).fill(0.0);
-        correction
-    }
-
-    fn apply_compensated(&self, x: MatRef<'_, f64>) -> Mat<f64> {
-        let first = self.held.n();
-        let mut kx = Mat::<f64>::zeros(self.rows, x.ncols());
-        kx.as_mut().subrows_mut(0, first).copy_from(self.held.apply_compensated(x.subrows(0, first)));
-        kx
-    }
-}
 
 /// The pairs' vectors restricted to their first `rows` rows.
 fn free_rows(pairs: Eigenpairs, rows: usize) -> Eigenpairs {
@@ -310,16 +293,10 @@ fn search(
                 continue;
             }
             let vectors = lanczos.vectors(&y);
-            // the eigenvalues as Rayleigh quotients of the matrices themselves: the projection's
-            // values carry the solves' round-off (2e-12 on a refined cube with plain solves), the
-            // quotient only its square
-            let values = rayleigh_quotients(k, m, &vectors, &values).iter().map(|mu| mu - shift).collect();
-            let pairs = Eigenpairs { values, vectors };
-            // every returned pair is checked, not assumed: its residual in K and M themselves
-            // the check's solve is refined unless the Lanczos solves proved refinement changes
-            // less than 1e-10 of a solution: the plain solve then measures a residual to that
-            // accuracy, a thousand times below what is accepted (RESIDUAL_TOL)
-            let (worst, at) = worst_residual(k, m, &pairs, shift);
+            // every returned pair is checked, not assumed: its residual in K and M themselves,
+            // and its eigenvalue the Rayleigh quotient of the same solve
+            let (pairs, residuals) = checked(k, m, Eigenpairs { values, vectors }, shift);
+            let (worst, at) = residuals.iter().enumerate().fold((0.0f64, 0), worst_of);
             let converged = estimated && worst <= RESIDUAL_TOL && pairs.values.len() == count;
             if !converged && lanczos.refine == 0 {
                 // plain solves were judged exact enough from the first block's correction, which
@@ -725,15 +702,6 @@ impl<'a> BlockLanczos<'a> {
     }
 }
 
-/// mu = x^T A x / x^T M x for every column x (A the solved matrix, K + shift M), with A x summed
-/// in double-double; `fallback` where a column has no mass.
-fn rayleigh_quotients(k: &dyn SpdSolve, m: &Sparse, x: &Mat<f64>, fallback: &[f64]) -> Vec<f64> {
-    // one n x count product alive at a time: at 249k DoFs and 26 modes each is 52 MB
-    let den = column_dots(x, &mul_new(m, x.as_ref()));
-    let num = column_dots(x, &k.apply_compensated(x.as_ref()));
-    (0..x.ncols()).map(|c| if den[c] > 0.0 && num[c].is_finite() { num[c] / den[c] } else { fallback[c] }).collect()
-}
-
 /// a_c . b_c for every column c.
 fn column_dots(a: &Mat<f64>, b: &Mat<f64>) -> Vec<f64> {
     (0..a.ncols()).map(|c| a.col(c).iter().zip(b.col(c).iter()).map(|(x, y)| x * y).sum()).collect()
@@ -753,37 +721,56 @@ fn m_norm(m: &Sparse, x: &Mat<f64>) -> f64 {
     (0..x.nrows()).map(|i| x[(i, 0)] * mx[(i, 0)]).sum::<f64>().max(0.0).sqrt()
 }
 
-/// The largest residual of the pairs in the shift-invert operator's own norm,
-/// |x - mu A^-1 M x|_M / |x|_M (mu = lambda + shift, A the factored K + shift M): what the
-/// Lanczos estimate claims, measured with a fresh solve. Unlike |K x - lambda M x| / |K x|, it
-/// does not grow with cond(K) for the lowest modes of slender parts, and it bounds the
-/// eigenvalue error (relative, about its square) and the vector's angle (over the gap).
-pub fn worst_residual(k: &dyn SpdSolve, m: &Sparse, pairs: &Eigenpairs, shift: f64) -> (f64, usize) {
-    if pairs.values.is_empty() {
-        return (0.0, 0);
-    }
+/// The pairs with their eigenvalues from a fresh refined solve, and every pair's residual in
+/// the shift-invert operator's own norm: for each column x, y = A^-1 M x (A the factored
+/// K + shift M), mu = 1/theta with theta = x^T M y / x^T M x the operator's Rayleigh quotient,
+/// and |x - mu y|_M / |x|_M, what the Lanczos estimate claims, measured (a solve of its own: the
+/// check must not share the Lanczos solves' round-off).
+///
+/// Unlike |K x - lambda M x| / |K x|, the residual does not grow with cond(K) for the lowest
+/// modes of slender parts, and it bounds the eigenvalue's error (relative, about its square) and
+/// the vector's angle (over the gap). The quotient's error is the residual's square too (high
+/// modes in x weigh 1/mu_i in it, not mu_i as in x^T K x / x^T M x), it sums M-weighted terms
+/// without cancellation, and costs no product with K; the projection's own values carry the
+/// Lanczos solves' round-off (2e-12 on a refined cube with plain solves).
+fn checked(k: &dyn SpdSolve, m: &Sparse, pairs: Eigenpairs, shift: f64) -> (Eigenpairs, Vec<f64>) {
     let x = &pairs.vectors;
-    // two n x count matrices alive at a time (the residual overwrites the solve)
-    let mut r = mul_new(m, x.as_ref());
-    let x2 = column_dots(x, &r);
-    // refined whatever the Lanczos solves were: the check must not share their round-off
-    k.solve_refined_steps(r.as_mut(), 1);
-    for c in 0..x.ncols() {
-        let mu = pairs.values[c] + shift;
-        for (r, x) in r.col_mut(c).iter_mut().zip(x.col(c).iter()) {
+    let count = x.ncols();
+    if count == 0 {
+        return (pairs, Vec::new());
+    }
+    // at most two n x count matrices beside x at a time: M x (then the residual, then the
+    // correction, in place) and y, then y (the residual x - mu y) and M y or M r
+    let mut mx = mul_new(m, x.as_ref());
+    let x2 = column_dots(x, &mx);
+    let mut y = mx.clone();
+    k.solve_plain(y.as_mut());
+    // one refinement step; the correction is solved in place of M x
+    k.residual(mx.as_mut(), y.as_ref());
+    k.solve_plain(mx.as_mut());
+    y += &mx;
+    drop(mx);
+    // x^T M y = y^T (M x) by a product with y: M x was overwritten to save its memory
+    let xmy = column_dots(x, &mul_new(m, y.as_ref()));
+    let mut values = Vec::with_capacity(count);
+    for c in 0..count {
+        let mu = if xmy[c] > 0.0 && x2[c] > 0.0 { x2[c] / xmy[c] } else { pairs.values[c] + shift };
+        values.push(mu - shift);
+        // y becomes the residual x - mu y
+        for (r, x) in y.col_mut(c).iter_mut().zip(x.col(c).iter()) {
             *r = x - mu * *r;
         }
     }
-    let r2 = column_dots(&r, &mul_new(m, r.as_ref()));
-    let mut worst = (0.0f64, 0);
-    for c in 0..x.ncols() {
-        let (r2, x2) = (r2[c], x2[c]);
-        let rel = if x2 > 0.0 { (r2.max(0.0) / x2).sqrt() } else { f64::INFINITY };
-        if !(rel <= worst.0) {
-            worst = (rel, c);
-        }
-    }
-    worst
+    let r2 = column_dots(&y, &mul_new(m, y.as_ref()));
+    let residuals = (0..count)
+        .map(|c| if x2[c] > 0.0 && xmy[c] > 0.0 { (r2[c].max(0.0) / x2[c]).sqrt() } else { f64::INFINITY })
+        .collect();
+    (Eigenpairs { values, vectors: pairs.vectors }, residuals)
+}
+
+/// Fold step for the largest residual and its index (NaN counts as largest).
+fn worst_of(worst: (f64, usize), (c, &r): (usize, &f64)) -> (f64, usize) {
+    if !(r <= worst.0) { (r, c) } else { worst }
 }
 
 /// All eigenpairs with omega below `omega_max`, at least `min_count` of them.
@@ -842,7 +829,7 @@ mod tests {
     /// searches it replaces (the physics is checked against CalculiX in the Python tests).
     #[test]
     fn whole_and_held_modes_from_one_space_equal_separate_searches() {
-        use crate::linalg::held::HeldSolver;
+        use crate::linalg::held::{HeldSolver, WholeAndHeld};
         use crate::linalg::sparse::block;
         let (k, m) = grid(14);
         let n = k.nrows();
@@ -867,7 +854,9 @@ mod tests {
         }
         // held modes really are held: the padded vectors' check found residuals at most 1e-7,
         // and as vectors of the free rows they solve K_ii x = lambda M_ii x
-        let (worst, _) = worst_residual(&held, &m_ii, &held_modes, 0.0);
+        let (_, residuals) = checked(&held, &m_ii, held_modes, 0.0);
+        assert_eq!(residuals.len(), 20);
+        let worst = residuals.iter().fold(0.0f64, |a, &b| a.max(b));
         assert!(worst <= RESIDUAL_TOL, "held residual {worst:e}");
     }
 }

@@ -9,9 +9,9 @@
 
 use crate::error::{BuildError, Result};
 use crate::linalg::sparse::{SpdSolve, SpdSolver};
-use crate::linalg::symmetric_product::mul_compensated;
+use crate::linalg::symmetric_product::subtract_compensated;
 use faer::linalg::solvers::Solve;
-use faer::reborrow::ReborrowMut;
+use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{Mat, MatMut, MatRef, Side};
 
 pub struct HeldSolver<'a> {
@@ -91,7 +91,8 @@ impl<'a> HeldSolver<'a> {
         self.whole.solve_in_place(z.as_mut());
         let zb = z.subrows(n, total - n).to_owned();
         let f = self.compliance.solve(&zb);
-        z -= &self.g * &f;
+        // in place: the product of G (n x h) would be one more n-row matrix
+        faer::linalg::matmul::matmul(z.as_mut(), faer::Accum::Add, self.g.as_ref(), f.as_ref(), -1.0, faer::Par::Seq);
         rhs.copy_from(z.subrows(0, n));
     }
 }
@@ -101,34 +102,58 @@ impl SpdSolve for HeldSolver<'_> {
         self.n
     }
 
-    fn apply_compensated(&self, x: MatRef<'_, f64>) -> Mat<f64> {
-        let mut padded = Mat::<f64>::zeros(self.whole.n(), x.ncols());
-        padded.as_mut().subrows_mut(0, self.n).copy_from(x);
-        let full = mul_compensated(None, 1.0, self.whole.matrix(), padded.as_ref());
-        full.subrows(0, self.n).to_owned()
+    fn solve_plain(&self, rhs: MatMut<'_, f64>) {
+        self.solve(rhs);
     }
 
-    fn solve_refined_steps(&self, mut rhs: MatMut<'_, f64>, steps: usize) -> f64 {
+    fn residual(&self, mut b: MatMut<'_, f64>, x: MatRef<'_, f64>) {
+        // K [x; 0] has K_ii x in its leading rows: the residual of the held system
         let (n, total) = (self.n, self.whole.n());
-        let mut b = Mat::<f64>::zeros(total, rhs.ncols());
-        b.as_mut().subrows_mut(0, n).copy_from(rhs.as_ref());
-        self.solve(rhs.rb_mut());
-        let mut x = Mat::<f64>::zeros(total, rhs.ncols());
-        let mut correction = 0.0;
-        for _ in 0..steps {
-            // K [x; 0] has K_ii x in its leading rows: the residual of the held system
-            x.as_mut().subrows_mut(0, n).copy_from(rhs.as_ref());
-            let mut r = mul_compensated(Some(b.as_ref()), -1.0, self.whole.matrix(), x.as_ref());
-            let mut r = r.as_mut().subrows_mut(0, n);
-            self.solve(r.rb_mut());
-            correction = r.norm_max() / rhs.norm_max();
-            for j in 0..rhs.ncols() {
-                for i in 0..n {
-                    rhs[(i, j)] += r[(i, j)];
-                }
-            }
-        }
-        correction
+        let pad = |a: MatRef<'_, f64>| {
+            let mut p = Mat::<f64>::zeros(total, a.ncols());
+            p.as_mut().subrows_mut(0, n).copy_from(a);
+            p
+        };
+        let mut r = pad(b.rb());
+        subtract_compensated(r.as_mut(), self.whole.matrix(), pad(x).as_ref());
+        b.copy_from(r.subrows(0, n));
+    }
+}
+
+/// The whole matrix's solves for the first `whole` columns and the held problem's for the
+/// others, all of the whole's rows (the held problem's zero at the held rows), in one pass
+/// through the factor: the eigen-solver checks both sets of Craig-Bampton's modes at once
+/// (249k DoFs: 26 and 20 columns 2 x 0.55 s, 46 together 0.8 s).
+pub struct WholeAndHeld<'a> {
+    pub held: &'a HeldSolver<'a>,
+    pub whole: usize,
+}
+
+impl SpdSolve for WholeAndHeld<'_> {
+    fn n(&self) -> usize {
+        self.held.whole.n()
+    }
+
+    fn solve_plain(&self, mut rhs: MatMut<'_, f64>) {
+        let held = &self.held;
+        let (n, total) = (held.n, held.whole.n());
+        held.whole.solve_in_place(rhs.rb_mut());
+        let first = self.whole.min(rhs.ncols());
+        let columns = rhs.ncols() - first;
+        let mut z = rhs.subcols_mut(first, columns);
+        let f = held.compliance.solve(z.rb().subrows(n, total - n));
+        faer::linalg::matmul::matmul(z.rb_mut(), faer::Accum::Add, held.g.as_ref(), f.as_ref(), -1.0, faer::Par::Seq);
+        z.subrows_mut(n, total - n).fill(0.0);
+    }
+
+    fn residual(&self, mut b: MatMut<'_, f64>, x: MatRef<'_, f64>) {
+        let held = &self.held;
+        let (n, total) = (held.n, held.whole.n());
+        subtract_compensated(b.rb_mut(), held.whole.matrix(), x);
+        // at the held rows a held problem's residual is the reaction that holds them: no error
+        let first = self.whole.min(b.ncols());
+        let columns = b.ncols() - first;
+        b.subcols_mut(first, columns).subrows_mut(n, total - n).fill(0.0);
     }
 }
 

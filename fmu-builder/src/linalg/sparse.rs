@@ -364,41 +364,30 @@ pub trait SpdSolve {
     /// Rows of the matrix solved with.
     fn n(&self) -> usize;
 
+    /// One solve through the factor, without refinement.
+    fn solve_plain(&self, rhs: MatMut<'_, f64>);
+
+    /// b - A x in place of b, every entry summed in double-double
+    /// (`symmetric_product::subtract_compensated`): what iterative refinement corrects with.
+    fn residual(&self, b: MatMut<'_, f64>, x: MatRef<'_, f64>);
+
     /// Solve, then `steps` rounds of iterative refinement on residuals computed in
     /// double-double: static shapes of slender parts lose digits to the stiffness's condition
     /// number (~1e10), and the flange compliance must be exact to round-off; an
     /// extended-precision residual restores them. Returns the last correction's size relative
     /// to the solution (max norms; 0 without refinement): how far a plain solve is off.
-    fn solve_refined_steps(&self, rhs: MatMut<'_, f64>, steps: usize) -> f64;
-
-    fn solve_refined(&self, rhs: MatMut<'_, f64>) {
-        self.solve_refined_steps(rhs, 2);
-    }
-
-    /// A x with every entry summed in double-double (`mul_compensated`).
-    fn apply_compensated(&self, x: MatRef<'_, f64>) -> Mat<f64>;
-}
-
-impl SpdSolve for SpdSolver<'_> {
-    fn n(&self) -> usize {
-        self.matrix.nrows()
-    }
-
-    fn apply_compensated(&self, x: MatRef<'_, f64>) -> Mat<f64> {
-        symmetric_product::mul_compensated(None, 1.0, &self.matrix, x)
-    }
-
     fn solve_refined_steps(&self, mut rhs: MatMut<'_, f64>, steps: usize) -> f64 {
         if steps == 0 {
-            self.solve_in_place(rhs);
+            self.solve_plain(rhs);
             return 0.0;
         }
         let b = rhs.to_owned();
-        self.solve_in_place(rhs.rb_mut());
+        self.solve_plain(rhs.rb_mut());
         let mut correction = 0.0;
         for _ in 0..steps {
-            let mut r = symmetric_product::mul_compensated(Some(b.as_ref()), -1.0, &self.matrix, rhs.rb());
-            self.solve_in_place(r.as_mut());
+            let mut r = b.clone();
+            self.residual(r.as_mut(), rhs.rb());
+            self.solve_plain(r.as_mut());
             correction = r.norm_max() / rhs.norm_max();
             for j in 0..r.ncols() {
                 for i in 0..r.nrows() {
@@ -407,6 +396,24 @@ impl SpdSolve for SpdSolver<'_> {
             }
         }
         correction
+    }
+
+    fn solve_refined(&self, rhs: MatMut<'_, f64>) {
+        self.solve_refined_steps(rhs, 2);
+    }
+}
+
+impl SpdSolve for SpdSolver<'_> {
+    fn n(&self) -> usize {
+        self.matrix.nrows()
+    }
+
+    fn solve_plain(&self, rhs: MatMut<'_, f64>) {
+        self.solve_in_place(rhs);
+    }
+
+    fn residual(&self, b: MatMut<'_, f64>, x: MatRef<'_, f64>) {
+        symmetric_product::subtract_compensated(b, &self.matrix, x);
     }
 }
 

@@ -20,7 +20,7 @@ const GROUP: usize = 16;
 
 /// out = A x, A exactly symmetric.
 pub fn mul(out: MatMut<'_, f64>, a: &SparseColMat<usize, f64>, x: MatRef<'_, f64>) {
-    product(out, None, 1.0, a, x, false);
+    product(out, false, 1.0, a, x, false);
 }
 
 pub fn mul_new(a: &SparseColMat<usize, f64>, x: MatRef<'_, f64>) -> Mat<f64> {
@@ -37,14 +37,24 @@ pub fn mul_compensated(
     a: &SparseColMat<usize, f64>,
     x: MatRef<'_, f64>,
 ) -> Mat<f64> {
-    let mut out = Mat::zeros(a.nrows(), x.ncols());
-    product(out.as_mut(), c, sign, a, x, true);
+    let mut out = match c {
+        Some(c) => c.to_owned(),
+        None => Mat::zeros(a.nrows(), x.ncols()),
+    };
+    product(out.as_mut(), c.is_some(), sign, a, x, true);
     out
 }
 
+/// r - A X in place of r (each row read before it is written), A exactly symmetric, in
+/// double-double as `mul_compensated`: a residual without a copy of the right-hand sides.
+pub fn subtract_compensated(r: MatMut<'_, f64>, a: &SparseColMat<usize, f64>, x: MatRef<'_, f64>) {
+    product(r, true, -1.0, a, x, true);
+}
+
+/// out = A x times sign, plus out's own entries where `accumulate`.
 fn product(
     mut out: MatMut<'_, f64>,
-    c: Option<MatRef<'_, f64>>,
+    accumulate: bool,
     sign: f64,
     a: &SparseColMat<usize, f64>,
     x: MatRef<'_, f64>,
@@ -71,26 +81,25 @@ fn product(
         let (first, end) = (g * k / groups, (g + 1) * k / groups);
         let w = end - first;
         let xg = x.subcols(first, w);
-        let cg = c.map(|c| c.subcols(first, w));
         let og = out.rb_mut().subcols_mut(first, w);
         // the group's own width: wider rows would be read (and gathered) for nothing
         match w {
-            0..=1 => group::<1>(og, cg, sign, a, xg, compensated, &bounds),
-            2 => group::<2>(og, cg, sign, a, xg, compensated, &bounds),
-            3 => group::<3>(og, cg, sign, a, xg, compensated, &bounds),
-            4 => group::<4>(og, cg, sign, a, xg, compensated, &bounds),
-            5 => group::<5>(og, cg, sign, a, xg, compensated, &bounds),
-            6 => group::<6>(og, cg, sign, a, xg, compensated, &bounds),
-            7 => group::<7>(og, cg, sign, a, xg, compensated, &bounds),
-            8 => group::<8>(og, cg, sign, a, xg, compensated, &bounds),
-            9 => group::<9>(og, cg, sign, a, xg, compensated, &bounds),
-            10 => group::<10>(og, cg, sign, a, xg, compensated, &bounds),
-            11 => group::<11>(og, cg, sign, a, xg, compensated, &bounds),
-            12 => group::<12>(og, cg, sign, a, xg, compensated, &bounds),
-            13 => group::<13>(og, cg, sign, a, xg, compensated, &bounds),
-            14 => group::<14>(og, cg, sign, a, xg, compensated, &bounds),
-            15 => group::<15>(og, cg, sign, a, xg, compensated, &bounds),
-            _ => group::<GROUP>(og, cg, sign, a, xg, compensated, &bounds),
+            0..=1 => group::<1>(og, accumulate, sign, a, xg, compensated, &bounds),
+            2 => group::<2>(og, accumulate, sign, a, xg, compensated, &bounds),
+            3 => group::<3>(og, accumulate, sign, a, xg, compensated, &bounds),
+            4 => group::<4>(og, accumulate, sign, a, xg, compensated, &bounds),
+            5 => group::<5>(og, accumulate, sign, a, xg, compensated, &bounds),
+            6 => group::<6>(og, accumulate, sign, a, xg, compensated, &bounds),
+            7 => group::<7>(og, accumulate, sign, a, xg, compensated, &bounds),
+            8 => group::<8>(og, accumulate, sign, a, xg, compensated, &bounds),
+            9 => group::<9>(og, accumulate, sign, a, xg, compensated, &bounds),
+            10 => group::<10>(og, accumulate, sign, a, xg, compensated, &bounds),
+            11 => group::<11>(og, accumulate, sign, a, xg, compensated, &bounds),
+            12 => group::<12>(og, accumulate, sign, a, xg, compensated, &bounds),
+            13 => group::<13>(og, accumulate, sign, a, xg, compensated, &bounds),
+            14 => group::<14>(og, accumulate, sign, a, xg, compensated, &bounds),
+            15 => group::<15>(og, accumulate, sign, a, xg, compensated, &bounds),
+            _ => group::<GROUP>(og, accumulate, sign, a, xg, compensated, &bounds),
         }
     }
 }
@@ -99,7 +108,7 @@ fn product(
 /// rows split at `bounds` between the threads.
 fn group<const W: usize>(
     out: MatMut<'_, f64>,
-    c: Option<MatRef<'_, f64>>,
+    accumulate: bool,
     sign: f64,
     a: &SparseColMat<usize, f64>,
     x: MatRef<'_, f64>,
@@ -135,10 +144,9 @@ fn group<const W: usize>(
     }
     rayon::scope(|s| {
         for (start, part) in parts {
-            let c = c.map(|c| c.subrows(start, part.nrows()));
             s.spawn(move |_| {
                 if compensated {
-                    rows_compensated::<W>(part, c, start, sign, a, rows);
+                    rows_compensated::<W>(part, accumulate, start, sign, a, rows);
                 } else {
                     rows_plain::<W>(part, start, sign, a, rows);
                 }
@@ -203,7 +211,7 @@ fn rows_plain_generic<const W: usize>(
 
 fn rows_compensated<const W: usize>(
     out: MatMut<'_, f64>,
-    c: Option<MatRef<'_, f64>>,
+    accumulate: bool,
     start: usize,
     sign: f64,
     a: &SparseColMat<usize, f64>,
@@ -212,28 +220,28 @@ fn rows_compensated<const W: usize>(
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the CPU has the FMA instructions the function is compiled for
-        return unsafe { rows_compensated_fma::<W>(out, c, start, sign, a, x) };
+        return unsafe { rows_compensated_fma::<W>(out, accumulate, start, sign, a, x) };
     }
-    rows_compensated_generic::<false, W>(out, c, start, sign, a, x)
+    rows_compensated_generic::<false, W>(out, accumulate, start, sign, a, x)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "fma")]
 unsafe fn rows_compensated_fma<const W: usize>(
     out: MatMut<'_, f64>,
-    c: Option<MatRef<'_, f64>>,
+    accumulate: bool,
     start: usize,
     sign: f64,
     a: &SparseColMat<usize, f64>,
     x: &[[f64; W]],
 ) {
-    rows_compensated_generic::<true, W>(out, c, start, sign, a, x)
+    rows_compensated_generic::<true, W>(out, accumulate, start, sign, a, x)
 }
 
 #[inline(always)]
 fn rows_compensated_generic<const FMA: bool, const W: usize>(
     mut out: MatMut<'_, f64>,
-    c: Option<MatRef<'_, f64>>,
+    accumulate: bool,
     start: usize,
     sign: f64,
     a: &SparseColMat<usize, f64>,
@@ -247,9 +255,9 @@ fn rows_compensated_generic<const FMA: bool, const W: usize>(
         let i = start + r;
         let mut hi = [0.0f64; W];
         let mut lo = [0.0f64; W];
-        if let Some(c) = c {
+        if accumulate {
             for (col, h) in hi.iter_mut().enumerate().take(w) {
-                *h = c[(r, col)];
+                *h = out[(r, col)];
             }
         }
         for p in col_ptr[i]..col_ptr[i + 1] {
