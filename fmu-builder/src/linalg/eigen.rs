@@ -14,8 +14,8 @@ use crate::linalg::held::{HeldSolver, WholeAndHeld};
 use crate::linalg::sparse::{Sparse, SpdSolve};
 use crate::linalg::symmetric_eigen::symmetric_eigen;
 use crate::linalg::symmetric_product::mul_new;
-use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::Mat;
+use faer::reborrow::{Reborrow, ReborrowMut};
 
 pub struct Eigenpairs {
     /// Ascending eigenvalues lambda = omega^2.
@@ -829,7 +829,7 @@ mod tests {
     /// searches it replaces (the physics is checked against CalculiX in the Python tests).
     #[test]
     fn whole_and_held_modes_from_one_space_equal_separate_searches() {
-        use crate::linalg::held::{HeldSolver, WholeAndHeld};
+        use crate::linalg::held::HeldSolver;
         use crate::linalg::sparse::block;
         let (k, m) = grid(14);
         let n = k.nrows();
