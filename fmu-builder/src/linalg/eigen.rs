@@ -135,6 +135,7 @@ pub fn lowest_and_held(
         let first_check = 2 * wanted + 2 * pt;
         let mut adaptive = true;
         let mut estimate_tol = tol;
+        let mut clock = Clock::default();
         loop {
             // the space is dropped before the pairs are checked (its memory is what the check's
             // products need), so a check that fails starts a new space: refined solves if the
@@ -148,9 +149,11 @@ pub fn lowest_and_held(
                     continue;
                 }
                 next_check = dim + dim.div_ceil(7);
+                let began = std::time::Instant::now();
                 let (values, y, whole_estimated) = lanczos.ritz(count, estimate_tol, exhausted)?;
                 let (held_values, held_y, held_estimated) =
                     lanczos.ritz_held(first, &m_g, held, count_held, estimate_tol, exhausted)?;
+                lanczos.clock.ritz += began.elapsed();
                 let estimated = whole_estimated && held_estimated;
                 if !estimated && !exhausted && dim >= shared_limit {
                     crate::profile::note(|| format!("no shared convergence with {dim} vectors: separate searches"));
@@ -171,9 +174,11 @@ pub fn lowest_and_held(
                 };
                 break (both, values.len(), estimated, at_limit, lanczos.refine, lanczos.blocks(), dim);
             };
+            clock.add(&lanczos.clock);
             drop(lanczos);
             // one refined solve checks both: the held columns through the held solver
-            let (both, worst) = checked(&WholeAndHeld { held, whole: count_whole }, m, both, 0.0);
+            let (both, worst) =
+                clock.time(|c| &mut c.checks, || checked(&WholeAndHeld { held, whole: count_whole }, m, both, 0.0));
             let (worst_whole, at_whole) = worst[..count_whole].iter().enumerate().fold((0.0f64, 0), worst_of);
             let (worst_held, at_held) = worst[count_whole..].iter().enumerate().fold((0.0f64, 0), worst_of);
             let whole = Eigenpairs {
@@ -204,7 +209,8 @@ pub fn lowest_and_held(
             }
             crate::profile::note(|| {
                 format!(
-                    "{count} modes of the whole and {count_held} held, in one space: {solves} block solves of {pt} ({dim} Lanczos vectors)"
+                    "{count} modes of the whole and {count_held} held, in one space: {solves} block solves of {pt} ({dim} Lanczos vectors); {}",
+                    clock.describe()
                 )
             });
             if !converged {
@@ -232,6 +238,42 @@ pub const SHARED_MAX_MODES: usize = 100;
 /// The pairs' vectors restricted to their first `rows` rows.
 fn free_rows(pairs: Eigenpairs, rows: usize) -> Eigenpairs {
     Eigenpairs { vectors: pairs.vectors.subrows(0, rows).to_owned(), values: pairs.values }
+}
+
+/// Where an eigen-solve's time went, for the build profile's note.
+#[derive(Default, Clone, Copy)]
+struct Clock {
+    solves: std::time::Duration,
+    orthogonalisation: std::time::Duration,
+    ritz: std::time::Duration,
+    checks: std::time::Duration,
+}
+
+impl Clock {
+    /// Run `f`, adding its wall time to the entry `at` picks.
+    fn time<R>(&mut self, at: fn(&mut Self) -> &mut std::time::Duration, f: impl FnOnce() -> R) -> R {
+        let began = std::time::Instant::now();
+        let r = f();
+        *at(self) += began.elapsed();
+        r
+    }
+
+    fn add(&mut self, other: &Clock) {
+        self.solves += other.solves;
+        self.orthogonalisation += other.orthogonalisation;
+        self.ritz += other.ritz;
+        self.checks += other.checks;
+    }
+
+    fn describe(&self) -> String {
+        format!(
+            "block solves {:.1} s, orthogonalisation {:.1} s, Ritz pairs {:.1} s, checks {:.1} s",
+            self.solves.as_secs_f64(),
+            self.orthogonalisation.as_secs_f64(),
+            self.ritz.as_secs_f64(),
+            self.checks.as_secs_f64()
+        )
+    }
 }
 
 /// What a search is for: a number of modes, or every mode below a frequency.
@@ -287,7 +329,9 @@ fn search(
                 continue;
             }
             next_check = dim + dim.div_ceil(7);
+            let began = std::time::Instant::now();
             let (values, y, estimated) = lanczos.ritz(count, estimate_tol, exhausted)?;
+            lanczos.clock.ritz += began.elapsed();
             let at_limit = exhausted || dim >= max_dim;
             if !estimated && !at_limit {
                 continue;
@@ -295,14 +339,18 @@ fn search(
             let vectors = lanczos.vectors(&y);
             // every returned pair is checked, not assumed: its residual in K and M themselves,
             // and its eigenvalue the Rayleigh quotient of the same solve
+            let began = std::time::Instant::now();
             let (pairs, residuals) = checked(k, m, Eigenpairs { values, vectors }, shift);
+            lanczos.clock.checks += began.elapsed();
             let (worst, at) = residuals.iter().enumerate().fold((0.0f64, 0), worst_of);
             let converged = estimated && worst <= RESIDUAL_TOL && pairs.values.len() == count;
             if !converged && lanczos.refine == 0 {
                 // plain solves were judged exact enough from the first block's correction, which
                 // the low modes dominate; the higher ones needed more (a slender part's mode 23
                 // kept a residual of 1.2e-7): again from the start, every solve refined
+                let clock = lanczos.clock;
                 lanczos = BlockLanczos::new(m, &start, deflate, false, reserve)?;
+                lanczos.clock = clock;
                 estimate_tol = tol;
                 next_check = first_check;
                 continue;
@@ -313,7 +361,12 @@ fn search(
                 continue;
             }
             let solves = lanczos.blocks();
-            crate::profile::note(|| format!("{count} modes: {solves} block solves of {p} ({dim} Lanczos vectors)"));
+            crate::profile::note(|| {
+                format!(
+                    "{count} modes: {solves} block solves of {p} ({dim} Lanczos vectors); {}",
+                    lanczos.clock.describe()
+                )
+            });
             if !converged {
                 return Err(BuildError::Numerical(format!(
                     "eigensolver: {count} modes did not converge with {dim} Lanczos vectors (of {n_free} DoFs): mode {} has the residual {worst:.1e} (accepted {RESIDUAL_TOL:.0e}); request fewer modes (reduction.modes, max_frequency) or check the mesh for extreme element proportions",
@@ -378,6 +431,7 @@ struct BlockLanczos<'a> {
     /// Refinement steps per solve: one until a solve shows it changes nothing that matters.
     refine: usize,
     adaptive: bool,
+    clock: Clock,
 }
 
 impl<'a> BlockLanczos<'a> {
@@ -409,6 +463,7 @@ impl<'a> BlockLanczos<'a> {
             exhausted: false,
             refine: 1,
             adaptive,
+            clock: Clock::default(),
         };
         match this.orthonormalise(w) {
             Some((v, mv, _)) => {
@@ -442,7 +497,9 @@ impl<'a> BlockLanczos<'a> {
         // plain solve perturbs the Ritz values by that much, far below what is accepted
         // (RESIDUAL_TOL), and the refinement's second solve per block is saved.
         let mut w = std::mem::replace(&mut self.m_last, Mat::zeros(0, 0));
-        let correction = k.solve_refined_steps(w.as_mut(), self.refine);
+        let refine = self.refine;
+        let correction = self.clock.time(|c| &mut c.solves, || k.solve_refined_steps(w.as_mut(), refine));
+        let began = std::time::Instant::now();
         if self.adaptive && self.refine > 0 && correction < 1e-10 {
             self.refine = 0;
         }
@@ -461,7 +518,9 @@ impl<'a> BlockLanczos<'a> {
             column += &c;
         }
         self.t.push(column);
-        match self.orthonormalise(w) {
+        let orthonormal = self.orthonormalise(w);
+        self.clock.orthogonalisation += began.elapsed();
+        match orthonormal {
             Some((v, mv, r)) => {
                 self.push(&v, mv);
                 self.coupling = r;
