@@ -11,3 +11,4 @@ pub mod symmetric_eigen;
 pub mod symmetric_product;
 #[cfg(test)]
 pub(crate) mod test_grids;
+pub mod tree_solve;
