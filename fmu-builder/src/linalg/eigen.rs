@@ -100,10 +100,8 @@ pub fn lowest_and_held(
     let h = g.ncols();
     let (count, count_held) = (count.min(n), count_held.min(first));
     let wanted = count.max(count_held);
-    let separate = || -> Result<(Eigenpairs, Eigenpairs)> {
-        let m_held = crate::linalg::sparse::block(m, 0..first, 0..first)?;
-        Ok((lowest(k, m, count, tol)?, lowest(held, &m_held, count_held, tol)?))
-    };
+    let separate =
+        || -> Result<(Eigenpairs, Eigenpairs)> { Ok((lowest(k, m, count, tol)?, lowest(held, m, count_held, tol)?)) };
     if count == 0 || count_held == 0 || h == 0 || 4 * (wanted + h) > n || wanted > SHARED_MAX_MODES {
         // nothing to share, a problem too small for it, or too many modes: each on its own
         return separate();

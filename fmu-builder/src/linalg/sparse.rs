@@ -62,15 +62,7 @@ pub fn mul(out: MatMut<'_, f64>, a: &Sparse, x: MatRef<'_, f64>) {
 /// (a copy of the matrix): the rows of A [x; 0] that belong to it. `compensated` sums in
 /// double-double.
 pub fn mul_leading(a: &Sparse, x: MatRef<'_, f64>, compensated: bool) -> Mat<f64> {
-    let k = x.nrows();
-    let mut padded = Mat::<f64>::zeros(a.ncols(), x.ncols());
-    padded.as_mut().subrows_mut(0, k).copy_from(x);
-    let full = if compensated {
-        symmetric_product::mul_compensated(None, 1.0, a, padded.as_ref())
-    } else {
-        symmetric_product::mul_new(a, padded.as_ref())
-    };
-    full.subrows(0, k).to_owned()
+    if compensated { symmetric_product::mul_compensated(None, 1.0, a, x) } else { symmetric_product::mul_new(a, x) }
 }
 
 pub fn mul_new(a: &Sparse, x: MatRef<'_, f64>) -> Mat<f64> {
@@ -255,6 +247,23 @@ pub struct SpdSolver<'m> {
     tree: Option<TreeSolve>,
 }
 
+/// The symbolic Cholesky factorisation of `a` in METIS's nested-dissection order, or in AMD's
+/// where METIS refuses the graph. One METIS run at a time: it draws its random numbers from the
+/// C library's one generator, and two side by side (two seeds, to keep the better order) gave
+/// orders that changed from run to run.
+fn symbolic_factor(a: &Sparse, what: &str) -> Result<SymbolicCholesky<usize>> {
+    let order = ordering::nested_dissection(a.symbolic());
+    let perm = order.as_ref().map(|o| faer::perm::PermRef::new_checked(&o.forward, &o.inverse, a.nrows()));
+    let ordering = match perm {
+        Some(p) => SymmetricOrdering::Custom(p),
+        None => SymmetricOrdering::Amd,
+    };
+    let by = if order.is_some() { "METIS nested dissection" } else { "AMD (METIS refused the graph)" };
+    crate::profile::note(|| format!("{by}, n {}, nnz(A) {}", a.nrows(), a.compute_nnz()));
+    factorize_symbolic_cholesky(a.symbolic(), Side::Lower, ordering, Default::default())
+        .map_err(|e| BuildError::Numerical(format!("{what}: its factor {}", faer_error::generic(&e))))
+}
+
 /// Bytes of one stored factor entry and its share of the row indices (supernodal storage keeps
 /// one index per row of a supernode, a small fraction of the values): for the size estimate.
 const FACTOR_BYTES_PER_ENTRY: f64 = 8.0;
@@ -263,19 +272,7 @@ impl<'m> SpdSolver<'m> {
     /// Factor `a` (both triangles stored); `dof` names a row of `a` for the message when the
     /// factorisation meets a pivot that is not positive (where the mechanism is).
     pub fn new(a: Cow<'m, Sparse>, what: &str, dof: &dyn Fn(usize) -> String) -> Result<Self> {
-        let order = crate::profile::phase(format!("ordering: {what}"), || {
-            let order = ordering::nested_dissection(a.symbolic());
-            let by = if order.is_some() { "METIS nested dissection" } else { "AMD (METIS refused the graph)" };
-            crate::profile::note(|| format!("{by}, n {}, nnz(A) {}", a.nrows(), a.compute_nnz()));
-            order
-        });
-        let perm = order.as_ref().map(|o| faer::perm::PermRef::new_checked(&o.forward, &o.inverse, a.nrows()));
-        let ordering = match perm {
-            Some(p) => SymmetricOrdering::Custom(p),
-            None => SymmetricOrdering::Amd,
-        };
-        let symbolic = factorize_symbolic_cholesky(a.symbolic(), Side::Lower, ordering, Default::default())
-            .map_err(|e| BuildError::Numerical(format!("{what}: its factor {}", faer_error::generic(&e))))?;
+        let symbolic = crate::profile::phase(format!("ordering: {what}"), || symbolic_factor(&a, what))?;
         let entries = symbolic.len_val();
         let mut values = Vec::new();
         values.try_reserve_exact(entries).map_err(|_| {

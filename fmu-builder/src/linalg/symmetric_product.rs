@@ -5,6 +5,9 @@
 //! row many times over, and the running sums of a compensated product then miss the cache on
 //! each addition (249k-DoF bracket, 26 columns: 1.07 s compensated, 0.20 s plain).
 //!
+//! Where X has fewer rows than A (k), the products are those of A's leading block A[0..k, 0..k]
+//! (the mass of a mounted body inside the whole model's, without a copy of it).
+//!
 //! X goes to the kernel in groups of at most `GROUP` columns, copied row by row so that a
 //! row's group is one cache line pair; the rows of the output are split between the threads by
 //! entries of A, so A is read once per group in all.
@@ -24,7 +27,7 @@ pub fn mul(out: MatMut<'_, f64>, a: &SparseColMat<usize, f64>, x: MatRef<'_, f64
 }
 
 pub fn mul_new(a: &SparseColMat<usize, f64>, x: MatRef<'_, f64>) -> Mat<f64> {
-    let mut out = Mat::zeros(a.nrows(), x.ncols());
+    let mut out = Mat::zeros(x.nrows(), x.ncols());
     mul(out.as_mut(), a, x);
     out
 }
@@ -39,7 +42,7 @@ pub fn mul_compensated(
 ) -> Mat<f64> {
     let mut out = match c {
         Some(c) => c.to_owned(),
-        None => Mat::zeros(a.nrows(), x.ncols()),
+        None => Mat::zeros(x.nrows(), x.ncols()),
     };
     product(out.as_mut(), c.is_some(), sign, a, x, true);
     out
@@ -60,9 +63,9 @@ fn product(
     x: MatRef<'_, f64>,
     compensated: bool,
 ) {
-    let (n, k) = (a.nrows(), x.ncols());
-    debug_assert_eq!(a.ncols(), n, "a symmetric matrix is square");
-    debug_assert_eq!(x.nrows(), n);
+    let (n, k) = (x.nrows(), x.ncols());
+    debug_assert_eq!(a.ncols(), a.nrows(), "a symmetric matrix is square");
+    debug_assert!(n <= a.nrows() && out.nrows() == n);
     if k == 0 || n == 0 {
         return;
     }
@@ -115,7 +118,8 @@ fn group<const W: usize>(
     compensated: bool,
     bounds: &[usize],
 ) {
-    let n = x.nrows();
+    // A's rows: X's rows beyond its own are zero (the leading-block product)
+    let (n, m) = (a.nrows(), x.nrows());
     let w = x.ncols();
     // the copy goes row by row (each column of X one sequential stream), on every thread, into
     // the calling thread's buffer (`PACKED`)
@@ -131,8 +135,9 @@ fn group<const W: usize>(
                 s.spawn(move |_| {
                     let first = c * chunk;
                     for (r, row) in part.iter_mut().enumerate() {
+                        let i = first + r;
                         for (col, v) in row.iter_mut().enumerate() {
-                            *v = if col < w { x[(first + r, col)] } else { 0.0 };
+                            *v = if col < w && i < m { x[(i, col)] } else { 0.0 };
                         }
                     }
                 });

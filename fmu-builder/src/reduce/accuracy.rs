@@ -5,7 +5,7 @@
 
 use crate::error::{BuildError, Result};
 use crate::linalg::eigen::{self, Deflation};
-use crate::linalg::sparse::{SpdSolver, block};
+use crate::linalg::sparse::SpdSolver;
 use crate::model::rigid_coupling::Assembled;
 use crate::reduce::basis::{self, Basis, EIGEN_TOL};
 use faer::Mat;
@@ -50,10 +50,7 @@ pub fn accuracy(
     let nc = model.dofs.n_clamped();
     let full_values = match computed {
         Some(full) if full.values.len() >= n_full => full.values[..n_full].to_vec(),
-        _ => {
-            let m = block(&model.mass, 0..nc, 0..nc)?;
-            eigen::lowest(solver, &m, n_full, EIGEN_TOL)?.values
-        }
+        _ => eigen::lowest(solver, &model.mass, n_full, EIGEN_TOL)?.values,
     };
     let two_pi = 2.0 * std::f64::consts::PI;
     let full_hz: Vec<f64> = full_values.iter().map(|l| l.sqrt() / two_pi).collect();

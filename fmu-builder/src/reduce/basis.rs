@@ -69,17 +69,14 @@ pub fn craig_bampton(
 
     let (normal, whole) = match (modes, whole_modes) {
         (ModeCount::Count(c), Some(count)) => {
-            let m = block(&model.mass, 0..nc, 0..nc)?;
-            let (whole, normal) = eigen::lowest_and_held(mounted, &m, count, &solver, c, EIGEN_TOL)?;
+            // the whole model's mass: the products take its leading blocks (no copy)
+            let (whole, normal) = eigen::lowest_and_held(mounted, &model.mass, count, &solver, c, EIGEN_TOL)?;
             // the comparison needs the frequencies only: the vectors' memory goes now
             (normal, Some(eigen::Eigenpairs { values: whole.values, vectors: Mat::zeros(nc, 0) }))
         }
-        (ModeCount::Count(c), None) => {
-            (eigen::lowest(&solver, &block(&model.mass, 0..ni, 0..ni)?, c, EIGEN_TOL)?, None)
-        }
+        (ModeCount::Count(c), None) => (eigen::lowest(&solver, &model.mass, c, EIGEN_TOL)?, None),
         (ModeCount::Below(f), _) => {
-            let m_ii = block(&model.mass, 0..ni, 0..ni)?;
-            (eigen::below(&solver, &m_ii, 2.0 * std::f64::consts::PI * f, 0, EIGEN_TOL)?, None)
+            (eigen::below(&solver, &model.mass, 2.0 * std::f64::consts::PI * f, 0, EIGEN_TOL)?, None)
         }
     };
     let nm = normal.values.len();
