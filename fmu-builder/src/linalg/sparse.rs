@@ -274,14 +274,13 @@ impl<'m> SpdSolver<'m> {
     pub fn new(a: Cow<'m, Sparse>, what: &str, dof: &dyn Fn(usize) -> String) -> Result<Self> {
         let symbolic = crate::profile::phase(format!("ordering: {what}"), || symbolic_factor(&a, what))?;
         let entries = symbolic.len_val();
-        let mut values = Vec::new();
-        values.try_reserve_exact(entries).map_err(|_| {
+        let mut values = zeroed(entries).ok_or_else(|| {
             BuildError::Numerical(format!(
                 "{what}: its Cholesky factor needs {:.1} GiB, more than this machine can give; coarsen the mesh",
                 entries as f64 * FACTOR_BYTES_PER_ENTRY / (1u64 << 30) as f64
             ))
         })?;
-        values.resize(entries, 0.0);
+        huge_pages(&mut values);
         let par = faer::get_global_parallelism();
         let outcome = crate::profile::phase(format!("Cholesky factorisation: {what}"), || {
             crate::profile::note(|| {
@@ -446,6 +445,49 @@ impl SpdSolve for SpdSolver<'_> {
 
     fn residual(&self, b: MatMut<'_, f64>, x: MatRef<'_, f64>) {
         symmetric_product::subtract_compensated(b, &self.matrix, x);
+    }
+}
+
+/// `n` zeros from the allocator's zeroed memory: fresh pages from the system, touched only when
+/// first written (by the factorisation, on its threads), not all at once by a fill here. Filling
+/// the 1.27 GB factor of the 249k-DoF bracket took 2.2-3.1 s on this (virtual) machine, whose
+/// first touch of a page is slow, more than the ordering; the build as a whole went from
+/// 22.7-23.9 s to 20.6-22.8 s.
+fn zeroed(n: usize) -> Option<Vec<f64>> {
+    if n == 0 {
+        return Some(Vec::new());
+    }
+    let layout = std::alloc::Layout::array::<f64>(n).ok()?;
+    // SAFETY: the layout has a non-zero size; a null pointer is handled, and a non-null one
+    // holds n zeroed f64 (all-zero bits are 0.0) allocated by the global allocator with exactly
+    // the layout Vec<f64> of capacity n frees it with
+    unsafe {
+        let ptr = std::alloc::alloc_zeroed(layout).cast::<f64>();
+        if ptr.is_null() {
+            return None;
+        }
+        Some(Vec::from_raw_parts(ptr, n, n))
+    }
+}
+
+/// Ask the kernel to back `buffer` (not yet touched) with 2 MB pages where it can, so that its
+/// first touch faults in fewer, larger pages. Transparent huge pages are commonly enabled for
+/// those who ask (`madvise`); elsewhere this changes nothing.
+fn huge_pages<T>(buffer: &mut [T]) {
+    #[cfg(target_os = "linux")]
+    {
+        const HUGE: usize = 2 << 20;
+        let start = buffer.as_mut_ptr() as usize;
+        let end = start + std::mem::size_of_val(buffer);
+        let first = start.next_multiple_of(HUGE);
+        let last = end - end % HUGE;
+        if last > first {
+            // SAFETY: the range lies within `buffer`'s allocation, and the advice changes only
+            // how the kernel backs its pages, not their contents or validity
+            unsafe {
+                libc::madvise(first as *mut libc::c_void, last - first, libc::MADV_HUGEPAGE);
+            }
+        }
     }
 }
 
