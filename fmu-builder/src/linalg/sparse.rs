@@ -291,6 +291,14 @@ impl<'m> SpdSolver<'m> {
                     entries as f64 * FACTOR_BYTES_PER_ENTRY / (1u64 << 20) as f64,
                 )
             });
+            // the factor's pages touched first by every thread at once: the first touch of a page
+            // is slow on this (virtual) machine, 1.27 GB took 3 s from one thread, and faer's
+            // factorisation touches them one supernode at a time (factorisation with the touch
+            // 5.7-7.3 s -> 4.0-4.4 s, the 249k-DoF bracket)
+            {
+                use rayon::prelude::*;
+                values.par_chunks_mut(1 << 18).for_each(|c| c.fill(0.0));
+            }
             let mut scratch =
                 MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()))
                     .map_err(|_| LltError::Generic(faer::sparse::FaerError::OutOfMemory))?;
@@ -449,10 +457,7 @@ impl SpdSolve for SpdSolver<'_> {
 }
 
 /// `n` zeros from the allocator's zeroed memory: fresh pages from the system, touched only when
-/// first written (by the factorisation, on its threads), not all at once by a fill here. Filling
-/// the 1.27 GB factor of the 249k-DoF bracket took 2.2-3.1 s on this (virtual) machine, whose
-/// first touch of a page is slow, more than the ordering; the build as a whole went from
-/// 22.7-23.9 s to 20.6-22.8 s.
+/// first written, on all threads together (`SpdSolver::new`), not by one thread's fill here.
 fn zeroed(n: usize) -> Option<Vec<f64>> {
     if n == 0 {
         return Some(Vec::new());
