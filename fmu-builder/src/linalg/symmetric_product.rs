@@ -154,13 +154,7 @@ fn group<const W: usize>(
         }
         rayon::scope(|s| {
             for (start, part) in parts {
-                s.spawn(move |_| {
-                    if compensated {
-                        rows_compensated::<W>(part, accumulate, start, sign, a, rows);
-                    } else {
-                        rows_plain::<W>(part, start, sign, a, rows);
-                    }
-                });
+                s.spawn(move |_| thread_rows::<W>(part, accumulate, compensated, start, sign, a, rows));
             }
         });
     });
@@ -174,8 +168,12 @@ thread_local! {
     static PACKED: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
-fn rows_plain<const W: usize>(
+/// The output rows of one thread (from row `start` of A): dispatch to the FMA build of the
+/// kernels where the CPU has it.
+fn thread_rows<const W: usize>(
     out: MatMut<'_, f64>,
+    accumulate: bool,
+    compensated: bool,
     start: usize,
     sign: f64,
     a: &SparseColMat<usize, f64>,
@@ -184,26 +182,32 @@ fn rows_plain<const W: usize>(
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the CPU has the FMA instructions the function is compiled for
-        return unsafe { rows_plain_fma::<W>(out, start, sign, a, x) };
+        return unsafe { rows_fma::<W>(out, accumulate, compensated, start, sign, a, x) };
     }
-    rows_plain_generic::<W>(out, start, sign, a, x)
+    rows_generic::<false, W>(out, accumulate, compensated, start, sign, a, x)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "fma")]
-unsafe fn rows_plain_fma<const W: usize>(
+unsafe fn rows_fma<const W: usize>(
     out: MatMut<'_, f64>,
+    accumulate: bool,
+    compensated: bool,
     start: usize,
     sign: f64,
     a: &SparseColMat<usize, f64>,
     x: &[[f64; W]],
 ) {
-    rows_plain_generic::<W>(out, start, sign, a, x)
+    rows_generic::<true, W>(out, accumulate, compensated, start, sign, a, x)
 }
 
+/// Double-double sums where `compensated` (onto the output's own entries where `accumulate`),
+/// plain ones otherwise.
 #[inline(always)]
-fn rows_plain_generic<const W: usize>(
+fn rows_generic<const FMA: bool, const W: usize>(
     mut out: MatMut<'_, f64>,
+    accumulate: bool,
+    compensated: bool,
     start: usize,
     sign: f64,
     a: &SparseColMat<usize, f64>,
@@ -215,63 +219,20 @@ fn rows_plain_generic<const W: usize>(
     let w = out.ncols();
     for r in 0..out.nrows() {
         let i = start + r;
-        let mut sum = [0.0f64; W];
-        for p in col_ptr[i]..col_ptr[i + 1] {
-            let (aij, xj) = (val[p], &x[row_idx[p]]);
-            for col in 0..W {
-                sum[col] += aij * xj[col];
+        let entries = col_ptr[i]..col_ptr[i + 1];
+        if !compensated {
+            let mut sum = [0.0f64; W];
+            for p in entries {
+                let (aij, xj) = (val[p], &x[row_idx[p]]);
+                for col in 0..W {
+                    sum[col] += aij * xj[col];
+                }
             }
+            for (col, s) in sum.iter().enumerate().take(w) {
+                out[(r, col)] = sign * s;
+            }
+            continue;
         }
-        for (col, s) in sum.iter().enumerate().take(w) {
-            out[(r, col)] = sign * s;
-        }
-    }
-}
-
-fn rows_compensated<const W: usize>(
-    out: MatMut<'_, f64>,
-    accumulate: bool,
-    start: usize,
-    sign: f64,
-    a: &SparseColMat<usize, f64>,
-    x: &[[f64; W]],
-) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("fma") {
-        // SAFETY: the CPU has the FMA instructions the function is compiled for
-        return unsafe { rows_compensated_fma::<W>(out, accumulate, start, sign, a, x) };
-    }
-    rows_compensated_generic::<false, W>(out, accumulate, start, sign, a, x)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "fma")]
-unsafe fn rows_compensated_fma<const W: usize>(
-    out: MatMut<'_, f64>,
-    accumulate: bool,
-    start: usize,
-    sign: f64,
-    a: &SparseColMat<usize, f64>,
-    x: &[[f64; W]],
-) {
-    rows_compensated_generic::<true, W>(out, accumulate, start, sign, a, x)
-}
-
-#[inline(always)]
-fn rows_compensated_generic<const FMA: bool, const W: usize>(
-    mut out: MatMut<'_, f64>,
-    accumulate: bool,
-    start: usize,
-    sign: f64,
-    a: &SparseColMat<usize, f64>,
-    x: &[[f64; W]],
-) {
-    let col_ptr = a.symbolic().col_ptr();
-    let row_idx = a.symbolic().row_idx();
-    let val = a.val();
-    let w = out.ncols();
-    for r in 0..out.nrows() {
-        let i = start + r;
         let mut hi = [0.0f64; W];
         let mut lo = [0.0f64; W];
         if accumulate {
@@ -279,7 +240,7 @@ fn rows_compensated_generic<const FMA: bool, const W: usize>(
                 *h = out[(r, col)];
             }
         }
-        for p in col_ptr[i]..col_ptr[i + 1] {
+        for p in entries {
             // sign is +-1: the scaled entry is exact
             let (aij, xj) = (sign * val[p], &x[row_idx[p]]);
             for col in 0..W {

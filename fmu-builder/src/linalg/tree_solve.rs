@@ -15,7 +15,7 @@ use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_uppe
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::cholesky::supernodal::{SupernodalLltRef, SymbolicSupernodalCholesky};
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
-use faer::{Accum, Mat, MatMut, Par};
+use faer::{Accum, Mat, MatMut, MatRef, Par};
 use std::ops::Range;
 
 /// A split of a supernodal factor's elimination tree between threads.
@@ -203,17 +203,9 @@ impl TreeSolve {
                 for ((r0, r1, mut piece), supernodes) in pieces.into_iter().zip(ranges) {
                     for s in supernodes.clone() {
                         let node = llt.supernode(s);
-                        let l = node.val();
-                        let size = l.ncols();
-                        let (l_top, l_bot) = l.split_at_row(size);
-                        let mut x_top = piece.rb_mut().subrows_mut(node.start() - r0, size);
-                        solve_lower_triangular_in_place(l_top, x_top.rb_mut(), Par::Seq);
+                        let x_top = piece.rb_mut().subrows_mut(node.start() - r0, node.val().ncols());
+                        let tmp = forward_node(node.val(), x_top, &mut tmp, Par::Seq);
                         let pattern = node.pattern();
-                        if pattern.is_empty() {
-                            continue;
-                        }
-                        let mut tmp = workspace(&mut tmp, pattern.len(), k);
-                        matmul(tmp.rb_mut(), Accum::Replace, l_bot, x_top.rb(), 1.0, Par::Seq);
                         for j in 0..k {
                             for (idx, &i) in pattern.iter().enumerate() {
                                 if i < r1 {
@@ -240,19 +232,10 @@ impl TreeSolve {
         let mut tmp = Mat::<f64>::zeros(0, 0);
         for &s in &self.top {
             let node = llt.supernode(s);
-            let l = node.val();
-            let size = l.ncols();
-            let (l_top, l_bot) = l.split_at_row(size);
-            let mut x_top = x.rb_mut().subrows_mut(node.start(), size);
-            solve_lower_triangular_in_place(l_top, x_top.rb_mut(), par);
-            let pattern = node.pattern();
-            if pattern.is_empty() {
-                continue;
-            }
-            let mut tmp = workspace(&mut tmp, pattern.len(), k);
-            matmul(tmp.rb_mut(), Accum::Replace, l_bot, x_top.rb(), 1.0, par);
+            let x_top = x.rb_mut().subrows_mut(node.start(), node.val().ncols());
+            let tmp = forward_node(node.val(), x_top, &mut tmp, par);
             for j in 0..k {
-                for (idx, &i) in pattern.iter().enumerate() {
+                for (idx, &i) in node.pattern().iter().enumerate() {
                     x[(i, j)] -= tmp[(idx, j)];
                 }
             }
@@ -271,22 +254,15 @@ impl TreeSolve {
         let mut tmp = Mat::<f64>::zeros(0, 0);
         for &s in self.top.iter().rev() {
             let node = llt.supernode(s);
-            let l = node.val();
-            let size = l.ncols();
-            let (l_top, l_bot) = l.split_at_row(size);
             let pattern = node.pattern();
-            if !pattern.is_empty() {
-                let mut tmp = workspace(&mut tmp, pattern.len(), k);
-                for j in 0..k {
-                    for (idx, &i) in pattern.iter().enumerate() {
-                        tmp[(idx, j)] = x[(i, j)];
-                    }
+            let mut below = workspace(&mut tmp, pattern.len(), k);
+            for j in 0..k {
+                for (idx, &i) in pattern.iter().enumerate() {
+                    below[(idx, j)] = x[(i, j)];
                 }
-                let x_top = x.rb_mut().subrows_mut(node.start(), size);
-                matmul(x_top, Accum::Add, l_bot.transpose(), tmp.rb(), -1.0, par);
             }
-            let x_top = x.rb_mut().subrows_mut(node.start(), size);
-            solve_upper_triangular_in_place(l_top.transpose(), x_top, par);
+            let x_top = x.rb_mut().subrows_mut(node.start(), node.val().ncols());
+            backward_node(node.val(), below.rb(), x_top, par);
         }
         // the top rows are final: every thread reads them from one copy
         let top_values = Mat::<f64>::from_fn(self.top_rows.len(), k, |t, j| x[(self.top_rows[t], j)]);
@@ -297,27 +273,48 @@ impl TreeSolve {
             for ((r0, r1, mut piece), supernodes) in pieces.into_iter().zip(ranges).rev() {
                 for s in supernodes.clone().rev() {
                     let node = llt.supernode(s);
-                    let l = node.val();
-                    let size = l.ncols();
-                    let (l_top, l_bot) = l.split_at_row(size);
                     let pattern = node.pattern();
-                    if !pattern.is_empty() {
-                        let mut tmp = workspace(&mut tmp, pattern.len(), k);
-                        for j in 0..k {
-                            for (idx, &i) in pattern.iter().enumerate() {
-                                tmp[(idx, j)] =
-                                    if i < r1 { piece[(i - r0, j)] } else { top_values[(self.top_index[i], j)] };
-                            }
+                    let mut below = workspace(&mut tmp, pattern.len(), k);
+                    for j in 0..k {
+                        for (idx, &i) in pattern.iter().enumerate() {
+                            below[(idx, j)] =
+                                if i < r1 { piece[(i - r0, j)] } else { top_values[(self.top_index[i], j)] };
                         }
-                        let x_top = piece.rb_mut().subrows_mut(node.start() - r0, size);
-                        matmul(x_top, Accum::Add, l_bot.transpose(), tmp.rb(), -1.0, Par::Seq);
                     }
-                    let x_top = piece.rb_mut().subrows_mut(node.start() - r0, size);
-                    solve_upper_triangular_in_place(l_top.transpose(), x_top, Par::Seq);
+                    let x_top = piece.rb_mut().subrows_mut(node.start() - r0, node.val().ncols());
+                    backward_node(node.val(), below.rb(), x_top, Par::Seq);
                 }
             }
         });
     }
+}
+
+/// One supernode's step of L y = b (`l` its block of L, the diagonal block on top): its own rows
+/// `x_top` solved in place, then L_bot x_top returned in the workspace, for the caller to subtract
+/// at the node's pattern rows (wherever those rows are kept).
+fn forward_node<'t>(
+    l: MatRef<'_, f64>,
+    mut x_top: MatMut<'_, f64>,
+    tmp: &'t mut Mat<f64>,
+    par: Par,
+) -> MatMut<'t, f64> {
+    let (l_top, l_bot) = l.split_at_row(l.ncols());
+    solve_lower_triangular_in_place(l_top, x_top.rb_mut(), par);
+    let mut update = workspace(tmp, l_bot.nrows(), x_top.ncols());
+    if l_bot.nrows() > 0 {
+        matmul(update.rb_mut(), Accum::Replace, l_bot, x_top.rb(), 1.0, par);
+    }
+    update
+}
+
+/// One supernode's step of L^T x = y: x_top -= L_bot^T `below` (the solution at the node's
+/// pattern rows), then its own rows solved in place.
+fn backward_node(l: MatRef<'_, f64>, below: MatRef<'_, f64>, mut x_top: MatMut<'_, f64>, par: Par) {
+    let (l_top, l_bot) = l.split_at_row(l.ncols());
+    if l_bot.nrows() > 0 {
+        matmul(x_top.rb_mut(), Accum::Add, l_bot.transpose(), below, -1.0, par);
+    }
+    solve_upper_triangular_in_place(l_top.transpose(), x_top, par);
 }
 
 /// The first `rows` x `cols` block of a workspace grown as needed.
