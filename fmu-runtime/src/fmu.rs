@@ -612,6 +612,7 @@ fn value_of<T: Scalar>(b: &mut FlexibleBody<T>, quantity: Quantity) -> Result<T,
                 FlangeOutput::RotationVector(i) => m.phi[i],
             }
         }
+        Q::Stress(k, i) => b.stress(k, i)?,
         Q::Gravity(i) => c(b.parameters().g[i]),
         Q::RayleighAlpha => c(b.parameters().alpha),
         Q::RayleighBeta => c(b.parameters().beta),

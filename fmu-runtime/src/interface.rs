@@ -32,6 +32,8 @@ pub enum Quantity {
     FlangeForce(usize, usize),
     FlangeTorque(usize, usize),
     Flange(usize, FlangeOutput),
+    /// Stress at recovery point k, component i: xx, yy, zz, xy, yz, zx (0..6), von Mises (6).
+    Stress(usize, usize),
     Gravity(usize),
     RayleighAlpha,
     RayleighBeta,
@@ -101,7 +103,11 @@ pub const UNITS: &[(&str, [i32; 4])] = &[
     ("J", [1, 2, -2, 0]),
     ("N.s", [1, 1, -1, 0]),
     ("J.s", [1, 2, -1, 0]),
+    ("Pa", [1, -1, -2, 0]),
 ];
+
+/// Names of the stress outputs of a recovery point, in `Quantity::Stress` component order.
+pub const STRESS_COMPONENTS: [&str; 7] = ["sxx", "syy", "szz", "sxy", "syz", "szx", "mises"];
 
 const AXES: [&str; 3] = ["x", "y", "z"];
 
@@ -264,6 +270,25 @@ impl VariableTable {
                 "rad",
                 |i| out(FlangeOutput::RotationVector(i)),
             );
+        }
+        for (k, point) in body.stress_points.iter().enumerate() {
+            for (i, component) in STRESS_COMPONENTS.iter().enumerate() {
+                let what = match i {
+                    0..3 => format!("Normal stress {component}, body frame"),
+                    3..6 => format!("Shear stress {component}, body frame"),
+                    _ => "Von Mises equivalent stress".to_string(),
+                };
+                b.push(
+                    format!("{}.{component}", point.name),
+                    format!("{what}, at {}", point.description),
+                    Causality::Output,
+                    Variability::Continuous,
+                    None,
+                    None,
+                    Some("Pa"),
+                    Quantity::Stress(k, i),
+                );
+            }
         }
         for (i, axis) in AXES.iter().enumerate() {
             b.push(
@@ -692,6 +717,8 @@ impl VariableTable {
                     self.select(|q| accel(q) || mount_w(q) || mount_z(q))
                 }
             },
+            // stresses follow the deformation as the flange displacements do
+            Q::Stress(..) => self.select(q_all),
             // the rotating-frame terms couple all modes and bring in the spin
             Q::MountForce(_) | Q::MountTorque(_) => self.select(|q| accel(q) || mount_w(q) || mount_z(q)),
             Q::ModalVelocity(j) if j >= nd && j < ns => self.select(relaxing_rate),

@@ -14,6 +14,20 @@ pub struct FlangeShapes {
     pub shapes: Vec<f64>,
 }
 
+/// A node where the FMU recovers stresses.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StressPoint {
+    /// Variable name stem (`stress.<name>.sxx`, ...).
+    pub name: String,
+    /// Which node and why (node set, nearest to a point, hot spot), for the variables'
+    /// descriptions.
+    pub description: String,
+    /// Position of the node in B [m].
+    pub position: [f64; 3],
+    /// 6 x n, row-major: stress components xx, yy, zz, xy, yz, zx in B [Pa] per unit q.
+    pub modes: Vec<f64>,
+}
+
 /// Rotating-frame invariants (docs/ARCHITECTURE.md, "Equations"), row-major:
 /// G_a = Phi^T M E_a Phi (3 x r x r, skew), O_ab = Phi^T M E_a E_b Phi (3 x 3 x r x r),
 /// o_ab = Phi^T M E_a E_b X (3 x 3 x r). (c_a = Phi^T M E_a X are the rows of C_r.)
@@ -62,6 +76,8 @@ pub struct ReducedBody {
     pub c_r: Vec<f64>,
     /// Force flanges (loaded or free), in the order of the FMU's variables.
     pub flanges: Vec<FlangeShapes>,
+    /// Stress recovery points, in the order of the FMU's variables.
+    pub stress_points: Vec<StressPoint>,
     /// Present when the body may rotate; without it the mount must not rotate.
     pub rotation: Option<RotationTerms>,
     pub stiffening: Option<Stiffening>,
@@ -130,6 +146,15 @@ impl ReducedBody {
             c.put_text(&format!("flange.{i}.name"), &f.name);
             c.put_array(&format!("flange.{i}.position"), &[3], &f.position);
             c.put_array(&format!("flange.{i}.shapes"), &[6, n], &f.shapes);
+        }
+        if !self.stress_points.is_empty() {
+            c.put_array("stress.count", &[1], &[self.stress_points.len() as f64]);
+        }
+        for (i, p) in self.stress_points.iter().enumerate() {
+            c.put_text(&format!("stress.{i}.name"), &p.name);
+            c.put_text(&format!("stress.{i}.description"), &p.description);
+            c.put_array(&format!("stress.{i}.position"), &[3], &p.position);
+            c.put_array(&format!("stress.{i}.modes"), &[6, n], &p.modes);
         }
         if self.free_floating {
             c.put_array("free_floating", &[1], &[1.0]);
@@ -200,6 +225,19 @@ impl ReducedBody {
                 shapes: c.array(&format!("flange.{i}.shapes"), &[6, n])?.to_vec(),
             });
         }
+        let stress_count = if c.contains("stress.count") { c.scalar("stress.count")? } else { 0.0 };
+        if !(stress_count >= 0.0 && stress_count.fract() == 0.0 && stress_count <= 1e4) {
+            return Err(FormatError::Malformed(format!("stress.count = {stress_count}")));
+        }
+        let mut stress_points = Vec::new();
+        for i in 0..stress_count as usize {
+            stress_points.push(StressPoint {
+                name: c.text(&format!("stress.{i}.name"))?.to_owned(),
+                description: c.text(&format!("stress.{i}.description"))?.to_owned(),
+                position: to3(c.array(&format!("stress.{i}.position"), &[3])?),
+                modes: c.array(&format!("stress.{i}.modes"), &[6, n])?.to_vec(),
+            });
+        }
         let rotation = if c.contains("rotation.G") {
             Some(RotationTerms {
                 g: c.array("rotation.G", &[3, n, n])?.to_vec(),
@@ -255,6 +293,7 @@ impl ReducedBody {
             c_t: c.array("c_t", &[3, n])?.to_vec(),
             c_r: c.array("c_r", &[3, n])?.to_vec(),
             flanges,
+            stress_points,
             rotation,
             stiffening,
             free_floating: c.contains("free_floating"),
@@ -319,6 +358,7 @@ pub fn two_mode_body() -> ReducedBody {
             position: [1.0, 0.0, 0.0],
             shapes: vec![0.0, 0.1, 0.5, 0.0, 0.0, 0.3, 0.2, 0.0, 0.0, -0.6, 0.0, 0.0],
         }],
+        stress_points: Vec::new(),
         rotation: None,
         stiffening: None,
         free_floating: false,

@@ -73,6 +73,7 @@ fn synthetic_body(n: usize, free_floating: bool) -> ReducedBody {
             FlangeShapes { name: "tip".into(), position: [1.0, 0.0, 0.0], shapes: r.vec(6 * n, 0.1) },
             FlangeShapes { name: "mid".into(), position: [0.5, 0.0, 0.0], shapes: r.vec(6 * n, 0.1) },
         ],
+        stress_points: Vec::new(),
         rotation: Some(RotationTerms { g, o_mat, o_vec: r.vec(9 * n, 1e-3) }),
         stiffening: Some(Stiffening {
             centrifugal: Some(r.vec(9 * nn, 1e-3)),

@@ -5,6 +5,7 @@
 //! inertia-relief flange compliance.
 
 use super::Built;
+use super::stress::{self, UnitCases, unit_case_names};
 use crate::error::{BuildError, Result};
 use crate::ffrf::inertia;
 use crate::ffrf::invariants;
@@ -15,6 +16,7 @@ use crate::model::assembly::{MassProperties, Uncoupled};
 use crate::model::flange::Flange;
 use crate::model::part::Part;
 use crate::model::rigid_coupling::{self, Assembled};
+use crate::model::stress::Recovery;
 use crate::output::fmu::guid::guid;
 use crate::output::report::report_of;
 use crate::profile;
@@ -23,6 +25,7 @@ use crate::reduce::basis::{self, ModeCount};
 use crate::reduce::damping::{modal_damping, with_user_damping};
 use faer::Side;
 use fmu_runtime::reduced::{FlangeShapes, ReducedBody, RotationTerms};
+use std::path::Path;
 
 /// Mass properties about the centre of mass, from those about the mesh origin.
 fn about_centre_of_mass(p: MassProperties) -> ([f64; 3], MassProperties) {
@@ -68,7 +71,15 @@ fn rigid_deflation(model: &Assembled, nodes: &[[f64; 3]], flanges: &[Flange], or
     Ok(Deflation { vectors, m_vectors })
 }
 
-pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, modes: ModeCount) -> Result<Built> {
+pub fn reduce(
+    spec: Spec,
+    file: &Path,
+    part: Part,
+    free: Uncoupled,
+    flanges: Vec<Flange>,
+    modes: ModeCount,
+    recovery: Option<Recovery>,
+) -> Result<Built> {
     let mesh = &part.mesh;
     let mut model = profile::phase("rigid coupling of the flanges", || {
         rigid_coupling::rigid_coupling(&free, &mesh.nodes, &flanges, [0.0; 3])
@@ -96,6 +107,18 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
     let rot = profile::phase("rotation invariants", || {
         inertia::rotation_invariants(&model, &mesh.nodes, origin, phi_mesh.as_ref())
     });
+    let (stress_points, stress_report) = match recovery {
+        Some(recovery) => {
+            // unit flange loads with inertia relief: what deforms a free body
+            let unit = basis::flange_unit_loads(&model);
+            let statics = basis::inertia_relief_solve(&solver, &model.mass, shift, &rigid, &unit);
+            let fields = inertia::expand(&model, &mesh.nodes, &flanges, statics.as_ref());
+            let force: Vec<usize> = (0..flanges.len()).filter(|&k| flanges[k].role == Role::Force).collect();
+            let unit = UnitCases { fields: fields.as_ref(), names: unit_case_names(&flanges, &force, &[]) };
+            stress::recover(file, &part, &flanges, origin, recovery, phi_mesh.as_ref(), &unit)?
+        }
+        None => (Vec::new(), Vec::new()),
+    };
     let r = basis.omega.len();
     let mut reduced = ReducedBody {
         guid: String::new(),
@@ -120,6 +143,7 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
                 shapes: inv.flange_shapes[k].clone(),
             })
             .collect(),
+        stress_points,
         rotation: Some(RotationTerms { g: rot.g, o_mat: rot.o_mat, o_vec: rot.o_vec }),
         stiffening: None,
         free_floating: true,
@@ -131,7 +155,7 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
     })?;
     enforce(&accuracy)?;
     let statics = basis.omega.len() - basis.n_normal;
-    let report = report_of(
+    let mut report = report_of(
         &spec,
         &part,
         &flanges,
@@ -142,5 +166,6 @@ pub fn reduce(spec: Spec, part: Part, free: Uncoupled, flanges: Vec<Flange>, mod
         statics,
         accuracy,
     );
+    report.stress_points = stress_report;
     Ok(Built { spec, part, flanges, model, basis, reduced, report, profile: Vec::new() })
 }

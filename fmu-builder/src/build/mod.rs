@@ -5,6 +5,7 @@
 mod built;
 pub mod free_floating;
 pub mod mounted;
+mod stress;
 pub mod sweep;
 
 pub use built::Built;
@@ -132,6 +133,11 @@ fn against_input(file: &Path, field: &'static str, hint: &'static str) -> impl F
 pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
     let mut part = profile::phase("mesh or import", || part::part_of(&spec, file))?;
     let flanges = profile::phase("flange selection", || flange::select_flanges(&spec, file, &part))?;
+    // recovery points are checked before anything costly: a misspelt node set fails at once
+    let recovery = match spec.outputs.as_ref().and_then(|o| o.stress.as_ref()) {
+        Some(request) => Some(crate::model::stress::requested_points(file, request, &part)?),
+        None => None,
+    };
     // a part given with its supports (free_free false) is held by them, not only by flanges
     if spec.geometry.matrices.as_ref().is_none_or(|m| m.free_free) {
         profile::phase("connectivity", || connectivity::check_connected(file, &part, &flanges))?;
@@ -149,9 +155,10 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
     check_basis_not_empty(&spec, &modes, file)?;
     check_krylov_size(&spec, file)?;
     let Some(mount) = spec.mount_index() else {
-        return free_floating::reduce(spec, part, free, flanges, modes).map_err(|e| against_stage(file, e));
+        return free_floating::reduce(spec, file, part, free, flanges, modes, recovery)
+            .map_err(|e| against_stage(file, e));
     };
-    mounted::reduce(spec, part, free, flanges, modes, mount).map_err(|e| against_stage(file, e))
+    mounted::reduce(spec, file, part, free, flanges, modes, mount, recovery).map_err(|e| against_stage(file, e))
 }
 
 /// A failure of the reduction, against the input most likely behind it: a factorisation that

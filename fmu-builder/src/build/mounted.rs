@@ -3,6 +3,7 @@
 //! stage's output is a plain value; this file only wires them.
 
 use super::Built;
+use super::stress::{self, UnitCases, unit_case_names};
 use crate::error::{BuildError, Result};
 use crate::ffrf::inertia::{self, LoadCase};
 use crate::ffrf::invariants;
@@ -15,6 +16,7 @@ use crate::model::assembly::{SolidMaterial, Uncoupled};
 use crate::model::flange::Flange;
 use crate::model::part::Part;
 use crate::model::rigid_coupling::{self, Assembled};
+use crate::model::stress::Recovery;
 use crate::output::fmu::guid::guid;
 use crate::output::report::report_of;
 use crate::profile;
@@ -25,6 +27,15 @@ use crate::reduce::frf;
 use crate::reduce::order;
 use faer::{Mat, MatRef};
 use fmu_runtime::reduced::{FlangeShapes, ReducedBody, RotationTerms, Stiffening};
+use std::path::Path;
+
+/// [a b]: the columns of `a`, then those of `b` (same rows).
+fn concat_columns(a: &Mat<f64>, b: &Mat<f64>) -> Mat<f64> {
+    let mut out = Mat::<f64>::zeros(a.nrows(), a.ncols() + b.ncols());
+    out.as_mut().subcols_mut(0, a.ncols()).copy_from(a);
+    out.as_mut().subcols_mut(a.ncols(), b.ncols()).copy_from(b);
+    out
+}
 
 /// Reduced geometric stiffness of every unit prestress the scene can apply: centrifugal and
 /// angular-acceleration loads if it rotates, translational ones if it has gravity or
@@ -194,13 +205,16 @@ fn choose_order(
 }
 
 /// The reduced body of a part held at its mount flange `mount`.
+#[allow(clippy::too_many_arguments)]
 pub fn reduce(
     spec: Spec,
+    file: &Path,
     part: Part,
     free: Uncoupled,
     flanges: Vec<Flange>,
     modes: ModeCount,
     mount: usize,
+    recovery: Option<Recovery>,
 ) -> Result<Built> {
     let origin = flanges[mount].reference;
     let mut model = profile::phase("rigid coupling of the flanges", || {
@@ -313,6 +327,20 @@ pub fn reduce(
     } else {
         None
     };
+    let force: Vec<usize> = (0..flanges.len()).filter(|&k| flanges[k].role == Role::Force).collect();
+    let (stress_points, stress_report) = match recovery {
+        Some(recovery) => {
+            // the unit cases' static fields: the flange shapes' unit loads, then the scene's
+            let statics = match &load_shapes {
+                Some(shapes) => concat_columns(&flange_shapes, shapes),
+                None => flange_shapes.clone(),
+            };
+            let fields = inertia::expand(&model, &mesh.nodes, &flanges, statics.as_ref());
+            let unit = UnitCases { fields: fields.as_ref(), names: unit_case_names(&flanges, &force, &cases) };
+            stress::recover(file, &part, &flanges, origin, recovery, phi_mesh.as_ref(), &unit)?
+        }
+        None => (Vec::new(), Vec::new()),
+    };
     let props = model.mass_properties;
     for a in 0..3 {
         if (inv.rigid_mass[a] - props.mass).abs() > 1e-9 * props.mass {
@@ -322,7 +350,6 @@ pub fn reduce(
             )));
         }
     }
-    let force: Vec<usize> = (0..flanges.len()).filter(|&k| flanges[k].role == Role::Force).collect();
     let mut reduced = ReducedBody {
         guid: String::new(),
         model_name: spec.name.clone(),
@@ -344,6 +371,7 @@ pub fn reduce(
                 shapes: inv.flange_shapes[k].clone(),
             })
             .collect(),
+        stress_points,
         rotation,
         stiffening,
         free_floating: false,
@@ -380,6 +408,7 @@ pub fn reduce(
         }
     }
     let statics = basis.omega.len() - basis.n_normal;
-    let report = report_of(&spec, &part, &flanges, &model, &basis, &reduced, &method, statics, accuracy);
+    let mut report = report_of(&spec, &part, &flanges, &model, &basis, &reduced, &method, statics, accuracy);
+    report.stress_points = stress_report;
     Ok(Built { spec, part, flanges, model, basis, reduced, report, profile: Vec::new() })
 }

@@ -31,7 +31,33 @@ pub struct Spec {
     #[serde(default)]
     pub scene: Option<Scene>,
     pub reduction: Reduction,
+    #[serde(default)]
+    pub outputs: Option<Outputs>,
 }
+
+/// What the FMU reports beside the flanges' motion.
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct Outputs {
+    #[serde(default)]
+    pub stress: Option<StressOutputs>,
+}
+
+/// Where the FMU recovers stresses: nodes of named sets, the nodes nearest to points, and the
+/// hot spots the builder finds.
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct StressOutputs {
+    #[serde(default)]
+    pub node_sets: Vec<String>,
+    #[serde(default)]
+    pub points: Vec<[f64; 3]>,
+    #[serde(default)]
+    pub hot_spots: usize,
+}
+
+/// Most stress recovery points a build accepts (seven outputs each).
+pub const MAX_STRESS_POINTS: usize = 1000;
 
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]

@@ -13,3 +13,4 @@ pub mod flange;
 mod node_graph;
 pub mod part;
 pub mod rigid_coupling;
+pub mod stress;

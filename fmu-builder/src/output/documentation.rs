@@ -4,7 +4,7 @@
 //! [`relative_error_plot`].
 
 use crate::output::plot::{Annotation, PALETTE, PlotSpec, Series, Stroke, esc, line_plot};
-use crate::output::report::Report;
+use crate::output::report::{Report, StressPointReport};
 use crate::reduce::frf::{ComparisonDamping, FrequencyResponse};
 use std::fmt::Write;
 
@@ -51,6 +51,7 @@ td,th{{border:1px solid #bbb;padding:0.2em 0.6em;text-align:right}}th{{backgroun
         );
     }
     h.push_str("</table>\n");
+    h.push_str(&stress_points_html(&r.stress_points));
     let _ = write!(
         h,
         "<h2>Reduction</h2>\n<p>{} with {} fixed-interface normal modes and {} constraint modes: reduced order {}.</p>\n",
@@ -108,6 +109,39 @@ compliance (relative to its largest entry): {:.2e}. Constraint modes make it exa
         h.push_str(&accuracy_over_band_html(fr, &a.compliance_flanges));
     }
     h.push_str("<p>The machine-readable report, with the full compliance matrices, is <code>report.json</code> beside this file.</p>\n</body></html>\n");
+    h
+}
+
+/// The stress recovery points (outputs.stress) and, per point, its static stresses under every
+/// unit load case: what the FMU's stress outputs read for that load held steady.
+fn stress_points_html(points: &[StressPointReport]) -> String {
+    if points.is_empty() {
+        return String::new();
+    }
+    let mut h = String::from(
+        "<h2>Stress recovery points</h2>\n<p>Outputs <code>&lt;point&gt;.sxx</code> .. <code>.szx</code> (body frame) and \
+<code>.mises</code> [Pa] at each node below: nodal stresses as CalculiX computes them (integration-point stresses \
+extrapolated to the element's nodes, averaged over the elements sharing the node), linear in the modal coordinates. \
+Hot spots are the nodes with the highest von Mises stress under the unit load cases, each case relative to its own \
+peak; nodes tied to a flange are not candidates. The static stresses per unit load follow each point.</p>\n",
+    );
+    for p in points {
+        let _ = write!(
+            h,
+            "<h3>{}</h3>\n<p>{}</p>\n<table><tr><th>unit load case</th><th>sxx</th><th>syy</th><th>szz</th><th>sxy</th>\
+<th>syz</th><th>szx</th><th>von Mises [Pa]</th></tr>\n",
+            esc(&p.name),
+            esc(&p.description)
+        );
+        for c in &p.unit_cases {
+            let _ = write!(h, "<tr><td>{}</td>", esc(&c.case));
+            for v in c.stress.iter().chain(std::iter::once(&c.von_mises)) {
+                let _ = write!(h, "<td>{}</td>", fmt_num(*v));
+            }
+            h.push_str("</tr>\n");
+        }
+        h.push_str("</table>\n");
+    }
     h
 }
 
@@ -343,6 +377,7 @@ mod tests {
                 reference_point: [1.0, 0.0, 0.0],
                 slave_nodes: 9,
             }],
+            stress_points: Vec::new(),
             accuracy: Accuracy {
                 reduced_hz: vec![300.0, 1500.0],
                 full_hz: vec![299.0, 1490.0],

@@ -20,6 +20,27 @@ pub struct FlangeReport {
     pub slave_nodes: usize,
 }
 
+/// A stress recovery point and its static stresses under the unit load cases.
+#[derive(Debug, Clone, Serialize)]
+pub struct StressPointReport {
+    /// Variable name stem of its outputs.
+    pub name: String,
+    /// Which node and why.
+    pub description: String,
+    /// Node position in the mesh's coordinates [m].
+    pub position: [f64; 3],
+    pub unit_cases: Vec<UnitCaseStress>,
+}
+
+/// Static stress at a recovery point under one unit load case (xx, yy, zz, xy, yz, zx in the
+/// body frame, and von Mises) [Pa per unit load].
+#[derive(Debug, Clone, Serialize)]
+pub struct UnitCaseStress {
+    pub case: String,
+    pub stress: [f64; 6],
+    pub von_mises: f64,
+}
+
 #[derive(Debug, Clone, Serialize)]
 pub struct Report {
     pub model_name: String,
@@ -57,6 +78,8 @@ pub struct Report {
     /// it has decayed by e: the tolerance falls a decade per decade of them above 10.
     pub ringing_periods: f64,
     pub flanges: Vec<FlangeReport>,
+    /// Stress recovery points (outputs.stress), in the order of the FMU's variables.
+    pub stress_points: Vec<StressPointReport>,
     pub accuracy: Accuracy,
 }
 
@@ -113,6 +136,7 @@ pub fn report_of(
                 slave_nodes: f.slaves.len(),
             })
             .collect(),
+        stress_points: Vec::new(),
         accuracy,
     }
 }

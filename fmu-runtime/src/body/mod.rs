@@ -25,6 +25,7 @@ mod mounted;
 mod quasi_static;
 mod reaction;
 mod statics;
+mod stress;
 
 use crate::coupled_propagator::CoupledPropagator;
 use crate::kinematics::{self as k3, Mat3, Vec3};

@@ -35,6 +35,7 @@ pub mod gauss;
 pub mod geometric;
 pub mod hex20;
 pub mod hex8;
+pub mod stress;
 pub mod tet10;
 pub mod tet4;
 
