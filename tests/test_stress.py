@@ -1,0 +1,172 @@
+"""Stress recovery (outputs.stress) against CalculiX on the builder's own mesh, and against beam
+theory.
+
+The FMU's stress outputs at static equilibrium (static_start, loads held) are compared with
+CalculiX's linear static solution of the same deck (`--export-inp`: same nodes, elements,
+material, flanges as *RIGID BODY), in two ways (ccx_stress.py):
+
+- with CalculiX's integration-point stresses (*EL PRINT, 7 digits) extrapolated to the nodes
+  with the exact matrices and averaged as CalculiX averages: the same definition as ours;
+- with CalculiX's own nodal stresses (.frd), whose extrapolation tables are rounded to 3..5
+  decimals and whose values carry 6 digits: bounded by that rounding.
+
+Run with -s to see the measured deviations."""
+
+import json
+import math
+import zipfile
+
+import numpy as np
+import pytest
+
+import calculix as ccx
+import ccx_stress
+from conftest import EXAMPLES, run_builder
+from fmu_access import Fmu
+
+COMPONENTS = ["sxx", "syy", "szz", "sxy", "syz", "szx"]
+
+
+def build(spec: dict, workdir, name: str):
+    """Build `spec` with its CalculiX deck: (FMU path, report, deck text)."""
+    path = workdir / f"{name}.json"
+    path.write_text(json.dumps(spec))
+    fmu, inp = workdir / f"{name}.fmu", workdir / f"{name}.inp"
+    run_builder([path, "-o", fmu, "--export-inp", inp, "-q"])
+    report = json.loads(zipfile.ZipFile(fmu).read("documentation/report.json"))
+    return fmu, report, inp.read_text()
+
+
+def fmu_static_stresses(fmu_path, report, inputs: dict) -> np.ndarray:
+    """The FMU's stress outputs (points x 6) at the static equilibrium under `inputs`."""
+    fmu = Fmu(fmu_path, "ModelExchange")
+    try:
+        fmu.set(static_start=True, **inputs)
+        fmu.initialize()
+        names = [f"{p['name']}.{c}" for p in report["stress_points"] for c in COMPONENTS]
+        return fmu.get(*names).reshape(-1, 6)
+    finally:
+        fmu.close()
+
+
+def deck_nodes_of(report, deck) -> list[int]:
+    """The deck's node id of every recovery point (the deck numbers nodes its own way: matched
+    by coordinates, which the deck carries to 17 digits)."""
+    coords = ccx.node_coordinates(deck)
+    ids = np.array(list(coords))
+    xyz = np.array([coords[i] for i in ids])
+    out = []
+    for p in report["stress_points"]:
+        d = np.linalg.norm(xyz - np.array(p["position"]), axis=1)
+        assert d.min() <= 1e-12 * (1 + np.abs(xyz).max()), f"{p['name']}: no deck node at {p['position']}"
+        out.append(int(ids[d.argmin()]))
+    return out
+
+
+def compare(label, ours, reference, tol):
+    """Largest deviation per point relative to that point's largest component; asserts `tol`."""
+    assert ours.shape == reference.shape, (ours.shape, reference.shape)
+    scale = np.abs(reference).max(axis=1)
+    worst = (np.abs(ours - reference).max(axis=1) / scale)
+    print(f"  {label}: {len(worst)} points, largest deviation {worst.max():.2e} of the point's largest "
+          f"component (tolerance {tol:.0e})")
+    assert worst.max() <= tol, f"{label}: point {worst.argmax()} deviates {worst.max():.2e}"
+    return worst.max()
+
+
+def check_against_calculix(fmu, report, deck, workdir, fmu_inputs: dict, ccx_loads: str, label: str,
+                           tol_points: float, tol_frd: float):
+    nodes = deck_nodes_of(report, deck)
+    analysis = (ccx.rigid_body(deck, "base") + ccx.rigid_body(deck, report["flanges"][1]["name"])
+                + ccx.clamp(deck, "base") + ccx_stress.stress_step(ccx_loads))
+    result = ccx.run_ccx(deck, analysis, workdir / label)
+    ours = fmu_static_stresses(fmu, report, fmu_inputs)
+    at_points = ccx_stress.el_print_stresses(result.dat)
+    exact = ccx_stress.nodal_from_points(deck, at_points, nodes)
+    frd = ccx_stress.frd_nodal_stresses((workdir / label / "job.frd").read_text())
+    print(f"\n{label}:")
+    compare("vs CalculiX integration-point stresses, extrapolated exactly",
+            ours, np.array([exact[n] for n in nodes]), tol_points)
+    compare("vs CalculiX nodal stresses (.frd)", ours, np.array([frd[n] for n in nodes]), tol_frd)
+    return ours
+
+
+def beam_spec(**scene):
+    spec = json.loads((EXAMPLES / "beam.json").read_text())
+    spec.pop("$schema")
+    spec["outputs"] = {"stress": {"points": [[0.1, 0.005, 0.01], [0.5, 0.0, 0.01], [0.3, -0.005, 0.0]],
+                                  "hot_spots": 4}}
+    if scene:
+        spec["scene"] = scene
+    return spec
+
+
+#: Tolerances, about ten times what these meshes measure (-s prints it). The exact comparison is
+#: bounded by CalculiX's printed integration-point stresses: 7 digits (5e-7) amplified by the
+#: extrapolation rows, whose |entries| sum to 9.1 for C3D20's 27-point fit and 2.9 for C3D10:
+#: measured 7.1e-6 (C3D20) and 9.8e-7 (C3D10). Its .frd nodal stresses carry 6 digits and
+#: come from tables rounded to 3..5 decimals: measured 1.9e-5 .. 3.5e-5.
+TOL_POINTS_HEX20 = 1e-4
+TOL_POINTS_TET10 = 1e-5
+TOL_FRD = 3e-4
+
+
+def test_beam_hex20_flange_loads_and_gravity_vs_calculix(tmp_path):
+    fmu, report, deck = build(beam_spec(loads=["gravity"]), tmp_path, "beam")
+    assert len(report["stress_points"]) == 7
+    tip = ccx.cload(deck, "tip", force=(0.0, 2.0, 5.0), moment=(0.3, 0.0, 0.1))
+    check_against_calculix(fmu, report, deck, tmp_path,
+                           {"tip.f[2]": 2.0, "tip.f[3]": 5.0, "tip.t[1]": 0.3, "tip.t[3]": 0.1},
+                           tip, "beam, tip loads", TOL_POINTS_HEX20, TOL_FRD)
+    check_against_calculix(fmu, report, deck, tmp_path, {"g[3]": -9.81},
+                           ccx.gravity(9.81, (0, 0, -1)), "beam, gravity", TOL_POINTS_HEX20, TOL_FRD)
+
+
+def test_beam_bending_stress_vs_beam_theory(tmp_path):
+    """sigma_xx = -F (L - x) z / I at x = 0.1 m and 0.5 m, top fibre (z = h/2), under a tip force
+    F_z: five beam heights from the clamp, where Saint-Venant's principle lets beam theory hold
+    (nearer, the rigid clamp's restraint of the Poisson contraction adds its local stresses)."""
+    fmu, report, _ = build(beam_spec(), tmp_path, "beam")
+    s = fmu_static_stresses(fmu, report, {"tip.f[3]": 1.0})
+    b, h, length = 0.01, 0.02, 1.0
+    inertia = b * h**3 / 12
+    for k, x in [(0, 0.1), (1, 0.5)]:
+        assert report["stress_points"][k]["position"][0] == pytest.approx(x, abs=1e-12)
+        theory = -1.0 * (length - x) * (h / 2) / inertia
+        print(f"\n  x = {x}: sigma_xx {s[k, 0]:.6e} Pa, beam theory {theory:.6e} Pa, "
+              f"deviation {abs(s[k, 0] / theory - 1):.2e}")
+        # measured 6.5e-5 at x = 0.1 m (the clamp's local stresses fading) and 6e-10 at 0.5 m;
+        # beam theory's own error (shear, Poisson) on this slender beam is that small, far
+        # below the 2 % the issue asks
+        assert abs(s[k, 0] / theory - 1) <= 1e-3
+
+
+def test_bracket_tet10_vs_calculix(tmp_path):
+    spec = json.loads((EXAMPLES / "bracket" / "bracket-inp.json").read_text())
+    spec.pop("$schema", None)
+    spec["geometry"]["mesh"] = str((EXAMPLES / "bracket" / spec["geometry"]["mesh"]).resolve())
+    spec["scene"] = {"loads": ["gravity"]}
+    spec["outputs"] = {"stress": {"points": [[0.03, 0.02, 0.003], [0.003, 0.02, 0.02]], "hot_spots": 6}}
+    fmu, report, deck = build(spec, tmp_path, "bracket")
+    arm = report["flanges"][1]["name"]
+    loads = ccx.cload(deck, arm, force=(10.0, 0.0, -20.0), moment=(0.0, 0.5, 0.0))
+    check_against_calculix(fmu, report, deck, tmp_path,
+                           {f"{arm}.f[1]": 10.0, f"{arm}.f[3]": -20.0, f"{arm}.t[2]": 0.5},
+                           loads, "bracket, arm loads", TOL_POINTS_TET10, TOL_FRD)
+    check_against_calculix(fmu, report, deck, tmp_path, {"g[1]": 9.81},
+                           ccx.gravity(9.81, (1, 0, 0)), "bracket, gravity", TOL_POINTS_TET10, TOL_FRD)
+
+
+def test_hot_spots_are_the_peaks_of_the_unit_cases(tmp_path):
+    """Every hot spot is the peak of a unit case over all nodes not tied to a flange, by the
+    builder's own report of static stresses (a consistency check of the ranking)."""
+    fmu, report, _ = build(beam_spec(), tmp_path, "beam")
+    hot = [p for p in report["stress_points"] if "hot spot" in p["description"]]
+    assert len(hot) == 4
+    named = [p for p in report["stress_points"] if "hot spot" not in p["description"]]
+    for p in hot:
+        # the case that ranks it: its von Mises stress there is the case's peak over the body
+        case = p["description"].split("under ")[1].rstrip(")")
+        value = next(c["von_mises"] for c in p["unit_cases"] if c["case"] == case)
+        for q in named:
+            assert next(c["von_mises"] for c in q["unit_cases"] if c["case"] == case) <= value * (1 + 1e-12)
