@@ -101,6 +101,17 @@ CASES = [
      ["reduction.moments", "basis vectors"]),
     ("reference point a light year away", lambda s: s["flanges"][1].update(reference_point=[1e16, 0, 0]),
      ["flanges[1].reference_point", "joint"]),
+    # stress recovery (outputs.stress)
+    ("stress at a node set that does not exist", lambda s: s.update(outputs={"stress": {"node_sets": ["ROOT"]}}),
+     ["outputs.stress.node_sets[0]", "no node set \"ROOT\"", "no node sets"]),
+    ("zero hot spots", lambda s: s.update(outputs={"stress": {"hot_spots": 0}}),
+     ["outputs.stress.hot_spots", "minimum of 1"]),
+    ("negative hot spots", lambda s: s.update(outputs={"stress": {"hot_spots": -3}}),
+     ["outputs.stress.hot_spots", "minimum of 1"]),
+    ("too many stress points", lambda s: s.update(outputs={"stress": {"hot_spots": 5000}}),
+     ["outputs.stress", "5000 recovery points", "at most 1000"]),
+    ("stress point not a point", lambda s: s.update(outputs={"stress": {"points": [[0.5, 0.0]]}}),
+     ["outputs.stress.points[0]"]),
     ("box far from the origin",
      lambda s: (set_path(s, ["geometry", "boxes", 0, "min"], [1e15, 0, 0]),
                 set_path(s, ["geometry", "boxes", 0, "max"], [1e15 + 1, 0.01, 0.02])),
@@ -171,3 +182,24 @@ def test_inverted_element_names_file_and_element_id(tmp_path):
 def test_missing_file_is_named(tmp_path):
     proc = run_builder([tmp_path / "nope.json", "-o", tmp_path / "x.fmu"], check=False)
     assert proc.returncode == 1 and "nope.json" in proc.stderr and "panicked" not in proc.stderr
+
+
+def test_stress_outputs_from_matrix_input_are_refused(tmp_path):
+    """Stresses need the elements; a part given as matrices has none: refused, naming the field."""
+    small = tmp_path / "small.json"
+    small.write_text(json.dumps(BASE))
+    run_builder([small, "-o", tmp_path / "small.fmu", "--export-free-free", tmp_path / "m", "-q"])
+    spec = copy.deepcopy(BASE)
+    spec["geometry"] = {"matrices": {"stiffness": "m/K.mtx", "mass": "m/M.mtx", "dofs": "m/dofs.txt",
+                                     "nodes": "m/nodes.txt"}}
+    spec.pop("material")
+    spec["flanges"] = [{"name": "base", "role": "motion", "nodes": {"box": {"min": [-1, -1, -1], "max": [1e-9, 1, 1]}}},
+                       {"name": "tip", "role": "force", "nodes": {"box": {"min": [0.999, -1, -1], "max": [2, 1, 1]}}}]
+    spec["outputs"] = {"stress": {"hot_spots": 2}}
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(spec))
+    proc = run_builder([path, "-o", tmp_path / "bad.fmu"], check=False)
+    assert proc.returncode == 1 and "panicked" not in proc.stderr, proc.stderr
+    for expected in [str(path), "outputs.stress", "matrices", "without elements"]:
+        assert expected in proc.stderr, f"{expected!r} not in {proc.stderr!r}"
+    assert not (tmp_path / "bad.fmu").exists()
