@@ -170,3 +170,28 @@ def test_hot_spots_are_the_peaks_of_the_unit_cases(tmp_path):
         value = next(c["von_mises"] for c in p["unit_cases"] if c["case"] == case)
         for q in named:
             assert next(c["von_mises"] for c in q["unit_cases"] if c["case"] == case) <= value * (1 + 1e-12)
+
+
+def test_t_square_steady_spin_vs_calculix_centrif(tmp_path):
+    """Paper example 3 spinning steadily at omega = 2 pi (1, 1, 1) rad/s about the axis through
+    its mount: the FMU's stresses at its static start under the spin against CalculiX's linear
+    static *DLOAD CENTRIF on the same mesh. CalculiX's linear statics leaves out spin softening,
+    (omega / omega_1)^2 = 5e-5 of the deformation, which the FMU has: that, not round-off, sets
+    the agreement (the flange displacements of test_large_motion agree as closely)."""
+    spec = json.loads((EXAMPLES / "t-square.json").read_text())
+    spec.pop("$schema")
+    spec["outputs"] = {"stress": {"points": [[0.18, 0.0, 0.02], [0.06, 0.02, 0.0], [0.02, 0.05, 0.02]],
+                                  "hot_spots": 5}}
+    fmu, report, deck = build(spec, tmp_path, "tsquare")
+    point = ccx.reference_point(deck, "base")
+    analysis = (ccx.rigid_body(deck, "base") + ccx.rigid_body(deck, "left") + ccx.rigid_body(deck, "right")
+                + ccx.clamp(deck, "base") + ccx_stress.stress_step(ccx.centrif(ccx.TSQUARE_OMEGA, point, ccx.TSQUARE_AXIS)))
+    result = ccx.run_ccx(deck, analysis, tmp_path / "spin")
+    nodes = deck_nodes_of(report, deck)
+    ours = fmu_static_stresses(fmu, report, {f"base.w[{i + 1}]": 2 * math.pi for i in range(3)})
+    exact = ccx_stress.nodal_from_points(deck, ccx_stress.el_print_stresses(result.dat), nodes)
+    print("\nT-square steady spin:")
+    # measured 4.4e-5 (spin softening, above); the issue's bound, 1e-4, is that of the
+    # displacements
+    compare("vs CalculiX CENTRIF, integration-point stresses extrapolated exactly",
+            ours, np.array([exact[n] for n in nodes]), 1e-4)
