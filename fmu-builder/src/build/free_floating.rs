@@ -5,7 +5,7 @@
 //! inertia-relief flange compliance.
 
 use super::Built;
-use super::stress::{self, UnitCases, unit_case_names};
+use super::stress::{self, Recovered, UnitCases, unit_case_names};
 use crate::error::{BuildError, Result};
 use crate::ffrf::inertia;
 use crate::ffrf::invariants;
@@ -107,7 +107,7 @@ pub fn reduce(
     let rot = profile::phase("rotation invariants", || {
         inertia::rotation_invariants(&model, &mesh.nodes, origin, phi_mesh.as_ref())
     });
-    let (stress_points, stress_report) = match recovery {
+    let recovered = match recovery {
         Some(recovery) => {
             // unit flange loads with inertia relief: what deforms a free body
             let unit = basis::flange_unit_loads(&model);
@@ -117,7 +117,7 @@ pub fn reduce(
             let unit = UnitCases { fields: fields.as_ref(), names: unit_case_names(&flanges, &force, &[]) };
             stress::recover(file, &part, &flanges, origin, recovery, phi_mesh.as_ref(), &unit)?
         }
-        None => (Vec::new(), Vec::new()),
+        None => Recovered::none(),
     };
     let r = basis.omega.len();
     let mut reduced = ReducedBody {
@@ -143,7 +143,7 @@ pub fn reduce(
                 shapes: inv.flange_shapes[k].clone(),
             })
             .collect(),
-        stress_points,
+        stress_points: recovered.points,
         rotation: Some(RotationTerms { g: rot.g, o_mat: rot.o_mat, o_vec: rot.o_vec }),
         stiffening: None,
         free_floating: true,
@@ -166,6 +166,6 @@ pub fn reduce(
         statics,
         accuracy,
     );
-    report.stress_points = stress_report;
+    report.stress_points = recovered.report;
     Ok(Built { spec, part, flanges, model, basis, reduced, report, profile: Vec::new() })
 }

@@ -3,7 +3,7 @@
 //! stage's output is a plain value; this file only wires them.
 
 use super::Built;
-use super::stress::{self, UnitCases, unit_case_names};
+use super::stress::{self, Recovered, UnitCases, unit_case_names};
 use crate::error::{BuildError, Result};
 use crate::ffrf::inertia::{self, LoadCase};
 use crate::ffrf::invariants;
@@ -16,7 +16,7 @@ use crate::model::assembly::{SolidMaterial, Uncoupled};
 use crate::model::flange::Flange;
 use crate::model::part::Part;
 use crate::model::rigid_coupling::{self, Assembled};
-use crate::model::stress::Recovery;
+use crate::model::stress::{Recovery, nodal_stresses};
 use crate::output::fmu::guid::guid;
 use crate::output::report::report_of;
 use crate::profile;
@@ -328,7 +328,7 @@ pub fn reduce(
         None
     };
     let force: Vec<usize> = (0..flanges.len()).filter(|&k| flanges[k].role == Role::Force).collect();
-    let (stress_points, stress_report) = match recovery {
+    let recovered = match recovery {
         Some(recovery) => {
             // the unit cases' static fields: the flange shapes' unit loads, then the scene's
             let statics = match &load_shapes {
@@ -339,7 +339,7 @@ pub fn reduce(
             let unit = UnitCases { fields: fields.as_ref(), names: unit_case_names(&flanges, &force, &cases) };
             stress::recover(file, &part, &flanges, origin, recovery, phi_mesh.as_ref(), &unit)?
         }
-        None => (Vec::new(), Vec::new()),
+        None => Recovered::none(),
     };
     let props = model.mass_properties;
     for a in 0..3 {
@@ -371,7 +371,7 @@ pub fn reduce(
                 shapes: inv.flange_shapes[k].clone(),
             })
             .collect(),
-        stress_points,
+        stress_points: recovered.points,
         rotation,
         stiffening,
         free_floating: false,
@@ -390,8 +390,18 @@ pub fn reduce(
     if !force.is_empty() && spec.scene.as_ref().is_some_and(|s| s.band.is_some() || s.tolerance.is_some()) {
         let band = band_of(&spec, &accuracy.full_hz);
         let damping = frf::ComparisonDamping::new(spec.damping.alpha, spec.damping.beta);
+        // the recovery points' stress responses are compared too (full: the full model's response
+        // on the mesh, its nodal stresses at the points)
+        let stresses_of = |x: MatRef<'_, f64>| {
+            let u = inertia::expand(&model, &mesh.nodes, &flanges, x);
+            nodal_stresses(&part, &recovered.nodes, u.as_ref())
+        };
+        let probe = (!recovered.nodes.is_empty()).then(|| frf::StressProbe {
+            full: &stresses_of,
+            modes: reduced.stress_points.iter().map(|p| p.modes.as_slice()).collect(),
+        });
         accuracy.frequency_response = Some(profile::phase("frequency-response comparison", || {
-            frf::compare(&model, &basis, damping, band, &accuracy.full_hz, &accuracy.compliance_full)
+            frf::compare(&model, &basis, damping, band, &accuracy.full_hz, &accuracy.compliance_full, probe.as_ref())
         })?);
     }
     if let Some(shapes) = &load_shapes {
@@ -409,6 +419,6 @@ pub fn reduce(
     }
     let statics = basis.omega.len() - basis.n_normal;
     let mut report = report_of(&spec, &part, &flanges, &model, &basis, &reduced, &method, statics, accuracy);
-    report.stress_points = stress_report;
+    report.stress_points = recovered.report;
     Ok(Built { spec, part, flanges, model, basis, reduced, report, profile: Vec::new() })
 }

@@ -43,6 +43,21 @@ pub fn unit_case_names(flanges: &[Flange], force: &[usize], cases: &[LoadCase]) 
     names
 }
 
+/// What stress recovery adds to a build.
+pub struct Recovered {
+    /// The FMU's recovery points with their stress modes.
+    pub points: Vec<StressPoint>,
+    pub report: Vec<StressPointReport>,
+    /// The points' mesh nodes, in the same order.
+    pub nodes: Vec<usize>,
+}
+
+impl Recovered {
+    pub fn none() -> Self {
+        Self { points: Vec::new(), report: Vec::new(), nodes: Vec::new() }
+    }
+}
+
 /// The recovery points' stress modes (6 x r per point, body frame = mesh axes) and their
 /// report, hot spots chosen among the unit cases' static stresses.
 pub fn recover(
@@ -53,7 +68,7 @@ pub fn recover(
     recovery: Recovery,
     phi_mesh: MatRef<'_, f64>,
     unit: &UnitCases<'_>,
-) -> Result<(Vec<StressPoint>, Vec<StressPointReport>)> {
+) -> Result<Recovered> {
     profile::phase("stress recovery", || {
         let mut points = recovery.points;
         if recovery.hot_spots > 0 {
@@ -112,6 +127,6 @@ pub fn recover(
                     .collect(),
             });
         }
-        Ok((stress_points, report))
+        Ok(Recovered { points: stress_points, report, nodes })
     })
 }

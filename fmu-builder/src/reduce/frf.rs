@@ -48,6 +48,23 @@ pub struct FrequencyResponse {
     /// The full model's complete flange FRF at every sampled frequency, row-major nb x nb, as
     /// [re, im] pairs: for independent checks (e.g. a SciPy solve on the exported matrices).
     pub full_matrices: Vec<Vec<[f64; 2]>>,
+    /// With stress recovery points: per frequency, |S_full - S_red|_F / |S_full|_F of the stress
+    /// responses (every point, component and unit flange load).
+    pub stress_relative_error: Vec<f64>,
+    /// The full model's stress responses at the first `STRESS_FRF_POINTS` recovery points: per
+    /// frequency, point-major (point, component xx..zx, unit load) as [re, im] [Pa per N or N m].
+    pub stress_full: Vec<Vec<[f64; 2]>>,
+}
+
+/// Recovery points whose full-model stress responses the report keeps (the error covers all).
+pub const STRESS_FRF_POINTS: usize = 20;
+
+/// Stresses at the recovery points, for the comparison of their responses: `full` maps
+/// responses of the constrained model (n_clamped x k) to the points' stresses (points x k,
+/// point-major); `modes` are the reduced body's stress modes (6 x r per point, row-major).
+pub struct StressProbe<'a> {
+    pub full: &'a dyn Fn(faer::MatRef<'_, f64>) -> Result<Vec<[f64; 6]>>,
+    pub modes: Vec<&'a [f64]>,
 }
 
 /// Sample frequencies: an even grid over the band plus every full-model eigenfrequency in it and
@@ -134,6 +151,13 @@ impl FullResponse {
 
     /// Flange FRF at `hz` (nb x nb).
     pub fn at(&mut self, damping: ComparisonDamping, hz: f64) -> Result<Mat<c64>> {
+        let x = self.response(damping, hz)?;
+        let rows = &self.rows;
+        Ok(Mat::from_fn(rows.len(), rows.len(), |i, j| x[(rows[i], j)]))
+    }
+
+    /// The full model's response to each unit flange load at `hz` (n_clamped x nb).
+    pub fn response(&mut self, damping: ComparisonDamping, hz: f64) -> Result<Mat<c64>> {
         let nc = self.k.nrows();
         let w = 2.0 * std::f64::consts::PI * hz;
         // K (1 + i eta) + i w (alpha M + beta K) - w^2 M, always with the same triplet order
@@ -196,8 +220,7 @@ impl FullResponse {
             }
             x += &r;
         }
-        let rows = &self.rows;
-        Ok(Mat::from_fn(rows.len(), rows.len(), |i, j| x[(rows[i], j)]))
+        Ok(x)
     }
 }
 
@@ -206,20 +229,25 @@ fn flange_rows(b: &Mat<f64>) -> Vec<usize> {
     (0..b.ncols()).map(|j| (0..b.nrows()).find(|&i| b[(i, j)] != 0.0).unwrap_or(0)).collect()
 }
 
-/// Reduced-model flange FRF at `hz`: Phi_b diag(1 / (lambda (1 + i eta) + i w d - w^2)) Phi_b^T,
-/// with the same Rayleigh damping projected (diagonal: Phi is M- and K-orthogonal).
-pub fn reduced_response(model: &Assembled, basis: &Basis, damping: ComparisonDamping, hz: f64) -> Mat<c64> {
-    let b = flange_unit_loads(model);
-    let rows = flange_rows(&b);
+/// The reduced model's modal receptances at `hz`: 1 / (lambda (1 + i eta) + i w d - w^2) per
+/// mode, with the same Rayleigh damping projected (diagonal: Phi is M- and K-orthogonal).
+fn modal_receptances(basis: &Basis, damping: ComparisonDamping, hz: f64) -> Vec<c64> {
     let w = 2.0 * std::f64::consts::PI * hz;
-    let r = basis.omega.len();
-    let g: Vec<c64> = (0..r)
+    (0..basis.omega.len())
         .map(|k| {
             let lambda = basis.omega[k] * basis.omega[k];
             let d = damping.alpha + damping.beta * lambda;
             c64::new(1.0, 0.0) / c64::new(lambda - w * w, lambda * damping.loss_factor + w * d)
         })
-        .collect();
+        .collect()
+}
+
+/// Reduced-model flange FRF at `hz`: Phi_b diag(receptances) Phi_b^T.
+pub fn reduced_response(model: &Assembled, basis: &Basis, damping: ComparisonDamping, hz: f64) -> Mat<c64> {
+    let b = flange_unit_loads(model);
+    let rows = flange_rows(&b);
+    let r = basis.omega.len();
+    let g = modal_receptances(basis, damping, hz);
     Mat::from_fn(rows.len(), rows.len(), |i, j| {
         let mut s = c64::new(0.0, 0.0);
         for k in 0..r {
@@ -237,6 +265,7 @@ pub fn compare(
     band: [f64; 2],
     eigen_hz: &[f64],
     static_compliance: &[Vec<f64>],
+    stress: Option<&StressProbe<'_>>,
 ) -> Result<FrequencyResponse> {
     let frequencies = grid(band, eigen_hz, 60);
     let scale: Vec<f64> =
@@ -245,9 +274,19 @@ pub fn compare(
     let mut driving_point_full = Vec::new();
     let mut driving_point_reduced = Vec::new();
     let mut full_matrices = Vec::new();
+    let mut stress_relative_error = Vec::new();
+    let mut stress_full = Vec::new();
     let mut full_model = FullResponse::new(model)?;
+    let b = flange_unit_loads(model);
+    let rows = flange_rows(&b);
     for &f in &frequencies {
-        let full = full_model.at(damping, f)?;
+        let x = full_model.response(damping, f)?;
+        let full = Mat::from_fn(rows.len(), rows.len(), |i, j| x[(rows[i], j)]);
+        if let Some(probe) = stress {
+            let (error, kept) = stress_responses(probe, &x, &rows, basis, damping, f)?;
+            stress_relative_error.push(error);
+            stress_full.push(kept);
+        }
         let red = reduced_response(model, basis, damping, f);
         let (mut num, mut den) = (0.0, 0.0);
         for i in 0..full.nrows() {
@@ -279,5 +318,45 @@ pub fn compare(
         driving_point_full,
         driving_point_reduced,
         full_matrices,
+        stress_relative_error,
+        stress_full,
     })
+}
+
+/// The stress responses at the probe's points, full (from the full response `x`) against
+/// reduced (stress modes times modal receptances times Phi_b^T): the relative error over all,
+/// and the full responses of the first `STRESS_FRF_POINTS` points as [re, im].
+fn stress_responses(
+    probe: &StressProbe<'_>,
+    x: &Mat<c64>,
+    rows: &[usize],
+    basis: &Basis,
+    damping: ComparisonDamping,
+    hz: f64,
+) -> Result<(f64, Vec<[f64; 2]>)> {
+    let nb = x.ncols();
+    let re = Mat::<f64>::from_fn(x.nrows(), nb, |i, j| x[(i, j)].re);
+    let im = Mat::<f64>::from_fn(x.nrows(), nb, |i, j| x[(i, j)].im);
+    let (s_re, s_im) = ((probe.full)(re.as_ref())?, (probe.full)(im.as_ref())?);
+    let g = modal_receptances(basis, damping, hz);
+    let r = g.len();
+    let (mut num, mut den) = (0.0, 0.0);
+    let mut kept = Vec::new();
+    for (p, modes) in probe.modes.iter().enumerate() {
+        for c in 0..6 {
+            for j in 0..nb {
+                let mut red = c64::new(0.0, 0.0);
+                for k in 0..r {
+                    red += g[k] * (modes[c * r + k] * basis.phi[(rows[j], k)]);
+                }
+                let full = c64::new(s_re[p * nb + j][c], s_im[p * nb + j][c]);
+                num += (full - red).norm_sqr();
+                den += full.norm_sqr();
+                if p < STRESS_FRF_POINTS {
+                    kept.push([full.re, full.im]);
+                }
+            }
+        }
+    }
+    Ok((if den > 0.0 { (num / den).sqrt() } else { 0.0 }, kept))
 }
