@@ -166,6 +166,15 @@ S = diag(C<sub>static</sub>)<sup>&minus;1/2</sup>, unit-free.</p>\n\
         damping = damping_html(&fr.damping),
         max = fr.max_relative_error,
     );
+    let (stress_at, stress_max) = arg_max(&fr.stress_relative_error);
+    if let Some(i) = stress_at {
+        let _ = writeln!(
+            h,
+            "<p>Stress responses at the recovery points (every point, component and unit flange load), full against \
+reduced: largest relative error {stress_max:.3e} (at {}).</p>",
+            fmt_hz(fr.frequencies_hz[i])
+        );
+    }
     h.push_str("<div class=\"plot\">\n");
     h.push_str(&frequency_response_plot(fr, flanges));
     h.push_str("</div>\n<div class=\"plot\">\n");
@@ -330,6 +339,8 @@ mod tests {
             driving_point_full: full,
             driving_point_reduced: red,
             full_matrices: Vec::new(),
+            stress_relative_error: Vec::new(),
+            stress_full: Vec::new(),
         }
     }
 

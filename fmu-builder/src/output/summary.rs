@@ -82,6 +82,22 @@ pub fn text(r: &Report) -> String {
         }
     }
     let _ = writeln!(s, "  vs full FE: static flange compliance within {:.1e}", a.compliance_max_relative_error);
+    if let Some(worst) =
+        a.frequency_response.as_ref().and_then(|fr| fr.stress_relative_error.iter().copied().reduce(f64::max))
+    {
+        let _ = writeln!(s, "  vs full FE: stress responses at the recovery points within {worst:.1e} over the band");
+    }
+    if !r.stress_points.is_empty() {
+        let hot = r.stress_points.iter().filter(|p| p.description.contains("hot spot")).count();
+        let _ = writeln!(
+            s,
+            "  stress outputs at {} points ({hot} hot spots): <point>.sxx .. .szx, .mises [Pa], listed in the documentation",
+            r.stress_points.len()
+        );
+        for p in r.stress_points.iter().filter(|p| p.description.contains("hot spot")) {
+            let _ = writeln!(s, "    {}: {}", p.name, p.description);
+        }
+    }
     if let Some(frf) = &a.frequency_response {
         let _ = writeln!(
             s,

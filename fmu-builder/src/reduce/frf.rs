@@ -59,11 +59,14 @@ pub struct FrequencyResponse {
 /// Recovery points whose full-model stress responses the report keeps (the error covers all).
 pub const STRESS_FRF_POINTS: usize = 20;
 
+/// Stresses (points x k, point-major) of responses of the constrained model (n_clamped x k).
+pub type StressesOf<'a> = dyn Fn(faer::MatRef<'_, f64>) -> Result<Vec<[f64; 6]>> + 'a;
+
 /// Stresses at the recovery points, for the comparison of their responses: `full` maps
 /// responses of the constrained model (n_clamped x k) to the points' stresses (points x k,
 /// point-major); `modes` are the reduced body's stress modes (6 x r per point, row-major).
 pub struct StressProbe<'a> {
-    pub full: &'a dyn Fn(faer::MatRef<'_, f64>) -> Result<Vec<[f64; 6]>>,
+    pub full: &'a StressesOf<'a>,
     pub modes: Vec<&'a [f64]>,
 }
 
