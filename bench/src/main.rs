@@ -22,6 +22,7 @@
 mod fmi;
 mod hard_cases;
 mod newmark;
+mod stress_outputs;
 
 use fmi::{Fmu, Instance};
 use fmi2::types::{fmi2CoSimulation, fmi2FMUstate, fmi2ModelExchange, fmi2Status};
@@ -774,6 +775,8 @@ fn run_in(opts: &Options, work: &Path) -> Result<(), String> {
         let subdivisions: &[usize] = if opts.short { &[1, 4, 8, 16] } else { &[1, 4, 8, 16, 32] };
         targets.extend(full_comparison(&built, &rows, t_end, subdivisions)?);
     }
+    let (what, measured, ok) = stress_outputs::run(work, opts.repeats)?;
+    targets.push(Target { what, measured, limit: format!("<= {}", stress_outputs::PER_POINT_LIMIT), ok });
     let hard = hard_cases::run(opts.short)?;
     targets.push(Target {
         what: "hard cases (tables above)".into(),

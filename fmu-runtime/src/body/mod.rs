@@ -107,6 +107,11 @@ struct Evaluation<T> {
     reaction_valid: bool,
     mount_force: Vec3<T>,
     mount_torque: Vec3<T>,
+    /// Counts the evaluations: results computed on demand remember the one they belong to.
+    generation: u64,
+    /// Stresses at the recovery points (xx .. zx, von Mises), each with the generation it was
+    /// computed at (0: never): a host reads a point's seven outputs one by one.
+    stresses: Vec<([T; 7], u64)>,
 }
 
 /// Rigid-body state of a free-floating body: centre-of-mass position and velocity (world), unit
@@ -310,6 +315,8 @@ impl FlexibleBody {
                 reaction_valid: false,
                 mount_force: [0.0; 3],
                 mount_torque: [0.0; 3],
+                generation: 0,
+                stresses: vec![([0.0; 7], 0); body.stress_points.len()],
             },
             coupling: Coupling { c_d: vec![0.0; n * n], c_k: vec![0.0; n * n], ..Coupling::default() },
             rot: k3::IDENTITY,
@@ -381,6 +388,8 @@ impl FlexibleBody {
                 reaction_valid: false,
                 mount_force: [Dual::default(); 3],
                 mount_torque: [Dual::default(); 3],
+                generation: 0,
+                stresses: vec![([Dual::default(); 7], 0); self.eval.stresses.len()],
             },
             coupling: Coupling { c_d: zeros(n * n), c_k: zeros(n * n), ..Coupling::default() },
             rot: k3::IDENTITY.map(Dual::from),
@@ -556,6 +565,7 @@ impl<T: Scalar> FlexibleBody<T> {
         }
         self.flange_kinematics();
         self.eval.reaction_valid = false;
+        self.eval.generation += 1;
         self.eval.valid = true;
         Ok(())
     }
