@@ -13,7 +13,7 @@ use fmi2::types::*;
 use fmu_runtime::body::FlexibleBody;
 use fmu_runtime::fmu::BodyFmu;
 use fmu_runtime::interface::VariableTable;
-use fmu_runtime::reduced::{FlangeShapes, ReducedBody, RotationTerms, Stiffening, two_mode_body};
+use fmu_runtime::reduced::{FlangeShapes, ReducedBody, RotationTerms, Stiffening, StressPoint, two_mode_body};
 use std::ffi::{CString, c_char, c_void};
 use std::sync::Arc;
 
@@ -73,7 +73,14 @@ fn synthetic_body(n: usize, free_floating: bool) -> ReducedBody {
             FlangeShapes { name: "tip".into(), position: [1.0, 0.0, 0.0], shapes: r.vec(6 * n, 0.1) },
             FlangeShapes { name: "mid".into(), position: [0.5, 0.0, 0.0], shapes: r.vec(6 * n, 0.1) },
         ],
-        stress_points: Vec::new(),
+        stress_points: (0..2)
+            .map(|k| StressPoint {
+                name: format!("stress.n{}", k + 1),
+                description: format!("synthetic point {k}"),
+                position: [0.2 * k as f64, 0.0, 0.0],
+                modes: r.vec(6 * n, 1e6),
+            })
+            .collect(),
         rotation: Some(RotationTerms { g, o_mat, o_vec: r.vec(9 * n, 1e-3) }),
         stiffening: Some(Stiffening {
             centrifugal: Some(r.vec(9 * nn, 1e-3)),
@@ -204,6 +211,9 @@ fn outputs(table: &VariableTable, reduced: &ReducedBody) -> Vec<u32> {
                 names.push(format!("{}.R[{i},{j}]", f.name));
             }
         }
+    }
+    for p in &reduced.stress_points {
+        names.extend(fmu_runtime::interface::STRESS_COMPONENTS.iter().map(|c| format!("{}.{c}", p.name)));
     }
     let extra: &[&str] =
         if reduced.free_floating { &["body.energy", "body.h[3]", "frame.r[1]"] } else { &["base.f[3]", "base.t[2]"] };
