@@ -112,8 +112,12 @@ TOL_FRD = 3e-4
 
 
 def test_beam_hex20_flange_loads_and_gravity_vs_calculix(tmp_path):
+    from fmpy.validation import validate_fmu
+
     fmu, report, deck = build(beam_spec(loads=["gravity"]), tmp_path, "beam")
     assert len(report["stress_points"]) == 7
+    # modelDescription.xml with 49 stress outputs, their units and dependencies, is valid
+    assert validate_fmu(str(fmu)) == []
     tip = ccx.cload(deck, "tip", force=(0.0, 2.0, 5.0), moment=(0.3, 0.0, 0.1))
     check_against_calculix(fmu, report, deck, tmp_path,
                            {"tip.f[2]": 2.0, "tip.f[3]": 5.0, "tip.t[1]": 0.3, "tip.t[3]": 0.1},
