@@ -246,3 +246,21 @@ def test_beam_stress_history_under_a_sine_load_near_resonance(tmp_path):
     # load); the hold's amplitude error (dt w)^2 / 24 = 1.6e-6 and the decayed transient are far
     # below: ten times the reduction's figure
     assert error <= 10 * reduction
+
+
+@pytest.mark.parametrize("element", ["hex8", "hex20r"])
+def test_other_hexahedra_vs_calculix(element, tmp_path):
+    """C3D8 and C3D20R (2x2x2 points, trilinear extrapolation to the corners, midsides the
+    mean of their edge's corners) on a short bar, tip loads."""
+    spec = beam_spec()
+    spec["geometry"] = {"element": element,
+                        "boxes": [{"min": [0.0, -0.01, -0.01], "max": [0.2, 0.01, 0.01], "elements": [10, 2, 2]}]}
+    spec["outputs"] = {"stress": {"points": [[0.05, 0.01, 0.01], [0.1, 0.0, 0.0]], "hot_spots": 4}}
+    fmu, report, deck = build(spec, tmp_path, element)
+    tip = ccx.cload(deck, "tip", force=(3.0, -2.0, 5.0), moment=(0.3, 0.2, 0.0))
+    # measured: 1.6e-6 (C3D8) and 8.4e-7 (C3D20R) against the exact extrapolation (rows' |entries|
+    # sum to 5.2 for the trilinear inverse); 5.8e-5 and 2.7e-5 against the .frd (its table to 3
+    # decimals: 2.549, -0.683, 0.183, -0.04904)
+    check_against_calculix(fmu, report, deck, tmp_path,
+                           {"tip.f[1]": 3.0, "tip.f[2]": -2.0, "tip.f[3]": 5.0, "tip.t[1]": 0.3, "tip.t[2]": 0.2},
+                           tip, f"bar {element}, tip loads", 2e-5, 6e-4)
