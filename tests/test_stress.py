@@ -264,3 +264,39 @@ def test_other_hexahedra_vs_calculix(element, tmp_path):
     check_against_calculix(fmu, report, deck, tmp_path,
                            {"tip.f[1]": 3.0, "tip.f[2]": -2.0, "tip.f[3]": 5.0, "tip.t[1]": 0.3, "tip.t[2]": 0.2},
                            tip, f"bar {element}, tip loads", 2e-5, 6e-4)
+
+
+def test_documentation_lists_the_points_and_their_unit_case_stresses(tmp_path):
+    fmu, report, _ = build(beam_spec(), tmp_path, "beam")
+    html = zipfile.ZipFile(fmu).read("documentation/index.html").decode()
+    assert "<h2>Stress recovery points</h2>" in html
+    assert len(report["stress_points"]) == 7
+    for p in report["stress_points"]:
+        assert f"<h3>{p['name']}</h3>" in html and p["description"] in html
+        # one row per unit load case: six at the tip flange
+        assert len(p["unit_cases"]) == 6
+        assert all(c["case"] in html for c in p["unit_cases"])
+
+
+def test_free_floating_body_recovers_stresses(tmp_path):
+    """A free body (inertia-relief attachment shapes): hot spots come from the flange's unit
+    loads with inertia relief, and under a steady end force the stresses settle on that
+    quasi-static state, finite, in Co-Simulation."""
+    from fmpy import simulate_fmu
+    from fmpy.validation import validate_fmu
+    from test_large_motion import FREE_BLOCK
+
+    spec = json.loads(json.dumps(FREE_BLOCK))
+    spec["outputs"] = {"stress": {"hot_spots": 3, "points": [[0.2, 0.0, 0.0]]}}
+    path = tmp_path / "free.json"
+    path.write_text(json.dumps(spec))
+    fmu = tmp_path / "free.fmu"
+    run_builder([path, "-o", fmu, "-q"])
+    assert validate_fmu(str(fmu)) == []
+    report = json.loads(zipfile.ZipFile(fmu).read("documentation/report.json"))
+    assert len(report["stress_points"]) == 4
+    names = [p["name"] + ".mises" for p in report["stress_points"]]
+    result = simulate_fmu(str(fmu), fmi_type="CoSimulation", stop_time=0.5, output_interval=1e-3,
+                          start_values={"end.f[1]": 50.0}, output=names)
+    mises = np.array([result[n] for n in names])
+    assert np.isfinite(mises).all() and mises.max() > 0
