@@ -206,7 +206,7 @@ def run_builder(builder: Path, mesh_dir: Path, env: dict) -> BuilderResult:
     spec = write_spec(mesh_dir)
     fmu = mesh_dir / "Bracket.fmu"
     fmu.unlink(missing_ok=True)
-    run = run_measured([builder, spec, "-o", fmu, "--timings"], mesh_dir, env, mesh_dir / "builder.log")
+    run = run_measured([builder, spec, "-o", fmu, "--force", "--timings"], mesh_dir, env, mesh_dir / "builder.log")
     if run.returncode != 0:
         # a negative code is a signal: 9 is what the kernel's out-of-memory killer sends
         how = f"killed by signal {-run.returncode}" if run.returncode < 0 else f"exit {run.returncode}"

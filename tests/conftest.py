@@ -15,8 +15,13 @@ EXAMPLES = ROOT / "examples"
 
 
 def run_builder(args, check=True):
-    """Run fmu-builder; returns the CompletedProcess (stdout/stderr as text)."""
-    proc = subprocess.run([str(BUILDER), *map(str, args)], capture_output=True, text=True, timeout=600)
+    """Run fmu-builder; returns the CompletedProcess (stdout/stderr as text). A build with -o
+    may replace its own earlier output (--force): the tests write into their temporary folders,
+    and test_cli.py checks the refusal without it."""
+    args = [str(a) for a in args]
+    if "-o" in args and "--force" not in args:
+        args.append("--force")
+    proc = subprocess.run([str(BUILDER), *args], capture_output=True, text=True, timeout=600)
     if check and proc.returncode != 0:
         raise AssertionError(f"fmu-builder {args} failed:\n{proc.stdout}\n{proc.stderr}")
     return proc

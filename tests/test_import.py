@@ -296,7 +296,8 @@ def test_missing_node_set_lists_the_sets(tmp_path):
 
 def run_measured(args):
     """Run the builder; (stdout, peak resident memory of the child in MiB) from wait4's rusage."""
-    proc = subprocess.Popen([str(BUILDER), *map(str, args)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen([str(BUILDER), *map(str, args), "--force"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
     out, err = proc.communicate(timeout=1200)
     # communicate() reaped the child; its rusage is in RUSAGE_CHILDREN only as a maximum over all
     # children, so the builder also reports its own high-water mark (VmHWM), parsed here

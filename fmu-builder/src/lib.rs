@@ -20,6 +20,7 @@
 pub mod error;
 pub mod linalg;
 pub mod profile;
+pub mod progress;
 
 pub mod ffrf;
 pub mod input;

@@ -10,11 +10,19 @@ use std::process::ExitCode;
     about = "Turn a finite-element model of an elastic part into an FMI 2.0 FMU (Model Exchange + Co-Simulation)"
 )]
 struct Args {
-    /// Input file (JSON, see schemas/fmu-builder-input.schema.json)
-    input: PathBuf,
-    /// Output FMU
-    #[arg(short, long, required_unless_present = "sweep", conflicts_with = "sweep")]
+    /// Input file (JSON, see --print-schema); "-" reads it from standard input (relative paths in
+    /// it then resolve from the working directory)
+    #[arg(required_unless_present = "print_schema")]
+    input: Option<PathBuf>,
+    /// Output FMU [default: <name>.fmu beside the input, <name> the input's "name"]
+    #[arg(short, long, conflicts_with = "sweep")]
     output: Option<PathBuf>,
+    /// Overwrite the output FMU if it exists
+    #[arg(long)]
+    force: bool,
+    /// Print the input's JSON schema and exit
+    #[arg(long, exclusive = true)]
+    print_schema: bool,
     /// Instead of building, reduce the body by every method at growing orders and print error in
     /// band vs cost per step vs build time
     #[arg(long)]
@@ -47,13 +55,97 @@ struct Args {
 
 fn main() -> ExitCode {
     let args = Args::parse();
+    if args.print_schema {
+        print!("{}", fmu_builder::input::spec::SCHEMA);
+        return ExitCode::SUCCESS;
+    }
     return_freed_memory();
     fmu_builder::profile::per_phase_memory(args.timings);
-    // clap lets exactly one of --output and --sweep through
-    match args.output.clone() {
-        Some(output) => build(&args, &output),
-        None => sweep(&args),
+    let input = match Input::read(args.input.as_deref().unwrap_or(Path::new("-"))) {
+        Ok(input) => input,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    if args.sweep {
+        return sweep(&args, &input);
     }
+    let output = match output_path(&args, &input) {
+        Ok(output) => output,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    build(&args, &input, &output)
+}
+
+/// The input's text and the path that names it ("<stdin>" for standard input: relative paths
+/// in it then resolve from the working directory).
+struct Input {
+    path: PathBuf,
+    text: String,
+}
+
+impl Input {
+    fn read(path: &Path) -> Result<Self, String> {
+        if path == Path::new("-") {
+            let mut text = String::new();
+            std::io::Read::read_to_string(&mut std::io::stdin(), &mut text)
+                .map_err(|e| format!("<stdin>: cannot read the input: {e}"))?;
+            return Ok(Self { path: PathBuf::from("<stdin>"), text });
+        }
+        let text =
+            std::fs::read_to_string(path).map_err(|e| format!("{}: cannot read the input: {e}", path.display()))?;
+        Ok(Self { path: path.to_path_buf(), text })
+    }
+}
+
+/// The FMU to write: `-o`, or `<name>.fmu` beside the input (in the working directory for
+/// standard input). Refused before any work when it cannot be written: a folder, a missing or
+/// read-only folder, or an existing file without --force.
+fn output_path(args: &Args, input: &Input) -> Result<PathBuf, String> {
+    let output = match &args.output {
+        Some(o) => o.clone(),
+        None => {
+            let spec = fmu_builder::input::spec::Spec::from_str(&input.path, &input.text).map_err(|e| e.to_string())?;
+            let folder = input.path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+            folder.join(format!("{}.fmu", spec.name))
+        }
+    };
+    if output.is_dir() {
+        return Err(format!(
+            "{}: is a folder; give the FMU's file name, e.g. -o {}",
+            output.display(),
+            output.join("Model.fmu").display()
+        ));
+    }
+    let folder = output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    if !folder.is_dir() {
+        return Err(format!(
+            "{}: cannot write the FMU: the folder {} does not exist",
+            output.display(),
+            folder.display()
+        ));
+    }
+    if output.exists() && !args.force {
+        return Err(format!("{}: exists; pass --force to overwrite it, or -o to write elsewhere", output.display()));
+    }
+    let probe = folder.join(format!(".fmu-builder-probe-{}", std::process::id()));
+    match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+        }
+        Err(e) => {
+            return Err(format!(
+                "{}: cannot write the FMU into the folder {}: {e}",
+                output.display(),
+                folder.display()
+            ));
+        }
+    }
+    Ok(output)
 }
 
 /// Blocks of a megabyte and more come from the system and go back to it when freed. glibc
@@ -69,17 +161,31 @@ fn return_freed_memory() {
 }
 
 /// Reduce by every method at growing orders and print the table (and plot).
-fn sweep(args: &Args) -> ExitCode {
-    let spec = match fmu_builder::input::spec::Spec::from_file(&args.input) {
+fn sweep(args: &Args, input: &Input) -> ExitCode {
+    let spec = match fmu_builder::input::spec::Spec::from_str(&input.path, &input.text) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");
             return ExitCode::FAILURE;
         }
     };
-    match fmu_builder::build::sweep::sweep(&spec, &args.input) {
+    // the table's rows as they finish: a sweep takes minutes
+    let band = spec.scene.as_ref().and_then(|s| s.band);
+    let mut header = Some(fmu_builder::build::sweep::table_header(band));
+    let mut print_row = |row: &fmu_builder::build::sweep::SweepRow| {
+        use std::io::Write;
+        let mut out = std::io::stdout();
+        if let Some(h) = header.take() {
+            let _ = out.write_all(h.as_bytes());
+        }
+        let _ = out.write_all(fmu_builder::build::sweep::table_row(row).as_bytes());
+        let _ = out.flush();
+    };
+    fmu_builder::progress::enable(!args.quiet);
+    let result = fmu_builder::build::sweep::sweep(&spec, &input.path, &mut print_row);
+    fmu_builder::progress::finish();
+    match result {
         Ok(rows) => {
-            print!("{}", fmu_builder::build::sweep::table(&rows, spec.scene.as_ref().and_then(|s| s.band)));
             if let Some(path) = &args.sweep_svg
                 && let Err(e) = std::fs::write(path, fmu_builder::build::sweep::plot(&rows))
             {
@@ -96,8 +202,11 @@ fn sweep(args: &Args) -> ExitCode {
 }
 
 /// Build the FMU, write what else was asked for, print the summary.
-fn build(args: &Args, output: &Path) -> ExitCode {
-    match fmu_builder::build::build(&args.input, output) {
+fn build(args: &Args, input: &Input, output: &Path) -> ExitCode {
+    fmu_builder::progress::enable(!args.quiet);
+    let result = fmu_builder::build::build_from_text(&input.text, &input.path, output);
+    fmu_builder::progress::finish();
+    match result {
         Ok(built) => {
             if let Some(path) = &args.report {
                 let json = serde_json::to_string_pretty(&built.report).unwrap_or_default();
@@ -126,6 +235,9 @@ fn build(args: &Args, output: &Path) -> ExitCode {
                 return ExitCode::FAILURE;
             }
             if !args.quiet {
+                for w in &built.report.warnings {
+                    eprintln!("warning: {w}");
+                }
                 print!("{}", fmu_builder::output::summary::text(&built.report));
                 if let Some(mib) = fmu_builder::profile::process_peak_mib() {
                     println!("peak memory {mib:.0} MiB");

@@ -91,6 +91,7 @@ fn max_opt(a: Option<u64>, b: Option<u64>) -> Option<u64> {
 /// Run `f` as the phase `name` and record its wall time and peak memory.
 pub fn phase<T>(name: impl Into<String>, f: impl FnOnce() -> T) -> T {
     let name = name.into();
+    crate::progress::phase(&name);
     RECORDER.with(|r| {
         let mut r = r.borrow_mut();
         let mark = high_water_kib();

@@ -1,15 +1,17 @@
 //! The builder's layout, checked on its sources: a stage uses only the stages before it (input,
-//! model, reduce, ffrf, output, then the driver `build`; `error`, `linalg` and `profile` serve all), and no
+//! model, reduce, ffrf, output, then the driver `build`; `error`, `linalg`, `profile` and `progress`
+//! serve all), and no
 //! module imports a module that imports it back. docs/ARCHITECTURE.md describes the stages.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// Top-level modules and their place in the data flow.
-const STAGES: [(&str, usize); 9] = [
+const STAGES: [(&str, usize); 10] = [
     ("error", 0),
     ("linalg", 0),
     ("profile", 0),
+    ("progress", 0),
     ("input", 1),
     ("model", 2),
     ("reduce", 3),

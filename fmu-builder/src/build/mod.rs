@@ -23,6 +23,19 @@ use std::path::Path;
 pub fn build(input: &Path, output: &Path) -> Result<Built> {
     profile::take();
     let spec = profile::phase("read and check the input", || Spec::from_file(input))?;
+    build_spec(spec, input, output)
+}
+
+/// As `build`, the input's text given (`input` names it in messages, and relative paths in it
+/// resolve from its folder: for standard input, name it "<stdin>" and they resolve from the
+/// working directory).
+pub fn build_from_text(text: &str, input: &Path, output: &Path) -> Result<Built> {
+    profile::take();
+    let spec = profile::phase("read and check the input", || Spec::from_str(input, text))?;
+    build_spec(spec, input, output)
+}
+
+fn build_spec(spec: Spec, input: &Path, output: &Path) -> Result<Built> {
     let mut built = reduce_spec(spec, input)?;
     profile::phase("checks and packaging", || package::write_fmu(&built.spec, &built.reduced, &built.report, output))
         .map_err(|e| match e {

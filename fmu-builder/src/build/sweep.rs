@@ -59,7 +59,7 @@ fn variant(spec: &Spec, reduction: Reduction, band: [f64; 2]) -> Spec {
     s
 }
 
-pub fn sweep(spec: &Spec, file: &Path) -> Result<Vec<SweepRow>> {
+pub fn sweep(spec: &Spec, file: &Path, on_row: &mut dyn FnMut(&SweepRow)) -> Result<Vec<SweepRow>> {
     // the band: the scene's, or 0 to the tenth eigenfrequency of the mounted body
     let band = match spec.scene.as_ref().and_then(|s| s.band) {
         Some(b) => b,
@@ -121,15 +121,10 @@ pub fn sweep(spec: &Spec, file: &Path) -> Result<Vec<SweepRow>> {
         let frf_error = built.report.accuracy.frequency_response.as_ref().map_or(f64::NAN, |f| f.max_relative_error);
         let step_ns = step_cost(&built, 0.0);
         let step_ns_rotating = built.reduced.rotation.is_some().then(|| step_cost(&built, 10.0));
-        rows.push(SweepRow {
-            method,
-            setting,
-            order: built.reduced.n_modes(),
-            frf_error,
-            step_ns,
-            step_ns_rotating,
-            build_s,
-        });
+        let row =
+            SweepRow { method, setting, order: built.reduced.n_modes(), frf_error, step_ns, step_ns_rotating, build_s };
+        on_row(&row);
+        rows.push(row);
     }
     Ok(rows)
 }
@@ -148,6 +143,15 @@ fn cb(modes: usize) -> Reduction {
 
 /// The table as printed and put in the README.
 pub fn table(rows: &[SweepRow], band: Option<[f64; 2]>) -> String {
+    let mut s = table_header(band);
+    for r in rows {
+        s.push_str(&table_row(r));
+    }
+    s
+}
+
+/// The table's head: what is compared, and the column names.
+pub fn table_header(band: Option<[f64; 2]>) -> String {
     let mut s = String::new();
     if let Some(b) = band {
         s.push_str(&format!(
@@ -157,14 +161,16 @@ pub fn table(rows: &[SweepRow], band: Option<[f64; 2]>) -> String {
     }
     s.push_str("| method | setting | order | FRF error in band | ns/step (fixed mount) | ns/step (spinning 10 rad/s) | build [s] |\n");
     s.push_str("|---|---|---:|---:|---:|---:|---:|\n");
-    for r in rows {
-        let rot = r.step_ns_rotating.map_or("-".to_string(), |v| format!("{v:.0}"));
-        s.push_str(&format!(
-            "| {} | {} | {} | {:.2e} | {:.0} | {} | {:.2} |\n",
-            r.method, r.setting, r.order, r.frf_error, r.step_ns, rot, r.build_s
-        ));
-    }
     s
+}
+
+/// One line of the table.
+pub fn table_row(r: &SweepRow) -> String {
+    let rot = r.step_ns_rotating.map_or("-".to_string(), |v| format!("{v:.0}"));
+    format!(
+        "| {} | {} | {} | {:.2e} | {:.0} | {} | {:.2} |\n",
+        r.method, r.setting, r.order, r.frf_error, r.step_ns, rot, r.build_s
+    )
 }
 
 /// Error in band against cost per step, one line per method (log-log), as a standalone SVG.

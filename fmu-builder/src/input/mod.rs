@@ -7,6 +7,7 @@ pub mod import;
 pub mod json_keys;
 pub mod mesh;
 pub mod ranges;
+pub mod schema_errors;
 pub mod size;
 pub mod spec;
 pub mod variable_names;

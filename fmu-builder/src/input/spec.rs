@@ -5,7 +5,7 @@
 
 use crate::error::{BuildError, Result};
 use crate::input::element::ElementKind;
-use crate::input::{json_keys, ranges, variable_names};
+use crate::input::{json_keys, ranges, schema_errors, variable_names};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -350,23 +350,6 @@ fn check_flange_names(path: &Path, value: &serde_json::Value) -> Result<()> {
     Ok(())
 }
 
-/// JSON pointer `/flanges/1/nodes` -> `flanges[1].nodes`, the way users read their file.
-fn field_path(pointer: &str) -> String {
-    let mut out = String::new();
-    for token in pointer.split('/').skip(1) {
-        let token = token.replace("~1", "/").replace("~0", "~");
-        if token.chars().all(|c| c.is_ascii_digit()) && !token.is_empty() {
-            out.push_str(&format!("[{token}]"));
-        } else {
-            if !out.is_empty() {
-                out.push('.');
-            }
-            out.push_str(&token);
-        }
-    }
-    out
-}
-
 impl Spec {
     pub fn from_file(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(|e| BuildError::io(path, e))?;
@@ -384,21 +367,16 @@ impl Spec {
             serde_json::from_str(SCHEMA).map_err(|e| BuildError::Numerical(format!("embedded schema: {e}")))?;
         let validator = jsonschema::validator_for(&schema)
             .map_err(|e| BuildError::Numerical(format!("embedded schema does not compile: {e}")))?;
-        let mut problems: Vec<(String, String)> = validator
-            .iter_errors(&value)
-            .map(|e| (field_path(&e.instance_path().to_string()), e.to_string()))
-            .collect();
-        if !problems.is_empty() {
-            // the deepest path is the most specific complaint (oneOf reports at the parent too)
-            problems.sort_by_key(|(f, _)| std::cmp::Reverse(f.matches(['.', '[']).count()));
-            let (field, message) = problems.remove(0);
-            let more =
-                if problems.is_empty() { String::new() } else { format!(" (and {} more problems)", problems.len()) };
-            return Err(BuildError::input(
-                path,
-                if field.is_empty() { "(top level)".to_string() } else { field },
-                format!("{message}{more}; see schemas/fmu-builder-input.schema.json"),
-            ));
+        let problems = schema_errors::explain(&schema, validator.iter_errors(&value));
+        if let Some((first, rest)) = problems.split_first() {
+            let field = if first.field.is_empty() { "(top level)".to_string() } else { first.field.clone() };
+            let mut message = first.message.clone();
+            for p in rest {
+                let f = if p.field.is_empty() { "(top level)" } else { p.field.as_str() };
+                message.push_str(&format!("\n  and {f}: {}", p.message));
+            }
+            message.push_str("\n  (the input's schema: fmu-builder --print-schema)");
+            return Err(BuildError::input(path, field, message));
         }
         let mut spec: Spec = serde_json::from_value(value)
             .map_err(|e| BuildError::input(path, "", format!("does not match the input format: {e}")))?;

@@ -491,6 +491,7 @@ impl<'a> BlockLanczos<'a> {
         if self.exhausted {
             return Ok(false);
         }
+        crate::progress::step(|| format!("{} Lanczos vectors, block solve {}", self.dim(), self.t.len() + 1));
         let b = self.t.len();
         // one refinement step: slender parts have cond(K) ~ 1e12, and a plain solve would cost
         // the lowest Ritz values their sixth digit (corrections of 1e-7 .. 1e-6 on the beams).

@@ -51,6 +51,7 @@ td,th{{border:1px solid #bbb;padding:0.2em 0.6em;text-align:right}}th{{backgroun
         );
     }
     h.push_str("</table>\n");
+    h.push_str(&scene_html(r));
     h.push_str(&stress_points_html(&r.stress_points));
     let _ = write!(
         h,
@@ -109,6 +110,36 @@ compliance (relative to its largest entry): {:.2e}. Constraint modes make it exa
         h.push_str(&accuracy_over_band_html(fr, &a.compliance_flanges));
     }
     h.push_str("<p>The machine-readable report, with the full compliance matrices, is <code>report.json</code> beside this file.</p>\n</body></html>\n");
+    h
+}
+
+/// What the scene lets the FMU model, what it refuses, and the build's warnings.
+fn scene_html(r: &Report) -> String {
+    let sc = &r.scene;
+    let yes = |b: bool| if b { "yes" } else { "no" };
+    let mut h = format!(
+        "<h2>Scene</h2>\n<table><tr><th>rotating-frame terms (a rotating mount)</th><td>{}</td></tr>\
+<tr><th>static shapes of gravity</th><td>{}</td></tr><tr><th>static shapes of mount acceleration</th><td>{}</td></tr>\
+<tr><th>geometric stiffening</th><td>{}</td></tr></table>\n",
+        yes(sc.rotation),
+        yes(sc.gravity),
+        yes(sc.acceleration),
+        yes(sc.geometric_stiffening)
+    );
+    if !sc.refuses.is_empty() {
+        h.push_str("<p>The FMU refuses (fmi2Error with the reason logged):</p>\n<ul>\n");
+        for refusal in &sc.refuses {
+            let _ = writeln!(h, "<li>{}</li>", esc(refusal));
+        }
+        h.push_str("</ul>\n");
+    }
+    if !r.warnings.is_empty() {
+        h.push_str("<h2>Warnings</h2>\n<ul>\n");
+        for w in &r.warnings {
+            let _ = writeln!(h, "<li>{}</li>", esc(w));
+        }
+        h.push_str("</ul>\n");
+    }
     h
 }
 
@@ -389,6 +420,8 @@ mod tests {
                 slave_nodes: 9,
             }],
             stress_points: Vec::new(),
+            scene: Default::default(),
+            warnings: Vec::new(),
             accuracy: Accuracy {
                 reduced_hz: vec![300.0, 1500.0],
                 full_hz: vec![299.0, 1490.0],

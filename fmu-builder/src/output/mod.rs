@@ -8,6 +8,7 @@ pub mod documentation;
 pub mod finite;
 pub mod fmu;
 pub mod package;
+pub mod plausibility;
 pub mod plot;
 pub mod report;
 pub mod summary;

@@ -6,6 +6,7 @@ use crate::model::flange::Flange;
 use crate::model::part::Part;
 use crate::model::rigid_coupling::Assembled;
 use crate::output::default_experiment::default_experiment;
+use crate::output::plausibility::{self, SceneReport};
 use crate::reduce::accuracy::Accuracy;
 use crate::reduce::basis::Basis;
 use crate::reduce::cutoff::dynamic_cutoff;
@@ -80,6 +81,10 @@ pub struct Report {
     pub flanges: Vec<FlangeReport>,
     /// Stress recovery points (outputs.stress), in the order of the FMU's variables.
     pub stress_points: Vec<StressPointReport>,
+    /// What the scene lets the FMU model and which inputs it refuses.
+    pub scene: SceneReport,
+    /// Probable unit slips and implausible results (the build stands).
+    pub warnings: Vec<String>,
     pub accuracy: Accuracy,
 }
 
@@ -98,7 +103,8 @@ pub fn report_of(
 ) -> Report {
     let props = model.mass_properties;
     let experiment = default_experiment(reduced);
-    Report {
+    let mount = flanges.iter().find(|f| f.role == Role::Motion).map(|f| f.name.as_str());
+    let mut report = Report {
         model_name: spec.name.clone(),
         guid: reduced.guid.clone(),
         element: part.element_description(),
@@ -137,6 +143,10 @@ pub fn report_of(
             })
             .collect(),
         stress_points: Vec::new(),
+        scene: plausibility::scene(spec, mount),
+        warnings: Vec::new(),
         accuracy,
-    }
+    };
+    report.warnings = plausibility::warnings(part, report.accuracy.full_hz.first().copied(), mount.is_some());
+    report
 }

@@ -29,6 +29,19 @@ pub fn text(r: &Report) -> String {
         "  {}: {} normal modes + {} static/Krylov shapes = order {}",
         r.method, r.fixed_interface_modes, r.constraint_modes, r.order
     );
+    let yes = |b: bool| if b { "yes" } else { "no" };
+    let sc = &r.scene;
+    let _ = writeln!(
+        s,
+        "  scene: rotation terms {}, gravity shapes {}, acceleration shapes {}, geometric stiffening {}",
+        yes(sc.rotation),
+        yes(sc.gravity),
+        yes(sc.acceleration),
+        yes(sc.geometric_stiffening)
+    );
+    for refusal in &sc.refuses {
+        let _ = writeln!(s, "  the FMU refuses {refusal}");
+    }
     let quasi_static = r.order - r.dynamic_modes;
     let _ = match r.dynamic_cutoff_hz {
         Some(hz) if quasi_static > 0 => writeln!(

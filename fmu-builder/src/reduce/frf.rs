@@ -282,7 +282,8 @@ pub fn compare(
     let mut full_model = FullResponse::new(model)?;
     let b = flange_unit_loads(model);
     let rows = flange_rows(&b);
-    for &f in &frequencies {
+    for (i, &f) in frequencies.iter().enumerate() {
+        crate::progress::step(|| format!("{} of {} frequencies ({f:.4} Hz)", i + 1, frequencies.len()));
         let x = full_model.response(damping, f)?;
         let full = Mat::from_fn(rows.len(), rows.len(), |i, j| x[(rows[i], j)]);
         if let Some(probe) = stress {

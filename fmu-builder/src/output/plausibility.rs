@@ -1,0 +1,122 @@
+//! What the build finished but a user probably did not mean, said as warnings (the build stands):
+//! inputs that look like a unit slip (E in MPa, rho in g/cm^3, a mesh in millimetres) and a body
+//! whose lowest frequency no engineering part has; and, stated plainly, what the scene lets the
+//! FMU do and which inputs it will refuse.
+
+use crate::input::spec::{SceneLoad, Spec};
+use crate::model::part::Part;
+use serde::Serialize;
+
+/// Young's moduli of engineering solids [Pa]: soft elastomers ~1e6, diamond ~1.2e12.
+const E_RANGE: [f64; 2] = [1e6, 1.5e12];
+/// Densities of engineering solids [kg/m^3]: foams ~30, osmium 22 600.
+const RHO_RANGE: [f64; 2] = [20.0, 25_000.0];
+/// Sizes of parts a system model holds [m]: a watch spring to a crane boom.
+const SIZE_RANGE: [f64; 2] = [1e-4, 100.0];
+/// Lowest frequencies of elastic parts [Hz]: a slender boom ~0.1, a micro-part ~1e6.
+const FREQUENCY_RANGE: [f64; 2] = [0.1, 1e6];
+
+/// What the scene lets the FMU model, and what it refuses.
+#[derive(Debug, Clone, Serialize, Default)]
+pub struct SceneReport {
+    /// Rotating-frame terms (Coriolis, centrifugal, Euler): a rotating mount is accepted.
+    pub rotation: bool,
+    /// Static shapes of gravity / mount acceleration in the basis (their statics exact).
+    pub gravity: bool,
+    pub acceleration: bool,
+    /// Stress stiffening by the prestress of the declared loads and the flange loads.
+    pub geometric_stiffening: bool,
+    /// Inputs the FMU refuses with this scene, in words.
+    pub refuses: Vec<String>,
+}
+
+pub fn scene(spec: &Spec, mount: Option<&str>) -> SceneReport {
+    let rotation = spec.rotates();
+    let mut refuses = Vec::new();
+    if let (false, Some(m)) = (rotation, mount) {
+        refuses.push(format!(
+            "a rotating mount: {m}.w and {m}.z must stay zero (the scene does not declare \"rotation\")"
+        ));
+    }
+    if let Some(m) = mount {
+        refuses.push(format!("a {m}.R that is not a rotation matrix"));
+    }
+    SceneReport {
+        rotation,
+        gravity: spec.declares(SceneLoad::Gravity),
+        acceleration: spec.declares(SceneLoad::Acceleration),
+        geometric_stiffening: spec.stiffening(),
+        refuses,
+    }
+}
+
+/// Warnings for values far outside what engineering parts in SI units have: the part's
+/// materials and extent, and the lowest frequency of the full model (`lowest_hz`; `mounted`:
+/// of the mounted body, else of the free one).
+pub fn warnings(part: &Part, lowest_hz: Option<f64>, mounted: bool) -> Vec<String> {
+    let mut out = Vec::new();
+    let outside = |v: f64, r: [f64; 2]| v < r[0] || v > r[1];
+    for m in &part.materials {
+        let (e, rho) = (m.elasticity.e, m.rho);
+        let name = if m.name.is_empty() { "the material".to_string() } else { format!("material {}", m.name) };
+        if outside(e, E_RANGE) {
+            let hint = if e < E_RANGE[0] && e * 1e6 >= E_RANGE[0] && e * 1e6 <= E_RANGE[1] {
+                format!(" (given in MPa? {e:e} MPa is {:e} Pa)", e * 1e6)
+            } else {
+                String::new()
+            };
+            out.push(format!(
+                "{name}: E = {e:e} Pa lies outside the {:e} .. {:e} Pa of engineering solids{hint}; the input is in SI units",
+                E_RANGE[0], E_RANGE[1]
+            ));
+        }
+        if !part.from_matrices && outside(rho, RHO_RANGE) {
+            let hint = if rho < RHO_RANGE[0] && rho * 1e3 >= RHO_RANGE[0] {
+                format!(" (given in g/cm^3? {rho} g/cm^3 is {} kg/m^3)", rho * 1e3)
+            } else {
+                String::new()
+            };
+            out.push(format!(
+                "{name}: rho = {rho:e} kg/m^3 lies outside the {} .. {} kg/m^3 of engineering solids{hint}",
+                RHO_RANGE[0], RHO_RANGE[1]
+            ));
+        }
+    }
+    if let Some(size) = extent(part)
+        && outside(size, SIZE_RANGE)
+    {
+        let hint = if size > SIZE_RANGE[1] { " (a mesh in millimetres? scale it to metres)" } else { "" };
+        out.push(format!(
+            "the part is {size:.4e} m across (its bounding box's diagonal), outside the {:e} .. {} m of parts a system model holds{hint}; the input is in SI units",
+            SIZE_RANGE[0], SIZE_RANGE[1]
+        ));
+    }
+    if let Some(f) = lowest_hz
+        && outside(f, FREQUENCY_RANGE)
+    {
+        out.push(format!(
+            "the lowest frequency of the {} body is {f:.4e} Hz, outside the {} .. {:e} Hz of elastic parts: check the units of E, rho and the mesh",
+            if mounted { "mounted" } else { "free" },
+            FREQUENCY_RANGE[0],
+            FREQUENCY_RANGE[1]
+        ));
+    }
+    out
+}
+
+/// Diagonal of the nodes' bounding box [m].
+fn extent(part: &Part) -> Option<f64> {
+    let nodes = &part.mesh.nodes;
+    if nodes.is_empty() {
+        return None;
+    }
+    let mut lo = nodes[0];
+    let mut hi = nodes[0];
+    for p in nodes {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    Some((0..3).map(|a| (hi[a] - lo[a]).powi(2)).sum::<f64>().sqrt())
+}

@@ -1,0 +1,156 @@
+"""What a user meets on the command line: the output's default, refusals before any work,
+standard input, the schema, and input errors that say what to fix (every problem, the nearest
+valid key for a misspelt one, the forms a field takes)."""
+
+import copy
+import json
+import os
+import subprocess
+
+from conftest import BUILDER, EXAMPLES
+
+BASE = json.loads((EXAMPLES / "beam.json").read_text())
+BASE.pop("$schema")
+BASE["geometry"]["boxes"][0]["elements"] = [10, 1, 1]
+BASE["reduction"]["modes"] = 2
+
+
+def builder(*args, stdin=None, cwd=None):
+    """The builder as a user runs it (no --force added)."""
+    return subprocess.run([str(BUILDER), *map(str, args)], capture_output=True, text=True, input=stdin,
+                          cwd=cwd, timeout=300)
+
+
+def write(tmp_path, spec, name="part.json"):
+    path = tmp_path / name
+    path.write_text(json.dumps(spec, indent=2))
+    return path
+
+
+def test_output_defaults_to_the_model_name_beside_the_input(tmp_path):
+    path = write(tmp_path, BASE)
+    proc = builder(path, "-q")
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "Beam.fmu").is_file()
+
+
+def test_existing_output_is_refused_without_force(tmp_path):
+    path = write(tmp_path, BASE)
+    out = tmp_path / "Beam.fmu"
+    out.write_bytes(b"keep me")
+    proc = builder(path, "-o", out, "-q")
+    assert proc.returncode == 1 and "panicked" not in proc.stderr
+    assert str(out) in proc.stderr and "--force" in proc.stderr
+    assert out.read_bytes() == b"keep me"
+    proc = builder(path, "-o", out, "-q", "--force")
+    assert proc.returncode == 0, proc.stderr
+    assert out.read_bytes()[:2] == b"PK"
+
+
+def test_unwritable_outputs_are_refused_before_any_work(tmp_path):
+    path = write(tmp_path, BASE)
+    for out, expected in [(tmp_path, "is a folder"), (tmp_path / "missing" / "B.fmu", "does not exist")]:
+        proc = builder(path, "-o", out, "-q")
+        assert proc.returncode == 1 and "panicked" not in proc.stderr
+        assert expected in proc.stderr and ".tmp" not in proc.stderr, proc.stderr
+    if os.geteuid() != 0:  # root writes anywhere
+        locked = tmp_path / "locked"
+        locked.mkdir(mode=0o555)
+        proc = builder(path, "-o", locked / "B.fmu", "-q")
+        assert proc.returncode == 1 and "cannot write" in proc.stderr
+
+
+def test_spec_from_standard_input_resolves_paths_from_the_working_directory(tmp_path):
+    spec = json.loads((EXAMPLES / "bracket" / "bracket-inp.json").read_text())
+    spec["reduction"] = {"modes": 2}
+    (tmp_path / "bracket.inp").write_bytes((EXAMPLES / "bracket" / "bracket.inp").read_bytes())
+    proc = builder("-", "-o", tmp_path / "b.fmu", "-q", stdin=json.dumps(spec), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "b.fmu").is_file()
+    # and without -o: <name>.fmu in the working directory
+    proc = builder("-", "-q", stdin=json.dumps(spec), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "Bracket.fmu").is_file()
+
+
+def test_print_schema_prints_the_schema_the_input_is_checked_against():
+    proc = builder("--print-schema")
+    assert proc.returncode == 0
+    schema = json.loads(proc.stdout)
+    assert schema == json.loads((EXAMPLES.parent / "schemas" / "fmu-builder-input.schema.json").read_text())
+
+
+def errors_of(tmp_path, change):
+    spec = copy.deepcopy(BASE)
+    change(spec)
+    proc = builder(write(tmp_path, spec), "-o", tmp_path / "x.fmu")
+    assert proc.returncode == 1 and "panicked" not in proc.stderr, proc.stderr
+    assert not (tmp_path / "x.fmu").exists()
+    # no path into the project's sources: the user has the binary, not the repository
+    assert "schemas/" not in proc.stderr
+    return proc.stderr
+
+
+def test_misspelt_keys_get_the_nearest_valid_one_and_every_problem_is_listed(tmp_path):
+    def change(s):
+        s["reduction"] = {"method": "craig_bampton", "mode": 4}
+        s["material"]["rh0"] = 7850.0
+
+    err = errors_of(tmp_path, change)
+    assert 'reduction.mode' in err and 'did you mean "modes"' in err
+    assert 'material.rh0' in err and 'did you mean "rho"' in err
+
+
+def test_a_mode_count_missing_names_the_forms_of_the_reduction(tmp_path):
+    for reduction in [{"method": "craig_bampton"}, {}, {"method": "krylov", "modes": 3, "expansion_points": [10.0]},
+                      {"modes": 3, "max_frequency": 100.0}]:
+        err = errors_of(tmp_path, lambda s: s.update(reduction=reduction))
+        assert "reduction" in err, err
+        assert '"modes"' in err and '"max_frequency"' in err and "krylov" in err, err
+
+
+def test_a_typo_inside_a_selector_is_named_in_that_selector(tmp_path):
+    selector = {"plane": {"point": [1.0, 0.0, 0.0], "normale": [1.0, 0.0, 0.0]}}
+    err = errors_of(tmp_path, lambda s: s["flanges"][1].update(nodes=selector))
+    assert "flanges[1].nodes.plane.normale" in err and 'did you mean "normal"' in err, err
+
+
+def test_a_misspelt_enum_value_gets_the_nearest_one(tmp_path):
+    err = errors_of(tmp_path, lambda s: s["flanges"][1].update(role="forse"))
+    assert "flanges[1].role" in err and 'did you mean "force"' in err, err
+
+
+def test_probable_unit_slips_warn_and_the_build_stands(tmp_path):
+    """E in MPa: a 0.1 Hz steel beam; a mesh in millimetres: a part 1000 m long."""
+    mpa = copy.deepcopy(BASE)
+    mpa["material"]["E"] = 2.0e5
+    proc = builder(write(tmp_path, mpa, "mpa.json"), "-o", tmp_path / "mpa.fmu")
+    assert proc.returncode == 0, proc.stderr
+    assert "warning: " in proc.stderr and "material" in proc.stderr and "MPa" in proc.stderr, proc.stderr
+    assert "lowest frequency" in proc.stderr
+    mm = copy.deepcopy(BASE)
+    box = mm["geometry"]["boxes"][0]
+    box["min"] = [v * 1000 for v in box["min"]]
+    box["max"] = [v * 1000 for v in box["max"]]
+    proc = builder(write(tmp_path, mm, "mm.json"), "-o", tmp_path / "mm.fmu")
+    assert proc.returncode == 0, proc.stderr
+    assert "millimetres" in proc.stderr, proc.stderr
+    report = json.loads(__import__("zipfile").ZipFile(tmp_path / "mm.fmu").read("documentation/report.json"))
+    assert any("millimetres" in w for w in report["warnings"])
+    # a plausible part warns of nothing
+    proc = builder(write(tmp_path, BASE, "ok.json"), "-o", tmp_path / "ok.fmu")
+    assert proc.returncode == 0 and "warning" not in proc.stderr, proc.stderr
+    # -q: nothing but errors
+    proc = builder(write(tmp_path, mpa, "mpa.json"), "-o", tmp_path / "mpa2.fmu", "-q")
+    assert proc.returncode == 0 and proc.stderr == "" and proc.stdout == ""
+
+
+def test_the_summary_states_what_the_scene_allows_and_refuses(tmp_path):
+    spec = copy.deepcopy(BASE)
+    spec["scene"] = {"loads": ["gravity"]}
+    proc = builder(write(tmp_path, spec), "-o", tmp_path / "g.fmu")
+    assert proc.returncode == 0, proc.stderr
+    assert "rotation terms no, gravity shapes yes" in proc.stdout, proc.stdout
+    assert "the FMU refuses a rotating mount: base.w and base.z must stay zero" in proc.stdout
+    html = __import__("zipfile").ZipFile(tmp_path / "g.fmu").read("documentation/index.html").decode()
+    assert "<h2>Scene</h2>" in html and "rotating mount" in html
