@@ -194,3 +194,35 @@ def test_the_readme_quick_start_works_as_written(tmp_path):
     # measured 4.9 % below beam theory: a plate 2:1 is stiffened across by Poisson (plate theory:
     # 1 - nu^2 = 0.91 of the beam value); 10 % holds it between the two theories
     assert abs(u / beam - 1) < 0.1, (u, beam)
+
+
+def test_vtk_export_reads_back_in_meshio(tmp_path):
+    """--export-vtk: the mesh (same nodes and elements as the report), each flange's slave nodes,
+    and the reduced basis' shapes named by frequency; the mount's nodes do not move in any shape."""
+    import meshio
+    import numpy as np
+    import zipfile
+
+    for name, spec_path, cell in [("beam", EXAMPLES / "beam.json", "hexahedron20"),
+                                  ("bracket", EXAMPLES / "bracket" / "bracket-inp.json", "tetra10")]:
+        vtk = tmp_path / f"{name}.vtk"
+        fmu = tmp_path / f"{name}.fmu"
+        proc = builder(spec_path, "-o", fmu, "-q", "--export-vtk", vtk)
+        assert proc.returncode == 0, proc.stderr
+        report = json.loads(zipfile.ZipFile(fmu).read("documentation/report.json"))
+        mesh = meshio.read(vtk)
+        assert len(mesh.points) == report["nodes"]
+        assert [c.type for c in mesh.cells] == [cell] and len(mesh.cells[0].data) == report["elements"]
+        for f in report["flanges"]:
+            assert int(mesh.point_data[f"flange_{f['name']}"].sum()) == f["slave_nodes"]
+        shapes = [k for k in mesh.point_data if k.startswith("shape_")]
+        assert len(shapes) == report["order"]
+        hz = [float(k.split("_")[2][:-2]) for k in shapes]
+        # named with 4 decimals
+        assert len(hz) == len(report["accuracy"]["reduced_hz"])
+        assert np.allclose(hz, report["accuracy"]["reduced_hz"], rtol=0, atol=5.1e-5)
+        mount = mesh.point_data[f"flange_{report['flanges'][0]['name']}"].ravel() == 1
+        for k in shapes:
+            u = mesh.point_data[k]
+            assert u.shape == (report["nodes"], 3) and np.abs(u).max() > 0
+            assert np.abs(u[mount]).max() == 0.0

@@ -36,6 +36,10 @@ struct Args {
     /// Also write the meshed part with its flange node sets as an Abaqus/CalculiX deck here
     #[arg(long)]
     export_inp: Option<PathBuf>,
+    /// Also write the mesh, the flanges' slave nodes and the reduced basis' shapes (displacement
+    /// fields named with their frequencies) as a legacy VTK file ParaView opens
+    #[arg(long)]
+    export_vtk: Option<PathBuf>,
     /// Also write the mounted body's K and M (Matrix Market) and the flange load DoFs into this folder
     #[arg(long)]
     export_matrices: Option<PathBuf>,
@@ -218,6 +222,24 @@ fn build(args: &Args, input: &Input, output: &Path) -> ExitCode {
             if let Some(path) = &args.export_inp {
                 let b = &built;
                 if let Err(e) = fmu_builder::model::export::write_abaqus_deck(path, &b.part, &b.flanges) {
+                    eprintln!("error: {e}");
+                    return ExitCode::FAILURE;
+                }
+            }
+            if let Some(path) = &args.export_vtk {
+                let b = &built;
+                let shapes =
+                    fmu_builder::ffrf::inertia::expand(&b.model, &b.part.mesh.nodes, &b.flanges, b.basis.phi.as_ref());
+                let names: Vec<String> = b
+                    .basis
+                    .omega
+                    .iter()
+                    .enumerate()
+                    .map(|(j, w)| format!("shape_{:02}_{:.4}Hz", j + 1, w / (2.0 * std::f64::consts::PI)))
+                    .collect();
+                if let Err(e) =
+                    fmu_builder::model::vtk::write_vtk(path, &b.spec.name, &b.part, &b.flanges, shapes.as_ref(), &names)
+                {
                     eprintln!("error: {e}");
                     return ExitCode::FAILURE;
                 }

@@ -14,3 +14,4 @@ mod node_graph;
 pub mod part;
 pub mod rigid_coupling;
 pub mod stress;
+pub mod vtk;
