@@ -226,3 +226,46 @@ def test_vtk_export_reads_back_in_meshio(tmp_path):
             u = mesh.point_data[k]
             assert u.shape == (report["nodes"], 3) and np.abs(u).max() > 0
             assert np.abs(u[mount]).max() == 0.0
+
+
+def test_documentation_of_every_example_has_each_section(tmp_path):
+    """documentation/index.html of every example: the sections a user needs, well-formed (every
+    element closed in order), the input embedded."""
+    from html.parser import HTMLParser
+    import zipfile
+
+    class Balance(HTMLParser):
+        VOID = {"meta", "br", "img", "input", "hr", "link"}
+
+        def __init__(self):
+            super().__init__()
+            self.stack, self.errors = [], []
+
+        def handle_starttag(self, tag, attrs):
+            if tag not in self.VOID:
+                self.stack.append(tag)
+
+        def handle_endtag(self, tag):
+            if not self.stack or self.stack[-1] != tag:
+                self.errors.append(f"</{tag}> closes {self.stack[-1:] or 'nothing'}")
+            else:
+                self.stack.pop()
+
+    for spec in [EXAMPLES / "beam.json", EXAMPLES / "l-beam.json", EXAMPLES / "t-square.json",
+                 EXAMPLES / "bracket" / "bracket.json"]:
+        fmu = tmp_path / (spec.stem + ".fmu")
+        proc = builder(spec, "-o", fmu, "-q")
+        assert proc.returncode == 0, proc.stderr
+        z = zipfile.ZipFile(fmu)
+        html = z.read("documentation/index.html").decode()
+        parser = Balance()
+        parser.feed(html)
+        assert parser.errors == [] and parser.stack == [], (spec.name, parser.errors[:3], parser.stack)
+        for section in ["<h2>Rigid body</h2>", "inertia tensor", "damping applied", "<h2>Flanges</h2>",
+                        "<h2>Scene</h2>", "<h2>Reduction</h2>", "full modes of the same shape", "MAC",
+                        "<h2>Variables</h2>", "<h2>Input</h2>", "fmu-builder "]:
+            assert section in html, f"{spec.name}: {section!r} missing"
+        assert json.loads(z.read("documentation/input.json"))["name"] == json.loads(spec.read_text())["name"]
+        # the source as the input names it, no path of the machine that built it
+        report = json.loads(z.read("documentation/report.json"))
+        assert str(tmp_path) not in report["source"] and str(EXAMPLES) not in report["source"]

@@ -15,7 +15,7 @@ pub const MAX_NODES_PER_ELEMENT: usize = 20;
 
 /// Supported solid element types, each equal to the CalculiX element of
 /// `calculix_name()` (node order, shape functions and integration rules).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Deserialize, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ElementKind {
     /// 8-node trilinear hexahedron (CalculiX C3D8).

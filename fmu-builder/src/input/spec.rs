@@ -11,7 +11,7 @@ use std::path::Path;
 
 pub const SCHEMA: &str = include_str!("../../../schemas/fmu-builder-input.schema.json");
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Spec {
     #[serde(rename = "$schema", default)]
@@ -36,7 +36,7 @@ pub struct Spec {
 }
 
 /// What the FMU reports beside the flanges' motion.
-#[derive(Debug, Clone, Deserialize, Default)]
+#[derive(Debug, Clone, Deserialize, serde::Serialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct Outputs {
     #[serde(default)]
@@ -45,7 +45,7 @@ pub struct Outputs {
 
 /// Where the FMU recovers stresses: nodes of named sets, the nodes nearest to points, and the
 /// hot spots the builder finds.
-#[derive(Debug, Clone, Deserialize, Default)]
+#[derive(Debug, Clone, Deserialize, serde::Serialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct StressOutputs {
     #[serde(default)]
@@ -59,7 +59,7 @@ pub struct StressOutputs {
 /// Most stress recovery points a build accepts (seven outputs each).
 pub const MAX_STRESS_POINTS: usize = 1000;
 
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Deserialize, serde::Serialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum SceneLoad {
     Gravity,
@@ -67,7 +67,7 @@ pub enum SceneLoad {
     Rotation,
 }
 
-#[derive(Debug, Clone, Deserialize, Default, PartialEq)]
+#[derive(Debug, Clone, Deserialize, serde::Serialize, Default, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
     #[serde(default)]
@@ -96,7 +96,7 @@ impl Spec {
     }
 }
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Geometry {
     /// Element kind of the box mesher (the schema allows the hexahedra only; the mesher refuses
@@ -113,7 +113,7 @@ pub struct Geometry {
     pub matrices: Option<MatrixSpec>,
 }
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct MatrixSpec {
     pub stiffness: String,
@@ -130,7 +130,7 @@ fn yes() -> bool {
     true
 }
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct BoxSpec {
     pub min: [f64; 3],
@@ -139,7 +139,7 @@ pub struct BoxSpec {
 }
 
 /// Material properties given in the input: each overrides what a mesh file says.
-#[derive(Debug, Clone, Copy, Deserialize, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Deserialize, serde::Serialize, Default, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
     #[serde(rename = "E", default)]
@@ -150,7 +150,7 @@ pub struct MaterialSpec {
     pub rho: Option<f64>,
 }
 
-#[derive(Debug, Clone, Deserialize, Default)]
+#[derive(Debug, Clone, Deserialize, serde::Serialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct Damping {
     #[serde(default)]
@@ -163,7 +163,7 @@ pub struct Damping {
     pub modal_bands: Option<Vec<DampingBand>>,
 }
 
-#[derive(Debug, Clone, Copy, Deserialize)]
+#[derive(Debug, Clone, Copy, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct DampingBand {
     pub below: f64,
@@ -180,14 +180,14 @@ impl Damping {
     }
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Deserialize, serde::Serialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum Role {
     Motion,
     Force,
 }
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct FlangeSpec {
     pub name: String,
@@ -197,7 +197,7 @@ pub struct FlangeSpec {
     pub reference_point: Option<[f64; 3]>,
 }
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, serde::Serialize)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum NodeSelector {
     BoxFace {
@@ -229,7 +229,7 @@ pub enum NodeSelector {
     },
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Deserialize, serde::Serialize, PartialEq, Eq)]
 pub enum Face {
     #[serde(rename = "-x")]
     MinusX,
@@ -259,7 +259,7 @@ impl Face {
     }
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, Deserialize, serde::Serialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum Method {
     #[default]
@@ -268,7 +268,7 @@ pub enum Method {
     Krylov,
 }
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Reduction {
     #[serde(default)]

@@ -254,7 +254,8 @@ fn mesh_file_part(spec: &Spec, file: &Path, mesh_path: &Path) -> Result<Part> {
         .map(|(name, members)| (name.clone(), members.iter().filter_map(|&n| new_index[n]).collect()))
         .collect();
     Ok(Part {
-        source: format!("{} ({} elements)", mesh_path.display(), mesh.n_elements()),
+        // as the input names it: an absolute path of the machine that built it says nothing
+        source: format!("{} ({} elements)", spec.geometry.mesh.as_deref().unwrap_or("mesh"), mesh.n_elements()),
         mesh,
         boxes: Vec::new(),
         materials,

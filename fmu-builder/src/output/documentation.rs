@@ -6,17 +6,19 @@
 use crate::output::plot::{Annotation, PALETTE, PlotSpec, Series, Stroke, esc, line_plot};
 use crate::output::report::{Report, StressPointReport};
 use crate::reduce::frf::{ComparisonDamping, FrequencyResponse};
+use fmu_runtime::interface::VariableTable;
 use std::fmt::Write;
 
-pub fn index_html(r: &Report) -> String {
+pub fn index_html(r: &Report, table: &VariableTable, input: &str) -> String {
     let mut h = String::new();
     let _ = write!(
         h,
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{name}</title>\
 <style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}}table{{border-collapse:collapse}}\
 td,th{{border:1px solid #bbb;padding:0.2em 0.6em;text-align:right}}th{{background:#eee}}</style></head><body>\n\
-<h1>{name}: reduced flexible body</h1>\n<p>Built by fmu-builder from a {el} mesh of {nodes} nodes and {els} elements \
+<h1>{name}: reduced flexible body</h1>\n<p>Built by {tool} from a {el} mesh of {nodes} nodes and {els} elements \
 ({dofs} DoFs after flange coupling). GUID {guid}.</p>\n",
+        tool = esc(&r.tool),
         name = esc(&r.model_name),
         el = esc(&r.element),
         nodes = r.nodes,
@@ -28,13 +30,22 @@ td,th{{border:1px solid #bbb;padding:0.2em 0.6em;text-align:right}}th{{backgroun
     let _ = write!(
         h,
         "<h2>Rigid body</h2>\n<table><tr><th>mass [kg]</th><td>{:.6e}</td></tr><tr><th>volume [m^3]</th><td>{}</td></tr>\
-<tr><th>centre of mass [m] (body frame)</th><td>{:.6e}, {:.6e}, {:.6e}</td></tr></table>\n\
-<p>Body frame: origin at the mount flange's reference point, axes of the undeformed part.</p>\n",
+<tr><th>centre of mass [m] (body frame)</th><td>{:.6e}, {:.6e}, {:.6e}</td></tr>\
+<tr><th>inertia tensor about the body frame's origin [kg m^2] (rows)</th><td>{}</td></tr>\
+<tr><th>damping applied</th><td>{}</td></tr></table>\n\
+<p>Body frame: origin at the mount flange's reference point (for a free body: the centre of mass), axes those of \
+the undeformed part as meshed. World frame: the host's; the mount's inputs place the body frame in it.</p>\n",
         r.mass,
         r.volume.map_or("(matrix input)".to_string(), |v| format!("{v:.6e}")),
         c[0],
         c[1],
-        c[2]
+        c[2],
+        r.inertia_about_origin
+            .chunks(3)
+            .map(|row| row.iter().map(|v| format!("{v:.6e}")).collect::<Vec<_>>().join(", "))
+            .collect::<Vec<_>>()
+            .join("<br>"),
+        esc(&r.damping)
     );
     h.push_str("<h2>Flanges</h2>\n<table><tr><th>name</th><th>role</th><th>reference point [m]</th><th>slave nodes</th></tr>\n");
     for f in &r.flanges {
@@ -92,12 +103,35 @@ of the run, so the tolerance falls a decade per decade of periods above ten. Co-
 modes whatever the tolerance.</p>",
         r.default_tolerance, r.ringing_periods
     );
-    h.push_str("<h3>Eigenfrequencies of the mounted body</h3>\n<table><tr><th>mode</th><th>reduced [Hz]</th><th>full FE [Hz]</th><th>relative error</th></tr>\n");
     let a = &r.accuracy;
-    for i in 0..a.reduced_hz.len() {
-        let full = a.full_hz.get(i).map(|f| format!("{f:.6}")).unwrap_or_default();
-        let err = a.relative_error.get(i).map(|e| format!("{e:.2e}")).unwrap_or_default();
-        let _ = writeln!(h, "<tr><td>{}</td><td>{:.6}</td><td>{full}</td><td>{err}</td></tr>", i + 1, a.reduced_hz[i]);
+    if a.pairs.is_empty() {
+        h.push_str("<h3>Eigenfrequencies of the mounted body</h3>\n<table><tr><th>mode</th><th>reduced [Hz]</th><th>full FE [Hz]</th><th>relative error</th></tr>\n");
+        for i in 0..a.reduced_hz.len() {
+            let full = a.full_hz.get(i).map(|f| format!("{f:.6}")).unwrap_or_default();
+            let err = a.relative_error.get(i).map(|e| format!("{e:.2e}")).unwrap_or_default();
+            let _ =
+                writeln!(h, "<tr><td>{}</td><td>{:.6}</td><td>{full}</td><td>{err}</td></tr>", i + 1, a.reduced_hz[i]);
+        }
+    } else {
+        h.push_str(
+            "<h3>Eigenfrequencies: reduced modes and the full modes of the same shape</h3>\n<p>Each reduced mode is paired \
+with the computed full-model mode whose shape it resembles most (modal assurance criterion, MAC, in the mass inner \
+product); a reduced mode that resembles none (MAC below 0.9) lies beyond what the model represents: a constraint or \
+residual-flexibility mode, there to make statics exact, not a vibration mode of the part.</p>\n\
+<table><tr><th>reduced mode</th><th>reduced [Hz]</th><th>full mode</th><th>full FE [Hz]</th><th>MAC</th>\
+<th>relative error</th></tr>\n",
+        );
+        for p in &a.pairs {
+            let (full, full_hz, err) = match (p.full, p.full_hz, p.relative_error) {
+                (Some(j), Some(f), Some(e)) => (j.to_string(), format!("{f:.6}"), format!("{e:.2e}")),
+                _ => ("-".to_string(), "-".to_string(), "outside the valid range".to_string()),
+            };
+            let _ = writeln!(
+                h,
+                "<tr><td>{}</td><td>{:.6}</td><td>{full}</td><td>{full_hz}</td><td>{:.4}</td><td>{err}</td></tr>",
+                p.reduced, p.reduced_hz, p.mac
+            );
+        }
     }
     h.push_str("</table>\n");
     let _ = write!(
@@ -109,7 +143,36 @@ compliance (relative to its largest entry): {:.2e}. Constraint modes make it exa
     if let Some(fr) = &a.frequency_response {
         h.push_str(&accuracy_over_band_html(fr, &a.compliance_flanges));
     }
+    h.push_str(&variables_html(table));
+    let _ = write!(
+        h,
+        "<h2>Input</h2>\n<p>The input as the builder read it (defaults filled in), also <code>input.json</code> beside this \
+file:</p>\n<pre>{}</pre>\n",
+        esc(input)
+    );
     h.push_str("<p>The machine-readable report, with the full compliance matrices, is <code>report.json</code> beside this file.</p>\n</body></html>\n");
+    h
+}
+
+/// Every variable of the FMU: name, causality, unit and what it means (frames and signs are in
+/// the descriptions).
+fn variables_html(table: &VariableTable) -> String {
+    let mut h = String::from(
+        "<h2>Variables</h2>\n<p>Loads act on the body; torques are about the flange's reference point; \
+\"world frame\" is the host's, \"body frame\" the part's axes at the mount.</p>\n\
+<table><tr><th>name</th><th>causality</th><th>unit</th><th>meaning</th></tr>\n",
+    );
+    for v in &table.variables {
+        let _ = writeln!(
+            h,
+            "<tr><td>{}</td><td>{:?}</td><td>{}</td><td style=\"text-align:left\">{}</td></tr>",
+            esc(&v.name),
+            v.causality,
+            v.unit.unwrap_or(""),
+            esc(&v.description)
+        );
+    }
+    h.push_str("</table>\n");
     h
 }
 
@@ -221,7 +284,8 @@ fn damping_html(d: &ComparisonDamping) -> String {
     }
     if d.loss_factor != 0.0 {
         let why = if parts.is_empty() {
-            " (the input has no damping; undamped responses are infinite at the eigenfrequencies)"
+            " (no Rayleigh damping in the input, and modal damping has no full-model counterpart: a loss factor keeps \
+both models' responses finite at the eigenfrequencies)"
         } else {
             ""
         };
@@ -389,9 +453,17 @@ mod tests {
         frf(freqs, err, full, red)
     }
 
+    /// The page of `r` with a two-mode body's variables and a small input.
+    fn html_of(r: &Report) -> String {
+        let table = VariableTable::new(&fmu_runtime::reduced::two_mode_body());
+        index_html(r, &table, "{\"name\": \"Beam <test>\"}")
+    }
+
     fn report(fr: Option<FrequencyResponse>) -> Report {
         Report {
             model_name: "Beam <test> & co".into(),
+            tool: "fmu-builder test".into(),
+            damping: "none".into(),
             guid: "{0000}".into(),
             element: "C3D10".into(),
             nodes: 100,
@@ -433,6 +505,7 @@ mod tests {
                 inertial_cases: Vec::new(),
                 inertial_flange_response_full: Vec::new(),
                 frequency_response: fr,
+                pairs: Vec::new(),
             },
         }
     }
@@ -450,7 +523,7 @@ mod tests {
 
     #[test]
     fn two_svgs_with_frequency_response() {
-        let html = index_html(&report(Some(sample_frf())));
+        let html = html_of(&report(Some(sample_frf())));
         assert_eq!(html.matches("<svg").count(), 2);
         assert!(html.contains("Accuracy over the band"));
         assert!(html.contains("loss factor"));
@@ -475,7 +548,7 @@ mod tests {
 
     #[test]
     fn no_svg_without_frequency_response() {
-        let html = index_html(&report(None));
+        let html = html_of(&report(None));
         assert_eq!(html.matches("<svg").count(), 0);
         assert!(!html.contains("Accuracy over the band"));
         assert!(html.contains("Static compliance"));
@@ -486,7 +559,7 @@ mod tests {
         let mut r = report(None);
         r.default_tolerance = 1e-10;
         r.ringing_periods = 29790.7;
-        let html = index_html(&r);
+        let html = html_of(&r);
         assert!(html.contains("Default experiment tolerance 1e-10"), "{html}");
         assert!(html.contains("29790.7 periods"));
     }
@@ -495,7 +568,7 @@ mod tests {
     fn rayleigh_damping_and_max_in_table() {
         let mut fr = sample_frf();
         fr.damping = ComparisonDamping::new(2.0, 1e-5);
-        let html = index_html(&report(Some(fr.clone())));
+        let html = html_of(&report(Some(fr.clone())));
         assert!(html.contains("Rayleigh") && html.contains("2.0000e0") && html.contains("1.0000e-5"));
         assert!(html.contains(&format!("{:.3e}", fr.max_relative_error)));
         assert!(html.contains(&format!("max {:.2e}", fr.max_relative_error)));
@@ -521,7 +594,7 @@ mod tests {
         for mut fr in cases {
             for band in [[0.0, 2000.0], [100.0, 100.0], [f64::NAN, 5.0], [50.0, 10.0]] {
                 fr.band_hz = band;
-                let html = index_html(&report(Some(fr.clone())));
+                let html = html_of(&report(Some(fr.clone())));
                 let svgs = svgs(&html);
                 assert_eq!(svgs.len(), 2);
                 for svg in svgs {

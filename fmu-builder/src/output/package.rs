@@ -46,6 +46,8 @@ pub fn write_fmu(spec: &Spec, reduced: &ReducedBody, report: &Report, output: &P
             "{e}: a flange's name (flanges[].name) collides with another variable of the FMU; rename the flange"
         ))
     })?;
+    let input =
+        serde_json::to_string_pretty(spec).map_err(|e| BuildError::Numerical(format!("serialising the input: {e}")))?;
     let report_json =
         serde_json::to_vec_pretty(report).map_err(|e| BuildError::Numerical(format!("serialising the report: {e}")))?;
     let archive = fmu::FmuArchive {
@@ -54,8 +56,9 @@ pub fn write_fmu(spec: &Spec, reduced: &ReducedBody, report: &Report, output: &P
         binary_linux64: RUNTIME_SO,
         resources: vec![(RESOURCE_FILE.to_string(), reduced.to_bytes())],
         documentation: vec![
-            ("index.html".to_string(), documentation::index_html(report).into_bytes()),
+            ("index.html".to_string(), documentation::index_html(report, &table, &input).into_bytes()),
             ("report.json".to_string(), report_json),
+            ("input.json".to_string(), input.clone().into_bytes()),
         ],
     };
     fmu::write_fmu(output, &archive).map_err(|e| match e {

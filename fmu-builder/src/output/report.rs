@@ -45,6 +45,10 @@ pub struct UnitCaseStress {
 #[derive(Debug, Clone, Serialize)]
 pub struct Report {
     pub model_name: String,
+    /// The builder that wrote the FMU (`fmu-builder <version>`).
+    pub tool: String,
+    /// The damping the FMU applies, in words (Rayleigh and modal, as the input gives them).
+    pub damping: String,
     pub guid: String,
     pub element: String,
     /// What the part was read from (boxes, a mesh file, matrices).
@@ -88,6 +92,30 @@ pub struct Report {
     pub accuracy: Accuracy,
 }
 
+/// The damping the FMU applies (its parameters damping.alpha and damping.beta start at the
+/// Rayleigh values; the modal ratios are fixed in the FMU).
+fn damping_applied(spec: &Spec) -> String {
+    let d = &spec.damping;
+    let mut parts = Vec::new();
+    if d.alpha != 0.0 || d.beta != 0.0 {
+        parts.push(format!(
+            "Rayleigh alpha = {:e} 1/s, beta = {:e} s (parameters damping.alpha, damping.beta)",
+            d.alpha, d.beta
+        ));
+    }
+    if let Some(z) = d.modal_ratio {
+        parts.push(format!("modal damping ratio {z} in every mode"));
+    }
+    if let Some(bands) = &d.modal_bands {
+        let b: Vec<String> = bands.iter().map(|b| format!("{} below {} Hz", b.ratio, b.below)).collect();
+        parts.push(format!("modal damping ratios {}", b.join(", ")));
+    }
+    if spec.geometry.matrices.as_ref().is_some_and(|m| m.damping.is_some()) {
+        parts.push("the input's damping matrix, projected on the basis (its diagonal)".to_string());
+    }
+    if parts.is_empty() { "none (undamped)".to_string() } else { parts.join("; ") }
+}
+
 /// The build's report: what was built and what its reduction costs.
 #[allow(clippy::too_many_arguments)]
 pub fn report_of(
@@ -106,6 +134,8 @@ pub fn report_of(
     let mount = flanges.iter().find(|f| f.role == Role::Motion).map(|f| f.name.as_str());
     let mut report = Report {
         model_name: spec.name.clone(),
+        tool: format!("fmu-builder {}", env!("CARGO_PKG_VERSION")),
+        damping: damping_applied(spec),
         guid: reduced.guid.clone(),
         element: part.element_description(),
         source: part.source.clone(),

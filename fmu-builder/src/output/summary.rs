@@ -90,9 +90,19 @@ pub fn text(r: &Report) -> String {
                 let _ = writeln!(s, "  vs full FE: the lowest {n} frequencies (to {f:.4} Hz) within {tol:.0e}");
             }
             None => {
-                let _ = writeln!(s, "  vs full FE: even the lowest frequency is off by more than {tol:.0e}");
+                let off = a.relative_error.first().map_or(String::new(), |e| format!(" ({:.1e})", e.abs()));
+                let _ = writeln!(s, "  vs full FE: even the lowest frequency is off by more than {tol:.0e}{off}");
             }
         }
+    }
+    let beyond = a.pairs.iter().filter(|p| p.full.is_none()).count();
+    if beyond > 0 {
+        let _ = writeln!(
+            s,
+            "  {beyond} reduced modes resemble no full mode (MAC < {}): constraint or residual-flexibility modes, beyond \
+             the frequencies the model represents",
+            crate::reduce::accuracy::MAC_PAIRED
+        );
     }
     let _ = writeln!(s, "  vs full FE: static flange compliance within {:.1e}", a.compliance_max_relative_error);
     if let Some(worst) =

@@ -31,6 +31,55 @@ pub struct Accuracy {
     pub inertial_flange_response_full: Vec<Vec<f64>>,
     /// Flange transfer functions full vs reduced over the band (mounted bodies with force flanges).
     pub frequency_response: Option<crate::reduce::frf::FrequencyResponse>,
+    /// Each reduced mode with the full mode its shape resembles most (modal assurance criterion),
+    /// where the full modes' shapes were computed.
+    pub pairs: Vec<ModePair>,
+}
+
+/// A reduced mode and the full mode of the most similar shape.
+#[derive(Debug, Clone, Serialize)]
+pub struct ModePair {
+    /// 1-based mode numbers.
+    pub reduced: usize,
+    /// None: no computed full mode resembles it (MAC below `MAC_PAIRED`): the reduced mode lies
+    /// beyond the frequencies the model represents (a constraint or residual-flexibility mode).
+    pub full: Option<usize>,
+    pub mac: f64,
+    pub reduced_hz: f64,
+    pub full_hz: Option<f64>,
+    pub relative_error: Option<f64>,
+}
+
+/// Least modal assurance criterion for a reduced mode to be the same as a full mode.
+pub const MAC_PAIRED: f64 = 0.9;
+
+/// Pairs by the modal assurance criterion MAC_ij = (phi_i^T M x_j)^2 (both M-normalised):
+/// `phi` the reduced modes on the constrained DoFs, `full` the full model's modes.
+pub fn mac_pairs(model: &Assembled, basis: &Basis, full: &eigen::Eigenpairs) -> Vec<ModePair> {
+    let (r, k) = (basis.omega.len(), full.values.len());
+    if k == 0 || full.vectors.ncols() != k || full.vectors.nrows() != basis.phi.nrows() {
+        return Vec::new();
+    }
+    let m_full = crate::linalg::sparse::mul_leading(&model.mass, full.vectors.as_ref(), false);
+    let c = basis.phi.transpose() * &m_full;
+    let two_pi = 2.0 * std::f64::consts::PI;
+    (0..r)
+        .map(|i| {
+            let (j, mac) =
+                (0..k).map(|j| (j, c[(i, j)] * c[(i, j)])).fold((0, 0.0), |b, x| if x.1 > b.1 { x } else { b });
+            let reduced_hz = basis.omega[i] / two_pi;
+            let paired = mac >= MAC_PAIRED;
+            let full_hz = paired.then(|| full.values[j].max(0.0).sqrt() / two_pi);
+            ModePair {
+                reduced: i + 1,
+                full: paired.then_some(j + 1),
+                mac,
+                reduced_hz,
+                full_hz,
+                relative_error: full_hz.map(|f| (reduced_hz - f) / f),
+            }
+        })
+        .collect()
 }
 
 /// Full-vs-reduced comparison. `n_full` eigenfrequencies of the full clamped model are computed.
@@ -48,10 +97,13 @@ pub fn accuracy(
     computed: Option<eigen::Eigenpairs>,
 ) -> Result<Accuracy> {
     let nc = model.dofs.n_clamped();
-    let full_values = match computed {
-        Some(full) if full.values.len() >= n_full => full.values[..n_full].to_vec(),
-        _ => eigen::lowest(solver, &model.mass, n_full, EIGEN_TOL)?.values,
+    let full = match computed {
+        Some(full) if full.values.len() >= n_full => full,
+        _ => eigen::lowest(solver, &model.mass, n_full, EIGEN_TOL)?,
     };
+    let pairs = mac_pairs(model, basis, &full);
+    let full_values = full.values[..n_full.min(full.values.len())].to_vec();
+    drop(full);
     let two_pi = 2.0 * std::f64::consts::PI;
     let full_hz: Vec<f64> = full_values.iter().map(|l| l.sqrt() / two_pi).collect();
     let reduced_hz: Vec<f64> = basis.omega.iter().map(|w| w / two_pi).collect();
@@ -80,6 +132,7 @@ pub fn accuracy(
         inertial_cases: Vec::new(),
         inertial_flange_response_full: Vec::new(),
         frequency_response: None,
+        pairs,
     })
 }
 
@@ -150,6 +203,7 @@ pub fn free_free_accuracy(
     basis: &Basis,
 ) -> Result<Accuracy> {
     let full = eigen::lowest_shifted(solver, &model.mass, basis.omega.len(), EIGEN_TOL, shift, Some(rigid))?;
+    let pairs = mac_pairs(model, basis, &full);
     let two_pi = 2.0 * std::f64::consts::PI;
     let full_hz: Vec<f64> = full.values.iter().map(|l| l.max(0.0).sqrt() / two_pi).collect();
     let reduced_hz: Vec<f64> = basis.omega.iter().map(|w| w / two_pi).collect();
@@ -175,5 +229,6 @@ pub fn free_free_accuracy(
         inertial_cases: Vec::new(),
         inertial_flange_response_full: Vec::new(),
         frequency_response: None,
+        pairs,
     })
 }

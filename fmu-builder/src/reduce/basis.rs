@@ -72,8 +72,9 @@ pub fn craig_bampton(
         (ModeCount::Count(c), Some(count)) => {
             // the whole model's mass: the products take its leading blocks (no copy)
             let (whole, normal) = eigen::lowest_and_held(mounted, &model.mass, count, &solver, c, EIGEN_TOL)?;
-            // the comparison needs the frequencies only: the vectors' memory goes now
-            (normal, Some(eigen::Eigenpairs { values: whole.values, vectors: Mat::zeros(nc, 0) }))
+            // the vectors stay for the comparison's pairing of modes by shape (n x count, freed
+            // there; below the eigen-solve's peak)
+            (normal, Some(whole))
         }
         (ModeCount::Count(c), None) => (eigen::lowest(&solver, &model.mass, c, EIGEN_TOL)?, None),
         (ModeCount::Below(f), _) => {
