@@ -167,5 +167,6 @@ pub fn reduce(
         accuracy,
     );
     report.stress_points = recovered.report;
+    report.pictures = crate::output::mesh_view::pictures(&part, &flanges, phi_mesh.as_ref(), &basis.omega);
     Ok(Built { spec, part, flanges, model, basis, reduced, report, profile: Vec::new() })
 }

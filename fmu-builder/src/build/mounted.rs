@@ -420,5 +420,6 @@ pub fn reduce(
     let statics = basis.omega.len() - basis.n_normal;
     let mut report = report_of(&spec, &part, &flanges, &model, &basis, &reduced, &method, statics, accuracy);
     report.stress_points = recovered.report;
+    report.pictures = crate::output::mesh_view::pictures(&part, &flanges, phi_mesh.as_ref(), &basis.omega);
     Ok(Built { spec, part, flanges, model, basis, reduced, report, profile: Vec::new() })
 }

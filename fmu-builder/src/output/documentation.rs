@@ -62,6 +62,7 @@ the undeformed part as meshed. World frame: the host's; the mount's inputs place
         );
     }
     h.push_str("</table>\n");
+    h.push_str(&pictures_html(&r.pictures));
     h.push_str(&scene_html(r));
     h.push_str(&stress_points_html(&r.stress_points));
     let _ = write!(
@@ -151,6 +152,18 @@ file:</p>\n<pre>{}</pre>\n",
         esc(input)
     );
     h.push_str("<p>The machine-readable report, with the full compliance matrices, is <code>report.json</code> beside this file.</p>\n</body></html>\n");
+    h
+}
+
+/// The mesh with its flanges and the first mode shapes.
+fn pictures_html(pictures: &[(String, String)]) -> String {
+    if pictures.is_empty() {
+        return String::new();
+    }
+    let mut h = String::from("<h2>Pictures</h2>\n");
+    for (caption, svg) in pictures {
+        let _ = write!(h, "<figure>\n{svg}<figcaption>{}</figcaption></figure>\n", esc(caption));
+    }
     h
 }
 
@@ -494,6 +507,7 @@ mod tests {
             stress_points: Vec::new(),
             scene: Default::default(),
             warnings: Vec::new(),
+            pictures: Vec::new(),
             accuracy: Accuracy {
                 reduced_hz: vec![300.0, 1500.0],
                 full_hz: vec![299.0, 1490.0],

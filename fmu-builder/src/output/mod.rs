@@ -7,6 +7,7 @@ pub mod default_experiment;
 pub mod documentation;
 pub mod finite;
 pub mod fmu;
+pub mod mesh_view;
 pub mod package;
 pub mod plausibility;
 pub mod plot;

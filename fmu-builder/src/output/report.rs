@@ -89,6 +89,9 @@ pub struct Report {
     pub scene: SceneReport,
     /// Probable unit slips and implausible results (the build stands).
     pub warnings: Vec<String>,
+    /// Pictures for the documentation (caption, SVG): not in report.json.
+    #[serde(skip)]
+    pub pictures: Vec<(String, String)>,
     pub accuracy: Accuracy,
 }
 
@@ -175,6 +178,7 @@ pub fn report_of(
         stress_points: Vec::new(),
         scene: plausibility::scene(spec, mount),
         warnings: Vec::new(),
+        pictures: Vec::new(),
         accuracy,
     };
     report.warnings = plausibility::warnings(part, report.accuracy.full_hz.first().copied(), mount.is_some());
