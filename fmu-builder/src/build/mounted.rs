@@ -168,8 +168,8 @@ fn choose_order(
     let in_band = eigen::below(solver, &m, 2.0 * std::f64::consts::PI * band[1] * 1.01, 1, basis::EIGEN_TOL)?;
     let eigen_hz: Vec<f64> = in_band.values.iter().map(|l| l.sqrt() / (2.0 * std::f64::consts::PI)).collect();
     let freqs = frf::grid(band, &eigen_hz, 60);
-    let mut full = frf::FullResponse::new(model)?;
-    let responses: Vec<_> = freqs.iter().map(|&f| full.at(damping, f)).collect::<Result<_>>()?;
+    let top = freqs.iter().copied().fold(band[1], f64::max);
+    let responses = frf::full_responses(model, solver, damping, top, &freqs)?;
     // unit-free scaling by the static compliance diagonal
     let mut g = b.clone();
     solver.solve_refined(g.as_mut());
@@ -401,7 +401,16 @@ pub fn reduce(
             modes: reduced.stress_points.iter().map(|p| p.modes.as_slice()).collect(),
         });
         accuracy.frequency_response = Some(profile::phase("frequency-response comparison", || {
-            frf::compare(&model, &basis, damping, band, &accuracy.full_hz, &accuracy.compliance_full, probe.as_ref())
+            frf::compare(
+                &model,
+                &solver,
+                &basis,
+                damping,
+                band,
+                &accuracy.full_hz,
+                &accuracy.compliance_full,
+                probe.as_ref(),
+            )
         })?);
     }
     if let Some(shapes) = &load_shapes {

@@ -449,6 +449,7 @@ mod tests {
             full_matrices: Vec::new(),
             stress_relative_error: Vec::new(),
             stress_full: Vec::new(),
+            method: "test".into(),
         }
     }
 

@@ -54,6 +54,8 @@ pub struct FrequencyResponse {
     /// The full model's stress responses at the first `STRESS_FRF_POINTS` recovery points: per
     /// frequency, point-major (point, component xx..zx, unit load) as [re, im] [Pa per N or N m].
     pub stress_full: Vec<Vec<[f64; 2]>>,
+    /// How the full model's responses were computed.
+    pub method: String,
 }
 
 /// Recovery points whose full-model stress responses the report keeps (the error covers all).
@@ -227,6 +229,31 @@ impl FullResponse {
     }
 }
 
+/// The full model's flange FRF (nb x nb) at each of `freqs` in the band up to `top_hz`: the band
+/// method where it applies (`band_response`), else a complex LU per frequency.
+pub fn full_responses(
+    model: &Assembled,
+    solver: &dyn crate::linalg::sparse::SpdSolve,
+    damping: ComparisonDamping,
+    top_hz: f64,
+    freqs: &[f64],
+) -> Result<Vec<Mat<c64>>> {
+    let rows = flange_rows(&flange_unit_loads(model));
+    match crate::reduce::band_response::BandResponse::new(model, solver, top_hz, damping)? {
+        Some(band) => Ok(freqs
+            .iter()
+            .map(|&f| {
+                let (y, w) = band.coefficients(damping, f);
+                band.rows_of(&rows, &y, &w)
+            })
+            .collect()),
+        None => {
+            let mut direct = FullResponse::new(model)?;
+            freqs.iter().map(|&f| direct.at(damping, f)).collect()
+        }
+    }
+}
+
 /// Row index of each unit load in B (its flange master DoF).
 fn flange_rows(b: &Mat<f64>) -> Vec<usize> {
     (0..b.ncols()).map(|j| (0..b.nrows()).find(|&i| b[(i, j)] != 0.0).unwrap_or(0)).collect()
@@ -261,8 +288,10 @@ pub fn reduced_response(model: &Assembled, basis: &Basis, damping: ComparisonDam
 }
 
 /// Full vs reduced over the band.
+#[allow(clippy::too_many_arguments)]
 pub fn compare(
     model: &Assembled,
+    solver: &dyn crate::linalg::sparse::SpdSolve,
     basis: &Basis,
     damping: ComparisonDamping,
     band: [f64; 2],
@@ -279,15 +308,49 @@ pub fn compare(
     let mut full_matrices = Vec::new();
     let mut stress_relative_error = Vec::new();
     let mut stress_full = Vec::new();
-    let mut full_model = FullResponse::new(model)?;
     let b = flange_unit_loads(model);
     let rows = flange_rows(&b);
+    // the full model over the band: modes below twice its top exactly plus a Krylov projection
+    // of the rest (one eigen-solve for the band), or, where too many modes lie below that, a
+    // complex LU per frequency
+    let fast = crate::reduce::band_response::BandResponse::new(model, solver, band[1], damping)?;
+    let mut direct = if fast.is_none() { Some(FullResponse::new(model)?) } else { None };
+    // stresses are linear in the response: those of the fast path's columns, once
+    let column_stresses = match (&fast, stress) {
+        (Some(f), Some(probe)) => Some((probe.full)(f.columns().as_ref())?),
+        _ => None,
+    };
+    let method = match &fast {
+        Some(f) => format!(
+            "{} full modes below {:.4} Hz exactly, the rest by {} Krylov blocks of the complement",
+            f.modes,
+            2.0 * band[1],
+            f.blocks
+        ),
+        None => "a complex sparse LU of the full model per frequency".to_string(),
+    };
     for (i, &f) in frequencies.iter().enumerate() {
         crate::progress::step(|| format!("{} of {} frequencies ({f:.4} Hz)", i + 1, frequencies.len()));
-        let x = full_model.response(damping, f)?;
-        let full = Mat::from_fn(rows.len(), rows.len(), |i, j| x[(rows[i], j)]);
-        if let Some(probe) = stress {
-            let (error, kept) = stress_responses(probe, &x, &rows, basis, damping, f)?;
+        let (full, full_stress) = match (&fast, &mut direct) {
+            (Some(fr), _) => {
+                let (y, w) = fr.coefficients(damping, f);
+                let full = fr.rows_of(&rows, &y, &w);
+                let s = column_stresses.as_ref().map(|cs| combine_stresses(cs, &y, &w));
+                (full, s)
+            }
+            (None, Some(d)) => {
+                let x = d.response(damping, f)?;
+                let full = Mat::from_fn(rows.len(), rows.len(), |i, j| x[(rows[i], j)]);
+                let s = match stress {
+                    Some(probe) => Some(stresses_of_complex(probe, &x)?),
+                    None => None,
+                };
+                (full, s)
+            }
+            (None, None) => unreachable!("one of the two is built"),
+        };
+        if let (Some(probe), Some(fs)) = (stress, &full_stress) {
+            let (error, kept) = stress_responses(probe, fs, &rows, basis, damping, f);
             stress_relative_error.push(error);
             stress_full.push(kept);
         }
@@ -324,7 +387,38 @@ pub fn compare(
         full_matrices,
         stress_relative_error,
         stress_full,
+        method,
     })
+}
+
+/// Stresses at the probe's points of a complex response x (n x nb): point-major (point, load).
+fn stresses_of_complex(probe: &StressProbe<'_>, x: &Mat<c64>) -> Result<Vec<[c64; 6]>> {
+    let nb = x.ncols();
+    let re = Mat::<f64>::from_fn(x.nrows(), nb, |i, j| x[(i, j)].re);
+    let im = Mat::<f64>::from_fn(x.nrows(), nb, |i, j| x[(i, j)].im);
+    let (s_re, s_im) = ((probe.full)(re.as_ref())?, (probe.full)(im.as_ref())?);
+    Ok(s_re.iter().zip(&s_im).map(|(r, i)| std::array::from_fn(|c| c64::new(r[c], i[c]))).collect())
+}
+
+/// Stresses of x = [Phi Q] [y; w] from those of the columns (points x (k + m), point-major).
+fn combine_stresses(columns: &[[f64; 6]], y: &Mat<c64>, w: &Mat<c64>) -> Vec<[c64; 6]> {
+    let (k, m, nb) = (y.nrows(), w.nrows(), y.ncols());
+    let per_point = k + m;
+    let points = columns.len().checked_div(per_point).unwrap_or(0);
+    let mut out = vec![[c64::new(0.0, 0.0); 6]; points * nb];
+    for p in 0..points {
+        for j in 0..nb {
+            let o = &mut out[p * nb + j];
+            for col in 0..per_point {
+                let coef = if col < k { y[(col, j)] } else { w[(col - k, j)] };
+                let s = &columns[p * per_point + col];
+                for c in 0..6 {
+                    o[c] += coef * s[c];
+                }
+            }
+        }
+    }
+    out
 }
 
 /// The stress responses at the probe's points, full (from the full response `x`) against
@@ -332,16 +426,13 @@ pub fn compare(
 /// and the full responses of the first `STRESS_FRF_POINTS` points as [re, im].
 fn stress_responses(
     probe: &StressProbe<'_>,
-    x: &Mat<c64>,
+    full_stress: &[[c64; 6]],
     rows: &[usize],
     basis: &Basis,
     damping: ComparisonDamping,
     hz: f64,
-) -> Result<(f64, Vec<[f64; 2]>)> {
-    let nb = x.ncols();
-    let re = Mat::<f64>::from_fn(x.nrows(), nb, |i, j| x[(i, j)].re);
-    let im = Mat::<f64>::from_fn(x.nrows(), nb, |i, j| x[(i, j)].im);
-    let (s_re, s_im) = ((probe.full)(re.as_ref())?, (probe.full)(im.as_ref())?);
+) -> (f64, Vec<[f64; 2]>) {
+    let nb = rows.len();
     let g = modal_receptances(basis, damping, hz);
     let r = g.len();
     let (mut num, mut den) = (0.0, 0.0);
@@ -353,7 +444,7 @@ fn stress_responses(
                 for k in 0..r {
                     red += g[k] * (modes[c * r + k] * basis.phi[(rows[j], k)]);
                 }
-                let full = c64::new(s_re[p * nb + j][c], s_im[p * nb + j][c]);
+                let full = full_stress[p * nb + j][c];
                 num += (full - red).norm_sqr();
                 den += full.norm_sqr();
                 if p < STRESS_FRF_POINTS {
@@ -362,5 +453,5 @@ fn stress_responses(
             }
         }
     }
-    Ok((if den > 0.0 { (num / den).sqrt() } else { 0.0 }, kept))
+    (if den > 0.0 { (num / den).sqrt() } else { 0.0 }, kept)
 }

@@ -5,6 +5,7 @@
 //! the full model that every build must pass (`accuracy`).
 
 pub mod accuracy;
+pub mod band_response;
 pub mod basis;
 pub mod cutoff;
 pub mod damping;
