@@ -148,7 +148,8 @@ fn band_response_equals_the_direct_solve() {
     let f1 = built.report.accuracy.full_hz[0];
     let top = 6.0 * f1;
     for damping in [ComparisonDamping::new(2.0, 1e-5), ComparisonDamping::new(0.0, 0.0)] {
-        let band = BandResponse::new(model, &solver, top, damping).unwrap().expect("few modes below the cut");
+        let band =
+            BandResponse::new(model, &solver, top, damping, None, 2.0).unwrap().expect("few modes below the cut");
         let mut direct = FullResponse::new(model).unwrap();
         let rows: Vec<usize> = {
             let b = fmu_builder::reduce::basis::flange_unit_loads(model);

@@ -129,6 +129,21 @@ fn band_of(spec: &Spec, full_hz: &[f64]) -> [f64; 2] {
         .unwrap_or_else(|| [0.0, full_hz.get(9).or(full_hz.last()).copied().unwrap_or(1.0)])
 }
 
+/// Ratio of the highest full mode computed to the top of the band compared when the scene names
+/// none: those modes are then all the band method needs (no eigen-solve of its own), and the
+/// rest converges by (1/3)^2 per Krylov block.
+const DEFAULT_CUT: f64 = 3.0;
+
+/// Largest model (constrained DoFs) whose transfer functions are compared without a named band:
+/// the comparison's Krylov blocks cost some 0.5 s each at 2.5e5 DoFs (4 s in all, a fifth of
+/// the build), and 0.05 s at 1e5; above, a scene.band asks for it.
+const DEFAULT_BAND_MAX_DOFS: usize = 100_000;
+
+/// The band compared when the scene names none.
+fn default_band(full_hz: &[f64]) -> [f64; 2] {
+    [0.0, full_hz.last().copied().unwrap_or(1.0) / DEFAULT_CUT]
+}
+
 /// The smallest dominant selection of the candidate basis meeting the scene's tolerance.
 #[allow(clippy::too_many_arguments)]
 fn choose_order(
@@ -381,14 +396,16 @@ pub fn reduce(
 
     let force_dofs: Vec<(String, usize)> =
         force.iter().map(|&k| (flanges[k].name.clone(), model.dofs.flange_first[k])).collect();
-    let mut accuracy = profile::phase("accuracy comparison with the full model", || {
+    let accuracy = profile::phase("accuracy comparison with the full model", || {
         accuracy::accuracy(&model, &solver, &flange_shapes, &basis, &force_dofs, basis.omega.len().max(10), whole)
     })?;
+    let (mut accuracy, full_modes) = accuracy;
     accuracy::enforce(&accuracy)?;
-    // the transfer-function comparison costs a complex factorization per sampled frequency:
-    // done when the scene names its band
-    if !force.is_empty() && spec.scene.as_ref().is_some_and(|s| s.band.is_some() || s.tolerance.is_some()) {
-        let band = band_of(&spec, &accuracy.full_hz);
+    // the transfer functions compared over the scene's band, or by default up to half the
+    // highest full mode computed (whose modes are then all the band method needs)
+    let named = spec.scene.as_ref().is_some_and(|s| s.band.is_some() || s.tolerance.is_some());
+    if !force.is_empty() && (named || model.dofs.n_clamped() <= DEFAULT_BAND_MAX_DOFS) {
+        let band = if named { band_of(&spec, &accuracy.full_hz) } else { default_band(&accuracy.full_hz) };
         let damping = frf::ComparisonDamping::new(spec.damping.alpha, spec.damping.beta);
         // the recovery points' stress responses are compared too (full: the full model's response
         // on the mesh, its nodal stresses at the points)
@@ -410,9 +427,12 @@ pub fn reduce(
                 &accuracy.full_hz,
                 &accuracy.compliance_full,
                 probe.as_ref(),
+                Some(&full_modes),
+                if named { crate::reduce::band_response::CUT } else { DEFAULT_CUT },
             )
         })?);
     }
+    drop(full_modes);
     if let Some(shapes) = &load_shapes {
         let axis = ["x", "y", "z"];
         for (c, case) in cases.iter().enumerate() {

@@ -266,7 +266,9 @@ frequencies: an even grid over the band plus every full-model eigenfrequency in 
 error is |S (H<sub>full</sub> &minus; H<sub>red</sub>) S|<sub>F</sub> / |S H<sub>full</sub> S|<sub>F</sub> with \
 S = diag(C<sub>static</sub>)<sup>&minus;1/2</sup>, unit-free.</p>\n\
 <table><tr><th>band [Hz]</th><td>{lo} &ndash; {hi}</td></tr><tr><th>comparison damping</th><td>{damping}</td></tr>\
-<tr><th>sampled frequencies</th><td>{n}</td></tr><tr><th>max relative error</th><td>{max:.3e}{at}</td></tr></table>\n",
+<tr><th>sampled frequencies</th><td>{n}</td></tr><tr><th>max relative error</th><td>{max:.3e}{at}</td></tr>\
+<tr><th>full model's responses</th><td>{method}</td></tr></table>\n",
+        method = esc(&fr.method),
         n = fr.frequencies_hz.len(),
         lo = fmt_num(fr.band_hz[0]),
         hi = fmt_num(fr.band_hz[1]),

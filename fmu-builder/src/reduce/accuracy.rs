@@ -95,7 +95,7 @@ pub fn accuracy(
     force_flanges: &[(String, usize)],
     n_full: usize,
     computed: Option<eigen::Eigenpairs>,
-) -> Result<Accuracy> {
+) -> Result<(Accuracy, eigen::Eigenpairs)> {
     let nc = model.dofs.n_clamped();
     let full = match computed {
         Some(full) if full.values.len() >= n_full => full,
@@ -103,7 +103,6 @@ pub fn accuracy(
     };
     let pairs = mac_pairs(model, basis, &full);
     let full_values = full.values[..n_full.min(full.values.len())].to_vec();
-    drop(full);
     let two_pi = 2.0 * std::f64::consts::PI;
     let full_hz: Vec<f64> = full_values.iter().map(|l| l.sqrt() / two_pi).collect();
     let reduced_hz: Vec<f64> = basis.omega.iter().map(|w| w / two_pi).collect();
@@ -121,7 +120,7 @@ pub fn accuracy(
     }
     let rows: Vec<usize> = force_flanges.iter().flat_map(|(_, first)| (0..6).map(move |i| first + i)).collect();
     let (compliance_full, compliance_reduced, compliance_max_relative_error) = compare_compliance(&rows, x, basis);
-    Ok(Accuracy {
+    let accuracy = Accuracy {
         reduced_hz,
         full_hz,
         relative_error,
@@ -133,7 +132,8 @@ pub fn accuracy(
         inertial_flange_response_full: Vec::new(),
         frequency_response: None,
         pairs,
-    })
+    };
+    Ok((accuracy, full))
 }
 
 /// Full compliance (rows of the static responses `x` at the flange DoFs `rows`) against the

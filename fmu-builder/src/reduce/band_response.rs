@@ -14,19 +14,19 @@ use crate::linalg::eigen;
 use crate::linalg::sparse::{Sparse, SpdSolve, mul_leading};
 use crate::model::rigid_coupling::Assembled;
 use crate::reduce::basis::{EIGEN_TOL, flange_unit_loads};
-use crate::reduce::frf::ComparisonDamping;
+use crate::reduce::damping::ComparisonDamping;
 use faer::linalg::solvers::Solve;
 use faer::{Mat, c64};
 
-/// Ratio of the cut to the band's top: the modes below it are exact, the Neumann ratio of the
-/// rest is at most its inverse squared.
-const CUT: f64 = 2.0;
+/// Ratio of the cut to the band's top for a named band: the modes below it are exact, the
+/// Neumann ratio of the rest is at most its inverse squared.
+pub const CUT: f64 = 2.0;
 /// Most modes below the cut this method takes (beyond, the direct solve per frequency).
 pub const MAX_MODES: usize = 300;
 /// Most Krylov blocks.
 const MAX_BLOCKS: usize = 40;
 /// Relative change of the response at the band's top below which the space is complete.
-const SETTLED: f64 = 1e-13;
+const SETTLED: f64 = 1e-12;
 
 pub struct BandResponse {
     /// Full modes below the cut (n x k, M-orthonormal) and their eigenvalues.
@@ -44,11 +44,33 @@ pub struct BandResponse {
 }
 
 impl BandResponse {
-    /// None where more than `MAX_MODES` modes lie below the cut.
-    pub fn new(model: &Assembled, k: &dyn SpdSolve, top_hz: f64, damping: ComparisonDamping) -> Result<Option<Self>> {
+    /// None where more than `MAX_MODES` modes lie below the cut. `known`: the full model's
+    /// lowest modes where computed already (used when they reach the cut: no eigen-solve).
+    pub fn new(
+        model: &Assembled,
+        k: &dyn SpdSolve,
+        top_hz: f64,
+        damping: ComparisonDamping,
+        known: Option<&eigen::Eigenpairs>,
+        cut: f64,
+    ) -> Result<Option<Self>> {
         let m = &model.mass;
-        let omega_cut = 2.0 * std::f64::consts::PI * top_hz.max(1e-9) * CUT;
-        let modes = eigen::below(k, m, omega_cut, 1, EIGEN_TOL)?;
+        let omega_cut = 2.0 * std::f64::consts::PI * top_hz.max(1e-9) * cut;
+        let reach = |e: &eigen::Eigenpairs| {
+            e.vectors.ncols() == e.values.len()
+                && e.vectors.nrows() == k.n()
+                && e.values.last().is_some_and(|&l| l.sqrt() >= omega_cut * (1.0 - 1e-12))
+        };
+        let modes = match known {
+            Some(e) if reach(e) => {
+                let count = e.values.iter().take_while(|&&l| l.sqrt() < omega_cut).count();
+                eigen::Eigenpairs {
+                    values: e.values[..count].to_vec(),
+                    vectors: e.vectors.subcols(0, count).to_owned(),
+                }
+            }
+            _ => eigen::below(k, m, omega_cut, 1, EIGEN_TOL)?,
+        };
         if modes.values.len() > MAX_MODES {
             return Ok(None);
         }
@@ -69,14 +91,16 @@ impl BandResponse {
         };
         this.modes = this.lambda.len();
         // the complement's Krylov space, block by block, until the response at the top settles
+        // plain solves: the projection is a Galerkin one on whatever space the blocks span (its
+        // K and M exact), so round-off in the blocks costs nothing but the space's reach
         let mut block = b.clone();
-        k.solve_refined_steps(block.as_mut(), 1);
+        k.solve_plain(block.as_mut());
         let mut previous: Option<Mat<c64>> = None;
         for _ in 0..MAX_BLOCKS {
             let Some(fresh) = this.orthonormal_block(m, block) else { break };
             // next block from this one: K^-1 M V
             let mut next = mul_leading(m, fresh.as_ref(), false);
-            k.solve_refined_steps(next.as_mut(), 1);
+            k.solve_plain(next.as_mut());
             this.append(m, k, &fresh, &b);
             this.blocks += 1;
             let (y, w) = this.coefficients(damping, top_hz);
@@ -109,33 +133,36 @@ impl BandResponse {
             let c = self.q.transpose() * &mw;
             w -= &self.q * &c;
         }
-        let mut kept: Vec<Mat<f64>> = Vec::new();
-        let mw = mul_leading(m, w.as_ref(), false);
+        // within the block: modified Gram-Schmidt twice, M w updated alongside (one product
+        // with M for the block)
+        let mut mw = mul_leading(m, w.as_ref(), false);
         let scale = (0..w.ncols())
             .map(|j| w.col(j).iter().zip(mw.col(j).iter()).map(|(a, b)| a * b).sum::<f64>())
             .fold(0.0f64, f64::max)
             .sqrt();
+        let mut kept: Vec<usize> = Vec::new();
         for j in 0..w.ncols() {
-            let mut v = w.subcols(j, 1).to_owned();
             for _ in 0..2 {
-                for u in &kept {
-                    let mu = mul_leading(m, u.as_ref(), false);
-                    let a: f64 = mu.col(0).iter().zip(v.col(0).iter()).map(|(x, y)| x * y).sum();
-                    v -= u * faer::Scale(a);
+                for &u in &kept {
+                    let a: f64 = mw.col(u).iter().zip(w.col(j).iter()).map(|(x, y)| x * y).sum();
+                    let (wu, mwu) = (w.col(u).to_owned(), mw.col(u).to_owned());
+                    w.col_mut(j).iter_mut().zip(wu.iter()).for_each(|(x, y)| *x -= a * y);
+                    mw.col_mut(j).iter_mut().zip(mwu.iter()).for_each(|(x, y)| *x -= a * y);
                 }
             }
-            let mv = mul_leading(m, v.as_ref(), false);
-            let norm = v.col(0).iter().zip(mv.col(0).iter()).map(|(x, y)| x * y).sum::<f64>().max(0.0).sqrt();
+            let norm = w.col(j).iter().zip(mw.col(j).iter()).map(|(x, y)| x * y).sum::<f64>().max(0.0).sqrt();
             if norm > 1e-10 * scale && norm > 0.0 {
-                kept.push(v * faer::Scale(1.0 / norm));
+                w.col_mut(j).iter_mut().for_each(|x| *x /= norm);
+                mw.col_mut(j).iter_mut().for_each(|x| *x /= norm);
+                kept.push(j);
             }
         }
         if kept.is_empty() {
             return None;
         }
         let mut out = Mat::zeros(w.nrows(), kept.len());
-        for (j, v) in kept.iter().enumerate() {
-            out.as_mut().col_mut(j).copy_from(v.col(0));
+        for (j, &c) in kept.iter().enumerate() {
+            out.as_mut().col_mut(j).copy_from(w.col(c));
         }
         Some(out)
     }

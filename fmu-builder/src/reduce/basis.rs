@@ -133,13 +133,14 @@ pub fn orthonormalise(model: &Assembled, v: Mat<f64>) -> Result<(Mat<f64>, Vec<f
     // products (one read of the kept basis per pass for the whole panel; column by column,
     // those reads cost 0.6 s at 249k DoFs), then column by column within the panel. Classical
     // Gram-Schmidt twice either way, so the same basis to round-off.
+    // the kept columns are compacted into w and M w themselves (column `kept` <= the one being
+    // processed, whose panel is copied out first): no second n x r pair at the build's peak
     let mut kept = 0;
-    let mut basis = Mat::<f64>::zeros(w.nrows(), w.ncols());
-    let mut m_basis = Mat::<f64>::zeros(w.nrows(), w.ncols());
-    for start in (0..w.ncols()).step_by(PANEL) {
-        let width = PANEL.min(w.ncols() - start);
-        let mut panel = w.subcols(start, width).to_owned();
-        let mut m_panel = mw.subcols(start, width).to_owned();
+    let (basis, m_basis) = (&mut w, &mut mw);
+    for start in (0..basis.ncols()).step_by(PANEL) {
+        let width = PANEL.min(basis.ncols() - start);
+        let mut panel = basis.subcols(start, width).to_owned();
+        let mut m_panel = m_basis.subcols(start, width).to_owned();
         let before = kept;
         for _ in 0..2 {
             project_out(panel.as_mut(), m_panel.as_mut(), basis.subcols(0, before), m_basis.subcols(0, before));
@@ -181,7 +182,10 @@ pub fn orthonormalise(model: &Assembled, v: Mat<f64>) -> Result<(Mat<f64>, Vec<f
                 .into(),
         ));
     }
-    let w = basis.subcols(0, kept).to_owned();
+    drop(mw);
+    let mut w = w;
+    let rows = w.nrows();
+    w.truncate(rows, kept);
     let kw = mul_leading(&model.stiffness, w.as_ref(), true);
     let r = w.ncols();
     let kr = w.transpose() * &kw;

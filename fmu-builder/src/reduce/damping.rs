@@ -6,6 +6,7 @@ use crate::input::spec::Spec;
 use crate::linalg::sparse;
 use crate::model::rigid_coupling::Assembled;
 use crate::reduce::basis::Basis;
+use serde::Serialize;
 
 /// 2 zeta_k omega_k per mode from the input's modal damping ratios.
 pub fn modal_damping(spec: &Spec, omega: &[f64]) -> Vec<f64> {
@@ -26,4 +27,23 @@ pub fn with_user_damping(mut modal: Vec<f64>, model: &Assembled, basis: &Basis) 
         *m += (0..n).map(|i| basis.phi[(i, k)] * dphi[(i, k)]).sum::<f64>();
     }
     Ok(modal)
+}
+
+/// The damping both models are compared with: the input's Rayleigh damping, or a 1 % structural
+/// loss factor when it has none (an undamped response is infinite at the eigenfrequencies).
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct ComparisonDamping {
+    pub alpha: f64,
+    pub beta: f64,
+    pub loss_factor: f64,
+}
+
+impl ComparisonDamping {
+    pub fn new(alpha: f64, beta: f64) -> Self {
+        if alpha == 0.0 && beta == 0.0 {
+            Self { alpha, beta, loss_factor: 0.01 }
+        } else {
+            Self { alpha, beta, loss_factor: 0.0 }
+        }
+    }
 }

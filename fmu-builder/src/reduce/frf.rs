@@ -14,24 +14,7 @@ use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, Triplet};
 use serde::Serialize;
 
-/// The damping both models are compared with: the input's Rayleigh damping, or a 1 % structural
-/// loss factor when it has none (an undamped response is infinite at the eigenfrequencies).
-#[derive(Debug, Clone, Copy, Serialize)]
-pub struct ComparisonDamping {
-    pub alpha: f64,
-    pub beta: f64,
-    pub loss_factor: f64,
-}
-
-impl ComparisonDamping {
-    pub fn new(alpha: f64, beta: f64) -> Self {
-        if alpha == 0.0 && beta == 0.0 {
-            Self { alpha, beta, loss_factor: 0.01 }
-        } else {
-            Self { alpha, beta, loss_factor: 0.0 }
-        }
-    }
-}
+pub use crate::reduce::damping::ComparisonDamping;
 
 #[derive(Debug, Clone, Serialize)]
 pub struct FrequencyResponse {
@@ -239,7 +222,14 @@ pub fn full_responses(
     freqs: &[f64],
 ) -> Result<Vec<Mat<c64>>> {
     let rows = flange_rows(&flange_unit_loads(model));
-    match crate::reduce::band_response::BandResponse::new(model, solver, top_hz, damping)? {
+    match crate::reduce::band_response::BandResponse::new(
+        model,
+        solver,
+        top_hz,
+        damping,
+        None,
+        crate::reduce::band_response::CUT,
+    )? {
         Some(band) => Ok(freqs
             .iter()
             .map(|&f| {
@@ -298,6 +288,8 @@ pub fn compare(
     eigen_hz: &[f64],
     static_compliance: &[Vec<f64>],
     stress: Option<&StressProbe<'_>>,
+    known_modes: Option<&crate::linalg::eigen::Eigenpairs>,
+    cut: f64,
 ) -> Result<FrequencyResponse> {
     let frequencies = grid(band, eigen_hz, 60);
     let scale: Vec<f64> =
@@ -313,7 +305,7 @@ pub fn compare(
     // the full model over the band: modes below twice its top exactly plus a Krylov projection
     // of the rest (one eigen-solve for the band), or, where too many modes lie below that, a
     // complex LU per frequency
-    let fast = crate::reduce::band_response::BandResponse::new(model, solver, band[1], damping)?;
+    let fast = crate::reduce::band_response::BandResponse::new(model, solver, band[1], damping, known_modes, cut)?;
     let mut direct = if fast.is_none() { Some(FullResponse::new(model)?) } else { None };
     // stresses are linear in the response: those of the fast path's columns, once
     let column_stresses = match (&fast, stress) {
@@ -324,7 +316,7 @@ pub fn compare(
         Some(f) => format!(
             "{} full modes below {:.4} Hz exactly, the rest by {} Krylov blocks of the complement",
             f.modes,
-            2.0 * band[1],
+            cut * band[1],
             f.blocks
         ),
         None => "a complex sparse LU of the full model per frequency".to_string(),
