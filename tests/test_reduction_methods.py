@@ -263,7 +263,13 @@ def test_sweep_prints_error_cost_and_build_time(tmp_path):
     assert krylov[-1] < krylov[0]
     assert any("rotation declared" in r[1] and r[5].strip() != "-" for r in rows)
     import xml.etree.ElementTree as ET
-    assert ET.parse(svg).getroot().tag.endswith("svg")
+    root = ET.parse(svg).getroot()
+    assert root.tag.endswith("svg")
+    # every run a marker labelled with its order
+    text = svg.read_text()
+    assert text.count("<circle") >= len(rows) - sum("declared" in r[1] for r in rows)
+    orders = {f"r={int(r[2])}" for r in rows if "declared" not in r[1]}
+    assert all(o in text for o in orders), orders
 
 
 def test_only_connected_flanges_are_modelled(tmp_path):

@@ -175,7 +175,7 @@ pub fn table_row(r: &SweepRow) -> String {
 
 /// Error in band against cost per step, one line per method (log-log), as a standalone SVG.
 pub fn plot(rows: &[SweepRow]) -> String {
-    use crate::output::plot::{PALETTE, PlotSpec, Series, Stroke, line_plot};
+    use crate::output::plot::{Annotation, PALETTE, PlotSpec, Series, Stroke, line_plot};
     let mut spec = PlotSpec::new(
         "Speed against error",
         "cost per step [ns] (fixed mount, h = 1 ms)",
@@ -184,20 +184,26 @@ pub fn plot(rows: &[SweepRow]) -> String {
     );
     spec.log_x = true;
     let mut series = Vec::new();
+    let mut labels = Vec::new();
     for (i, method) in ["craig_bampton", "modal", "krylov"].iter().enumerate() {
         let pts: Vec<&SweepRow> =
             rows.iter().filter(|r| r.method == *method && !r.setting.ends_with("declared")).collect();
         if pts.is_empty() {
             continue;
         }
+        let (x, y): (Vec<f64>, Vec<f64>) = pts.iter().map(|r| (r.step_ns, r.frf_error)).unzip();
+        let color = PALETTE[i % PALETTE.len()].to_string();
         series.push(Series {
             label: Some(method.replace('_', "-")),
-            x: pts.iter().map(|r| r.step_ns).collect(),
-            y: pts.iter().map(|r| r.frf_error).collect(),
-            color: PALETTE[i % PALETTE.len()].to_string(),
+            x: x.clone(),
+            y: y.clone(),
+            color: color.clone(),
             stroke: Stroke::Line,
         });
+        // each run a marker, labelled with its order
+        series.push(Series { label: None, x, y, color, stroke: Stroke::Markers });
+        labels.extend(pts.iter().map(|r| Annotation { x: r.step_ns, y: r.frf_error, text: format!("r={}", r.order) }));
     }
-    let svg = line_plot(&spec, &series, &[]);
+    let svg = line_plot(&spec, &series, &labels);
     format!("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n{svg}\n")
 }

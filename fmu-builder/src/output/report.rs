@@ -95,6 +95,13 @@ pub struct Report {
     pub accuracy: Accuracy,
 }
 
+/// Components below 1e-12 of the vector's size are round-off of a symmetric part's zeros:
+/// reported as 0 (not -0.000000 or 6.4e-17).
+fn without_round_off(v: [f64; 3]) -> [f64; 3] {
+    let size = v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    v.map(|x| if x.abs() <= 1e-12 * size { 0.0 } else { x })
+}
+
 /// The damping the FMU applies (its parameters damping.alpha and damping.beta start at the
 /// Rayleigh values; the modal ratios are fixed in the FMU).
 fn damping_applied(spec: &Spec) -> String {
@@ -148,7 +155,7 @@ pub fn report_of(
         dofs_constrained: model.dofs.n_dofs,
         mass: props.mass,
         volume: props.volume,
-        center_of_mass: props.first_moment.map(|m| m / props.mass),
+        center_of_mass: without_round_off(props.first_moment.map(|m| m / props.mass)),
         inertia_about_origin: props.inertia,
         method: method.into(),
         fixed_interface_modes: basis.n_normal,
