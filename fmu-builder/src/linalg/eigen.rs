@@ -673,6 +673,7 @@ impl<'a> BlockLanczos<'a> {
         let mut values = Vec::with_capacity(count);
         let mut y = Mat::<f64>::zeros(dim, count);
         let mut converged = true;
+        let mut settled = 0;
         // largest theta = 1/lambda first
         for c in 0..count {
             let idx = dim - 1 - c;
@@ -683,10 +684,13 @@ impl<'a> BlockLanczos<'a> {
             let estimate = (&self.coupling * u.submatrix(dim - p, idx, p, 1)).norm_l2();
             if !exact && estimate > tol * theta {
                 converged = false;
+            } else {
+                settled += 1;
             }
             values.push(1.0 / theta);
             y.as_mut().col_mut(c).copy_from(u.col(idx));
         }
+        crate::progress::step(|| format!("{dim} Lanczos vectors: {settled} of {count} modes converged"));
         Ok((values, y, converged))
     }
 
