@@ -12,11 +12,12 @@ use std::time::{Duration, Instant};
 
 /// Recovery point counts measured.
 const POINTS: [usize; 3] = [0, 10, 100];
-/// Target: reading one more point's seven outputs per step costs at most a plain step (set,
+/// Target: reading one more point's seven outputs per step costs at most 1.5 plain steps (set,
 /// step, no output). A point's six rows of 26 are summed once per evaluation (six independent
 /// sums, then von Mises), and each output read costs what any output read costs (~25 ns):
-/// measured 180-220 ns per point against 320-400 ns per plain step on the README's machine.
-pub const PER_POINT_LIMIT: f64 = 1.0;
+/// measured 0.57 of a plain step on the README's machine at rest (154-220 ns per point against
+/// 272-400 ns per step), 0.88 with both its cores busy elsewhere.
+pub const PER_POINT_LIMIT: f64 = 1.5;
 
 fn spec(points: usize) -> String {
     let outputs =
