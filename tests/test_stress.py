@@ -22,19 +22,19 @@ import pytest
 import calculix as ccx
 import ccx_stress
 from conftest import EXAMPLES, run_builder
+from test_calculix import build_with_deck
 from fmu_access import Fmu
 
 COMPONENTS = ["sxx", "syy", "szz", "sxy", "syz", "szx"]
 
 
 def build(spec: dict, workdir, name: str):
-    """Build `spec` with its CalculiX deck: (FMU path, report, deck text)."""
-    path = workdir / f"{name}.json"
+    """Build `spec` with its CalculiX deck in workdir/name: (FMU path, report, deck text)."""
+    folder = workdir / name
+    folder.mkdir()
+    path = folder / f"{name}.json"
     path.write_text(json.dumps(spec))
-    fmu, inp = workdir / f"{name}.fmu", workdir / f"{name}.inp"
-    run_builder([path, "-o", fmu, "--export-inp", inp, "-q"])
-    report = json.loads(zipfile.ZipFile(fmu).read("documentation/report.json"))
-    return fmu, report, inp.read_text()
+    return build_with_deck(path, folder)
 
 
 def fmu_static_stresses(fmu_path, report, inputs: dict) -> np.ndarray:

@@ -5,7 +5,7 @@
 //! part draws a few thousand lines.
 
 use crate::input::element::ElementKind;
-use crate::model::flange::Flange;
+use crate::model::flange::{Flange, model_size};
 use crate::model::part::Part;
 use crate::output::plot::{PALETTE, esc};
 use faer::MatRef;
@@ -186,18 +186,7 @@ pub fn mesh_picture(part: &Part, flanges: &[Flange], edges: &[[usize; 2]]) -> St
 /// tenth of the part's size) over the undeformed outline in grey.
 pub fn mode_picture(part: &Part, edges: &[[usize; 2]], shapes: MatRef<'_, f64>, j: usize, hz: f64) -> String {
     let nodes = &part.mesh.nodes;
-    let size = {
-        let all: Vec<[f64; 3]> = edges.iter().flat_map(|e| [nodes[e[0]], nodes[e[1]]]).collect();
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for p in &all {
-            for a in 0..3 {
-                lo[a] = lo[a].min(p[a]);
-                hi[a] = hi[a].max(p[a]);
-            }
-        }
-        (0..3).map(|a| (hi[a] - lo[a]).max(0.0).powi(2)).sum::<f64>().sqrt()
-    };
+    let size = model_size(&part.mesh);
     let u = |i: usize| [shapes[(3 * i, j)], shapes[(3 * i + 1, j)], shapes[(3 * i + 2, j)]];
     let largest = edges
         .iter()

@@ -4,6 +4,7 @@
 //! FMU do and which inputs it will refuse.
 
 use crate::input::spec::{SceneLoad, Spec};
+use crate::model::flange::model_size;
 use crate::model::part::Part;
 use serde::Serialize;
 
@@ -82,7 +83,7 @@ pub fn warnings(part: &Part, lowest_hz: Option<f64>, mounted: bool) -> Vec<Strin
             ));
         }
     }
-    if let Some(size) = extent(part)
+    if let Some(size) = (!part.mesh.nodes.is_empty()).then(|| model_size(&part.mesh))
         && outside(size, SIZE_RANGE)
     {
         let hint = if size > SIZE_RANGE[1] { " (a mesh in millimetres? scale it to metres)" } else { "" };
@@ -102,21 +103,4 @@ pub fn warnings(part: &Part, lowest_hz: Option<f64>, mounted: bool) -> Vec<Strin
         ));
     }
     out
-}
-
-/// Diagonal of the nodes' bounding box [m].
-fn extent(part: &Part) -> Option<f64> {
-    let nodes = &part.mesh.nodes;
-    if nodes.is_empty() {
-        return None;
-    }
-    let mut lo = nodes[0];
-    let mut hi = nodes[0];
-    for p in nodes {
-        for a in 0..3 {
-            lo[a] = lo[a].min(p[a]);
-            hi[a] = hi[a].max(p[a]);
-        }
-    }
-    Some((0..3).map(|a| (hi[a] - lo[a]).powi(2)).sum::<f64>().sqrt())
 }
