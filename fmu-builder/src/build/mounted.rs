@@ -134,11 +134,6 @@ fn band_of(spec: &Spec, full_hz: &[f64]) -> [f64; 2] {
 /// rest converges by (1/3)^2 per Krylov block.
 const DEFAULT_CUT: f64 = 3.0;
 
-/// Largest model (constrained DoFs) whose transfer functions are compared without a named band:
-/// the comparison's Krylov blocks cost some 0.5 s each at 2.5e5 DoFs (4 s in all, a fifth of
-/// the build), and 0.05 s at 1e5; above, a scene.band asks for it.
-const DEFAULT_BAND_MAX_DOFS: usize = 100_000;
-
 /// The band compared when the scene names none.
 fn default_band(full_hz: &[f64]) -> [f64; 2] {
     [0.0, full_hz.last().copied().unwrap_or(1.0) / DEFAULT_CUT]
@@ -401,10 +396,12 @@ pub fn reduce(
     })?;
     let (mut accuracy, full_modes) = accuracy;
     accuracy::enforce(&accuracy)?;
-    // the transfer functions compared over the scene's band, or by default up to half the
-    // highest full mode computed (whose modes are then all the band method needs)
+    // the transfer functions compared over the scene's band, or by default up to a third of the
+    // highest full mode computed (whose modes are then all the band method needs, as the flange
+    // static shapes are its first Krylov block): at every size, as it costs a few block solves
+    // (2.3 s of a 25 s build at 2.5e5 DoFs)
     let named = spec.scene.as_ref().is_some_and(|s| s.band.is_some() || s.tolerance.is_some());
-    if !force.is_empty() && (named || model.dofs.n_clamped() <= DEFAULT_BAND_MAX_DOFS) {
+    if !force.is_empty() {
         let band = if named { band_of(&spec, &accuracy.full_hz) } else { default_band(&accuracy.full_hz) };
         let damping = frf::ComparisonDamping::new(spec.damping.alpha, spec.damping.beta);
         // the recovery points' stress responses are compared too (full: the full model's response
@@ -427,7 +424,7 @@ pub fn reduce(
                 &accuracy.full_hz,
                 &accuracy.compliance_full,
                 probe.as_ref(),
-                Some(&full_modes),
+                crate::reduce::band_response::Known { modes: Some(&full_modes), static_response: Some(&flange_shapes) },
                 if named { crate::reduce::band_response::CUT } else { DEFAULT_CUT },
             )
         })?);

@@ -5,6 +5,7 @@
 
 use crate::output::plot::{Annotation, PALETTE, PlotSpec, Series, Stroke, esc, line_plot};
 use crate::output::report::{Report, StressPointReport};
+use crate::reduce::accuracy::Accuracy;
 use crate::reduce::frf::{ComparisonDamping, FrequencyResponse};
 use fmu_runtime::interface::VariableTable;
 use std::fmt::Write;
@@ -135,6 +136,9 @@ residual-flexibility mode, there to make statics exact, not a vibration mode of 
         }
     }
     h.push_str("</table>\n");
+    if let Some(plot) = frequency_error_plot(a) {
+        let _ = write!(h, "<div class=\"plot\">\n{plot}</div>\n");
+    }
     let _ = write!(
         h,
         "<h3>Static compliance of the force flanges</h3>\n<p>Largest deviation of the reduced from the full-model \
@@ -403,6 +407,34 @@ pub fn frequency_response_plot(fr: &FrequencyResponse, flanges: &[String]) -> St
     line_plot(&spec, &series, &[])
 }
 
+/// The eigenfrequency error of every reduced mode paired with a full mode (by MAC, or by index
+/// where no pairing was made), over the full mode's frequency on a log axis: the accuracy plot
+/// every body has, with or without force flanges and a band. None without a pair.
+pub fn frequency_error_plot(a: &Accuracy) -> Option<String> {
+    let points: Vec<(f64, f64)> = if a.pairs.is_empty() {
+        a.full_hz.iter().zip(&a.relative_error).map(|(&f, &e)| (f, e)).collect()
+    } else {
+        a.pairs.iter().filter_map(|p| Some((p.full_hz?, p.relative_error?))).collect()
+    };
+    // an exact frequency has no place on a log axis: shown at the floor of double precision
+    if points.is_empty() {
+        return None;
+    }
+    let (x, y): (Vec<f64>, Vec<f64>) = points.into_iter().map(|(f, e)| (f, e.abs().max(1e-16))).unzip();
+    let worst = y.iter().copied().fold(0.0, f64::max);
+    let series = [
+        Series { label: None, x: x.clone(), y: y.clone(), color: PALETTE[0].to_string(), stroke: Stroke::Line },
+        Series { label: None, x, y, color: PALETTE[0].to_string(), stroke: Stroke::Markers },
+    ];
+    let spec = PlotSpec::new(
+        &format!("Eigenfrequency error of the reduced modes, against the full FE model (max {worst:.2e})"),
+        "full-model frequency [Hz]",
+        "relative error [-]",
+        true,
+    );
+    Some(line_plot(&spec, &series, &[]))
+}
+
 /// Plot (b): relative error of the flange FRF per frequency on a log axis, its maximum marked.
 pub fn relative_error_plot(fr: &FrequencyResponse) -> String {
     let series = [Series {
@@ -539,9 +571,10 @@ mod tests {
     }
 
     #[test]
-    fn two_svgs_with_frequency_response() {
+    fn three_svgs_with_frequency_response() {
         let html = html_of(&report(Some(sample_frf())));
-        assert_eq!(html.matches("<svg").count(), 2);
+        // the eigenfrequency errors, the driving points, the FRF error
+        assert_eq!(html.matches("<svg").count(), 3);
         assert!(html.contains("Accuracy over the band"));
         assert!(html.contains("loss factor"));
         assert!(html.contains("tip u_z") && html.contains("tip phi_y"));
@@ -564,9 +597,15 @@ mod tests {
     }
 
     #[test]
-    fn no_svg_without_frequency_response() {
+    fn the_frequency_errors_alone_without_frequency_response() {
         let html = html_of(&report(None));
-        assert_eq!(html.matches("<svg").count(), 0);
+        let plots = svgs(&html);
+        assert_eq!(plots.len(), 1);
+        assert!(plots[0].contains("Eigenfrequency error of the reduced modes"));
+        // both modes' points, a marker each
+        assert!(check_svg(plots[0]) > 10);
+        assert_eq!(plots[0].matches("<circle").count(), 2);
+        assert!(plots[0].contains("max 6.00e-3"), "{}", plots[0]);
         assert!(!html.contains("Accuracy over the band"));
         assert!(html.contains("Static compliance"));
     }
@@ -613,7 +652,8 @@ mod tests {
                 fr.band_hz = band;
                 let html = html_of(&report(Some(fr.clone())));
                 let svgs = svgs(&html);
-                assert_eq!(svgs.len(), 2);
+                // the eigenfrequency errors and the band's two plots
+                assert_eq!(svgs.len(), 3);
                 for svg in svgs {
                     check_svg(svg);
                 }

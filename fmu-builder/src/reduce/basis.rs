@@ -322,17 +322,22 @@ pub fn flange_unit_loads_count(model: &Assembled) -> usize {
 
 /// Unit loads at the force flanges' master DoFs (n_clamped x 6 per flange).
 pub fn flange_unit_loads(model: &Assembled) -> Mat<f64> {
-    let d = &model.dofs;
-    let nc = d.n_clamped();
-    let firsts: Vec<usize> =
-        (0..d.flange_first.len()).filter(|&k| Some(k) != d.mount).map(|k| d.flange_first[k]).collect();
-    let mut b = Mat::<f64>::zeros(nc, 6 * firsts.len());
-    for (f, first) in firsts.iter().enumerate() {
-        for i in 0..6 {
-            b[(first + i, 6 * f + i)] = 1.0;
-        }
+    let rows = flange_unit_load_rows(model);
+    let mut b = Mat::<f64>::zeros(model.dofs.n_clamped(), rows.len());
+    for (j, &r) in rows.iter().enumerate() {
+        b[(r, j)] = 1.0;
     }
     b
+}
+
+/// The row of each column's unit load in `flange_unit_loads` (its flange master DoF): the
+/// response at the loads without the n x 6 matrix.
+pub fn flange_unit_load_rows(model: &Assembled) -> Vec<usize> {
+    let d = &model.dofs;
+    (0..d.flange_first.len())
+        .filter(|&k| Some(k) != d.mount)
+        .flat_map(|k| (0..6).map(move |i| d.flange_first[k] + i))
+        .collect()
 }
 
 /// Modal reduction with residual flexibility (static correction): the normal modes of the

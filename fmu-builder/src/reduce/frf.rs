@@ -7,7 +7,7 @@ use crate::error::{BuildError, Result};
 use crate::linalg::faer_error;
 use crate::linalg::sparse::{block, mul_compensated};
 use crate::model::rigid_coupling::Assembled;
-use crate::reduce::basis::{Basis, flange_unit_loads};
+use crate::reduce::basis::{Basis, flange_unit_load_rows, flange_unit_loads};
 use faer::Mat;
 use faer::c64;
 use faer::linalg::solvers::Solve;
@@ -95,7 +95,7 @@ impl FullResponse {
         let k = block(&model.stiffness, 0..nc, 0..nc)?;
         let m = block(&model.mass, 0..nc, 0..nc)?;
         let b = flange_unit_loads(model);
-        let rows = flange_rows(&b);
+        let rows = flange_unit_load_rows(model);
         let mut trip = Vec::new();
         for a in [&k, &m] {
             for j in 0..nc {
@@ -221,13 +221,13 @@ pub fn full_responses(
     top_hz: f64,
     freqs: &[f64],
 ) -> Result<Vec<Mat<c64>>> {
-    let rows = flange_rows(&flange_unit_loads(model));
+    let rows = flange_unit_load_rows(model);
     match crate::reduce::band_response::BandResponse::new(
         model,
         solver,
         top_hz,
         damping,
-        None,
+        crate::reduce::band_response::Known::default(),
         crate::reduce::band_response::CUT,
     )? {
         Some(band) => Ok(freqs
@@ -244,11 +244,6 @@ pub fn full_responses(
     }
 }
 
-/// Row index of each unit load in B (its flange master DoF).
-fn flange_rows(b: &Mat<f64>) -> Vec<usize> {
-    (0..b.ncols()).map(|j| (0..b.nrows()).find(|&i| b[(i, j)] != 0.0).unwrap_or(0)).collect()
-}
-
 /// The reduced model's modal receptances at `hz`: 1 / (lambda (1 + i eta) + i w d - w^2) per
 /// mode, with the same Rayleigh damping projected (diagonal: Phi is M- and K-orthogonal).
 fn modal_receptances(basis: &Basis, damping: ComparisonDamping, hz: f64) -> Vec<c64> {
@@ -263,9 +258,8 @@ fn modal_receptances(basis: &Basis, damping: ComparisonDamping, hz: f64) -> Vec<
 }
 
 /// Reduced-model flange FRF at `hz`: Phi_b diag(receptances) Phi_b^T.
-pub fn reduced_response(model: &Assembled, basis: &Basis, damping: ComparisonDamping, hz: f64) -> Mat<c64> {
-    let b = flange_unit_loads(model);
-    let rows = flange_rows(&b);
+/// `rows`: the flange master DoFs (`flange_unit_load_rows`).
+pub fn reduced_response(rows: &[usize], basis: &Basis, damping: ComparisonDamping, hz: f64) -> Mat<c64> {
     let r = basis.omega.len();
     let g = modal_receptances(basis, damping, hz);
     Mat::from_fn(rows.len(), rows.len(), |i, j| {
@@ -288,7 +282,7 @@ pub fn compare(
     eigen_hz: &[f64],
     static_compliance: &[Vec<f64>],
     stress: Option<&StressProbe<'_>>,
-    known_modes: Option<&crate::linalg::eigen::Eigenpairs>,
+    known: crate::reduce::band_response::Known<'_>,
     cut: f64,
 ) -> Result<FrequencyResponse> {
     let frequencies = grid(band, eigen_hz, 60);
@@ -300,12 +294,11 @@ pub fn compare(
     let mut full_matrices = Vec::new();
     let mut stress_relative_error = Vec::new();
     let mut stress_full = Vec::new();
-    let b = flange_unit_loads(model);
-    let rows = flange_rows(&b);
+    let rows = flange_unit_load_rows(model);
     // the full model over the band: modes below twice its top exactly plus a Krylov projection
     // of the rest (one eigen-solve for the band), or, where too many modes lie below that, a
     // complex LU per frequency
-    let fast = crate::reduce::band_response::BandResponse::new(model, solver, band[1], damping, known_modes, cut)?;
+    let fast = crate::reduce::band_response::BandResponse::new(model, solver, band[1], damping, known, cut)?;
     let mut direct = if fast.is_none() { Some(FullResponse::new(model)?) } else { None };
     // stresses are linear in the response: those of the fast path's columns, once
     let column_stresses = match (&fast, stress) {
@@ -346,7 +339,7 @@ pub fn compare(
             stress_relative_error.push(error);
             stress_full.push(kept);
         }
-        let red = reduced_response(model, basis, damping, f);
+        let red = reduced_response(&rows, basis, damping, f);
         let (mut num, mut den) = (0.0, 0.0);
         for i in 0..full.nrows() {
             for j in 0..full.ncols() {
