@@ -10,7 +10,7 @@
 
 use crate::ffrf::rows::{Layout, Rows};
 use crate::model::flange::Flange;
-use crate::model::rigid_coupling::{Assembled, NodeDofs};
+use crate::model::rigid_coupling::{Assembled, DofOf, NodeDofs};
 use faer::{Mat, MatRef};
 
 /// A unit inertial load case of the frame's motion (loads on the body, in the body frame).
@@ -82,6 +82,8 @@ enum Follows {
     Master { first: usize, arm: [f64; 3] },
     /// the mount, held
     Held,
+    /// a distributing flange's node with dependent directions (`DofMap::dependent`)
+    Partial([DofOf; 3]),
 }
 
 fn node_follows(model: &Assembled, nodes: &[[f64; 3]], flanges: &[Flange]) -> Vec<Follows> {
@@ -95,6 +97,7 @@ fn node_follows(model: &Assembled, nodes: &[[f64; 3]], flanges: &[Flange]) -> Ve
             let arm = [nodes[n][0] - r[0], nodes[n][1] - r[1], nodes[n][2] - r[2]];
             Follows::Master { first: d.flange_first[k], arm }
         }
+        NodeDofs::Partial(dofs) => Follows::Partial(dofs),
     };
     d.node.iter().enumerate().map(follows).collect()
 }
@@ -120,6 +123,13 @@ pub fn expand(model: &Assembled, nodes: &[[f64; 3]], flanges: &[Flange], phi: Ma
                     ]
                 }
                 Follows::Held => continue,
+                Follows::Partial(dofs) => dofs.map(|dof| match dof {
+                    DofOf::Own(g) => src[g],
+                    // the held mount's terms are zero
+                    DofOf::Dependent(j) => {
+                        model.dofs.dependent[j].image.iter().filter(|t| t.0 < src.nrows()).map(|&(g, c)| c * src[g]).sum()
+                    }
+                }),
             };
             for (i, u) in u.into_iter().enumerate() {
                 dst[3 * n + i] = u;
@@ -133,7 +143,8 @@ pub fn expand(model: &Assembled, nodes: &[[f64; 3]], flanges: &[Flange], phi: Ma
 /// forces move to their flange's master as force and moment; the mount's slaves are held.
 pub fn restrict(model: &Assembled, nodes: &[[f64; 3]], flanges: &[Flange], f: MatRef<'_, f64>) -> Mat<f64> {
     let follows = node_follows(model, nodes, flanges);
-    let mut out = Mat::<f64>::zeros(model.dofs.n_clamped(), f.ncols());
+    let n_clamped = model.dofs.n_clamped();
+    let mut out = Mat::<f64>::zeros(n_clamped, f.ncols());
     for j in 0..f.ncols() {
         let (src, mut dst) = (f.col(j), out.col_mut(j));
         for (n, how) in follows.iter().enumerate() {
@@ -154,6 +165,18 @@ pub fn restrict(model: &Assembled, nodes: &[[f64; 3]], flanges: &[Flange], f: Ma
                     dst[first + 5] += x[0] * fj[1] - x[1] * fj[0];
                 }
                 Follows::Held => {}
+                Follows::Partial(dofs) => {
+                    for (dof, f) in dofs.into_iter().zip(fj) {
+                        match dof {
+                            DofOf::Own(g) => dst[g] += f,
+                            DofOf::Dependent(j) => {
+                                for &(g, c) in model.dofs.dependent[j].image.iter().filter(|t| t.0 < n_clamped) {
+                                    dst[g] += c * f;
+                                }
+                            }
+                        }
+                    }
+                }
             }
         }
     }
@@ -265,6 +288,7 @@ pub(crate) mod tests {
     use crate::input::element::ElementKind;
     use crate::input::mesh::{BoxRegion, mesh_boxes};
     use crate::input::spec::Role;
+    use crate::model::flange::FlangeCoupling;
     use crate::linalg::sparse::mul_new;
     use crate::model::assembly::{SolidMaterial, uncoupled};
     use crate::model::fe::Elasticity;
@@ -289,8 +313,20 @@ pub(crate) mod tests {
         let free = uncoupled(&mesh, &[steel], &|e, m| BuildError::Numerical(format!("{e}: {m}"))).unwrap();
         let on = |x: f64| (0..mesh.n_nodes()).filter(|&n| mesh.nodes[n][0] == x).collect::<Vec<_>>();
         let flanges = vec![
-            Flange { name: "base".into(), role: Role::Motion, reference: [0.0, 0.25, 0.0], slaves: on(0.0) },
-            Flange { name: "arm".into(), role: Role::Force, reference: [2.3, 0.2, 0.1], slaves: on(2.0) },
+            Flange {
+                name: "base".into(),
+                role: Role::Motion,
+                reference: [0.0, 0.25, 0.0],
+                slaves: on(0.0),
+                coupling: FlangeCoupling::Rigid,
+            },
+            Flange {
+                name: "arm".into(),
+                role: Role::Force,
+                reference: [2.3, 0.2, 0.1],
+                slaves: on(2.0),
+                coupling: FlangeCoupling::Rigid,
+            },
         ];
         let origin = [0.1, 0.3, -0.2];
         let model = rigid_coupling(&free, &mesh.nodes, &flanges, origin).unwrap();

@@ -4,7 +4,7 @@
 
 use crate::ffrf::rows::{Layout, Rows, transpose_times};
 use crate::model::flange::Flange;
-use crate::model::rigid_coupling::{Assembled, NodeDofs};
+use crate::model::rigid_coupling::{Assembled, DofOf, NodeDofs};
 use crate::reduce::basis::Basis;
 use faer::{Mat, MatRef};
 
@@ -37,28 +37,36 @@ fn rigid_rows<'a>(
 ) -> Rows<'a> {
     let d = &model.dofs;
     let mut r = Rows::from_fn(layout, 6, |_, _| {});
-    let mut put = |first: usize, p: [f64; 3], with_rotation: bool| {
+    // DoF g as direction i of a point at p (moving rigidly); a master's rotation DoFs rotate
+    let put = |r: &mut Rows<'a>, g: usize, p: [f64; 3], i: usize| {
         let x = [p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]];
         // rot[a] = e_a x x
         let rot = [[0.0, -x[2], x[1]], [x[2], 0.0, -x[0]], [-x[1], x[0], 0.0]];
-        for i in 0..3 {
-            let row = r.row_mut(first + i);
-            row[i] = 1.0;
-            for (a, rot_a) in rot.iter().enumerate() {
-                row[3 + a] = rot_a[i];
-            }
-            if with_rotation {
-                r.row_mut(first + 3 + i)[3 + i] = 1.0;
-            }
+        let row = r.row_mut(g);
+        row[i] = 1.0;
+        for (a, rot_a) in rot.iter().enumerate() {
+            row[3 + a] = rot_a[i];
         }
     };
     for (n, nd) in d.node.iter().enumerate() {
-        if let NodeDofs::Free(first) = nd {
-            put(*first, nodes[n], false);
+        match *nd {
+            NodeDofs::Free(first) => (0..3).for_each(|i| put(&mut r, first + i, nodes[n], i)),
+            // a distributing flange's node: its own directions (the dependent ones follow)
+            NodeDofs::Partial(dofs) => {
+                for (i, dof) in dofs.iter().enumerate() {
+                    if let DofOf::Own(g) = *dof {
+                        put(&mut r, g, nodes[n], i);
+                    }
+                }
+            }
+            NodeDofs::Slave(_) => {}
         }
     }
     for (k, f) in flanges.iter().enumerate() {
-        put(d.flange_first[k], f.reference, true);
+        (0..3).for_each(|i| put(&mut r, d.flange_first[k] + i, f.reference, i));
+        for i in 0..3 {
+            r.row_mut(d.flange_first[k] + 3 + i)[3 + i] = 1.0;
+        }
     }
     r
 }

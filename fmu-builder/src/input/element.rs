@@ -94,6 +94,16 @@ impl ElementKind {
         }
     }
 
+    /// The faces as cycles of corner positions (connectivity order), outward or not.
+    pub const fn corner_faces(self) -> &'static [&'static [usize]] {
+        match self {
+            ElementKind::Tet4 | ElementKind::Tet10 => &[&[0, 1, 2], &[0, 1, 3], &[1, 2, 3], &[0, 2, 3]],
+            ElementKind::Hex8 | ElementKind::Hex20 | ElementKind::Hex20R => {
+                &[&[0, 1, 2, 3], &[4, 5, 6, 7], &[0, 1, 5, 4], &[1, 2, 6, 5], &[2, 3, 7, 6], &[3, 0, 4, 7]]
+            }
+        }
+    }
+
     /// For each midside node (in connectivity order, after the corners), the
     /// two 0-based corner positions of the edge it sits on. Empty for linear
     /// elements.

@@ -187,6 +187,29 @@ pub enum Role {
     Force,
 }
 
+/// How a flange's reference point is tied to its nodes.
+#[derive(Debug, Clone, Copy, Default, Deserialize, serde::Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum Coupling {
+    /// RBE2: the nodes move rigidly with the reference point (stiffens the part there).
+    #[default]
+    Rigid,
+    /// RBE3: the reference point moves as the weighted average of its nodes; loads are
+    /// distributed over them; no stiffness is added.
+    Distributing,
+}
+
+/// A distributing flange's node weights.
+#[derive(Debug, Clone, Copy, Default, Deserialize, serde::Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum Weights {
+    #[default]
+    Uniform,
+    /// Each node's share of the surface the flange's nodes cover (the element faces whose
+    /// nodes all belong to the flange).
+    Area,
+}
+
 #[derive(Debug, Clone, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct FlangeSpec {
@@ -195,6 +218,10 @@ pub struct FlangeSpec {
     pub nodes: NodeSelector,
     #[serde(default)]
     pub reference_point: Option<[f64; 3]>,
+    #[serde(default)]
+    pub coupling: Coupling,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weights: Option<Weights>,
 }
 
 #[derive(Debug, Clone, Deserialize, serde::Serialize)]
@@ -418,6 +445,25 @@ impl Spec {
                     format!("flanges[{i}].name"),
                     format!("\"{}\" is already the name of flanges[{j}]", f.name),
                 ));
+            }
+            match (f.coupling, f.weights) {
+                (Coupling::Rigid, Some(_)) => {
+                    return Err(BuildError::input(
+                        path,
+                        format!("flanges[{i}].weights"),
+                        "weights belong to a distributing coupling; this flange is rigid (add \"coupling\": \"distributing\", \
+                         or remove weights)",
+                    ));
+                }
+                (Coupling::Distributing, Some(Weights::Area)) if self.geometry.matrices.is_some() => {
+                    return Err(BuildError::input(
+                        path,
+                        format!("flanges[{i}].weights"),
+                        "area weights need the part's element faces, and matrix input has no elements; use \"uniform\" \
+                         weights, or give the mesh",
+                    ));
+                }
+                _ => {}
             }
             match &f.nodes {
                 NodeSelector::BoxFace { box_index, .. } if *box_index >= self.geometry.boxes.len() => {

@@ -1,5 +1,6 @@
-//! The congruence T^T A T of a sparse matrix under a DoF map T whose rows have at most three
-//! terms (the rigid coupling's: a free DoF keeps one image, a slave DoF becomes u + theta x d),
+//! The congruence T^T A T of a sparse matrix under a DoF map T whose rows have few terms (the
+//! rigid coupling's: a free DoF keeps one image, a slave DoF becomes u + theta x d; a
+//! distributing coupling's six dependent DoFs have many),
 //! computed column by column of the result on all cores, then made exactly symmetric in place.
 //! Nothing proportional to the sum of all products is held: the result's pattern is counted
 //! first, then filled.
@@ -10,26 +11,38 @@ use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use rayon::prelude::*;
 use std::ops::Range;
 
-/// Where one DoF of A goes: up to three (DoF of the result, coefficient) terms, as many as a
-/// slave's translation u + theta x d has.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct DofImage {
-    terms: [(usize, f64); 3],
-    len: u8,
+/// Where each DoF of A goes: its (DoF of the result, coefficient) terms, row by row of the map
+/// T (compressed): one for a free DoF, up to three for a rigid flange's node (u + theta x d),
+/// a distributing flange's whole node set for its six dependent DoFs.
+#[derive(Debug, Clone)]
+pub(crate) struct Images {
+    first: Vec<usize>,
+    terms: Vec<(usize, f64)>,
 }
 
-impl DofImage {
-    pub(crate) const NONE: Self = Self { terms: [(0, 0.0); 3], len: 0 };
-
-    /// The image with one more term (a fourth is beyond any rigid coupling's row).
-    pub(crate) fn with(mut self, dof: usize, coefficient: f64) -> Self {
-        self.terms[self.len as usize] = (dof, coefficient);
-        self.len += 1;
-        self
+impl Images {
+    pub(crate) fn with_capacity(dofs: usize) -> Self {
+        let mut first = Vec::with_capacity(dofs + 1);
+        first.push(0);
+        Self { first, terms: Vec::with_capacity(dofs) }
     }
 
-    fn terms(&self) -> &[(usize, f64)] {
-        &self.terms[..self.len as usize]
+    /// Appends the next DoF's image.
+    pub(crate) fn push(&mut self, terms: impl IntoIterator<Item = (usize, f64)>) {
+        self.terms.extend(terms);
+        self.first.push(self.terms.len());
+    }
+
+    pub(crate) fn len(&self) -> usize {
+        self.first.len() - 1
+    }
+
+    pub(crate) fn of(&self, i: usize) -> &[(usize, f64)] {
+        &self.terms[self.first[i]..self.first[i + 1]]
+    }
+
+    fn all_terms(&self) -> &[(usize, f64)] {
+        &self.terms
     }
 }
 
@@ -43,7 +56,7 @@ const COLUMNS_PER_TASK: usize = 512;
 /// matrix we factor. `what` names the matrix in errors.
 pub(crate) fn symmetric_congruence(
     a: &SparseColMat<usize, f64>,
-    images: &[DofImage],
+    images: &Images,
     n: usize,
     what: &str,
 ) -> Result<SparseColMat<usize, f64>> {
@@ -55,7 +68,7 @@ pub(crate) fn symmetric_congruence(
             images.len()
         )));
     }
-    if let Some(&(g, _)) = images.iter().flat_map(DofImage::terms).find(|(g, _)| *g >= n) {
+    if let Some(&(g, _)) = images.all_terms().iter().find(|(g, _)| *g >= n) {
         return Err(BuildError::Numerical(format!("coupling the {what}: DoF {g} beyond the {n} coupled DoFs")));
     }
     let preimages = Preimages::of(images, n);
@@ -71,9 +84,9 @@ struct Preimages {
 }
 
 impl Preimages {
-    fn of(images: &[DofImage], n: usize) -> Self {
+    fn of(images: &Images, n: usize) -> Self {
         let mut first = vec![0; n + 1];
-        for &(g, _) in images.iter().flat_map(DofImage::terms) {
+        for &(g, _) in images.all_terms() {
             first[g + 1] += 1;
         }
         for g in 0..n {
@@ -81,8 +94,8 @@ impl Preimages {
         }
         let mut next = first.clone();
         let mut terms = vec![(0, 0.0); first[n]];
-        for (i, image) in images.iter().enumerate() {
-            for &(g, c) in image.terms() {
+        for i in 0..images.len() {
+            for &(g, c) in images.of(i) {
                 terms[next[g]] = (i, c);
                 next[g] += 1;
             }
@@ -106,12 +119,12 @@ struct SoleImage {
 
 const SHARED: SoleImage = SoleImage { dof: usize::MAX, coefficient: 0.0 };
 
-fn sole_images(images: &[DofImage], preimages: &Preimages) -> Vec<SoleImage> {
-    let sole = |image: &DofImage| match image.terms() {
+fn sole_images(images: &Images, preimages: &Preimages) -> Vec<SoleImage> {
+    let sole = |i: usize| match images.of(i) {
         &[(dof, coefficient)] if preimages.of_dof(dof).len() == 1 => SoleImage { dof, coefficient },
         _ => SHARED,
     };
-    images.iter().map(sole).collect()
+    (0..images.len()).map(sole).collect()
 }
 
 /// One thread's work space for a column of the result: its rows and values, and dense sums
@@ -168,7 +181,7 @@ impl ColumnScratch {
 
 struct Product<'a> {
     a: &'a SparseColMat<usize, f64>,
-    images: &'a [DofImage],
+    images: &'a Images,
     sole: Vec<SoleImage>,
     preimages: &'a Preimages,
 }
@@ -190,7 +203,7 @@ impl Product<'_> {
         }
         for &(j, cj) in self.preimages.of_dof(g) {
             for (&i, &v) in self.a.row_idx_of_col_raw(j).iter().zip(self.a.val_of_col(j)) {
-                for &(gi, ci) in self.images[i].terms() {
+                for &(gi, ci) in self.images.of(i) {
                     s.accumulate(g, gi, ci * v * cj);
                 }
             }
@@ -209,7 +222,7 @@ impl Product<'_> {
                 s.rows.push(sole.dof);
                 s.vals.push(sole.coefficient * v * cj);
             } else {
-                for &(gi, ci) in self.images[i].terms() {
+                for &(gi, ci) in self.images.of(i) {
                     s.accumulate(g, gi, ci * v * cj);
                 }
             }
@@ -336,9 +349,17 @@ mod tests {
     }
 
     /// (B + B^T) / 2 of B = T^T A T, formed densely.
-    fn dense_reference(a: &SparseColMat<usize, f64>, images: &[DofImage], n: usize) -> Mat<f64> {
+    fn images_of(rows: &[Vec<(usize, f64)>]) -> Images {
+        let mut images = Images::with_capacity(rows.len());
+        for r in rows {
+            images.push(r.iter().copied());
+        }
+        images
+    }
+
+    fn dense_reference(a: &SparseColMat<usize, f64>, images: &Images, n: usize) -> Mat<f64> {
         let t = Mat::from_fn(images.len(), n, |i, g| {
-            images[i].terms().iter().filter(|t| t.0 == g).map(|t| t.1).sum::<f64>()
+            images.of(i).iter().filter(|t| t.0 == g).map(|t| t.1).sum::<f64>()
         });
         let b = t.transpose() * a.to_dense() * &t;
         Mat::from_fn(n, n, |i, j| 0.5 * b[(i, j)] + 0.5 * b[(j, i)])
@@ -383,12 +404,7 @@ mod tests {
                 (3, 0, 0.25),
             ],
         );
-        let images = [
-            DofImage::NONE.with(0, 1.0),
-            DofImage::NONE.with(1, 1.0),
-            DofImage::NONE.with(2, 1.0),
-            DofImage::NONE.with(1, 0.5).with(2, -2.0),
-        ];
+        let images = images_of(&[vec![(0, 1.0)], vec![(1, 1.0)], vec![(2, 1.0)], vec![(1, 0.5), (2, -2.0)]]);
         let s = symmetric_congruence(&a, &images, 3, "test").unwrap();
         assert_exactly_symmetric(&s);
         assert_matches(&s, &dense_reference(&a, &images, 3));
@@ -414,12 +430,7 @@ mod tests {
                 (3, 0, 0.1),
             ],
         );
-        let images = [
-            DofImage::NONE.with(2, 1.0),
-            DofImage::NONE.with(0, -2.0),
-            DofImage::NONE.with(1, 1.0),
-            DofImage::NONE.with(1, 0.5).with(0, 3.0),
-        ];
+        let images = images_of(&[vec![(2, 1.0)], vec![(0, -2.0)], vec![(1, 1.0)], vec![(1, 0.5), (0, 3.0)]]);
         let s = symmetric_congruence(&a, &images, 3, "test").unwrap();
         assert_exactly_symmetric(&s);
         assert_matches(&s, &dense_reference(&a, &images, 3));
@@ -431,8 +442,8 @@ mod tests {
     #[test]
     fn a_map_that_does_not_fit_is_an_error() {
         let a = sparse(2, &[(0, 0, 1.0), (1, 1, 1.0)]);
-        assert!(symmetric_congruence(&a, &[DofImage::NONE.with(0, 1.0)], 1, "test").is_err());
-        let images = [DofImage::NONE.with(0, 1.0), DofImage::NONE.with(5, 1.0)];
+        assert!(symmetric_congruence(&a, &images_of(&[vec![(0, 1.0)]]), 1, "test").is_err());
+        let images = images_of(&[vec![(0, 1.0)], vec![(5, 1.0)]]);
         assert!(symmetric_congruence(&a, &images, 2, "test").is_err());
     }
 }

@@ -1,10 +1,12 @@
-//! Flanges: a six-DoF master node at a reference point, tied rigidly to slave nodes (RBE2; paper
-//! eq. 3): xi_j = u + theta x (x_j - r_c). Here the slaves are selected on the mesh and checked;
-//! the coupling itself enters at assembly (`assembly::rigid_coupling`).
+//! Flanges: a six-DoF master node at a reference point, tied to slave nodes rigidly (RBE2; paper
+//! eq. 3: xi_j = u + theta x (x_j - r_c)) or by a distributing coupling (RBE3, `distributing`).
+//! Here the slaves are selected on the mesh and checked, and a distributing flange's weights
+//! found; the coupling itself enters at assembly (`rigid_coupling`).
 
 use crate::error::{BuildError, Result};
 use crate::input::mesh::Mesh;
-use crate::input::spec::{NodeSelector, Role, Spec};
+use crate::input::spec::{Coupling, NodeSelector, Role, Spec, Weights};
+use crate::model::distributing;
 use crate::model::part::Part;
 use nalgebra::{Matrix3, Vector3};
 use std::path::Path;
@@ -17,6 +19,14 @@ pub struct Flange {
     pub reference: [f64; 3],
     /// Mesh node indices tied to the master, ascending.
     pub slaves: Vec<usize>,
+    pub coupling: FlangeCoupling,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum FlangeCoupling {
+    Rigid,
+    /// The weight of each slave (same order), positive.
+    Distributing { weights: Vec<f64> },
 }
 
 fn bounds(mesh: &Mesh) -> ([f64; 3], [f64; 3]) {
@@ -191,9 +201,60 @@ pub fn select_flanges(spec: &Spec, file: &Path, part: &Part) -> Result<Vec<Flang
                 ),
             ));
         }
-        flanges.push(Flange { name: fs.name.clone(), role: fs.role, reference, slaves });
+        let (slaves, coupling) = match fs.coupling {
+            Coupling::Rigid => (slaves, FlangeCoupling::Rigid),
+            Coupling::Distributing => distributing_weights(file, k, fs.name.as_str(), fs.weights, part, slaves, reference)?,
+        };
+        flanges.push(Flange { name: fs.name.clone(), role: fs.role, reference, slaves, coupling });
     }
     Ok(flanges)
+}
+
+/// A distributing flange's weights (nodes without weight leave the flange: nothing ties them),
+/// checked to define the reference point's rotation.
+fn distributing_weights(
+    file: &Path,
+    k: usize,
+    name: &str,
+    weights: Option<Weights>,
+    part: &Part,
+    slaves: Vec<usize>,
+    reference: [f64; 3],
+) -> Result<(Vec<usize>, FlangeCoupling)> {
+    let mesh = &part.mesh;
+    let w = match weights.unwrap_or_default() {
+        Weights::Uniform => vec![1.0; slaves.len()],
+        Weights::Area => distributing::tributary_areas(mesh, &slaves),
+    };
+    let (slaves, w): (Vec<usize>, Vec<f64>) = slaves.into_iter().zip(w).filter(|(_, w)| *w > 0.0).unzip();
+    if slaves.is_empty() {
+        return Err(BuildError::input(
+            file,
+            format!("flanges[{k}].weights"),
+            format!(
+                "flange \"{name}\" has area weights, but no face of the part's surface has all its nodes in the flange \
+                 (a node set or selector of surface nodes is needed, corners and midsides); use \"uniform\" weights"
+            ),
+        ));
+    }
+    let points: Vec<[f64; 3]> = slaves.iter().map(|&i| mesh.nodes[i]).collect();
+    match distributing::constraint(&points, &w, reference) {
+        Ok(_) => Ok((slaves, FlangeCoupling::Distributing { weights: w })),
+        Err(why) => Err(BuildError::input(
+            file,
+            format!("flanges[{k}].coupling"),
+            format!(
+                "flange \"{name}\"'s {} weighted nodes {}: a distributing coupling takes the reference point's rotation \
+                 from how its nodes move about their centroid, which nodes on a line leave undefined; select nodes \
+                 spread over a surface, or use \"coupling\": \"rigid\"",
+                points.len(),
+                match why {
+                    distributing::Refusal::Collinear => "lie on a line",
+                    distributing::Refusal::NoWeight => "have no weight",
+                }
+            ),
+        )),
+    }
 }
 
 #[cfg(test)]

@@ -1,22 +1,45 @@
-//! The rigid coupling of the flanges (RBE2, paper eq. 3): a slave node's three DoFs are replaced
-//! by its flange's six master DoFs through xi_j = u + theta x (x_j - r_c), entry by entry of the
-//! sparse matrices, so no dense transformation is ever formed.
+//! The coupling of the flanges to the part. Rigid (RBE2, paper eq. 3): a slave node's three DoFs
+//! are replaced by its flange's six master DoFs through xi_j = u + theta x (x_j - r_c).
+//! Distributing (RBE3, `distributing`): the nodes keep their DoFs but six, which follow the
+//! master and the rest. Either way entry by entry of the sparse matrices (T^T A T with T's rows
+//! in `congruence`), so no dense transformation is ever formed.
 //!
 //! DoF order of the constrained model: free-node DoFs (3 per node), then the force flanges' master
 //! DoFs (6 each: u, theta), then the mount's six master DoFs last, so the clamped model (mount held)
 //! is the leading block.
 
-use crate::error::Result;
+use crate::error::{BuildError, Result};
 use crate::input::spec::Role;
 use crate::model::assembly::{MassProperties, Uncoupled, mass_properties};
-use crate::model::congruence::{DofImage, symmetric_congruence};
-use crate::model::flange::Flange;
+use crate::model::congruence::{Images, symmetric_congruence};
+use crate::model::distributing;
+use crate::model::flange::{Flange, FlangeCoupling};
 use faer::sparse::SparseColMat;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum NodeDofs {
+    /// Three own DoFs, from this one.
     Free(usize),
+    /// Rigidly tied to this flange's master.
     Slave(usize),
+    /// A distributing flange's node with some of its directions among the flange's six
+    /// dependent DoFs: per direction, its own DoF or its entry in `DofMap::dependent`.
+    Partial([DofOf; 3]),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DofOf {
+    Own(usize),
+    Dependent(usize),
+}
+
+/// A DoF a distributing coupling eliminates: its value in terms of the constrained DoFs (its
+/// flange's master and the other nodes' own DoFs).
+#[derive(Debug, Clone)]
+pub struct DependentDof {
+    pub node: usize,
+    pub direction: usize,
+    pub image: Vec<(usize, f64)>,
 }
 
 #[derive(Debug, Clone)]
@@ -24,26 +47,68 @@ pub struct DofMap {
     pub node: Vec<NodeDofs>,
     /// First of the six master DoFs, per flange in input order.
     pub flange_first: Vec<usize>,
-    /// Number of free-node DoFs (the interior of Craig-Bampton).
+    /// Number of the nodes' own DoFs (the interior of Craig-Bampton).
     pub n_interior: usize,
     pub n_dofs: usize,
     /// The mount flange, whose six DoFs come last and are held; None for a free-floating body.
     pub mount: Option<usize>,
+    pub dependent: Vec<DependentDof>,
 }
 
 impl DofMap {
-    pub fn new(n_nodes: usize, flanges: &[Flange]) -> Self {
-        let mut node = vec![NodeDofs::Free(0); n_nodes];
+    pub fn new(nodes: &[[f64; 3]], flanges: &[Flange]) -> Result<Self> {
+        let mut node = vec![NodeDofs::Free(0); nodes.len()];
+        // a distributing flange's eliminations, by node: which directions are dependent
+        let mut eliminations = Vec::new();
+        let mut dependent_at: Vec<[Option<usize>; 3]> = Vec::new();
+        let mut slot_of = std::collections::HashMap::new();
         for (k, f) in flanges.iter().enumerate() {
-            for &s in &f.slaves {
-                node[s] = NodeDofs::Slave(k);
+            match &f.coupling {
+                FlangeCoupling::Rigid => {
+                    for &s in &f.slaves {
+                        node[s] = NodeDofs::Slave(k);
+                    }
+                }
+                FlangeCoupling::Distributing { weights } => {
+                    let points: Vec<[f64; 3]> = f.slaves.iter().map(|&s| nodes[s]).collect();
+                    let refused = |why| {
+                        BuildError::Numerical(format!(
+                            "the distributing coupling of flange \"{}\" is singular ({why:?})",
+                            f.name
+                        ))
+                    };
+                    let c = distributing::constraint(&points, weights, f.reference).map_err(refused)?;
+                    let e = distributing::eliminate(&c).map_err(refused)?;
+                    for (j, &(i, dir)) in e.dependent.iter().enumerate() {
+                        let n = f.slaves[i];
+                        let slot = *slot_of.entry(n).or_insert_with(|| {
+                            dependent_at.push([None; 3]);
+                            dependent_at.len() - 1
+                        });
+                        dependent_at[slot][dir] = Some(6 * eliminations.len() + j);
+                    }
+                    eliminations.push((k, e));
+                }
             }
         }
         let mut next = 0;
-        for n in node.iter_mut() {
-            if let NodeDofs::Free(d) = n {
-                *d = next;
-                next += 3;
+        for (n, nd) in node.iter_mut().enumerate() {
+            match slot_of.get(&n) {
+                Some(&slot) => {
+                    *nd = NodeDofs::Partial(std::array::from_fn(|dir| match dependent_at[slot][dir] {
+                        Some(j) => DofOf::Dependent(j),
+                        None => {
+                            next += 1;
+                            DofOf::Own(next - 1)
+                        }
+                    }))
+                }
+                None => {
+                    if let NodeDofs::Free(d) = nd {
+                        *d = next;
+                        next += 3;
+                    }
+                }
             }
         }
         let n_interior = next;
@@ -59,7 +124,26 @@ impl DofMap {
             flange_first[mount] = next;
             next += 6;
         }
-        Self { node, flange_first, n_interior, n_dofs: next, mount }
+        let mut this = Self { node, flange_first, n_interior, n_dofs: next, mount, dependent: Vec::new() };
+        // the dependent DoFs' images, now that every own DoF has its number
+        for (k, e) in eliminations {
+            let f = &flanges[k];
+            for (j, &(i, dir)) in e.dependent.iter().enumerate() {
+                let master = (0..6).map(|m| (this.flange_first[k] + m, e.master[j][m]));
+                let others = e.others[j].iter().map(|&(o, d, c)| match this.node[f.slaves[o]] {
+                    NodeDofs::Free(first) => (first + d, c),
+                    NodeDofs::Partial(dofs) => match dofs[d] {
+                        DofOf::Own(g) => (g, c),
+                        DofOf::Dependent(_) => unreachable!("the elimination's others are independent"),
+                    },
+                    NodeDofs::Slave(_) => unreachable!("a node belongs to one flange"),
+                });
+                let mut image: Vec<(usize, f64)> = master.chain(others).filter(|t| t.1 != 0.0).collect();
+                image.sort_unstable_by_key(|t| t.0);
+                this.dependent.push(DependentDof { node: f.slaves[i], direction: dir, image });
+            }
+        }
+        Ok(this)
     }
 
     /// What DoF `d` of the constrained model is, for messages: a node's direction (the node
@@ -68,9 +152,13 @@ impl DofMap {
         const DIR: [&str; 3] = ["x", "y", "z"];
         const MASTER: [&str; 6] = ["u_x", "u_y", "u_z", "theta_x", "theta_y", "theta_z"];
         if d < self.n_interior {
-            let node = self.node.iter().position(|n| *n == NodeDofs::Free(d - d % 3));
-            return match node {
-                Some(n) => format!("the {} direction of {}", DIR[d % 3], node_label(n)),
+            let found = self.node.iter().enumerate().find_map(|(n, nd)| match *nd {
+                NodeDofs::Free(first) if (first..first + 3).contains(&d) => Some((n, d - first)),
+                NodeDofs::Partial(dofs) => dofs.iter().position(|x| *x == DofOf::Own(d)).map(|dir| (n, dir)),
+                _ => None,
+            });
+            return match found {
+                Some((n, dir)) => format!("the {} direction of {}", DIR[dir], node_label(n)),
                 None => format!("DoF {d}"),
             };
         }
@@ -106,23 +194,26 @@ fn coupling_block(d: [f64; 3]) -> [[f64; 6]; 3] {
     [[1.0, 0.0, 0.0, 0.0, d[2], -d[1]], [0.0, 1.0, 0.0, -d[2], 0.0, d[0]], [0.0, 0.0, 1.0, d[1], -d[0], 0.0]]
 }
 
-/// Where each DoF of the free-free model goes in the constrained model: at most three
-/// (constrained DoF, coefficient) pairs (a slave's translation is u + theta x d).
-fn dof_images(dofs: &DofMap, nodes: &[[f64; 3]], flanges: &[Flange]) -> Vec<DofImage> {
-    let mut images = Vec::with_capacity(3 * nodes.len());
+/// Where each DoF of the free-free model goes in the constrained model (the rows of the map T):
+/// a free DoF to its own, a rigid slave's to u + theta x d (its zeros left out: a slave on the
+/// reference's axis keeps fewer terms), a distributing flange's dependent DoF to its image.
+fn dof_images(dofs: &DofMap, nodes: &[[f64; 3]], flanges: &[Flange]) -> Images {
+    let mut images = Images::with_capacity(3 * nodes.len());
     for (n, p) in nodes.iter().enumerate() {
         for i in 0..3 {
-            images.push(match dofs.node[n] {
-                NodeDofs::Free(d) => DofImage::NONE.with(d + i, 1.0),
+            match dofs.node[n] {
+                NodeDofs::Free(d) => images.push([(d + i, 1.0)]),
                 NodeDofs::Slave(k) => {
                     let r = flanges[k].reference;
                     let block = coupling_block([p[0] - r[0], p[1] - r[1], p[2] - r[2]]);
                     let f = dofs.flange_first[k];
-                    // the row's zeros are left out: a slave on the reference's axis keeps fewer terms
-                    let terms = block[i].iter().enumerate().filter(|(_, c)| **c != 0.0);
-                    terms.fold(DofImage::NONE, |image, (j, &c)| image.with(f + j, c))
+                    images.push(block[i].iter().enumerate().filter(|(_, c)| **c != 0.0).map(|(j, &c)| (f + j, c)));
                 }
-            });
+                NodeDofs::Partial(own) => match own[i] {
+                    DofOf::Own(d) => images.push([(d, 1.0)]),
+                    DofOf::Dependent(j) => images.push(dofs.dependent[j].image.iter().copied()),
+                },
+            }
         }
     }
     images
@@ -131,7 +222,7 @@ fn dof_images(dofs: &DofMap, nodes: &[[f64; 3]], flanges: &[Flange]) -> Vec<DofI
 /// Tie the flanges to the free-free part: the constrained K, M (and D) and the rigid-body mass
 /// properties about `origin`.
 pub fn rigid_coupling(part: &Uncoupled, nodes: &[[f64; 3]], flanges: &[Flange], origin: [f64; 3]) -> Result<Assembled> {
-    let dofs = DofMap::new(nodes.len(), flanges);
+    let dofs = DofMap::new(nodes, flanges)?;
     let images = dof_images(&dofs, nodes, flanges);
     let n = dofs.n_dofs;
     let stiffness = symmetric_congruence(&part.stiffness, &images, n, "stiffness")?;
@@ -154,8 +245,20 @@ mod tests {
     fn flanges(nodes: &[[f64; 3]]) -> Vec<Flange> {
         let on = |x: f64| (0..nodes.len()).filter(|&n| nodes[n][0] == x).collect::<Vec<_>>();
         vec![
-            Flange { name: "arm".into(), role: Role::Force, reference: [3.2, 0.5, 0.5], slaves: on(3.0) },
-            Flange { name: "base".into(), role: Role::Motion, reference: [0.0, 0.5, 0.0], slaves: on(0.0) },
+            Flange {
+                name: "arm".into(),
+                role: Role::Force,
+                reference: [3.2, 0.5, 0.5],
+                slaves: on(3.0),
+                coupling: FlangeCoupling::Rigid,
+            },
+            Flange {
+                name: "base".into(),
+                role: Role::Motion,
+                reference: [0.0, 0.5, 0.0],
+                slaves: on(0.0),
+                coupling: FlangeCoupling::Rigid,
+            },
         ]
     }
 
@@ -172,6 +275,14 @@ mod tests {
                         let block = coupling_block([p[0] - r[0], p[1] - r[1], p[2] - r[2]]);
                         (0..6).for_each(|j| t[(3 * n + i, dofs.flange_first[k] + j)] = block[i][j]);
                     }
+                    NodeDofs::Partial(own) => match own[i] {
+                        DofOf::Own(d) => t[(3 * n + i, d)] = 1.0,
+                        DofOf::Dependent(j) => {
+                            for &(g, c) in &dofs.dependent[j].image {
+                                t[(3 * n + i, g)] = c;
+                            }
+                        }
+                    },
                 }
             }
         }

@@ -4,7 +4,6 @@
 //! outline displaced over the undeformed one in grey. Small whatever the mesh: a 250k-node
 //! part draws a few thousand lines.
 
-use crate::input::element::ElementKind;
 use crate::model::flange::{Flange, model_size};
 use crate::model::part::Part;
 use crate::output::plot::{PALETTE, esc};
@@ -17,17 +16,6 @@ const HEIGHT: f64 = 400.0;
 const MARGIN: f64 = 30.0;
 /// Most slave nodes drawn per flange (evenly thinned beyond).
 const MAX_DOTS: usize = 400;
-
-/// Corner faces of an element (indices into its connectivity), outward or not: only their node
-/// sets matter here.
-fn faces(kind: ElementKind) -> &'static [&'static [usize]] {
-    match kind {
-        ElementKind::Tet4 | ElementKind::Tet10 => &[&[0, 1, 2], &[0, 1, 3], &[1, 2, 3], &[0, 2, 3]],
-        ElementKind::Hex8 | ElementKind::Hex20 | ElementKind::Hex20R => {
-            &[&[0, 1, 2, 3], &[4, 5, 6, 7], &[0, 1, 5, 4], &[1, 2, 6, 5], &[2, 3, 7, 6], &[3, 0, 4, 7]]
-        }
-    }
-}
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
@@ -49,7 +37,7 @@ pub fn outline(part: &Part) -> Vec<[usize; 2]> {
     let mut count: HashMap<Vec<usize>, (usize, Vec<usize>)> = HashMap::new();
     for e in 0..mesh.n_elements() {
         let conn = mesh.element(e);
-        for face in faces(mesh.kind(e)) {
+        for face in mesh.kind(e).corner_faces() {
             let nodes: Vec<usize> = face.iter().map(|&i| conn[i]).collect();
             let mut key = nodes.clone();
             key.sort_unstable();
