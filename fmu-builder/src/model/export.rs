@@ -1,11 +1,12 @@
 //! The meshed, flanged part as an Abaqus/CalculiX input deck (model data only: nodes, elements,
 //! node sets, material), so the same mesh can be analysed by CalculiX for reference results.
 //! Each flange gets its slave set `<NAME>` plus a reference node (set `<NAME>_REF`) and a
-//! rotation node (set `<NAME>_ROT`) at its reference point, ready for `*RIGID BODY`.
+//! rotation node (set `<NAME>_ROT`) at its reference point, ready for `*RIGID BODY`; a
+//! distributing flange's node weights follow its sets as comment lines.
 
 use crate::error::{BuildError, Result};
 use crate::input::element::ElementKind;
-use crate::model::flange::Flange;
+use crate::model::flange::{Flange, FlangeCoupling};
 use crate::model::part::Part;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -71,6 +72,16 @@ pub fn abaqus_deck(part: &Part, flanges: &[Flange]) -> String {
         }
         let _ = writeln!(s, "*NSET, NSET={name}_REF\n{}", n + 1 + 2 * k);
         let _ = writeln!(s, "*NSET, NSET={name}_ROT\n{}", n + 2 + 2 * k);
+        // a distributing flange's weights as comment lines (`**W node, weight`): CalculiX 2.20
+        // has no one keyword for its whole coupling (`*DISTRIBUTING COUPLING` ties translations
+        // only, `*COUPLING` + `*DISTRIBUTING` spreads loads with its own weights), so the deck
+        // carries the data and the analysis picks what it needs
+        if let FlangeCoupling::Distributing { weights } = &f.coupling {
+            let _ = writeln!(s, "** distributing coupling of {name} (node, weight):");
+            for (&node, &w) in f.slaves.iter().zip(weights) {
+                let _ = writeln!(s, "**W {}, {}", node + 1, real(w));
+            }
+        }
     }
     for m in used {
         let mat = &part.materials[m];
