@@ -44,6 +44,15 @@ CASES = [
      lambda s: set_path(s, ["flanges", 1, "nodes"], {"plane": {"point": [0.0, 0, 0], "normal": [1, 0, 0]}}),
      ["flanges[1].nodes", "shares"]),
     ("two mounts", lambda s: set_path(s, ["flanges", 1, "role"], "motion"), ["flanges[1].role", "second"]),
+    # distributing flanges
+    ("weights on a rigid flange", lambda s: s["flanges"][1].update(weights="area"),
+     ["flanges[1].weights", "distributing"]),
+    ("unknown coupling", lambda s: s["flanges"][1].update(coupling="rbe3"),
+     ["flanges[1].coupling", "distributing"]),
+    ("area weights on an inner cross-section",
+     lambda s: s["flanges"][1].update(coupling="distributing", weights="area",
+                                      nodes={"plane": {"point": [0.5, 0, 0], "normal": [1, 0, 0]}}),
+     ["flanges[1].weights", "no face of the part's surface", "uniform"]),
     ("stiffening on a free body",
      lambda s: (set_path(s, ["flanges", 0, "role"], "force"), s.update(scene={"geometric_stiffening": True})),
      ["scene.geometric_stiffening", "mounted"]),
@@ -182,6 +191,44 @@ def test_inverted_element_names_file_and_element_id(tmp_path):
 def test_missing_file_is_named(tmp_path):
     proc = run_builder([tmp_path / "nope.json", "-o", tmp_path / "x.fmu"], check=False)
     assert proc.returncode == 1 and "nope.json" in proc.stderr and "panicked" not in proc.stderr
+
+
+def test_area_weights_from_matrix_input_are_refused(tmp_path):
+    """Area weights need the element faces; a part given as matrices has none: refused, naming the
+    field and the way out (uniform weights)."""
+    small = tmp_path / "small.json"
+    small.write_text(json.dumps(BASE))
+    run_builder([small, "-o", tmp_path / "small.fmu", "--export-free-free", tmp_path / "m", "-q"])
+    spec = copy.deepcopy(BASE)
+    spec["geometry"] = {"matrices": {"stiffness": "m/K.mtx", "mass": "m/M.mtx", "dofs": "m/dofs.txt",
+                                     "nodes": "m/nodes.txt"}}
+    spec.pop("material")
+    spec["flanges"] = [{"name": "base", "role": "motion", "nodes": {"box": {"min": [-1, -1, -1], "max": [1e-9, 1, 1]}}},
+                       {"name": "tip", "role": "force", "nodes": {"box": {"min": [0.999, -1, -1], "max": [2, 1, 1]}},
+                        "coupling": "distributing", "weights": "area"}]
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(spec))
+    proc = run_builder([path, "-o", tmp_path / "bad.fmu"], check=False)
+    assert proc.returncode == 1 and "panicked" not in proc.stderr, proc.stderr
+    for expected in [str(path), "flanges[1].weights", "matrix input has no elements", "uniform"]:
+        assert expected in proc.stderr, f"{expected!r} not in {proc.stderr!r}"
+    assert not (tmp_path / "bad.fmu").exists()
+    # uniform weights on the same matrices build, and the coupling enters as for the mesh: the
+    # same full-model compliance (a consistency check of one constraint for both inputs)
+    spec["flanges"][1]["weights"] = "uniform"
+    path.write_text(json.dumps(spec))
+    run_builder([path, "-o", tmp_path / "matrices.fmu", "-q"])
+    meshed = copy.deepcopy(BASE)
+    meshed["flanges"] = spec["flanges"]
+    (tmp_path / "mesh.json").write_text(json.dumps(meshed))
+    run_builder([tmp_path / "mesh.json", "-o", tmp_path / "mesh.fmu", "-q"])
+    import zipfile
+    import numpy as np
+    g = [np.array(json.loads(zipfile.ZipFile(tmp_path / f).read("documentation/report.json"))["accuracy"]["compliance_full"])
+         for f in ["matrices.fmu", "mesh.fmu"]]
+    assert g[0].shape == g[1].shape == (6, 6)
+    # the matrices are the mesh's, written to 17 digits: the two agree to round-off
+    assert np.abs(g[0] - g[1]).max() <= 1e-10 * np.abs(g[1]).max()
 
 
 def test_stress_outputs_from_matrix_input_are_refused(tmp_path):
