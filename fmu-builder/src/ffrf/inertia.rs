@@ -126,9 +126,12 @@ pub fn expand(model: &Assembled, nodes: &[[f64; 3]], flanges: &[Flange], phi: Ma
                 Follows::Partial(dofs) => dofs.map(|dof| match dof {
                     DofOf::Own(g) => src[g],
                     // the held mount's terms are zero
-                    DofOf::Dependent(j) => {
-                        model.dofs.dependent[j].image.iter().filter(|t| t.0 < src.nrows()).map(|&(g, c)| c * src[g]).sum()
-                    }
+                    DofOf::Dependent(j) => model.dofs.dependent[j]
+                        .image
+                        .iter()
+                        .filter(|t| t.0 < src.nrows())
+                        .map(|&(g, c)| c * src[g])
+                        .sum(),
                 }),
             };
             for (i, u) in u.into_iter().enumerate() {
@@ -288,10 +291,10 @@ pub(crate) mod tests {
     use crate::input::element::ElementKind;
     use crate::input::mesh::{BoxRegion, mesh_boxes};
     use crate::input::spec::Role;
-    use crate::model::flange::FlangeCoupling;
     use crate::linalg::sparse::mul_new;
     use crate::model::assembly::{SolidMaterial, uncoupled};
     use crate::model::fe::Elasticity;
+    use crate::model::flange::FlangeCoupling;
     use crate::model::rigid_coupling::rigid_coupling;
 
     /// A hex20 bar (consistent mass with negative couplings) held at x = 0 by the mount, a force

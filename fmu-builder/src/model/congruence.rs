@@ -358,9 +358,8 @@ mod tests {
     }
 
     fn dense_reference(a: &SparseColMat<usize, f64>, images: &Images, n: usize) -> Mat<f64> {
-        let t = Mat::from_fn(images.len(), n, |i, g| {
-            images.of(i).iter().filter(|t| t.0 == g).map(|t| t.1).sum::<f64>()
-        });
+        let t =
+            Mat::from_fn(images.len(), n, |i, g| images.of(i).iter().filter(|t| t.0 == g).map(|t| t.1).sum::<f64>());
         let b = t.transpose() * a.to_dense() * &t;
         Mat::from_fn(n, n, |i, j| 0.5 * b[(i, j)] + 0.5 * b[(j, i)])
     }

@@ -26,7 +26,9 @@ pub struct Flange {
 pub enum FlangeCoupling {
     Rigid,
     /// The weight of each slave (same order), positive.
-    Distributing { weights: Vec<f64> },
+    Distributing {
+        weights: Vec<f64>,
+    },
 }
 
 fn bounds(mesh: &Mesh) -> ([f64; 3], [f64; 3]) {
@@ -203,7 +205,9 @@ pub fn select_flanges(spec: &Spec, file: &Path, part: &Part) -> Result<Vec<Flang
         }
         let (slaves, coupling) = match fs.coupling {
             Coupling::Rigid => (slaves, FlangeCoupling::Rigid),
-            Coupling::Distributing => distributing_weights(file, k, fs.name.as_str(), fs.weights, part, slaves, reference)?,
+            Coupling::Distributing => {
+                distributing_weights(file, k, fs.name.as_str(), fs.weights, part, slaves, reference)?
+            }
         };
         flanges.push(Flange { name: fs.name.clone(), role: fs.role, reference, slaves, coupling });
     }
