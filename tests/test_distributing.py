@@ -337,3 +337,31 @@ def test_distributing_mount_frequencies_vs_calculix_equations(tmp_path):
     # measured 4.1e-7 at most: CalculiX's 7 printed digits
     assert dev.max() <= PRINTED
     assert np.all(ours <= stiff * (1 + 1e-9)) and (stiff / ours - 1).max() > 1e-4
+
+
+def test_free_body_with_distributing_flanges_keeps_the_plain_parts_frequencies(tmp_path):
+    """A free-floating bracket whose two bolt holes are distributing force flanges: nothing is added
+    to the part, so its free-free frequencies (full model and, to the reduction's accuracy, the
+    FMU's) are CalculiX's for the plain part (`*FREQUENCY` above a 1 Hz shift, the rigid-body
+    modes below it); rigid flanges stiffen both holes and raise them."""
+    spec = bracket_spec("distributing")
+    spec["flanges"][0]["role"] = "force"
+    spec["flanges"][0]["coupling"] = "distributing"
+    spec["flanges"][0].pop("reference_point", None)
+    report, deck, fmu = build(spec, tmp_path, "free")
+    for f in spec["flanges"]:
+        f["coupling"] = "rigid"
+    rigid, _, _ = build(spec, tmp_path, "free_rigid")
+    count = 8
+    result = ccx.run_ccx(deck, ccx.frequency_step(count + 6, shift_hz=1.0), tmp_path / "freq")
+    ours = np.array(report["accuracy"]["full_hz"][:count])
+    theirs = np.array(result.frequencies_hz[:count])
+    stiff = np.array(rigid["accuracy"]["full_hz"][:count])
+    assert len(ours) == len(theirs) == len(stiff) == count and theirs[0] > 100.0
+    dev = np.abs(ours / theirs - 1)
+    print(f"\nfree bracket, distributing holes: {ours[:4]} Hz, CalculiX (plain part) {theirs[:4]} Hz, worst {dev.max():.1e};"
+          f" rigid holes {stiff[:4]} Hz")
+    assert dev.max() <= PRINTED
+    assert np.all(ours <= stiff * (1 + 1e-9)) and (stiff / ours - 1).max() > 1e-4
+    from fmpy.validation import validate_fmu
+    assert validate_fmu(str(fmu)) == []
