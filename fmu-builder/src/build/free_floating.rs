@@ -81,7 +81,7 @@ pub fn reduce(
     recovery: Option<Recovery>,
 ) -> Result<Built> {
     let mesh = &part.mesh;
-    let mut model = profile::phase("rigid coupling of the flanges", || {
+    let mut model = profile::phase("coupling of the flanges", || {
         rigid_coupling::rigid_coupling(&free, &mesh.nodes, &flanges, [0.0; 3])
     })?;
     drop(free);

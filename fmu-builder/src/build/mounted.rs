@@ -227,7 +227,7 @@ pub fn reduce(
     recovery: Option<Recovery>,
 ) -> Result<Built> {
     let origin = flanges[mount].reference;
-    let mut model = profile::phase("rigid coupling of the flanges", || {
+    let mut model = profile::phase("coupling of the flanges", || {
         rigid_coupling::rigid_coupling(&free, &part.mesh.nodes, &flanges, origin)
     })?;
     drop(free);

@@ -48,18 +48,19 @@ the undeformed part as meshed. World frame: the host's; the mount's inputs place
             .join("<br>"),
         esc(&r.damping)
     );
-    h.push_str("<h2>Flanges</h2>\n<table><tr><th>name</th><th>role</th><th>reference point [m]</th><th>slave nodes</th></tr>\n");
+    h.push_str("<h2>Flanges</h2>\n<table><tr><th>name</th><th>role</th><th>reference point [m]</th><th>slave nodes</th><th>coupling</th></tr>\n");
     for f in &r.flanges {
         let p = f.reference_point;
         let _ = writeln!(
             h,
-            "<tr><td>{}</td><td>{}</td><td>{:.6}, {:.6}, {:.6}</td><td>{}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{:.6}, {:.6}, {:.6}</td><td>{}</td><td>{}</td></tr>",
             esc(&f.name),
             esc(&f.role),
             p[0],
             p[1],
             p[2],
-            f.slave_nodes
+            f.slave_nodes,
+            esc(&f.coupling)
         );
     }
     h.push_str("</table>\n");
@@ -538,6 +539,7 @@ mod tests {
                 role: "force".into(),
                 reference_point: [1.0, 0.0, 0.0],
                 slave_nodes: 9,
+                coupling: "rigid".into(),
             }],
             stress_points: Vec::new(),
             scene: Default::default(),

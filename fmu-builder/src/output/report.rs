@@ -1,8 +1,8 @@
 //! The report of a build: what was built (part, mass properties, flanges, method and order) and
 //! what the reduction costs in accuracy. Written into the FMU's documentation as JSON.
 
-use crate::input::spec::{Role, Spec};
-use crate::model::flange::Flange;
+use crate::input::spec::{Role, Spec, Weights};
+use crate::model::flange::{Flange, FlangeCoupling};
 use crate::model::part::Part;
 use crate::model::rigid_coupling::Assembled;
 use crate::output::default_experiment::default_experiment;
@@ -19,6 +19,12 @@ pub struct FlangeReport {
     pub role: String,
     pub reference_point: [f64; 3],
     pub slave_nodes: usize,
+    /// "rigid", or "distributing, uniform weights" / "distributing, area weights".
+    pub coupling: String,
+}
+
+fn rigid() -> String {
+    "rigid".into()
 }
 
 /// A stress recovery point and its static stresses under the unit load cases.
@@ -180,6 +186,13 @@ pub fn report_of(
                 },
                 reference_point: f.reference,
                 slave_nodes: f.slaves.len(),
+                coupling: match &f.coupling {
+                    FlangeCoupling::Rigid => rigid(),
+                    FlangeCoupling::Distributing { .. } => {
+                        let area = spec.flanges.iter().any(|s| s.name == f.name && s.weights == Some(Weights::Area));
+                        format!("distributing, {} weights", if area { "area" } else { "uniform" })
+                    }
+                },
             })
             .collect(),
         stress_points: Vec::new(),

@@ -20,8 +20,8 @@ pub fn text(r: &Report) -> String {
         let p = f.reference_point;
         let _ = writeln!(
             s,
-            "  flange {:<12} {:<6} at ({:.6}, {:.6}, {:.6}) m, {} slave nodes",
-            f.name, f.role, p[0], p[1], p[2], f.slave_nodes
+            "  flange {:<12} {:<6} at ({:.6}, {:.6}, {:.6}) m, {} slave nodes, {}",
+            f.name, f.role, p[0], p[1], p[2], f.slave_nodes, f.coupling
         );
     }
     let _ = writeln!(
