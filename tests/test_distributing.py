@@ -226,7 +226,11 @@ def test_bracket_bolt_hole_vs_calculix(tmp_path):
     """The bracket's upright bolt hole (tet10, uniform weights) as a distributing flange: forces
     through CalculiX's *DISTRIBUTING COUPLING (reference translation printed by CalculiX), moments
     as CalculiX's distributing loads; the reference point's six motions from CalculiX's field."""
-    report, deck, _ = build(bracket_spec("distributing"), tmp_path, "bracket")
+    report, deck, fmu = build(bracket_spec("distributing"), tmp_path, "bracket")
+    # the report and the documentation say which flange distributes
+    assert [f["coupling"] for f in report["flanges"]] == ["rigid", "distributing, uniform weights"]
+    html = zipfile.ZipFile(fmu).read("documentation/index.html").decode()
+    assert "<td>distributing, uniform weights</td>" in html
     nodes, points, w = flange_nodes(deck, "arm")
     assert np.allclose(w, 1.0)
     ref = ccx.reference_point(deck, "arm")
