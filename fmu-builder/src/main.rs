@@ -6,7 +6,9 @@ use std::process::ExitCode;
 
 #[derive(Parser)]
 #[command(
-    version,
+    // which linux64 binary the FMUs get: portable (glibc 2.17+) or only for glibc as new as the
+    // build machine's (build.rs)
+    version = concat!(env!("CARGO_PKG_VERSION"), " (linux64 runtime: ", env!("FMU_RUNTIME_LINUX64"), ")"),
     about = "Turn a finite-element model of an elastic part into an FMI 2.0 FMU (Model Exchange + Co-Simulation)"
 )]
 struct Args {
