@@ -171,6 +171,14 @@ def test_universal_macos_binary_with_an_x86_64_slice_is_accepted(workdir, stub):
     assert zipfile.ZipFile(out).read("binaries/darwin64/Bar.dylib") == fat.read_bytes()
 
 
+def test_a_linux64_binary_replaces_the_builders_own(workdir, plain, stub):
+    so = stub("linux64.so", "x86_64-linux-gnu")
+    out = workdir / "replaced.fmu"
+    run_builder([workdir / "bar.json", "-o", out, "-q", "--platform-binary", f"linux64={so}"])
+    assert names(out) == ["binaries/linux64/Bar.so"]
+    assert zipfile.ZipFile(out).read("binaries/linux64/Bar.so") == so.read_bytes() != plain[1]
+
+
 def refusal(workdir, platform, path):
     out = workdir / "refused.fmu"
     if out.exists():

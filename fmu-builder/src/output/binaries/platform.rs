@@ -1,4 +1,4 @@
-//! The platforms FMI 2.0 names for an FMU's binaries (section 2.4, the `binaries/` folder):
+//! The platforms FMI 2.0 names for an FMU's binaries (the `binaries/` folder of its FMU layout):
 //! win32, win64, linux32, linux64, darwin32, darwin64, each with the file format, the processor
 //! and the file extension an importer on it expects. FMI 2.0 names x86 and x86-64 platforms
 //! only: an aarch64 (arm64) binary has no folder of its own there (FMI 3.0's platform tuples,
