@@ -1,10 +1,29 @@
 #!/usr/bin/env bash
-# The project's test command: formatting and lints, Rust tests, the benchmark's targets (short
-# mode), the release builder, then the end-to-end tests with FMPy in a virtual environment this
-# script creates (tests/.venv).
+# The project's test command: the Python environment and the portable-build tools first, then
+# formatting and lints, Rust tests, the benchmark's targets (short mode), the release builder,
+# and the end-to-end tests with FMPy in the virtual environment this script creates
+# (tests/.venv).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
+# Before any cargo command: every one of them runs fmu-builder/build.rs, which links the FMU's
+# linux64 runtime with zig against glibc 2.17 when it finds zig (the ziglang package of
+# tests/.venv, pinned in requirements.txt) and cargo-zigbuild, so that every test below runs on
+# the portable binary. In CI a missing tool fails the build (FMU_RUNTIME_PORTABLE=require)
+# instead of falling back to a native binary.
+setup_start=$SECONDS
+if [ ! -x tests/.venv/bin/python ]; then
+    python3 -m venv tests/.venv
+fi
+tests/.venv/bin/python -m pip install --quiet --upgrade pip
+tests/.venv/bin/python -m pip install --quiet -r tests/requirements.txt
+if ! cargo zigbuild --help >/dev/null 2>&1; then
+    cargo install --locked cargo-zigbuild --version 0.24.1
+fi
+if [ -n "${CI:-}" ]; then
+    export FMU_RUNTIME_PORTABLE=require
+fi
+echo "Python environment and portable-build tools ready in $((SECONDS - setup_start)) s ($(tests/.venv/bin/python -m ziglang version | sed 's/^/zig /'), $(cargo-zigbuild --version 2>/dev/null || echo cargo-zigbuild))"
 # formatting and lints first: cheap, and the code base must be clean under both
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets -- -D warnings
@@ -13,10 +32,6 @@ cargo test --workspace --release
 # its short mode: under two minutes, non-zero exit on a missed target
 cargo run --release -p bench -- --short
 cargo build --release -p fmu-builder
-if [ ! -x tests/.venv/bin/python ]; then
-    python3 -m venv tests/.venv
-fi
-tests/.venv/bin/python -m pip install --quiet --upgrade pip
-tests/.venv/bin/python -m pip install --quiet -r tests/requirements.txt
+"${CARGO_TARGET_DIR:-target}/release/fmu-builder" --version
 cd tests
 .venv/bin/python -m pytest -v -s "$@"

@@ -6,7 +6,9 @@ use std::process::ExitCode;
 
 #[derive(Parser)]
 #[command(
-    version,
+    // which linux64 binary the FMUs get: portable (glibc 2.17+) or only for glibc as new as the
+    // build machine's (build.rs)
+    version = concat!(env!("CARGO_PKG_VERSION"), " (linux64 runtime: ", env!("FMU_RUNTIME_LINUX64"), ")"),
     about = "Turn a finite-element model of an elastic part into an FMI 2.0 FMU (Model Exchange + Co-Simulation)"
 )]
 struct Args {
@@ -20,6 +22,13 @@ struct Args {
     /// Overwrite the output FMU if it exists
     #[arg(long)]
     force: bool,
+    /// Also package fmu-runtime built on another platform (repeatable): PLATFORM is win32, win64,
+    /// linux32, linux64 (replaces the builder's own), darwin32 or darwin64; FILE is what `cargo
+    /// build -p fmu-runtime --release` wrote there (fmu_runtime.dll, libfmu_runtime.so,
+    /// libfmu_runtime.dylib), from the same source as this builder. Checked before the build:
+    /// format, processor, shared library, exported fmi2 functions, runtime source
+    #[arg(long, value_name = "PLATFORM=FILE", conflicts_with = "sweep")]
+    platform_binary: Vec<String>,
     /// Print the input's JSON schema and exit
     #[arg(long, exclusive = true)]
     print_schema: bool,
@@ -82,6 +91,13 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
+    match platform_binaries(&args.platform_binary) {
+        Ok(binaries) => fmu_builder::output::package::set_platform_binaries(binaries),
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    }
     build(&args, &input, &output)
 }
 
@@ -150,6 +166,16 @@ fn output_path(args: &Args, input: &Input) -> Result<PathBuf, String> {
         }
     }
     Ok(output)
+}
+
+/// The `--platform-binary` files, read and checked before the build starts: a wrong file is
+/// refused in a second, not after the reduction.
+fn platform_binaries(args: &[String]) -> Result<Vec<fmu_builder::output::binaries::PlatformBinary>, String> {
+    use fmu_builder::output::binaries;
+    let list = args.iter().map(|a| binaries::PlatformBinary::from_arg(a)).collect::<Result<Vec<_>, _>>();
+    let list = list.map_err(|e| e.to_string())?;
+    binaries::check_distinct(&list).map_err(|e| e.to_string())?;
+    Ok(list)
 }
 
 /// Blocks of a megabyte and more come from the system and go back to it when freed. glibc

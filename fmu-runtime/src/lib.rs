@@ -15,3 +15,30 @@ pub mod reduced;
 pub mod scalar;
 
 fmi2::export_fmi2!(crate::fmu::BodyFmu);
+
+include!(concat!(env!("OUT_DIR"), "/build_id.rs"));
+
+/// What precedes [`BUILD_ID`] in the binary: the builder finds the identity of a runtime binary
+/// of any format (ELF, PE, Mach-O) by this text in its bytes.
+pub const BUILD_ID_MARKER: &str = "FMU_RUNTIME_BUILD_ID=";
+
+/// `BUILD_ID_MARKER` + `BUILD_ID` as a NUL-terminated C string, exported (and so kept by the
+/// linker) from every build of the runtime, so that the builder can refuse a binary built on
+/// another platform from another source (see build.rs).
+#[unsafe(no_mangle)]
+pub static FMU_RUNTIME_BUILD_ID: [u8; BUILD_ID_MARKER.len() + BUILD_ID.len() + 1] = marked_build_id();
+
+const fn marked_build_id<const N: usize>() -> [u8; N] {
+    let mut out = [0u8; N];
+    let (marker, id) = (BUILD_ID_MARKER.as_bytes(), BUILD_ID.as_bytes());
+    let mut i = 0;
+    while i < marker.len() {
+        out[i] = marker[i];
+        i += 1;
+    }
+    while i < marker.len() + id.len() {
+        out[i] = id[i - marker.len()];
+        i += 1;
+    }
+    out
+}

@@ -1,8 +1,10 @@
 //! Stage 5, output: what the user gets. The report of a build (`report`) and its printed summary
 //! (`summary`), the HTML documentation (`documentation`), the FMU's modelDescription.xml and
 //! archive (`fmu`), the check that everything it carries is finite (`finite`), and the packaging
-//! of it all with the runtime binary (`package`).
+//! of it all with the runtime binaries (`package`; `binaries` checks those built on other
+//! platforms).
 
+pub mod binaries;
 pub mod default_experiment;
 pub mod documentation;
 pub mod finite;

@@ -1,7 +1,8 @@
-//! The FMU of a reduced body: modelDescription.xml, binary, resources and documentation.
+//! The FMU of a reduced body: modelDescription.xml, binaries, resources and documentation.
 
 use crate::error::{BuildError, Result};
 use crate::input::spec::Spec;
+use crate::output::binaries::{Platform, PlatformBinary, fmi2_functions};
 use crate::output::default_experiment::default_experiment;
 use crate::output::documentation;
 use crate::output::finite;
@@ -11,9 +12,21 @@ use fmu_runtime::format::RESOURCE_FILE;
 use fmu_runtime::interface::VariableTable;
 use fmu_runtime::reduced::ReducedBody;
 use std::path::Path;
+use std::sync::Mutex;
 
 /// The runtime cdylib, built by build.rs: the FMU's binaries/linux64/<id>.so.
 pub const RUNTIME_SO: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/fmu_runtime.so"));
+
+/// Runtime binaries of other platforms for the FMUs written from now on (the command line's
+/// `--platform-binary`). A setting of the process rather than an argument: the driver (`build`)
+/// hands `write_fmu` the body alone.
+static PLATFORM_BINARIES: Mutex<Vec<PlatformBinary>> = Mutex::new(Vec::new());
+
+/// The FMUs written from now on carry these binaries too (a linux64 one replaces the builder's
+/// own); each is checked again against the FMU's modelDescription.xml when it is packaged.
+pub fn set_platform_binaries(binaries: Vec<PlatformBinary>) {
+    *PLATFORM_BINARIES.lock().unwrap_or_else(|poisoned| poisoned.into_inner()) = binaries;
+}
 
 /// The FMU of a reduced body.
 pub fn write_fmu(spec: &Spec, reduced: &ReducedBody, report: &Report, output: &Path) -> Result<()> {
@@ -50,10 +63,19 @@ pub fn write_fmu(spec: &Spec, reduced: &ReducedBody, report: &Report, output: &P
         serde_json::to_string_pretty(spec).map_err(|e| BuildError::Numerical(format!("serialising the input: {e}")))?;
     let report_json =
         serde_json::to_vec_pretty(report).map_err(|e| BuildError::Numerical(format!("serialising the report: {e}")))?;
+    let others = PLATFORM_BINARIES.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).clone();
+    let required = fmi2_functions::required(&xml);
+    for binary in &others {
+        binary.check(&required)?;
+    }
+    let mut binaries: Vec<(Platform, &[u8])> = others.iter().map(|b| (b.platform, b.data.as_slice())).collect();
+    if !binaries.iter().any(|(p, _)| *p == Platform::Linux64) {
+        binaries.insert(0, (Platform::Linux64, RUNTIME_SO));
+    }
     let archive = fmu::FmuArchive {
         model_description: xml,
         model_identifier: &id,
-        binary_linux64: RUNTIME_SO,
+        binaries,
         resources: vec![(RESOURCE_FILE.to_string(), reduced.to_bytes())],
         documentation: vec![
             ("index.html".to_string(), documentation::index_html(report, &table, &input).into_bytes()),

@@ -1,5 +1,5 @@
-//! The .fmu zip archive: modelDescription.xml at the root, `binaries/linux64/<id>.so` (no `lib`
-//! prefix, executable), `resources/...`, `documentation/...`; deflate, forward slashes.
+//! The .fmu zip archive: modelDescription.xml at the root, `binaries/<platform>/<id>.<dll|so|dylib>`
+//! (no `lib` prefix, executable), `resources/...`, `documentation/...`; deflate, forward slashes.
 //!
 //! The archive is written to a temporary file next to the target and renamed into place only
 //! when complete, so a failed build never leaves a half FMU where an importer would pick it up.
@@ -13,12 +13,13 @@ use zip::write::SimpleFileOptions;
 use zip::{CompressionMethod, ZipWriter};
 
 use super::{FmuError, is_model_identifier};
+use crate::output::binaries::Platform;
 
 pub struct FmuArchive<'a> {
     pub model_description: String,
     pub model_identifier: &'a str,
-    /// The runtime cdylib for x86_64 Linux.
-    pub binary_linux64: &'a [u8],
+    /// The runtime binary of each platform (at least one, one per platform).
+    pub binaries: Vec<(Platform, &'a [u8])>,
     /// Paths relative to `resources/`, e.g. `reduced_body.bin`.
     pub resources: Vec<(String, Vec<u8>)>,
     /// Paths relative to `documentation/`; the caller provides `index.html`.
@@ -56,14 +57,19 @@ fn entries<'a>(a: &'a FmuArchive) -> Result<Vec<Entry<'a>>, String> {
     if !is_model_identifier(a.model_identifier) {
         return Err(format!("model identifier '{}' is not a valid C identifier", a.model_identifier));
     }
-    if a.binary_linux64.is_empty() {
-        return Err("the linux64 binary is empty".into());
+    if a.binaries.is_empty() {
+        return Err("there is no binary for any platform".into());
     }
-    let mut list = vec![
-        Entry { name: "modelDescription.xml".into(), data: a.model_description.as_bytes(), mode: 0o644 },
+    let mut list =
+        vec![Entry { name: "modelDescription.xml".into(), data: a.model_description.as_bytes(), mode: 0o644 }];
+    for (platform, data) in &a.binaries {
+        if data.is_empty() {
+            return Err(format!("the {platform} binary is empty"));
+        }
+        let name = format!("binaries/{platform}/{}.{}", a.model_identifier, platform.extension());
         // Importers dlopen this file: it must be executable once extracted.
-        Entry { name: format!("binaries/linux64/{}.so", a.model_identifier), data: a.binary_linux64, mode: 0o755 },
-    ];
+        list.push(Entry { name, data, mode: 0o755 });
+    }
     for (folder, files) in [("resources", &a.resources), ("documentation", &a.documentation)] {
         for (name, data) in files {
             check_relative(name).map_err(|m| format!("{folder} entry '{name}': {m}"))?;
@@ -166,7 +172,7 @@ mod tests {
         FmuArchive {
             model_description: "<fmiModelDescription/>".into(),
             model_identifier: "Beam",
-            binary_linux64: binary,
+            binaries: vec![(Platform::Linux64, binary)],
             resources: vec![("reduced_body.bin".into(), vec![1, 2, 3])],
             documentation: vec![("index.html".into(), b"<html></html>".to_vec())],
         }
@@ -237,6 +243,39 @@ mod tests {
         assert_eq!(fs::read_dir(&dir).unwrap().count(), 0);
         // an unwritable target directory is an error, not a panic
         assert!(write_fmu(&dir.join("missing/Beam.fmu"), &archive(&binary)).is_err());
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn each_platform_binary_at_its_name() {
+        let dir = scratch("platforms");
+        let path = dir.join("Beam.fmu");
+        let (so, dll, dylib) = (vec![1u8; 10], vec![2u8; 10], vec![3u8; 10]);
+        let mut a = archive(&so);
+        a.binaries.extend([(Platform::Win64, &dll[..]), (Platform::Darwin64, &dylib[..])]);
+        write_fmu(&path, &a).unwrap();
+        let mut zip = zip::ZipArchive::new(File::open(&path).unwrap()).unwrap();
+        for (name, data) in [
+            ("binaries/linux64/Beam.so", &so),
+            ("binaries/win64/Beam.dll", &dll),
+            ("binaries/darwin64/Beam.dylib", &dylib),
+        ] {
+            let mut entry = zip.by_name(name).unwrap();
+            assert_eq!(entry.unix_mode().unwrap() & 0o777, 0o755, "{name}");
+            let mut read = Vec::new();
+            entry.read_to_end(&mut read).unwrap();
+            assert_eq!(&read, data, "{name}");
+        }
+        // one binary per platform, none empty, at least one
+        let mut twice = archive(&so);
+        twice.binaries.push((Platform::Linux64, &dll[..]));
+        assert!(write_fmu(&path, &twice).unwrap_err().to_string().contains("twice"));
+        let mut empty = archive(&so);
+        empty.binaries.push((Platform::Win32, &[]));
+        assert!(write_fmu(&path, &empty).unwrap_err().to_string().contains("the win32 binary is empty"));
+        let mut none = archive(&so);
+        none.binaries.clear();
+        assert!(write_fmu(&path, &none).unwrap_err().to_string().contains("no binary"));
         let _ = fs::remove_dir_all(&dir);
     }
 
