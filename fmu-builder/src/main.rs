@@ -91,14 +91,14 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    match platform_binaries(&args.platform_binary) {
-        Ok(binaries) => fmu_builder::output::package::set_platform_binaries(binaries),
+    let binaries = match platform_binaries(&args.platform_binary) {
+        Ok(binaries) => binaries,
         Err(e) => {
             eprintln!("error: {e}");
             return ExitCode::FAILURE;
         }
-    }
-    build(&args, &input, &output)
+    };
+    build(&args, &input, &output, &binaries)
 }
 
 /// The input's text and the path that names it ("<stdin>" for standard input: relative paths
@@ -232,9 +232,14 @@ fn sweep(args: &Args, input: &Input) -> ExitCode {
 }
 
 /// Build the FMU, write what else was asked for, print the summary.
-fn build(args: &Args, input: &Input, output: &Path) -> ExitCode {
+fn build(
+    args: &Args,
+    input: &Input,
+    output: &Path,
+    binaries: &[fmu_builder::output::binaries::PlatformBinary],
+) -> ExitCode {
     fmu_builder::progress::enable(!args.quiet);
-    let result = fmu_builder::build::build_from_text(&input.text, &input.path, output);
+    let result = fmu_builder::build::build_from_text(&input.text, &input.path, output, binaries);
     fmu_builder::progress::finish();
     match result {
         Ok(built) => {

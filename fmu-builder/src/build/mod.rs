@@ -14,6 +14,7 @@ use crate::error::{BuildError, Result};
 use crate::input::spec::{Method, Role, Spec};
 use crate::linalg::eigen;
 use crate::model::{connectivity, flange, part};
+use crate::output::binaries::PlatformBinary;
 use crate::output::package;
 use crate::profile;
 use crate::reduce::basis::ModeCount;
@@ -23,22 +24,25 @@ use std::path::Path;
 pub fn build(input: &Path, output: &Path) -> Result<Built> {
     profile::take();
     let spec = profile::phase("read and check the input", || Spec::from_file(input))?;
-    build_spec(spec, input, output)
+    build_spec(spec, input, output, &[])
 }
 
 /// As `build`, the input's text given (`input` names it in messages, and relative paths in it
 /// resolve from its folder: for standard input, name it "<stdin>" and they resolve from the
-/// working directory).
-pub fn build_from_text(text: &str, input: &Path, output: &Path) -> Result<Built> {
+/// working directory). `binaries`: runtimes built for other platforms, packaged beside the
+/// builder's own (a linux64 one replaces it).
+pub fn build_from_text(text: &str, input: &Path, output: &Path, binaries: &[PlatformBinary]) -> Result<Built> {
     profile::take();
     let spec = profile::phase("read and check the input", || Spec::from_str(input, text))?;
-    build_spec(spec, input, output)
+    build_spec(spec, input, output, binaries)
 }
 
-fn build_spec(spec: Spec, input: &Path, output: &Path) -> Result<Built> {
+fn build_spec(spec: Spec, input: &Path, output: &Path, binaries: &[PlatformBinary]) -> Result<Built> {
     let mut built = reduce_spec(spec, input)?;
-    profile::phase("checks and packaging", || package::write_fmu(&built.spec, &built.reduced, &built.report, output))
-        .map_err(|e| match e {
+    profile::phase("checks and packaging", || {
+        package::write_fmu(&built.spec, &built.reduced, &built.report, output, binaries)
+    })
+    .map_err(|e| match e {
         BuildError::Numerical(m) => BuildError::input(input, "", m),
         other => other,
     })?;

@@ -12,24 +12,20 @@ use fmu_runtime::format::RESOURCE_FILE;
 use fmu_runtime::interface::VariableTable;
 use fmu_runtime::reduced::ReducedBody;
 use std::path::Path;
-use std::sync::Mutex;
 
 /// The runtime cdylib, built by build.rs: the FMU's binaries/linux64/<id>.so.
 pub const RUNTIME_SO: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/fmu_runtime.so"));
 
-/// Runtime binaries of other platforms for the FMUs written from now on (the command line's
-/// `--platform-binary`). A setting of the process rather than an argument: the driver (`build`)
-/// hands `write_fmu` the body alone.
-static PLATFORM_BINARIES: Mutex<Vec<PlatformBinary>> = Mutex::new(Vec::new());
-
-/// The FMUs written from now on carry these binaries too (a linux64 one replaces the builder's
-/// own); each is checked again against the FMU's modelDescription.xml when it is packaged.
-pub fn set_platform_binaries(binaries: Vec<PlatformBinary>) {
-    *PLATFORM_BINARIES.lock().unwrap_or_else(|poisoned| poisoned.into_inner()) = binaries;
-}
-
-/// The FMU of a reduced body.
-pub fn write_fmu(spec: &Spec, reduced: &ReducedBody, report: &Report, output: &Path) -> Result<()> {
+/// The FMU of a reduced body, with the builder's linux64 runtime and `others` (runtimes built for
+/// other platforms, the command line's `--platform-binary`; a linux64 one replaces the builder's
+/// own), each checked again against the FMU's modelDescription.xml.
+pub fn write_fmu(
+    spec: &Spec,
+    reduced: &ReducedBody,
+    report: &Report,
+    output: &Path,
+    others: &[PlatformBinary],
+) -> Result<()> {
     // nothing non-finite leaves the builder: not in the report, not in the body, not in the
     // FMU's first steps
     finite::check_report(report)?;
@@ -63,9 +59,8 @@ pub fn write_fmu(spec: &Spec, reduced: &ReducedBody, report: &Report, output: &P
         serde_json::to_string_pretty(spec).map_err(|e| BuildError::Numerical(format!("serialising the input: {e}")))?;
     let report_json =
         serde_json::to_vec_pretty(report).map_err(|e| BuildError::Numerical(format!("serialising the report: {e}")))?;
-    let others = PLATFORM_BINARIES.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).clone();
     let required = fmi2_functions::required(&xml);
-    for binary in &others {
+    for binary in others {
         binary.check(&required)?;
     }
     let mut binaries: Vec<(Platform, &[u8])> = others.iter().map(|b| (b.platform, b.data.as_slice())).collect();
