@@ -3,6 +3,9 @@ status, and never a panic."""
 
 import copy
 import json
+import zipfile
+
+import numpy as np
 
 import pytest
 
@@ -193,9 +196,8 @@ def test_missing_file_is_named(tmp_path):
     assert proc.returncode == 1 and "nope.json" in proc.stderr and "panicked" not in proc.stderr
 
 
-def test_area_weights_from_matrix_input_are_refused(tmp_path):
-    """Area weights need the element faces; a part given as matrices has none: refused, naming the
-    field and the way out (uniform weights)."""
+def matrix_input(tmp_path):
+    """BASE as a part given by its matrices (exported into tmp_path/m), flanges by boxes."""
     small = tmp_path / "small.json"
     small.write_text(json.dumps(BASE))
     run_builder([small, "-o", tmp_path / "small.fmu", "--export-free-free", tmp_path / "m", "-q"])
@@ -204,8 +206,15 @@ def test_area_weights_from_matrix_input_are_refused(tmp_path):
                                      "nodes": "m/nodes.txt"}}
     spec.pop("material")
     spec["flanges"] = [{"name": "base", "role": "motion", "nodes": {"box": {"min": [-1, -1, -1], "max": [1e-9, 1, 1]}}},
-                       {"name": "tip", "role": "force", "nodes": {"box": {"min": [0.999, -1, -1], "max": [2, 1, 1]}},
-                        "coupling": "distributing", "weights": "area"}]
+                       {"name": "tip", "role": "force", "nodes": {"box": {"min": [0.999, -1, -1], "max": [2, 1, 1]}}}]
+    return spec
+
+
+def test_area_weights_from_matrix_input_are_refused(tmp_path):
+    """Area weights need the element faces; a part given as matrices has none: refused, naming the
+    field and the way out (uniform weights)."""
+    spec = matrix_input(tmp_path)
+    spec["flanges"][1].update(coupling="distributing", weights="area")
     path = tmp_path / "bad.json"
     path.write_text(json.dumps(spec))
     proc = run_builder([path, "-o", tmp_path / "bad.fmu"], check=False)
@@ -222,8 +231,6 @@ def test_area_weights_from_matrix_input_are_refused(tmp_path):
     meshed["flanges"] = spec["flanges"]
     (tmp_path / "mesh.json").write_text(json.dumps(meshed))
     run_builder([tmp_path / "mesh.json", "-o", tmp_path / "mesh.fmu", "-q"])
-    import zipfile
-    import numpy as np
     g = [np.array(json.loads(zipfile.ZipFile(tmp_path / f).read("documentation/report.json"))["accuracy"]["compliance_full"])
          for f in ["matrices.fmu", "mesh.fmu"]]
     assert g[0].shape == g[1].shape == (6, 6)
@@ -233,15 +240,7 @@ def test_area_weights_from_matrix_input_are_refused(tmp_path):
 
 def test_stress_outputs_from_matrix_input_are_refused(tmp_path):
     """Stresses need the elements; a part given as matrices has none: refused, naming the field."""
-    small = tmp_path / "small.json"
-    small.write_text(json.dumps(BASE))
-    run_builder([small, "-o", tmp_path / "small.fmu", "--export-free-free", tmp_path / "m", "-q"])
-    spec = copy.deepcopy(BASE)
-    spec["geometry"] = {"matrices": {"stiffness": "m/K.mtx", "mass": "m/M.mtx", "dofs": "m/dofs.txt",
-                                     "nodes": "m/nodes.txt"}}
-    spec.pop("material")
-    spec["flanges"] = [{"name": "base", "role": "motion", "nodes": {"box": {"min": [-1, -1, -1], "max": [1e-9, 1, 1]}}},
-                       {"name": "tip", "role": "force", "nodes": {"box": {"min": [0.999, -1, -1], "max": [2, 1, 1]}}}]
+    spec = matrix_input(tmp_path)
     spec["outputs"] = {"stress": {"hot_spots": 2}}
     path = tmp_path / "bad.json"
     path.write_text(json.dumps(spec))

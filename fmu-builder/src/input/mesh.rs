@@ -76,6 +76,23 @@ impl Mesh {
         seen.iter().map(|k| k.name()).collect::<Vec<_>>().join(", ")
     }
 
+    /// The faces of the mesh's surface, each met by one element only: (element, face index into
+    /// its kind's `corner_faces`), ascending (the same order run to run).
+    pub fn boundary_faces(&self) -> Vec<(usize, usize)> {
+        let mut count: HashMap<Vec<usize>, (usize, (usize, usize))> = HashMap::new();
+        for e in 0..self.n_elements() {
+            let conn = self.element(e);
+            for (f, face) in self.kind(e).corner_faces().iter().enumerate() {
+                let mut key: Vec<usize> = face.iter().map(|&i| conn[i]).collect();
+                key.sort_unstable();
+                count.entry(key).and_modify(|c| c.0 += 1).or_insert((1, (e, f)));
+            }
+        }
+        let mut out: Vec<(usize, usize)> = count.into_values().filter(|c| c.0 == 1).map(|c| c.1).collect();
+        out.sort_unstable();
+        out
+    }
+
     /// Node indices of element `i`. Panics if `i >= n_elements()` (a caller
     /// bug, not a user-input condition).
     pub fn element(&self, i: usize) -> &[usize] {

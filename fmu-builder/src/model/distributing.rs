@@ -53,16 +53,16 @@ pub fn constraint(points: &[[f64; 3]], weights: &[f64], reference: [f64; 3]) -> 
     }
     let j_inv = j.try_inverse().ok_or(Refusal::Collinear)?;
     // the fitted motion at the reference point: u_ref = u_mean + theta x (reference - centroid)
-    // = u_mean + a x theta with a = centroid - reference
+    // = u_mean + a x theta with a = centroid - reference (cross_matrix: a x .)
     let a = centroid - Vector3::from(reference);
-    let s_a = skew(a);
+    let s_a = a.cross_matrix();
     let blocks = points
         .iter()
         .zip(&w)
         .map(|(p, &wi)| {
             let d = Vector3::from(*p) - centroid;
-            // theta contribution: J^-1 w_i (d x u_i) = J^-1 w_i S(d) u_i
-            let rot = j_inv * skew(d) * wi;
+            // theta contribution: J^-1 w_i (d x u_i)
+            let rot = j_inv * d.cross_matrix() * wi;
             let trans = Matrix3::identity() * wi + s_a * rot;
             let mut block = [[0.0; 3]; 6];
             for r in 0..3 {
@@ -75,11 +75,6 @@ pub fn constraint(points: &[[f64; 3]], weights: &[f64], reference: [f64; 3]) -> 
         })
         .collect();
     Ok(Constraint { blocks })
-}
-
-/// S(v) x = v x x.
-fn skew(v: Vector3<f64>) -> Matrix3<f64> {
-    Matrix3::new(0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0)
 }
 
 /// The six DoFs the constraint eliminates (node index into the flange's nodes, direction) and
@@ -153,27 +148,17 @@ pub fn eliminate(c: &Constraint) -> Result<Elimination, Refusal> {
 /// their midside nodes, each triangle's area shared equally by its three corners. Nodes on no
 /// such face get zero. `nodes` ascending.
 pub fn tributary_areas(mesh: &Mesh, nodes: &[usize]) -> Vec<f64> {
-    use std::collections::HashMap;
     let index = |g: usize| nodes.binary_search(&g).ok();
-    // boundary faces (corner sets met once), with their full node lists
-    let mut faces: HashMap<Vec<usize>, (usize, Vec<usize>, Vec<usize>)> = HashMap::new();
-    for e in 0..mesh.n_elements() {
-        let conn = mesh.element(e);
-        let kind = mesh.kind(e);
-        for face in kind.corner_faces() {
-            let corners: Vec<usize> = face.iter().map(|&i| conn[i]).collect();
-            // the midside between consecutive corners (quadratic elements)
-            let mids: Vec<usize> = (0..face.len())
-                .filter_map(|i| midside(kind, face[i], face[(i + 1) % face.len()]).map(|m| conn[m]))
-                .collect();
-            let mut key = corners.clone();
-            key.sort_unstable();
-            faces.entry(key).and_modify(|f| f.0 += 1).or_insert((1, corners, mids));
-        }
-    }
     let mut area = vec![0.0; nodes.len()];
-    for (count, corners, mids) in faces.values() {
-        if *count != 1 || corners.iter().chain(mids).any(|&g| index(g).is_none()) {
+    for (e, f) in mesh.boundary_faces() {
+        let (conn, kind) = (mesh.element(e), mesh.kind(e));
+        let face = kind.corner_faces()[f];
+        let corners: Vec<usize> = face.iter().map(|&i| conn[i]).collect();
+        // the midside between consecutive corners (quadratic elements)
+        let mids: Vec<usize> = (0..face.len())
+            .filter_map(|i| midside(kind, face[i], face[(i + 1) % face.len()]).map(|m| conn[m]))
+            .collect();
+        if corners.iter().chain(&mids).any(|&g| index(g).is_none()) {
             continue;
         }
         if mids.is_empty() && corners.len() == 4 {
@@ -186,7 +171,7 @@ pub fn tributary_areas(mesh: &Mesh, nodes: &[usize]) -> Vec<f64> {
             }
             continue;
         }
-        for tri in flat_triangles(corners, mids) {
+        for tri in flat_triangles(&corners, &mids) {
             let p = tri.map(|g| Vector3::from(mesh.nodes[g]));
             let a = 0.5 * (p[1] - p[0]).cross(&(p[2] - p[0])).norm();
             for g in tri {

@@ -33,23 +33,11 @@ fn unit(a: [f64; 3]) -> [f64; 3] {
 /// Feature edges of the mesh's surface, as pairs of corner nodes.
 pub fn outline(part: &Part) -> Vec<[usize; 2]> {
     let mesh = &part.mesh;
-    // boundary faces: corner sets that occur once
-    let mut count: HashMap<Vec<usize>, (usize, Vec<usize>)> = HashMap::new();
-    for e in 0..mesh.n_elements() {
-        let conn = mesh.element(e);
-        for face in mesh.kind(e).corner_faces() {
-            let nodes: Vec<usize> = face.iter().map(|&i| conn[i]).collect();
-            let mut key = nodes.clone();
-            key.sort_unstable();
-            count.entry(key).and_modify(|c| c.0 += 1).or_insert((1, nodes));
-        }
-    }
     // each boundary edge with the normals of the boundary faces along it
     let mut edges: HashMap<[usize; 2], Vec<[f64; 3]>> = HashMap::new();
-    for (n, nodes) in count.values() {
-        if *n != 1 {
-            continue;
-        }
+    for (e, f) in mesh.boundary_faces() {
+        let conn = mesh.element(e);
+        let nodes: Vec<usize> = mesh.kind(e).corner_faces()[f].iter().map(|&i| conn[i]).collect();
         let p = |i: usize| mesh.nodes[nodes[i]];
         let normal = unit(cross(sub(p(1), p(0)), sub(p(2), p(0))));
         for i in 0..nodes.len() {
