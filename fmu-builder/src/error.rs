@@ -15,6 +15,10 @@ pub enum BuildError {
     Numerical(String),
     #[error("{}: {message}", .path.display())]
     Io { path: PathBuf, message: String },
+    /// The distributed back-end could not be started or reached (launcher, Python packages,
+    /// network): nothing in the input's model to change.
+    #[error("the PETSc back-end: {0}")]
+    Backend(String),
 }
 
 fn field_prefix(field: &str) -> String {

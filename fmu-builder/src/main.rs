@@ -56,6 +56,21 @@ struct Args {
     /// this folder: the input of `geometry.matrices`
     #[arg(long)]
     export_free_free: Option<PathBuf>,
+    /// Where the reduction's linear algebra runs: in-process (default) or petsc (PETSc, MUMPS
+    /// and SLEPc across MPI ranks, through a driver started by the MPI launcher; needs petsc4py,
+    /// slepc4py and mpi4py on every rank). Overrides the input's reduction.backend.kind
+    #[arg(long, value_parser = ["in-process", "petsc"])]
+    backend: Option<String>,
+    /// petsc back-end: MPI ranks [default 2]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    ranks: Option<u32>,
+    /// petsc back-end: the MPI launcher with its own options, e.g. "mpirun --hostfile hosts" or
+    /// "srun" ["-n <ranks> <python> driver.py job.json" follow; default "mpirun"]
+    #[arg(long)]
+    launcher: Option<String>,
+    /// petsc back-end: the Python with petsc4py, slepc4py and mpi4py on every rank [default python3]
+    #[arg(long)]
+    python: Option<String>,
     /// Print nothing but errors
     #[arg(short, long)]
     quiet: bool,
@@ -239,7 +254,18 @@ fn build(
     binaries: &[fmu_builder::output::binaries::PlatformBinary],
 ) -> ExitCode {
     fmu_builder::progress::enable(!args.quiet);
-    let result = fmu_builder::build::build_from_text(&input.text, &input.path, output, binaries);
+    let kind = args.backend.as_deref().map(|b| match b {
+        "petsc" => fmu_builder::input::spec::BackendKind::Petsc,
+        _ => fmu_builder::input::spec::BackendKind::InProcess,
+    });
+    let backend = fmu_builder::input::spec::BackendSpec {
+        kind,
+        ranks: args.ranks.map(|r| r as usize),
+        launcher: args.launcher.clone(),
+        python: args.python.clone(),
+        ..Default::default()
+    };
+    let result = fmu_builder::build::build_from_text(&input.text, &input.path, output, binaries, &backend);
     fmu_builder::progress::finish();
     match result {
         Ok(built) => {

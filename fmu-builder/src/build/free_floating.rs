@@ -89,12 +89,16 @@ pub fn reduce(
     model.mass_properties = props;
     let (k_shifted, shift) = shifted(&model.stiffness, &model.mass)?;
     // where it fails tells the user where the mesh has its mechanism
-    let solver = SpdSolver::new(std::borrow::Cow::Owned(k_shifted), "K + s M of the free body", &|d| {
+    let backend = spec.reduction.backend.backend(file.parent().unwrap_or(Path::new("")));
+    let solver = SpdSolver::on(&backend, std::borrow::Cow::Owned(k_shifted), "K + s M of the free body", &|d| {
         model.dofs.describe(d, &flanges, &|n| part.node_label(n))
     })?;
     let rigid = rigid_deflation(&model, &mesh.nodes, &flanges, origin)?;
     let basis = profile::phase("reduction basis", || basis::free_free(&model, &solver, shift, &rigid, modes))?;
-    let inv = profile::phase("invariants", || invariants::invariants(&model, &mesh.nodes, &flanges, origin, &basis));
+    solver.health()?;
+    let on = solver.session();
+    let inv =
+        profile::phase("invariants", || invariants::invariants(&model, &mesh.nodes, &flanges, origin, &basis, on))?;
     // mean axes: the elastic shapes carry no momentum
     let scale = props.mass.sqrt() * (1.0 + props.inertia[0].abs().sqrt());
     let drift = inv.c_t.iter().chain(&inv.c_r).fold(0.0f64, |m, v| m.max(v.abs()));
@@ -105,8 +109,8 @@ pub fn reduce(
     }
     let phi_mesh = inertia::expand(&model, &mesh.nodes, &flanges, basis.phi.as_ref());
     let rot = profile::phase("rotation invariants", || {
-        inertia::rotation_invariants(&model, &mesh.nodes, origin, phi_mesh.as_ref())
-    });
+        inertia::rotation_invariants(&model, &mesh.nodes, origin, phi_mesh.as_ref(), on)
+    })?;
     let recovered = match recovery {
         Some(recovery) => {
             // unit flange loads with inertia relief: what deforms a free body
@@ -154,6 +158,8 @@ pub fn reduce(
         free_free_accuracy(&model, &solver, shift, &rigid, &basis)
     })?;
     enforce(&accuracy)?;
+    solver.health()?;
+    let backend_report = crate::output::report::backend_of(&solver)?;
     let statics = basis.omega.len() - basis.n_normal;
     let mut report = report_of(
         &spec,
@@ -167,6 +173,7 @@ pub fn reduce(
         accuracy,
     );
     report.stress_points = recovered.report;
+    report.backend = backend_report;
     report.pictures = crate::output::mesh_view::pictures(&part, &flanges, phi_mesh.as_ref(), &basis.omega);
     Ok(Built { spec, part, flanges, model, basis, reduced, report, profile: Vec::new() })
 }

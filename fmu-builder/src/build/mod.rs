@@ -11,7 +11,7 @@ pub mod sweep;
 pub use built::Built;
 
 use crate::error::{BuildError, Result};
-use crate::input::spec::{Method, Role, Spec};
+use crate::input::spec::{BackendKind, BackendSpec, Method, Role, Spec};
 use crate::linalg::eigen;
 use crate::model::{connectivity, flange, part};
 use crate::output::binaries::PlatformBinary;
@@ -31,9 +31,17 @@ pub fn build(input: &Path, output: &Path) -> Result<Built> {
 /// resolve from its folder: for standard input, name it "<stdin>" and they resolve from the
 /// working directory). `binaries`: runtimes built for other platforms, packaged beside the
 /// builder's own (a linux64 one replaces it).
-pub fn build_from_text(text: &str, input: &Path, output: &Path, binaries: &[PlatformBinary]) -> Result<Built> {
+/// `backend`: the command line's choice of back-end, overriding the input's fields it sets.
+pub fn build_from_text(
+    text: &str,
+    input: &Path,
+    output: &Path,
+    binaries: &[PlatformBinary],
+    backend: &BackendSpec,
+) -> Result<Built> {
     profile::take();
-    let spec = profile::phase("read and check the input", || Spec::from_str(input, text))?;
+    let mut spec = profile::phase("read and check the input", || Spec::from_str(input, text))?;
+    spec.reduction.backend = spec.reduction.backend.merged(backend);
     build_spec(spec, input, output, binaries)
 }
 
@@ -122,6 +130,44 @@ fn check_krylov_size(spec: &Spec, file: &Path) -> Result<()> {
     Ok(())
 }
 
+/// What the distributed back-end does not run: the Krylov method's expansion points other than
+/// s = 0 (each an indefinite LU factorisation of its own) and the order selection by tolerance
+/// (complex factorisations of the full model across the band). Refused before anything costly,
+/// with the way out.
+fn check_distributable(spec: &Spec, file: &Path) -> Result<()> {
+    let backend = &spec.reduction.backend;
+    if backend.kind != Some(BackendKind::Petsc) {
+        if backend != &(BackendSpec { kind: backend.kind, ..Default::default() }) {
+            return Err(BuildError::input(
+                file,
+                "reduction.backend",
+                "ranks, launcher, python, host, job_folder, partitioner and connect_timeout are settings of the petsc back-end: \
+                 set kind to \"petsc\" (or --backend petsc), or remove them",
+            ));
+        }
+        return Ok(());
+    }
+    let r = &spec.reduction;
+    let points = r.expansion_points.iter().flatten().chain(r.real_expansion_points.iter().flatten()).any(|&p| p > 0.0);
+    if r.method == Method::Krylov && points {
+        return Err(BuildError::input(
+            file,
+            "reduction.expansion_points",
+            "the petsc back-end expands about s = 0 only (each other expansion point needs an indefinite factorisation \
+             of its own, which it does not run): remove the expansion points and use reduction.moments, or build in process",
+        ));
+    }
+    if spec.scene.as_ref().is_some_and(|s| s.tolerance.is_some()) {
+        return Err(BuildError::input(
+            file,
+            "scene.tolerance",
+            "the order selection by tolerance compares complex full-model responses across the band, which the petsc \
+             back-end does not run: give reduction.modes or reduction.max_frequency instead, or build in process",
+        ));
+    }
+    Ok(())
+}
+
 /// A basis needs at least one shape: a mode, a force flange's static shapes or a scene load's.
 fn check_basis_not_empty(spec: &Spec, modes: &ModeCount, file: &Path) -> Result<()> {
     let force_flanges = spec.flanges.iter().filter(|f| f.role == Role::Force).count();
@@ -171,6 +217,7 @@ pub fn reduce_spec(spec: Spec, file: &Path) -> Result<Built> {
     };
     check_basis_not_empty(&spec, &modes, file)?;
     check_krylov_size(&spec, file)?;
+    check_distributable(&spec, file)?;
     let Some(mount) = spec.mount_index() else {
         return free_floating::reduce(spec, file, part, free, flanges, modes, recovery)
             .map_err(|e| against_stage(file, e));

@@ -239,10 +239,13 @@ pub fn reduce(
     let model = model;
     // one factor serves every solve of the build: the mounted body's statics and modes, the
     // Craig-Bampton shapes with the flanges held (`held::HeldSolver`), the accuracy comparison
-    let solver =
-        SpdSolver::new(std::borrow::Cow::Borrowed(&model.stiffness), "the stiffness of the mounted body", &|d| {
-            model.dofs.describe(d, &flanges, &|n| part.node_label(n))
-        })?;
+    let backend = spec.reduction.backend.backend(file.parent().unwrap_or(Path::new("")));
+    let solver = SpdSolver::on(
+        &backend,
+        std::borrow::Cow::Borrowed(&model.stiffness),
+        "the stiffness of the mounted body",
+        &|d| model.dofs.describe(d, &flanges, &|n| part.node_label(n)),
+    )?;
 
     // the scene's inertial loads: static shapes in the basis, prestress for stiffening
     let mut cases = Vec::new();
@@ -311,14 +314,18 @@ pub fn reduce(
         }
         _ => basis,
     };
-    let inv = profile::phase("invariants", || invariants::invariants(&model, &mesh.nodes, &flanges, origin, &basis));
+    solver.health()?;
+    let on = solver.session();
+    let inv =
+        profile::phase("invariants", || invariants::invariants(&model, &mesh.nodes, &flanges, origin, &basis, on))?;
     let phi_mesh = inertia::expand(&model, &mesh.nodes, &flanges, basis.phi.as_ref());
-    let rotation = spec.rotates().then(|| {
-        profile::phase("rotation invariants", || {
-            let r = inertia::rotation_invariants(&model, &mesh.nodes, origin, phi_mesh.as_ref());
-            RotationTerms { g: r.g, o_mat: r.o_mat, o_vec: r.o_vec }
-        })
-    });
+    let rotation = match spec.rotates() {
+        true => Some(profile::phase("rotation invariants", || -> Result<_> {
+            let r = inertia::rotation_invariants(&model, &mesh.nodes, origin, phi_mesh.as_ref(), on)?;
+            Ok(RotationTerms { g: r.g, o_mat: r.o_mat, o_vec: r.o_vec })
+        })?),
+        false => None,
+    };
     let stiffening = if spec.stiffening() {
         Some(profile::phase("geometric stiffening", || {
             stiffening_terms(
@@ -430,6 +437,8 @@ pub fn reduce(
         })?);
     }
     drop(full_modes);
+    solver.health()?;
+    let backend_report = crate::output::report::backend_of(&solver)?;
     if let Some(shapes) = &load_shapes {
         let axis = ["x", "y", "z"];
         for (c, case) in cases.iter().enumerate() {
@@ -446,6 +455,7 @@ pub fn reduce(
     let statics = basis.omega.len() - basis.n_normal;
     let mut report = report_of(&spec, &part, &flanges, &model, &basis, &reduced, &method, statics, accuracy);
     report.stress_points = recovered.report;
+    report.backend = backend_report;
     report.pictures = crate::output::mesh_view::pictures(&part, &flanges, phi_mesh.as_ref(), &basis.omega);
     Ok(Built { spec, part, flanges, model, basis, reduced, report, profile: Vec::new() })
 }

@@ -89,6 +89,8 @@ pub fn sweep(spec: &Spec, file: &Path, on_row: &mut dyn FnMut(&SweepRow)) -> Res
                 moments: Some(k),
                 real_expansion_points: spec.reduction.real_expansion_points.clone(),
                 dynamic_cutoff: spec.reduction.dynamic_cutoff,
+                // the sweep compares methods in process
+                backend: Default::default(),
             },
         ));
     }
@@ -138,6 +140,7 @@ fn cb(modes: usize) -> Reduction {
         moments: None,
         real_expansion_points: None,
         dynamic_cutoff: None,
+        backend: Default::default(),
     }
 }
 

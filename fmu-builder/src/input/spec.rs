@@ -6,6 +6,7 @@
 use crate::error::{BuildError, Result};
 use crate::input::element::ElementKind;
 use crate::input::{json_keys, ranges, schema_errors, variable_names};
+use crate::linalg::distributed::{Backend, PetscBackend};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -313,6 +314,79 @@ pub struct Reduction {
     /// Modes above this frequency [Hz] are quasi-static in Model Exchange.
     #[serde(default)]
     pub dynamic_cutoff: Option<f64>,
+    /// Where the linear algebra runs (the command line may override it).
+    #[serde(default)]
+    pub backend: BackendSpec,
+}
+
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BackendKind {
+    #[default]
+    InProcess,
+    Petsc,
+}
+
+/// `reduction.backend`: every field optional, so that the command line's can fill or override
+/// the input's (`merged`).
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BackendSpec {
+    #[serde(default)]
+    pub kind: Option<BackendKind>,
+    #[serde(default)]
+    pub ranks: Option<usize>,
+    #[serde(default)]
+    pub launcher: Option<String>,
+    #[serde(default)]
+    pub python: Option<String>,
+    #[serde(default)]
+    pub host: Option<String>,
+    #[serde(default)]
+    pub job_folder: Option<std::path::PathBuf>,
+    #[serde(default)]
+    pub partitioner: Option<String>,
+    #[serde(default)]
+    pub connect_timeout: Option<f64>,
+}
+
+impl BackendSpec {
+    /// These fields where `over` leaves them unset, `over`'s where it sets them.
+    pub fn merged(&self, over: &BackendSpec) -> BackendSpec {
+        BackendSpec {
+            kind: over.kind.or(self.kind),
+            ranks: over.ranks.or(self.ranks),
+            launcher: over.launcher.clone().or_else(|| self.launcher.clone()),
+            python: over.python.clone().or_else(|| self.python.clone()),
+            host: over.host.clone().or_else(|| self.host.clone()),
+            job_folder: over.job_folder.clone().or_else(|| self.job_folder.clone()),
+            partitioner: over.partitioner.clone().or_else(|| self.partitioner.clone()),
+            connect_timeout: over.connect_timeout.or(self.connect_timeout),
+        }
+    }
+
+    /// The back-end these fields describe; a relative job folder is taken from `base` (the
+    /// input file's folder).
+    pub fn backend(&self, base: &Path) -> Backend {
+        if self.kind != Some(BackendKind::Petsc) {
+            return Backend::InProcess;
+        }
+        let default = PetscBackend::default();
+        Backend::Petsc(PetscBackend {
+            ranks: self.ranks.unwrap_or(default.ranks),
+            launcher: self
+                .launcher
+                .as_deref()
+                .map_or(default.launcher, |l| l.split_whitespace().map(str::to_string).collect()),
+            python: self.python.clone().unwrap_or(default.python),
+            host: self.host.clone().unwrap_or(default.host),
+            job_folder: self.job_folder.as_ref().map(|f| base.join(f)),
+            partitioner: self.partitioner.clone().unwrap_or(default.partitioner),
+            // the job's files (matrices, driver, its output) kept for a look at a failure
+            keep_job_folder: std::env::var_os("FMU_BUILDER_KEEP_PETSC_JOB").is_some(),
+            connect_timeout_seconds: self.connect_timeout.unwrap_or(default.connect_timeout_seconds),
+        })
+    }
 }
 
 /// Longest over shortest element edge of a box mesh. A solid element's stiffness conditioning

@@ -8,7 +8,7 @@
 //! factorisations of 10-13 s and 1.3 GB each.
 
 use crate::error::{BuildError, Result};
-use crate::linalg::sparse::{SpdSolve, SpdSolver};
+use crate::linalg::sparse::{Distributed, SpdSolve, SpdSolver};
 use crate::linalg::symmetric_product::subtract_compensated;
 use faer::linalg::solvers::Solve;
 use faer::reborrow::{Reborrow, ReborrowMut};
@@ -109,6 +109,10 @@ impl SpdSolve for HeldSolver<'_> {
     fn residual(&self, b: MatMut<'_, f64>, x: MatRef<'_, f64>) {
         // the leading block's product: K_ii x, the residual of the held system
         subtract_compensated(b, self.whole.matrix(), x);
+    }
+
+    fn distributed(&self) -> Option<Distributed<'_>> {
+        self.whole.session().map(|session| Distributed { session, held: Some(self.g.as_ref()) })
     }
 }
 

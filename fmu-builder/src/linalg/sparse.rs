@@ -1,6 +1,8 @@
 //! Sparse helpers over faer: leading blocks, symmetric products and a factor-once solver.
 
 use crate::error::{BuildError, Result};
+use crate::linalg::distributed::Backend;
+use crate::linalg::distributed::session::Session;
 use crate::linalg::dot2::add_product;
 use crate::linalg::faer_error;
 use crate::linalg::ordering;
@@ -238,13 +240,22 @@ pub fn add_scaled(a: &Sparse, c: f64, b: &Sparse) -> Result<Sparse> {
 /// allows. The symbolic factorisation comes first, so the factor's size is known (and in the
 /// build profile) before its memory is taken.
 pub struct SpdSolver<'m> {
-    symbolic: SymbolicCholesky<usize>,
-    values: Vec<f64>,
+    engine: Engine,
     /// The factored matrix, for the refinement's residuals: borrowed where the model keeps it
     /// anyway (the mounted body's stiffness: one copy of 0.3 GB at 249k DoFs, not two).
     matrix: Cow<'m, Sparse>,
-    /// The factor's elimination tree split between the threads, where it splits.
-    tree: Option<TreeSolve>,
+}
+
+/// Where the factor lives.
+enum Engine {
+    InProcess {
+        symbolic: SymbolicCholesky<usize>,
+        values: Vec<f64>,
+        /// The factor's elimination tree split between the threads, where it splits.
+        tree: Option<TreeSolve>,
+    },
+    /// MUMPS's, across the MPI ranks of the PETSc back-end.
+    Distributed(Session),
 }
 
 /// The symbolic Cholesky factorisation of `a` in METIS's nested-dissection order, or in AMD's
@@ -269,6 +280,32 @@ fn symbolic_factor(a: &Sparse, what: &str) -> Result<SymbolicCholesky<usize>> {
 const FACTOR_BYTES_PER_ENTRY: f64 = 8.0;
 
 impl<'m> SpdSolver<'m> {
+    /// Factor `a` on the reduction's back-end: in this process (`new`), or distributed by PETSc
+    /// (`distributed::Session`), which reports a factorisation that fails with its reason.
+    pub fn on(backend: &Backend, a: Cow<'m, Sparse>, what: &str, dof: &dyn Fn(usize) -> String) -> Result<Self> {
+        match backend {
+            Backend::InProcess => Self::new(a, what, dof),
+            Backend::Petsc(petsc) => {
+                let session = Session::start(petsc, &a, what)?;
+                Ok(Self { engine: Engine::Distributed(session), matrix: a })
+            }
+        }
+    }
+
+    /// The distributed back-end's session, if the factor is there.
+    pub fn session(&self) -> Option<&Session> {
+        match &self.engine {
+            Engine::Distributed(s) => Some(s),
+            Engine::InProcess { .. } => None,
+        }
+    }
+
+    /// A solve of the distributed back-end that failed (its solves cannot return errors
+    /// through `SpdSolve`: they fill the result with NaN and keep the reason for this check).
+    pub fn health(&self) -> Result<()> {
+        self.session().map_or(Ok(()), Session::health)
+    }
+
     /// Factor `a` (both triangles stored); `dof` names a row of `a` for the message when the
     /// factorisation meets a pivot that is not positive (where the mechanism is).
     pub fn new(a: Cow<'m, Sparse>, what: &str, dof: &dyn Fn(usize) -> String) -> Result<Self> {
@@ -318,7 +355,7 @@ impl<'m> SpdSolver<'m> {
         match outcome {
             Ok(()) => {
                 let tree = TreeSolve::new(&symbolic, rayon::current_num_threads());
-                Ok(Self { symbolic, values, matrix: a, tree })
+                Ok(Self { engine: Engine::InProcess { symbolic, values, tree }, matrix: a })
             }
             Err(e) => {
                 let mut message = format!("{what} is {}", faer_error::llt(&e));
@@ -337,23 +374,30 @@ impl<'m> SpdSolver<'m> {
         &self.matrix
     }
 
-    /// Entries of the Cholesky factor.
+    /// Entries of the Cholesky factor (all ranks' for a distributed one).
     pub fn factor_entries(&self) -> usize {
-        self.values.len()
-    }
-
-    /// Solve in place: the elimination tree split between the threads (`tree_solve`) where it
-    /// splits, else as `solve_whole_tree`.
-    pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
-        match &self.tree {
-            Some(tree) => tree.solve(&self.symbolic, &self.values, rhs),
-            None => self.solve_whole_tree(rhs),
+        match &self.engine {
+            Engine::InProcess { values, .. } => values.len(),
+            Engine::Distributed(s) => s.started.factor_entries as usize,
         }
     }
 
-    /// The symbolic factorisation and the factor's values.
-    pub fn factor(&self) -> (&SymbolicCholesky<usize>, &[f64]) {
-        (&self.symbolic, &self.values)
+    /// Solve in place: the elimination tree split between the threads (`tree_solve`) where it
+    /// splits, else as `solve_whole_tree`; on the distributed back-end, by its factor.
+    pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
+        match &self.engine {
+            Engine::InProcess { symbolic, values, tree: Some(tree) } => tree.solve(symbolic, values, rhs),
+            Engine::InProcess { tree: None, .. } => self.solve_whole_tree(rhs),
+            Engine::Distributed(s) => s.solve_or_nan(rhs),
+        }
+    }
+
+    /// The symbolic factorisation and the factor's values, of an in-process factor.
+    pub fn factor(&self) -> Option<(&SymbolicCholesky<usize>, &[f64])> {
+        match &self.engine {
+            Engine::InProcess { symbolic, values, .. } => Some((symbolic, values)),
+            Engine::Distributed(_) => None,
+        }
     }
 
     /// Solve in place through faer's solve. Two or more right-hand sides are split between two
@@ -373,8 +417,12 @@ impl<'m> SpdSolver<'m> {
     }
 
     fn solve_with(&self, rhs: MatMut<'_, f64>, par: Par) {
-        let mut scratch = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(rhs.ncols(), par));
-        LltRef::<'_, usize, f64>::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+        let (symbolic, values) = match &self.engine {
+            Engine::InProcess { symbolic, values, .. } => (symbolic, values),
+            Engine::Distributed(s) => return s.solve_or_nan(rhs),
+        };
+        let mut scratch = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(rhs.ncols(), par));
+        LltRef::<'_, usize, f64>::new(symbolic, values).solve_in_place_with_conj(
             faer::Conj::No,
             rhs,
             par,
@@ -440,6 +488,20 @@ pub trait SpdSolve {
     fn solve_refined(&self, rhs: MatMut<'_, f64>) {
         self.solve_refined_steps(rhs, 2);
     }
+
+    /// The distributed back-end behind these solves, if they run there: its eigen-solves are
+    /// then SLEPc's.
+    fn distributed(&self) -> Option<Distributed<'_>> {
+        None
+    }
+}
+
+/// A solver on the distributed back-end: the session holding the factor of K and, for a held
+/// problem (`held::HeldSolver`), the unit-load responses G = K^-1 E of its trailing held rows.
+#[derive(Clone, Copy)]
+pub struct Distributed<'a> {
+    pub session: &'a Session,
+    pub held: Option<MatRef<'a, f64>>,
 }
 
 impl SpdSolve for SpdSolver<'_> {
@@ -453,6 +515,10 @@ impl SpdSolve for SpdSolver<'_> {
 
     fn residual(&self, b: MatMut<'_, f64>, x: MatRef<'_, f64>) {
         symmetric_product::subtract_compensated(b, &self.matrix, x);
+    }
+
+    fn distributed(&self) -> Option<Distributed<'_>> {
+        self.session().map(|session| Distributed { session, held: None })
     }
 }
 
@@ -605,7 +671,7 @@ mod tests {
         let n = a.nrows();
         let name = |d: usize| format!("row {d}");
         let solver = SpdSolver::new(std::borrow::Cow::Borrowed(&a), "grid", &name).unwrap();
-        let (symbolic, values) = solver.factor();
+        let (symbolic, values) = solver.factor().unwrap();
         let tree = TreeSolve::new(symbolic, 2).expect("a grid's tree splits between two threads");
         let parts = tree.subtrees_per_thread();
         assert_eq!(parts.len(), 2);

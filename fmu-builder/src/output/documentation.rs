@@ -542,6 +542,7 @@ mod tests {
                 coupling: "rigid".into(),
             }],
             stress_points: Vec::new(),
+            backend: Default::default(),
             scene: Default::default(),
             warnings: Vec::new(),
             pictures: Vec::new(),

@@ -1,7 +1,9 @@
 //! The report of a build: what was built (part, mass properties, flanges, method and order) and
 //! what the reduction costs in accuracy. Written into the FMU's documentation as JSON.
 
+use crate::error::Result;
 use crate::input::spec::{Role, Spec, Weights};
+use crate::linalg::sparse::{SpdSolve, SpdSolver};
 use crate::model::flange::{Flange, FlangeCoupling};
 use crate::model::part::Part;
 use crate::model::rigid_coupling::Assembled;
@@ -48,6 +50,47 @@ pub struct UnitCaseStress {
     pub von_mises: f64,
 }
 
+/// The back-end of the reduction: in this process, or PETSc across MPI ranks with its rows'
+/// distribution, the MUMPS factor's size (all ranks), its phases' times and each rank's peak
+/// resident memory (so far: the products and packaging after it add little).
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct BackendReport {
+    pub kind: String,
+    pub ranks: usize,
+    pub rows_per_rank: Vec<usize>,
+    pub factor_entries: f64,
+    pub load_seconds: Option<f64>,
+    pub partition_seconds: Option<f64>,
+    pub factor_seconds: Option<f64>,
+    pub peak_mib_per_rank: Vec<f64>,
+}
+
+/// The report of `solver`'s back-end.
+pub fn backend_of(solver: &SpdSolver) -> Result<BackendReport> {
+    Ok(match solver.session() {
+        None => BackendReport {
+            kind: "in_process".into(),
+            ranks: 1,
+            rows_per_rank: vec![solver.n()],
+            factor_entries: solver.factor_entries() as f64,
+            ..Default::default()
+        },
+        Some(session) => {
+            let s = &session.started;
+            BackendReport {
+                kind: "petsc".into(),
+                ranks: s.ranks,
+                rows_per_rank: s.rows_per_rank.clone(),
+                factor_entries: s.factor_entries,
+                load_seconds: Some(s.load_seconds),
+                partition_seconds: Some(s.partition_seconds),
+                factor_seconds: Some(s.factor_seconds),
+                peak_mib_per_rank: session.peak_memory()?,
+            }
+        }
+    })
+}
+
 #[derive(Debug, Clone, Serialize)]
 pub struct Report {
     pub model_name: String,
@@ -91,6 +134,8 @@ pub struct Report {
     pub flanges: Vec<FlangeReport>,
     /// Stress recovery points (outputs.stress), in the order of the FMU's variables.
     pub stress_points: Vec<StressPointReport>,
+    /// Where the reduction's linear algebra ran.
+    pub backend: BackendReport,
     /// What the scene lets the FMU model and which inputs it refuses.
     pub scene: SceneReport,
     /// Probable unit slips and implausible results (the build stands).
@@ -196,6 +241,7 @@ pub fn report_of(
             })
             .collect(),
         stress_points: Vec::new(),
+        backend: BackendReport::default(),
         scene: plausibility::scene(spec, mount),
         warnings: Vec::new(),
         pictures: Vec::new(),

@@ -1,0 +1,429 @@
+//! One run of the driver (`driver.py`) under MPI, from its launch to its last answer: the job
+//! folder with the stiffness in PETSc's binary format, the launcher's process, and the TCP
+//! connection rank 0 opens back to the builder. Requests go one at a time (a JSON line, then
+//! little-endian doubles); a failed request is an error naming what the driver reported.
+
+use super::petsc_binary;
+use super::{EigenRequest, PetscBackend};
+use crate::error::{BuildError, Result};
+use faer::sparse::SparseColMat;
+use faer::{Mat, MatMut, MatRef};
+use serde_json::{Value, json};
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::{TcpListener, TcpStream};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+/// The driver, shipped inside the builder and written into each job folder: builder and driver
+/// always speak the same protocol.
+const DRIVER: &str = include_str!("driver.py");
+const PROTOCOL: u64 = 1;
+
+/// The builder's sparse matrices (`linalg::sparse::Sparse`, which builds on this module).
+type Sparse = SparseColMat<usize, f64>;
+
+/// A matrix told apart by its rows, entries and two weighted sums of its entries.
+type MatrixKey = (usize, usize, u64, u64);
+
+struct Connection {
+    reader: BufReader<TcpStream>,
+    writer: std::io::BufWriter<TcpStream>,
+}
+
+/// What the driver reported when its factor was ready.
+#[derive(Clone, Debug)]
+pub struct Started {
+    pub ranks: usize,
+    pub rows_per_rank: Vec<usize>,
+    pub factor_entries: f64,
+    pub load_seconds: f64,
+    pub partition_seconds: f64,
+    pub factor_seconds: f64,
+}
+
+pub struct Session {
+    connection: Mutex<Connection>,
+    child: Mutex<Child>,
+    folder: PathBuf,
+    keep_folder: bool,
+    rows: usize,
+    /// Matrices the driver holds: (rows, entries, two sums) of ours -> its id.
+    loaded: Mutex<Vec<(MatrixKey, usize)>>,
+    /// The first failure of a request that could not return an error (a solve inside the
+    /// `SpdSolve` trait): reported by `health`.
+    failure: Mutex<Option<String>>,
+    pub started: Started,
+}
+
+fn io_error(what: &str) -> impl Fn(std::io::Error) -> BuildError + '_ {
+    move |e| BuildError::Backend(format!("{what}: {e}"))
+}
+
+/// A token the driver must present: a stray connection to the port is not taken for it.
+fn token() -> String {
+    let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
+    format!("{:x}{:x}", nanos, std::process::id())
+}
+
+/// The last lines of a file (the driver's standard error), for a message.
+fn tail(path: &Path, lines: usize) -> String {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let all: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
+    all[all.len().saturating_sub(lines)..].join("\n")
+}
+
+impl Session {
+    /// Launch the driver on `backend.ranks` ranks and have it load, partition and factor `k`.
+    pub fn start(backend: &PetscBackend, k: &Sparse, what: &str) -> Result<Self> {
+        let base = backend.job_folder.clone().unwrap_or_else(std::env::temp_dir);
+        let folder = base.join(format!("fmu-builder-petsc-{}", token()));
+        std::fs::create_dir_all(&folder).map_err(io_error("creating the job folder"))?;
+        let started = Self::launch(backend, k, what, &folder);
+        match started {
+            Ok(session) => Ok(session),
+            Err(e) => {
+                if !backend.keep_job_folder {
+                    std::fs::remove_dir_all(&folder).ok();
+                }
+                Err(e)
+            }
+        }
+    }
+
+    fn launch(backend: &PetscBackend, k: &Sparse, what: &str, folder: &Path) -> Result<Self> {
+        let driver = folder.join("driver.py");
+        std::fs::write(&driver, DRIVER).map_err(io_error("writing the driver"))?;
+        crate::profile::phase(format!("PETSc job: {what} written"), || {
+            petsc_binary::write_symmetric(&folder.join("stiffness.bin"), k)
+        })?;
+        let listener = TcpListener::bind((backend.listen_address(), 0)).map_err(io_error("opening a port"))?;
+        let port = listener.local_addr().map_err(io_error("opening a port"))?.port();
+        let token = token();
+        let job = json!({
+            "host": backend.host,
+            "port": port,
+            "token": token,
+            "stiffness": "stiffness.bin",
+            "partitioner": backend.partitioner,
+        });
+        let job_path = folder.join("job.json");
+        std::fs::write(&job_path, job.to_string()).map_err(io_error("writing the job"))?;
+        let (program, arguments) = backend.command(&driver, &job_path);
+        let stderr_path = folder.join("driver.err");
+        let stdout = std::fs::File::create(folder.join("driver.out")).map_err(io_error("creating driver.out"))?;
+        let stderr = std::fs::File::create(&stderr_path).map_err(io_error("creating driver.err"))?;
+        let launched = format!("{program} {}", arguments.join(" "));
+        crate::profile::note(|| format!("launched: {launched}"));
+        let mut child = Command::new(&program)
+            .args(&arguments)
+            .stdin(Stdio::null())
+            .stdout(stdout)
+            .stderr(stderr)
+            .spawn()
+            .map_err(|e| {
+                BuildError::Backend(format!(
+                    "could not start `{program}`: {e}; install OpenMPI (mpirun) or name the launcher \
+                     (reduction.backend.launcher, --launcher)"
+                ))
+            })?;
+        // rank 0 connects once PETSc is up; a launcher that ends first failed (its error says why)
+        listener.set_nonblocking(true).map_err(io_error("listening"))?;
+        let deadline = Instant::now() + Duration::from_secs_f64(backend.connect_timeout_seconds);
+        let stream = loop {
+            match listener.accept() {
+                Ok((stream, _)) => break stream,
+                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
+                Err(e) => return Err(io_error("accepting the driver's connection")(e)),
+            }
+            if let Ok(Some(status)) = child.try_wait() {
+                return Err(BuildError::Backend(format!(
+                    "the driver ended ({status}) before it connected; `{launched}` reported:\n{}",
+                    tail(&stderr_path, 12)
+                )));
+            }
+            if Instant::now() > deadline {
+                child.kill().ok();
+                child.wait().ok();
+                return Err(BuildError::Backend(format!(
+                    "the driver did not connect to {}:{port} within {} s (reduction.backend.host must be an address the \
+                     ranks reach the builder at); `{launched}` reported:\n{}",
+                    backend.host,
+                    backend.connect_timeout_seconds,
+                    tail(&stderr_path, 12)
+                )));
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        stream.set_nonblocking(false).map_err(io_error("the connection"))?;
+        stream.set_nodelay(true).ok();
+        let reader = BufReader::with_capacity(1 << 20, stream.try_clone().map_err(io_error("the connection"))?);
+        let writer = std::io::BufWriter::with_capacity(1 << 20, stream);
+        let mut connection = Connection { reader, writer };
+        let hello = read_line(&mut connection, &stderr_path)?;
+        if hello["hello"].as_str() != Some(token.as_str()) || hello["protocol"].as_u64() != Some(PROTOCOL) {
+            return Err(BuildError::Backend(format!("an unexpected greeting {hello}")));
+        }
+        let answer = crate::profile::phase(format!("PETSc: load, partition and factor {what}"), || {
+            read_line(&mut connection, &stderr_path)
+        })?;
+        if answer["ok"] != json!(true) {
+            child.wait().ok();
+            let message = answer["error"].as_str().unwrap_or("no reason given").to_string();
+            return Err(BuildError::Numerical(format!("{what} could not be factored by MUMPS: {message}")));
+        }
+        let number = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
+        let started = Started {
+            ranks: answer["ranks"].as_u64().unwrap_or(0) as usize,
+            rows_per_rank: answer["rows_per_rank"]
+                .as_array()
+                .map(|a| a.iter().filter_map(Value::as_u64).map(|v| v as usize).collect())
+                .unwrap_or_default(),
+            factor_entries: number(&answer["factor_entries"]),
+            load_seconds: number(&answer["seconds"]["load"]),
+            partition_seconds: number(&answer["seconds"]["partition"]),
+            factor_seconds: number(&answer["seconds"]["factor"]),
+        };
+        let s = started.clone();
+        crate::profile::note(move || {
+            format!(
+                "{} ranks, rows per rank {:?}, MUMPS factor {:.3e} entries; load {:.1} s, partition {:.1} s, factor {:.1} s",
+                s.ranks, s.rows_per_rank, s.factor_entries, s.load_seconds, s.partition_seconds, s.factor_seconds
+            )
+        });
+        Ok(Self {
+            connection: Mutex::new(connection),
+            child: Mutex::new(child),
+            folder: folder.to_path_buf(),
+            keep_folder: backend.keep_job_folder,
+            rows: k.nrows(),
+            loaded: Mutex::new(Vec::new()),
+            failure: Mutex::new(None),
+            started,
+        })
+    }
+
+    /// Rows of the factored matrix.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// One request: `header` (its "doubles" added), the blocks' columns in order; the answer's
+    /// header and doubles. An answer with "ok": false is the error.
+    fn request(&self, mut header: Value, blocks: &[MatRef<'_, f64>]) -> Result<(Value, Vec<f64>)> {
+        let doubles: usize = blocks.iter().map(|b| b.nrows() * b.ncols()).sum();
+        header["doubles"] = json!(doubles);
+        let mut c =
+            self.connection.lock().map_err(|_| BuildError::Numerical("the PETSc back-end: a lost lock".into()))?;
+        let what = format!("the request {}", header["op"]);
+        let send = |c: &mut Connection| -> std::io::Result<()> {
+            c.writer.write_all(header.to_string().as_bytes())?;
+            c.writer.write_all(b"\n")?;
+            for b in blocks {
+                for j in 0..b.ncols() {
+                    for v in b.col(j).iter() {
+                        c.writer.write_all(&v.to_le_bytes())?;
+                    }
+                }
+            }
+            c.writer.flush()
+        };
+        send(&mut c).map_err(|e| self.lost(&what, e))?;
+        let answer = read_line(&mut c, &self.folder.join("driver.err"))?;
+        let count = answer["doubles"].as_u64().unwrap_or(0) as usize;
+        let mut bytes = vec![0u8; 8 * count];
+        c.reader.read_exact(&mut bytes).map_err(|e| self.lost(&what, e))?;
+        if answer["ok"] != json!(true) {
+            return Err(BuildError::Numerical(format!(
+                "the PETSc back-end failed {what}: {}",
+                answer["error"].as_str().unwrap_or("no reason given")
+            )));
+        }
+        let values = bytes.chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().unwrap_or([0; 8]))).collect();
+        Ok((answer, values))
+    }
+
+    fn lost(&self, what: &str, e: std::io::Error) -> BuildError {
+        BuildError::Backend(format!(
+            "the connection broke during {what} ({e}); the driver reported:\n{}",
+            tail(&self.folder.join("driver.err"), 12)
+        ))
+    }
+
+    /// x = K^-1 b for every column, through the distributed factor.
+    pub fn solve(&self, mut rhs: MatMut<'_, f64>) -> Result<()> {
+        if rhs.ncols() == 0 {
+            return Ok(());
+        }
+        let (_, x) = self.request(json!({"op": "solve", "columns": rhs.ncols()}), &[rhs.as_ref()])?;
+        let n = rhs.nrows();
+        if x.len() != n * rhs.ncols() {
+            return Err(BuildError::Numerical(format!(
+                "the PETSc back-end returned {} values for {n} x {}",
+                x.len(),
+                rhs.ncols()
+            )));
+        }
+        for j in 0..rhs.ncols() {
+            for i in 0..n {
+                rhs[(i, j)] = x[j * n + i];
+            }
+        }
+        Ok(())
+    }
+
+    /// As `solve`, for callers that cannot return an error: a failure fills the columns with NaN
+    /// and is kept for `health`.
+    pub fn solve_or_nan(&self, mut rhs: MatMut<'_, f64>) {
+        if let Err(e) = self.solve(rhs.as_mut()) {
+            rhs.fill(f64::NAN);
+            if let Ok(mut failure) = self.failure.lock() {
+                failure.get_or_insert_with(|| e.to_string());
+            }
+        }
+    }
+
+    /// The first failed solve's error, if one failed.
+    pub fn health(&self) -> Result<()> {
+        match self.failure.lock().ok().and_then(|f| f.clone()) {
+            Some(message) => Err(BuildError::Numerical(message)),
+            None => Ok(()),
+        }
+    }
+
+    /// The driver's id of `m`, sending it the first time. Matrices are told apart by their
+    /// size and two weighted sums of their entries: the builder passes leading blocks it makes
+    /// anew for each request, which an address would not recognise.
+    fn matrix_id(&self, m: &Sparse) -> Result<usize> {
+        let lock = || BuildError::Numerical("the PETSc back-end: a lost lock".into());
+        let mut sums = [0.0f64; 2];
+        for j in 0..m.ncols() {
+            for (&i, &v) in m.row_idx_of_col_raw(j).iter().zip(m.val_of_col(j)) {
+                sums[0] += v;
+                sums[1] += v * ((i * 31 + j * 17) % 101) as f64;
+            }
+        }
+        let key = (m.nrows(), m.compute_nnz(), sums[0].to_bits(), sums[1].to_bits());
+        let loaded = self.loaded.lock().map_err(|_| lock())?;
+        if let Some(&(_, id)) = loaded.iter().find(|(k, _)| *k == key) {
+            return Ok(id);
+        }
+        let id = loaded.len();
+        drop(loaded);
+        let file = format!("matrix{id}.bin");
+        petsc_binary::write_symmetric(&self.folder.join(&file), m)?;
+        self.request(json!({"op": "load", "id": id, "file": file}), &[])?;
+        self.loaded.lock().map_err(|_| lock())?.push((key, id));
+        Ok(id)
+    }
+
+    /// A^T M B (M symmetric, rows as A and B), the products distributed.
+    pub fn inner(&self, m: &Sparse, a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Result<Mat<f64>> {
+        let id = self.matrix_id(m)?;
+        let (_, v) = self.request(json!({"op": "inner", "id": id, "a": a.ncols(), "b": b.ncols()}), &[a, b])?;
+        if v.len() != a.ncols() * b.ncols() {
+            return Err(BuildError::Numerical("the PETSc back-end returned a product of another size".into()));
+        }
+        Ok(Mat::from_fn(a.ncols(), b.ncols(), |i, j| v[j * a.ncols() + i]))
+    }
+
+    /// SLEPc's eigenpairs of the factored K with the mass `m` (as many rows): values
+    /// (of the factored matrix's problem) and vectors, all rows (zero at held rows).
+    pub fn eigen(
+        &self,
+        m: &Sparse,
+        request: EigenRequest,
+        deflate: Option<MatRef<'_, f64>>,
+        held: Option<MatRef<'_, f64>>,
+    ) -> Result<(Vec<f64>, Mat<f64>)> {
+        if m.nrows() != self.rows {
+            return Err(BuildError::Numerical(format!(
+                "the PETSc back-end: a mass of {} rows for a stiffness of {}",
+                m.nrows(),
+                self.rows
+            )));
+        }
+        let id = self.matrix_id(m)?;
+        let mut header = json!({
+            "op": "eigen",
+            "mass": id,
+            "deflate": deflate.map_or(0, |d| d.ncols()),
+            "held": held.map_or(0, |g| g.ncols()),
+            "tol": request.tol,
+        });
+        match request.below {
+            Some(lambda) => {
+                header["below"] = json!(lambda);
+                header["min_count"] = json!(request.count);
+            }
+            None => header["count"] = json!(request.count),
+        }
+        let blocks: Vec<MatRef<'_, f64>> = deflate.into_iter().chain(held).collect();
+        let (answer, v) = self.request(header, &blocks)?;
+        let values: Vec<f64> =
+            answer["values"].as_array().map(|a| a.iter().filter_map(Value::as_f64).collect()).unwrap_or_default();
+        let n = self.rows;
+        if v.len() != n * values.len() {
+            return Err(BuildError::Numerical("the PETSc back-end returned eigenvectors of another size".into()));
+        }
+        crate::profile::note(|| {
+            format!(
+                "SLEPc Krylov-Schur: {} pairs in {} restarts",
+                values.len(),
+                answer["iterations"].as_u64().unwrap_or(0)
+            )
+        });
+        Ok((values.clone(), Mat::from_fn(n, values.len(), |i, j| v[j * n + i])))
+    }
+
+    /// Peak resident memory of each rank so far, MiB.
+    pub fn peak_memory(&self) -> Result<Vec<f64>> {
+        let (answer, _) = self.request(json!({"op": "stats"}), &[])?;
+        Ok(answer["peak_mib"].as_array().map(|a| a.iter().filter_map(Value::as_f64).collect()).unwrap_or_default())
+    }
+}
+
+fn read_line(c: &mut Connection, stderr: &Path) -> Result<Value> {
+    let mut line = String::new();
+    let read = c.reader.read_line(&mut line);
+    match read {
+        Ok(0) | Err(_) => {
+            Err(BuildError::Backend(format!("the driver closed its connection; it reported:\n{}", tail(stderr, 12))))
+        }
+        Ok(_) => serde_json::from_str(&line)
+            .map_err(|e| BuildError::Backend(format!("an answer that is not JSON ({e}): {line}"))),
+    }
+}
+
+impl Drop for Session {
+    fn drop(&mut self) {
+        if let Ok(mut c) = self.connection.lock() {
+            let quit = c.writer.write_all(b"{\"op\": \"quit\"}\n").and_then(|_| c.writer.flush());
+            if quit.is_ok() {
+                let mut line = String::new();
+                let _ = c.reader.read_line(&mut line);
+                if let Ok(answer) = serde_json::from_str::<Value>(&line)
+                    && let Some(peaks) = answer["peak_mib"].as_array()
+                {
+                    let peaks: Vec<String> =
+                        peaks.iter().filter_map(Value::as_f64).map(|p| format!("{p:.0}")).collect();
+                    crate::profile::note(|| format!("PETSc ranks' peak memory: {} MiB", peaks.join(", ")));
+                }
+            }
+        }
+        if let Ok(mut child) = self.child.lock() {
+            let deadline = Instant::now() + Duration::from_secs(30);
+            while matches!(child.try_wait(), Ok(None)) && Instant::now() < deadline {
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            if matches!(child.try_wait(), Ok(None)) {
+                child.kill().ok();
+            }
+            child.wait().ok();
+        }
+        if !self.keep_folder {
+            std::fs::remove_dir_all(&self.folder).ok();
+        }
+    }
+}
