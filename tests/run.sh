@@ -23,6 +23,20 @@ fi
 if [ -n "${CI:-}" ]; then
     export FMU_RUNTIME_PORTABLE=require
 fi
+# the distributed back-end's tests: PETSc, SLEPc (with MUMPS) and OpenMPI from Debian, for
+# Debian's own Python (/usr/bin/python3), which the driver runs under mpirun
+petsc_packages="python3-petsc4py-real python3-slepc4py-real python3-mpi4py openmpi-bin"
+# shellcheck disable=SC2086
+if ! dpkg -s $petsc_packages >/dev/null 2>&1; then
+    if command -v apt-get >/dev/null; then
+        if [ "$(id -u)" = 0 ]; then sudo=""; else sudo="sudo"; fi
+        # shellcheck disable=SC2086
+        $sudo apt-get install -y $petsc_packages >/dev/null || { $sudo apt-get update >/dev/null && $sudo apt-get install -y $petsc_packages >/dev/null; }
+    elif [ -n "${CI:-}" ]; then
+        echo "the PETSc back-end's tests need Debian's $petsc_packages" >&2
+        exit 1
+    fi
+fi
 echo "Python environment and portable-build tools ready in $((SECONDS - setup_start)) s ($(tests/.venv/bin/python -m ziglang version | sed 's/^/zig /'), $(cargo-zigbuild --version 2>/dev/null || echo cargo-zigbuild))"
 # formatting and lints first: cheap, and the code base must be clean under both
 cargo fmt --all -- --check

@@ -29,6 +29,19 @@ pub fn text(r: &Report) -> String {
         "  {}: {} normal modes + {} static/Krylov shapes = order {}",
         r.method, r.fixed_interface_modes, r.constraint_modes, r.order
     );
+    if r.backend.kind == "petsc" {
+        let b = &r.backend;
+        let rows: Vec<String> = b.rows_per_rank.iter().map(usize::to_string).collect();
+        let peaks: Vec<String> = b.peak_mib_per_rank.iter().map(|p| format!("{p:.0}")).collect();
+        let _ = writeln!(
+            s,
+            "  back-end: PETSc/MUMPS/SLEPc on {} MPI ranks, rows {}, factor {:.3e} entries in all, peak {} MiB per rank",
+            b.ranks,
+            rows.join(" / "),
+            b.factor_entries,
+            peaks.join(" / ")
+        );
+    }
     let yes = |b: bool| if b { "yes" } else { "no" };
     let sc = &r.scene;
     let _ = writeln!(

@@ -438,22 +438,27 @@ class Driver:
         if deflate:
             eps.setDeflationSpace(deflate)
         below = header.get("below")
-        count = max(header.get("count", 0), header.get("min_count", 0), 1 if below is None else 10)
-        count = min(count, n - held_count - deflate_count)
+        # guard pairs beyond those wanted: the builder's Rayleigh-Ritz step resolves the wanted
+        # ones against them
+        guard = header.get("guard", 0)
+        limit = n - held_count - deflate_count
+        wanted = min(max(header.get("count", 0), header.get("min_count", 0), 1 if below is None else 10), limit)
         while True:
-            eps.setDimensions(nev=count, ncv=min(max(2 * count, count + 16), n - held_count - deflate_count))
+            nev = min(wanted + guard, limit)
+            eps.setDimensions(nev=nev, ncv=min(max(2 * nev, nev + 16), limit))
             eps.solve()
             found = eps.getConverged()
-            if found < count:
-                raise Failure("SLEPc found %d of %d eigenpairs" % (found, count))
+            if found < nev:
+                raise Failure("SLEPc found %d of %d eigenpairs" % (found, nev))
             values = sorted(eps.getEigenvalue(i).real for i in range(found))
-            if below is None or values[count - 1] > below or count >= n - held_count - deflate_count:
+            if below is None or nev >= limit or values[max(nev - guard - 1, 0)] > below:
                 break
-            count = min(2 * count, n - held_count - deflate_count)
-        order = sorted(range(found), key=lambda i: eps.getEigenvalue(i).real)[:count]
+            wanted = min(2 * wanted, limit)
+        order = sorted(range(found), key=lambda i: eps.getEigenvalue(i).real)
         if below is not None:
-            order = [i for i in order if eps.getEigenvalue(i).real <= below]
-            order = order[: max(len(order), header.get("min_count", 0))]
+            inside = sum(1 for i in order if eps.getEigenvalue(i).real <= below)
+            wanted = max(inside, header.get("min_count", 0))
+        order = order[: min(wanted + guard, found)]
         x = a.createVecRight()
         values = []
         out = bytearray() if rank == 0 else None

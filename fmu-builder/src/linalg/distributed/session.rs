@@ -80,7 +80,8 @@ impl Session {
         let base = backend.job_folder.clone().unwrap_or_else(std::env::temp_dir);
         let folder = base.join(format!("fmu-builder-petsc-{}", token()));
         std::fs::create_dir_all(&folder).map_err(io_error("creating the job folder"))?;
-        let started = Self::launch(backend, k, what, &folder);
+        let started =
+            crate::profile::phase(format!("PETSc back-end: {what}"), || Self::launch(backend, k, what, &folder));
         match started {
             Ok(session) => Ok(session),
             Err(e) => {
@@ -95,9 +96,7 @@ impl Session {
     fn launch(backend: &PetscBackend, k: &Sparse, what: &str, folder: &Path) -> Result<Self> {
         let driver = folder.join("driver.py");
         std::fs::write(&driver, DRIVER).map_err(io_error("writing the driver"))?;
-        crate::profile::phase(format!("PETSc job: {what} written"), || {
-            petsc_binary::write_symmetric(&folder.join("stiffness.bin"), k)
-        })?;
+        crate::profile::phase("job files written", || petsc_binary::write_symmetric(&folder.join("stiffness.bin"), k))?;
         let listener = TcpListener::bind((backend.listen_address(), 0)).map_err(io_error("opening a port"))?;
         let port = listener.local_addr().map_err(io_error("opening a port"))?.port();
         let token = token();
@@ -165,9 +164,8 @@ impl Session {
         if hello["hello"].as_str() != Some(token.as_str()) || hello["protocol"].as_u64() != Some(PROTOCOL) {
             return Err(BuildError::Backend(format!("an unexpected greeting {hello}")));
         }
-        let answer = crate::profile::phase(format!("PETSc: load, partition and factor {what}"), || {
-            read_line(&mut connection, &stderr_path)
-        })?;
+        let answer =
+            crate::profile::phase("driver: load, partition and factor", || read_line(&mut connection, &stderr_path))?;
         if answer["ok"] != json!(true) {
             child.wait().ok();
             let message = answer["error"].as_str().unwrap_or("no reason given").to_string();
@@ -329,11 +327,13 @@ impl Session {
     }
 
     /// SLEPc's eigenpairs of the factored K with the mass `m` (as many rows): values
-    /// (of the factored matrix's problem) and vectors, all rows (zero at held rows).
+    /// (of the factored matrix's problem) and vectors, all rows (zero at held rows); `guard`
+    /// pairs more than `request` asks for.
     pub fn eigen(
         &self,
         m: &Sparse,
         request: EigenRequest,
+        guard: usize,
         deflate: Option<MatRef<'_, f64>>,
         held: Option<MatRef<'_, f64>>,
     ) -> Result<(Vec<f64>, Mat<f64>)> {
@@ -351,6 +351,7 @@ impl Session {
             "deflate": deflate.map_or(0, |d| d.ncols()),
             "held": held.map_or(0, |g| g.ncols()),
             "tol": request.tol,
+            "guard": guard,
         });
         match request.below {
             Some(lambda) => {
@@ -403,13 +404,6 @@ impl Drop for Session {
             if quit.is_ok() {
                 let mut line = String::new();
                 let _ = c.reader.read_line(&mut line);
-                if let Ok(answer) = serde_json::from_str::<Value>(&line)
-                    && let Some(peaks) = answer["peak_mib"].as_array()
-                {
-                    let peaks: Vec<String> =
-                        peaks.iter().filter_map(Value::as_f64).map(|p| format!("{p:.0}")).collect();
-                    crate::profile::note(|| format!("PETSc ranks' peak memory: {} MiB", peaks.join(", ")));
-                }
             }
         }
         if let Ok(mut child) = self.child.lock() {

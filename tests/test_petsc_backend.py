@@ -1,0 +1,348 @@
+"""The distributed back-end (reduction.backend petsc, --backend petsc): PETSc partitions the
+stiffness, MUMPS factors it across MPI ranks, SLEPc solves the eigenproblems, the invariants'
+mass products run there. Its FMUs must equal the in-process back-end's: the same reduced
+frequencies (1e-9), flange statics (1e-9) and co-simulated step response (1e-8), on 1 and 2
+ranks, for the beam and the bracket (mounted) and a free-floating beam. The in-process build is
+the comparison here, a consistency check of two implementations of the same reduction; the
+physics of both is checked against CalculiX and beam theory elsewhere. The driver's own answers
+are checked against LAPACK (numpy) on a small matrix.
+
+The test set-up (tests/run.sh) installs Debian's python3-petsc4py-real, python3-slepc4py-real,
+python3-mpi4py and openmpi-bin; the driver runs under Debian's /usr/bin/python3.
+"""
+
+import json
+import os
+import shutil
+import socket
+import struct
+import subprocess
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import read_model_description, simulate_fmu
+
+from conftest import EXAMPLES, ROOT, run_builder
+
+PYTHON = "/usr/bin/python3"
+DRIVER = ROOT / "fmu-builder" / "src" / "linalg" / "distributed" / "driver.py"
+# mpirun refuses root without these (CI machines run as root); --oversubscribe lets two ranks
+# start on a machine whose slots mpirun counts differently
+os.environ.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
+os.environ.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+LAUNCHER = "mpirun --oversubscribe"
+
+
+def petsc_available():
+    if shutil.which("mpirun") is None or not Path(PYTHON).exists():
+        return False
+    # the driver's own imports (it finds Debian's packages itself), without its main
+    probe = subprocess.run([PYTHON, "-c", "import runpy; runpy.run_path(%r)" % str(DRIVER)],
+                           capture_output=True, text=True)
+    return probe.returncode == 0
+
+
+def test_petsc_is_installed():
+    """The back-end's tests need PETSc, SLEPc and OpenMPI (tests/run.sh installs them); missing,
+    this fails with the reason instead of the tests below skipping silently in CI."""
+    if not petsc_available():
+        message = "Debian's python3-petsc4py-real, python3-slepc4py-real, python3-mpi4py and openmpi-bin are needed"
+        if os.environ.get("CI"):
+            pytest.fail(message)
+        pytest.skip(message)
+
+
+needs_petsc = pytest.mark.skipif(not petsc_available() and not os.environ.get("CI"),
+                                 reason="PETSc/SLEPc/OpenMPI not installed (tests/run.sh installs them)")
+
+
+def build(spec_path, out, *extra):
+    run_builder([spec_path, "-o", out, "-q", *extra])
+    return json.loads(zipfile.ZipFile(out).read("documentation/report.json"))
+
+
+def petsc_args(ranks):
+    return ["--backend", "petsc", "--ranks", str(ranks), "--launcher", LAUNCHER, "--python", PYTHON]
+
+
+def free_beam(tmp_path):
+    """The beam with both flanges force flanges: a free-floating body (shifted factor, rigid
+    modes deflated, inertia-relief shapes)."""
+    spec = json.loads((EXAMPLES / "beam.json").read_text())
+    spec["name"] = "FreeBeam"
+    for f in spec["flanges"]:
+        f["role"] = "force"
+    path = tmp_path / "free_beam.json"
+    path.write_text(json.dumps(spec))
+    return path
+
+
+def step_response(fmu):
+    """FMPy's co-simulation (its defaults) of a unit force step on the first force flange's z
+    direction (off the centre: a free body turns as well): all outputs over 20 ms."""
+    md = read_model_description(str(fmu))
+    outputs = [v.name for v in md.modelVariables if v.causality == "output"]
+    forces = [v.name for v in md.modelVariables if v.causality == "input" and v.name.endswith(".f[3]")]
+    assert forces, "no force input found"
+    inputs = {forces[0]: 1.0}
+    res = simulate_fmu(str(fmu), fmi_type="CoSimulation", stop_time=0.02, output_interval=1e-4,
+                       start_values=inputs, output=outputs)
+    return {name: np.asarray(res[name]) for name in outputs}
+
+
+def relative_difference(a, b):
+    assert len(a) == len(b) and len(a) > 0
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    return float(np.max(np.abs(a - b)) / np.max(np.abs(a)))
+
+
+CASES = {
+    "beam": lambda tmp: EXAMPLES / "beam.json",
+    "bracket": lambda tmp: EXAMPLES / "bracket" / "bracket.json",
+    "free beam": free_beam,
+}
+
+
+@pytest.fixture(scope="module")
+def in_process(tmp_path_factory):
+    """Each case built once in process: the comparison of every distributed build."""
+    folder = tmp_path_factory.mktemp("in_process")
+    built = {}
+    for name, spec in CASES.items():
+        fmu = folder / (name.replace(" ", "_") + ".fmu")
+        built[name] = (fmu, build(spec(folder), fmu), step_response(fmu))
+    return built
+
+
+@needs_petsc
+@pytest.mark.parametrize("ranks", [1, 2])
+@pytest.mark.parametrize("case", list(CASES))
+def test_distributed_fmu_equals_in_process(tmp_path, in_process, case, ranks):
+    fmu_in, report_in, response_in = in_process[case]
+    fmu = tmp_path / "petsc.fmu"
+    report = build(CASES[case](tmp_path), fmu, *petsc_args(ranks))
+    backend = report["backend"]
+    # the rows really were distributed by PETSc's partitioning: every rank holds a share
+    assert backend["kind"] == "petsc" and backend["ranks"] == ranks, backend
+    assert len(backend["rows_per_rank"]) == ranks and min(backend["rows_per_rank"]) > 0, backend
+    assert sum(backend["rows_per_rank"]) == report_in["backend"]["rows_per_rank"][0], backend
+    assert len(backend["peak_mib_per_rank"]) == ranks
+    assert report_in["backend"]["kind"] == "in_process"
+
+    acc, acc_in = report["accuracy"], report_in["accuracy"]
+    freq = relative_difference(acc_in["reduced_hz"], acc["reduced_hz"])
+    full = relative_difference(acc_in["full_hz"], acc["full_hz"])
+    flat = lambda rows: [x for row in rows for x in row]  # noqa: E731
+    statics = relative_difference(flat(acc_in["compliance_reduced"]), flat(acc["compliance_reduced"]))
+    response = step_response(fmu)
+    assert sorted(response) == sorted(response_in)
+    # each output against the largest of its vector (tip.u, base.f, ...): a component that is
+    # zero but for round-off (base.f[1] of a z load, 1e-13 N) has no digits of its own to compare
+    family = {}
+    for name, values in response_in.items():
+        vector = name.split("[")[0]
+        family[vector] = max(family.get(vector, 0.0), float(np.max(np.abs(values))))
+    step = 0.0
+    for name, values in response_in.items():
+        assert len(values) == len(response[name]) > 100
+        scale = family[name.split("[")[0]]
+        if scale > 0:
+            step = max(step, float(np.max(np.abs(values - response[name]))) / scale)
+    print(f"\n{case}, {ranks} rank(s): reduced frequencies {freq:.1e}, full {full:.1e}, "
+          f"flange statics {statics:.1e}, step response {step:.1e}; rows {backend['rows_per_rank']}, "
+          f"peak MiB per rank {[round(p) for p in backend['peak_mib_per_rank']]}")
+    # the issue's tolerances; measured (beam, bracket, free beam) 1e-11 .. 6e-11 for the
+    # frequencies, 1e-15 .. 4e-14 for the statics
+    assert freq <= 1e-9 and full <= 1e-9
+    assert statics <= 1e-9
+    assert step <= 1e-8
+
+
+@needs_petsc
+def test_distributed_build_names_its_back_end_and_ranks(tmp_path):
+    """The summary and --timings say where the work ran: the launch, the ranks' rows, the SLEPc
+    solves, and (summary) each rank's peak memory."""
+    proc = run_builder([EXAMPLES / "beam.json", "-o", tmp_path / "b.fmu", "--timings", *petsc_args(2)])
+    text = proc.stdout + proc.stderr
+    for expected in ["launched: mpirun --oversubscribe -n 2", "driver: load, partition and factor",
+                     "eigen-solve (SLEPc Krylov-Schur", "2 ranks, rows per rank",
+                     "back-end: PETSc/MUMPS/SLEPc on 2 MPI ranks"]:
+        assert expected in text, expected
+
+
+def refusal(tmp_path, spec_changes, *extra):
+    spec = json.loads((EXAMPLES / "beam.json").read_text())
+    for key, value in spec_changes.items():
+        target = spec
+        *path, last = key.split(".")
+        for p in path:
+            target = target.setdefault(p, {})
+        target[last] = value
+    path = tmp_path / "spec.json"
+    path.write_text(json.dumps(spec))
+    proc = run_builder([path, "-o", tmp_path / "x.fmu", *extra], check=False)
+    assert proc.returncode != 0
+    assert not (tmp_path / "x.fmu").exists()
+    return proc.stderr
+
+
+def test_refusals_name_the_field_and_the_way_out(tmp_path):
+    """What the distributed back-end does not run is refused before any work, naming the field."""
+    err = refusal(tmp_path, {"reduction": {"method": "krylov", "expansion_points": [100.0]},
+                             "reduction.backend": {"kind": "petsc"}})
+    assert "reduction.expansion_points" in err and "s = 0 only" in err, err
+    err = refusal(tmp_path, {"scene": {"band": [0, 500], "tolerance": 1e-3}}, *petsc_args(2))
+    assert "scene.tolerance" in err and "reduction.modes" in err, err
+    # settings of the petsc back-end without choosing it
+    err = refusal(tmp_path, {}, "--ranks", "4")
+    assert "reduction.backend" in err and "petsc" in err, err
+    err = refusal(tmp_path, {"reduction.backend": {"kind": "in_process", "launcher": "srun"}})
+    assert "reduction.backend" in err, err
+    err = refusal(tmp_path, {"reduction.backend": {"kind": "petsc", "ranks": 0}})
+    assert "reduction.backend.ranks" in err, err
+
+
+def test_a_launcher_that_fails_is_reported(tmp_path):
+    """A missing launcher, or a driver that cannot start (no petsc4py for that Python), is an
+    error saying which and what the launcher printed, not a hang."""
+    err = refusal(tmp_path, {}, "--backend", "petsc", "--launcher", "/nonexistent/mpirun")
+    assert "could not start `/nonexistent/mpirun`" in err and "launcher" in err, err
+    if shutil.which("mpirun"):
+        err = refusal(tmp_path, {}, "--backend", "petsc", "--launcher", LAUNCHER, "--python", "/nonexistent/python3")
+        assert "ended" in err and "before it connected" in err, err
+
+
+class Driver:
+    """The driver run directly on a matrix of the test's, as the builder runs it: the job file,
+    the PETSc binary matrices, one TCP connection."""
+
+    def __init__(self, folder, k, ranks):
+        self.n = k.shape[0]
+        folder.mkdir(parents=True, exist_ok=True)
+        shutil.copy(DRIVER, folder / "driver.py")
+        write_petsc(folder / "stiffness.bin", k)
+        self.folder = folder
+        server = socket.socket()
+        server.bind(("127.0.0.1", 0))
+        server.listen(1)
+        server.settimeout(120)
+        (folder / "job.json").write_text(json.dumps({"host": "127.0.0.1", "port": server.getsockname()[1],
+                                                     "token": "t", "stiffness": "stiffness.bin",
+                                                     "partitioner": "ptscotch"}))
+        self.process = subprocess.Popen(["mpirun", "--oversubscribe", "-n", str(ranks), PYTHON,
+                                         str(folder / "driver.py"), str(folder / "job.json")],
+                                        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        self.sock, _ = server.accept()
+        self.reader = self.sock.makefile("rb")
+        hello = self.answer()[0]
+        assert hello["hello"] == "t" and hello["ranks"] == ranks
+        self.started = self.answer()[0]
+
+    def answer(self):
+        header = json.loads(self.reader.readline())
+        data = np.frombuffer(self.reader.read(8 * header.get("doubles", 0)), "<f8")
+        return header, data
+
+    def request(self, header, *blocks):
+        data = b"".join(np.asarray(b, dtype="<f8").T.tobytes() for b in blocks)
+        header["doubles"] = len(data) // 8
+        self.sock.sendall((json.dumps(header) + "\n").encode() + data)
+        return self.answer()
+
+    def close(self):
+        self.request({"op": "quit"})
+        self.process.wait(timeout=60)
+
+
+def write_petsc(path, a):
+    """PETSc's binary AIJ format, written here from its documentation (the builder has its own
+    writer in Rust)."""
+    n = a.shape[0]
+    rows = [np.nonzero(a[i])[0] for i in range(n)]
+    with open(path, "wb") as f:
+        f.write(struct.pack(">4i", 1211216, n, n, sum(len(r) for r in rows)))
+        f.write(struct.pack(">%di" % n, *[len(r) for r in rows]))
+        for r in rows:
+            f.write(struct.pack(">%di" % len(r), *r))
+        for i, r in enumerate(rows):
+            f.write(struct.pack(">%dd" % len(r), *a[i, r]))
+
+
+def generalized_eigenvalues(k, m):
+    lower = np.linalg.cholesky(m)
+    inverse = np.linalg.inv(lower)
+    return np.linalg.eigvalsh(inverse @ k @ inverse.T)
+
+
+@needs_petsc
+@pytest.mark.parametrize("ranks", [1, 2])
+def test_driver_answers_equal_lapack(tmp_path, ranks):
+    """Each request of the driver on a small sparse SPD matrix against numpy (LAPACK): solves,
+    the mass products, the lowest eigenpairs, those below a bound, with deflation, and with the
+    trailing rows held (through the whole factor and G = K^-1 E)."""
+    n = 90
+    rng = np.random.default_rng(7)
+    k = np.zeros((n, n))
+    for i in range(n):  # a banded SPD matrix: a chain with springs to its neighbours' neighbours
+        for j in range(max(0, i - 3), i):
+            k[i, j] = k[j, i] = -rng.uniform(0.5, 1.5)
+    k += np.diag(-k.sum(axis=1) + rng.uniform(0.1, 0.2, n))
+    m = np.diag(rng.uniform(1.0, 2.0, n))
+    driver = Driver(tmp_path / "job", k, ranks)
+    try:
+        assert len(driver.started["rows_per_rank"]) == ranks and sum(driver.started["rows_per_rank"]) == n
+        b = rng.standard_normal((n, 3))
+        header, x = driver.request({"op": "solve", "columns": 3}, b)
+        assert header["ok"] and x.size == 3 * n
+        # LAPACK's solve and MUMPS's of a matrix of condition ~1e3: round-off, 1e-14 measured
+        assert np.max(np.abs(x.reshape(3, n).T - np.linalg.solve(k, b))) <= 1e-12 * np.max(np.abs(np.linalg.solve(k, b)))
+        assert driver.request({"op": "load", "id": 0, "file": "mass.bin"})[0]["ok"] is False  # not written yet
+        write_petsc(tmp_path / "job" / "mass.bin", m)
+        assert driver.request({"op": "load", "id": 0, "file": "mass.bin"})[0]["ok"]
+        header, p = driver.request({"op": "inner", "id": 0, "a": 2, "b": 3}, b[:, :2], b)
+        assert p.size == 6
+        assert np.allclose(p.reshape(3, 2).T, b[:, :2].T @ m @ b, rtol=1e-13, atol=0)
+
+        lam = generalized_eigenvalues(k, m)
+        header, v = driver.request({"op": "eigen", "mass": 0, "count": 6, "tol": 1e-12})
+        assert header["ok"] and len(header["values"]) == 6 and v.size == 6 * n
+        # well separated eigenvalues of a small problem: both solvers to round-off (1e-14 measured)
+        assert np.allclose(header["values"], lam[:6], rtol=1e-10, atol=0)
+        vectors = v.reshape(6, n).T
+        residual = k @ vectors - m @ vectors * np.array(header["values"])
+        assert np.max(np.abs(residual)) <= 1e-8 * np.max(np.abs(k @ vectors))
+
+        header, _ = driver.request({"op": "eigen", "mass": 0, "below": lam[8] * 1.000001, "min_count": 1, "tol": 1e-12})
+        assert len(header["values"]) == 9, header["values"]
+
+        # deflation of the two lowest modes: the next four come back
+        header, _ = driver.request({"op": "eigen", "mass": 0, "count": 4, "tol": 1e-12, "deflate": 2}, vectors[:, :2])
+        assert np.allclose(header["values"], lam[2:6], rtol=1e-10, atol=0), header["values"]
+
+        held = 6
+        first = n - held
+        g = np.linalg.solve(k, np.eye(n)[:, first:])
+        lam_held = generalized_eigenvalues(k[:first, :first], m[:first, :first])
+        header, v = driver.request({"op": "eigen", "mass": 0, "count": 5, "tol": 1e-12, "held": held}, g)
+        assert header["ok"], header
+        assert np.allclose(header["values"], lam_held[:5], rtol=1e-10, atol=0)
+        assert np.max(np.abs(v.reshape(5, n).T[first:])) == 0.0  # held rows stay zero
+    finally:
+        driver.close()
+
+
+@needs_petsc
+def test_driver_refuses_a_matrix_that_is_not_positive_definite(tmp_path):
+    """MUMPS's inertia: a stiffness with a negative direction (a part that is not held, or a
+    wrong material) is refused with the count of negative pivots, not factored into nonsense."""
+    n = 40
+    k = np.diag(np.linspace(1.0, 2.0, n))
+    k[5, 5] = -1.0
+    driver = Driver(tmp_path / "job", k, 2)
+    try:
+        assert driver.started["ok"] is False
+        assert "not positive definite" in driver.started["error"] and "1 negative" in driver.started["error"]
+    finally:
+        driver.process.wait(timeout=60)
