@@ -905,7 +905,9 @@ fn distributed_search(
             }
         };
         let guard = (request.count / 4).max(4);
+        let began = std::time::Instant::now();
         let (_, vectors) = on.session.eigen(mass, request, guard, deflate.map(|d| d.vectors.as_ref()), on.held)?;
+        let slepc = began.elapsed().as_secs_f64();
         // SLEPc's operator is the factor's plain solve, whose round-off the held problem's
         // correction amplifies (the beam's held modes: residuals to 3e-9, the reduced body's top
         // frequency 8e-9 off): one inverse iteration with refined solves, then Rayleigh-Ritz
@@ -935,6 +937,13 @@ fn distributed_search(
         let (pairs, residuals) = checked(k, m, pairs, shift, true);
         on.session.health()?;
         let (worst, at) = residuals.iter().enumerate().fold((0.0f64, 0), worst_of);
+        crate::profile::note(|| {
+            format!(
+                "SLEPc {slepc:.1} s ({} pairs and {guard} guard pairs), refinement and checks {:.1} s, worst residual {worst:.1e}",
+                keep,
+                began.elapsed().as_secs_f64() - slepc
+            )
+        });
         if let Want::Lowest(count) = want
             && keep < count
         {

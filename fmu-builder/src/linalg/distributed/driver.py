@@ -361,17 +361,25 @@ class Driver:
         return {}, None
 
     def op_solve(self, header, payload):
+        """K^-1 B for a block of columns: MUMPS's multiple right-hand sides (MatMatSolve), one
+        pass through the factor for the block instead of one per column."""
         layout = self.factor.layout
         n, count = layout.n, header["columns"]
+        b = PETSc.Mat().createDense(((layout.local, n), (PETSc.DECIDE, count)), comm=PETSc.COMM_WORLD)
+        b.setUp()
+        block = b.getDenseArray()
+        for j, column in enumerate(columns_of(payload, n, count)):
+            block[:, j] = layout.spread(column).getArray()
+        b.assemble()
+        x = b.duplicate()
+        self.factor.ksp.getPC().getFactorMatrix().matSolve(b, x)
         out = bytearray() if rank == 0 else None
-        for column in columns_of(payload, n, count):
-            x = self.factor.solve(layout.spread(column))
-            reason = self.factor.ksp.getConvergedReason()
-            if reason < 0:
-                raise Failure("the MUMPS solve failed (KSP reason %d)" % reason)
-            result = layout.gather(x)
+        for j in range(count):
+            result = layout.gather(x.getColumnVector(j))
             if rank == 0:
                 out += result.tobytes()
+        b.destroy()
+        x.destroy()
         return {"columns": count}, out
 
     def op_inner(self, header, payload):
