@@ -883,6 +883,9 @@ fn distributed_search(
     shift: f64,
     deflate: Option<&Deflation>,
 ) -> Result<Eigenpairs> {
+    if matches!(want, Want::Lowest(0)) {
+        return Ok(Eigenpairs { values: Vec::new(), vectors: Mat::zeros(k.n(), 0) });
+    }
     crate::profile::phase("eigen-solve (SLEPc Krylov-Schur, shift-invert, distributed)", || {
         let n = k.n();
         let rows = on.session.rows();
