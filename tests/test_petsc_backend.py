@@ -231,6 +231,9 @@ def test_refusals_name_the_field_and_the_way_out(tmp_path):
     assert "reduction.backend" in err, err
     err = refusal(tmp_path, {"reduction.backend": {"kind": "petsc", "ranks": 0}})
     assert "reduction.backend.ranks" in err, err
+    # the sweep compares methods in process: a back-end asked of it is refused, not ignored
+    proc = run_builder([EXAMPLES / "beam.json", "--sweep", "--backend", "petsc"], check=False)
+    assert proc.returncode != 0 and "'--sweep' cannot be used with '--backend" in proc.stderr, proc.stderr
 
 
 def test_a_launcher_that_fails_is_reported(tmp_path):

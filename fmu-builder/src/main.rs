@@ -59,17 +59,17 @@ struct Args {
     /// Where the reduction's linear algebra runs: in-process (default) or petsc (PETSc, MUMPS
     /// and SLEPc across MPI ranks, through a driver started by the MPI launcher; needs petsc4py,
     /// slepc4py and mpi4py on every rank). Overrides the input's reduction.backend.kind
-    #[arg(long, value_parser = ["in-process", "petsc"])]
+    #[arg(long, value_parser = ["in-process", "petsc"], conflicts_with = "sweep")]
     backend: Option<String>,
     /// petsc back-end: MPI ranks [default 2]
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..), conflicts_with = "sweep")]
     ranks: Option<u32>,
     /// petsc back-end: the MPI launcher with its own options, e.g. "mpirun --hostfile hosts" or
     /// "srun" ["-n <ranks> <python> driver.py job.json" follow; default "mpirun"]
-    #[arg(long)]
+    #[arg(long, conflicts_with = "sweep")]
     launcher: Option<String>,
     /// petsc back-end: the Python with petsc4py, slepc4py and mpi4py on every rank [default python3]
-    #[arg(long)]
+    #[arg(long, conflicts_with = "sweep")]
     python: Option<String>,
     /// Print nothing but errors
     #[arg(short, long)]
