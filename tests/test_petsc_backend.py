@@ -201,49 +201,36 @@ def test_distributed_build_names_its_back_end_and_ranks(tmp_path):
         assert expected in text, expected
 
 
-def refusal(tmp_path, spec_changes, *extra):
-    spec = json.loads((EXAMPLES / "beam.json").read_text())
-    for key, value in spec_changes.items():
-        target = spec
-        *path, last = key.split(".")
-        for p in path:
-            target = target.setdefault(p, {})
-        target[last] = value
-    path = tmp_path / "spec.json"
-    path.write_text(json.dumps(spec))
-    proc = run_builder([path, "-o", tmp_path / "x.fmu", *extra], check=False)
-    assert proc.returncode != 0
-    assert not (tmp_path / "x.fmu").exists()
+def refused(args):
+    """A build the command line refuses: its stderr (no FMU, no panic)."""
+    proc = run_builder(args, check=False)
+    assert proc.returncode != 0 and "panicked" not in proc.stderr, proc.stderr
     return proc.stderr
 
 
-def test_refusals_name_the_field_and_the_way_out(tmp_path):
-    """What the distributed back-end does not run is refused before any work, naming the field."""
-    err = refusal(tmp_path, {"reduction": {"method": "krylov", "expansion_points": [100.0]},
-                             "reduction.backend": {"kind": "petsc"}})
-    assert "reduction.expansion_points" in err and "s = 0 only" in err, err
-    err = refusal(tmp_path, {"scene": {"band": [0, 500], "tolerance": 1e-3}}, *petsc_args(2))
-    assert "scene.tolerance" in err and "reduction.modes" in err, err
-    # settings of the petsc back-end without choosing it
-    err = refusal(tmp_path, {}, "--ranks", "4")
+def test_command_line_refusals_name_the_option(tmp_path):
+    """The back-end's options where they cannot apply are refused, not ignored (what the input's
+    reduction.backend may not ask is in test_bad_input.py)."""
+    out = tmp_path / "x.fmu"
+    err = refused([EXAMPLES / "beam.json", "-o", out, "--ranks", "4"])
     assert "reduction.backend" in err and "petsc" in err, err
-    err = refusal(tmp_path, {"reduction.backend": {"kind": "in_process", "launcher": "srun"}})
-    assert "reduction.backend" in err, err
-    err = refusal(tmp_path, {"reduction.backend": {"kind": "petsc", "ranks": 0}})
-    assert "reduction.backend.ranks" in err, err
-    # the sweep compares methods in process: a back-end asked of it is refused, not ignored
-    proc = run_builder([EXAMPLES / "beam.json", "--sweep", "--backend", "petsc"], check=False)
-    assert proc.returncode != 0 and "'--sweep' cannot be used with '--backend" in proc.stderr, proc.stderr
+    # the sweep compares methods in process
+    err = refused([EXAMPLES / "beam.json", "--sweep", "--backend", "petsc"])
+    assert "'--sweep' cannot be used with '--backend" in err, err
+    assert not out.exists()
 
 
 def test_a_launcher_that_fails_is_reported(tmp_path):
     """A missing launcher, or a driver that cannot start (no petsc4py for that Python), is an
     error saying which and what the launcher printed, not a hang."""
-    err = refusal(tmp_path, {}, "--backend", "petsc", "--launcher", "/nonexistent/mpirun")
+    out = tmp_path / "x.fmu"
+    err = refused([EXAMPLES / "beam.json", "-o", out, "--backend", "petsc", "--launcher", "/nonexistent/mpirun"])
     assert "could not start `/nonexistent/mpirun`" in err and "launcher" in err, err
     if shutil.which("mpirun"):
-        err = refusal(tmp_path, {}, "--backend", "petsc", "--launcher", LAUNCHER, "--python", "/nonexistent/python3")
+        err = refused([EXAMPLES / "beam.json", "-o", out, "--backend", "petsc", "--launcher", LAUNCHER,
+                       "--python", "/nonexistent/python3"])
         assert "ended" in err and "before it connected" in err, err
+    assert not out.exists()
 
 
 class Driver:

@@ -260,8 +260,10 @@ class HeldSolve:
         self.keep = keep
         h = len(g)
         # z_b gathered to every rank: h values
-        self.held_is = PETSc.IS().createGeneral(held_rows if rank == 0 else [], comm=PETSc.COMM_SELF)
+        held_is = PETSc.IS().createGeneral(held_rows if rank == 0 else [], comm=PETSc.COMM_SELF)
         self.held_values = PETSc.Vec().createSeq(h if rank == 0 else 0)
+        # one scatter for every application: all vectors share the factor's layout
+        self.held_scatter = PETSc.Scatter().create(factor.layout.template, held_is, self.held_values, None)
         s = [[0.0] * h for _ in range(h)]
         for j in range(h):
             values = self._held_of(g[j])
@@ -271,10 +273,8 @@ class HeldSolve:
         self.s_inverse = invert(s)
 
     def _held_of(self, v):
-        scatter = PETSc.Scatter().create(v, self.held_is, self.held_values, None)
-        scatter.scatter(v, self.held_values, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        self.held_scatter.scatter(v, self.held_values, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         values = self.held_values.getArray().tolist() if rank == 0 else None
-        scatter.destroy()
         return comm.bcast(values, root=0)
 
     def apply(self, pc, b, x):
@@ -286,9 +286,7 @@ class HeldSolve:
         z = self.factor.solve(whole)
         zb = self._held_of(z)
         h = len(self.g)
-        for j in range(h):
-            f = sum(self.s_inverse[j][i] * zb[i] for i in range(h))
-            z.axpy(-f, self.g[j])
+        z.maxpy([-sum(self.s_inverse[j][i] * zb[i] for i in range(h)) for j in range(h)], self.g)
         sub = z.getSubVector(self.keep)
         sub.copy(x)
         z.restoreSubVector(self.keep, sub)
