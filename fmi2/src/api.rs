@@ -852,11 +852,15 @@ pub unsafe fn fmi2CompletedIntegratorStep<M: Model>(
     terminateSimulation: *mut fmi2Boolean,
 ) -> fmi2Status {
     unsafe {
-        guarded::<M>(c, &spec::fmi2CompletedIntegratorStep, |_inst| {
+        guarded::<M>(c, &spec::fmi2CompletedIntegratorStep, |inst| {
             let enter = out_ref(enterEventMode, "enterEventMode")?;
             let terminate = out_ref(terminateSimulation, "terminateSimulation")?;
             *enter = fmi2False;
             *terminate = fmi2False;
+            if let Some(warning) = inst.model.completed_integrator_step(inst.time) {
+                inst.logger.warning(fmi2Warning, &format!("fmi2CompletedIntegratorStep: {warning}"));
+                return Ok(fmi2Warning);
+            }
             Ok(fmi2OK)
         })
     }

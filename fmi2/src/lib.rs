@@ -160,6 +160,12 @@ pub trait Model: Sized + Clone {
     fn get_real_output_derivative(&mut self, _vr: u32, _order: i32) -> Result<f64, String> {
         Err("output derivatives are not supported by this model".into())
     }
+    /// Model Exchange: the host completed an integrator step at `time` (fmi2SetTime's last value).
+    /// A warning about how the host integrates (the layer logs it once per call that returns one
+    /// and answers fmi2Warning); the step stands either way.
+    fn completed_integrator_step(&mut self, _time: f64) -> Option<String> {
+        None
+    }
     /// Co-Simulation: advance from t to t + h exactly.
     fn do_step(&mut self, t: f64, h: f64) -> Result<(), String>;
     /// A warning about the last successful step (the layer logs it and returns fmi2Warning).

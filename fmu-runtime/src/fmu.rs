@@ -24,13 +24,14 @@ pub struct BodyFmu {
     table: Arc<VariableTable>,
     body: FlexibleBody,
     static_start: bool,
+    steps: crate::explicit_host::StepWatch,
 }
 
 impl BodyFmu {
     /// The model of a reduced body for Co-Simulation (every mode integrated by the exact step).
     pub fn from_reduced(reduced: ReducedBody) -> Self {
         let table = Arc::new(VariableTable::new(&reduced));
-        Self { table, body: FlexibleBody::new(Arc::new(reduced)), static_start: false }
+        Self { table, body: FlexibleBody::new(Arc::new(reduced)), static_start: false, steps: Default::default() }
     }
 
     /// The model for `interface`: Model Exchange hands the modes above the cutoff to no
@@ -348,6 +349,7 @@ impl Model for BodyFmu {
     }
 
     fn get_derivatives(&mut self, dx: &mut [f64]) -> Result<(), String> {
+        self.steps.evaluated();
         let (n, nr) = (self.body.n_dynamic(), self.body.n_relaxing());
         let (modal, frame_part) = dx.split_at_mut(2 * n + nr);
         let (dq, rest) = modal.split_at_mut(n);
@@ -360,6 +362,12 @@ impl Model for BodyFmu {
             write_frame(frame_part, &rate);
         }
         Ok(())
+    }
+
+    fn completed_integrator_step(&mut self, time: f64) -> Option<String> {
+        let p = self.body.parameters();
+        let (alpha, beta) = (p.alpha, p.beta);
+        self.steps.completed(time, self.body.reduced(), alpha, beta)
     }
 
     fn get_nominals(&self, nominals: &mut [f64]) {

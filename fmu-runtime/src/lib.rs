@@ -6,6 +6,7 @@
 
 pub mod body;
 pub mod coupled_propagator;
+pub mod explicit_host;
 pub mod fmu;
 pub mod format;
 pub mod interface;

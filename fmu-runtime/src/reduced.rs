@@ -114,6 +114,36 @@ impl ReducedBody {
         if d > 0.0 { self.omega[j] * self.omega[j] / d } else { f64::INFINITY }
     }
 
+    /// The longest step [s] at which explicit Euler stays stable for every Model Exchange state
+    /// at damping alpha, beta (|1 + h lambda| <= 1 for each eigenvalue lambda), and the mode that
+    /// limits it; 0 where a dynamic mode is undamped (no step is stable: each one multiplies its
+    /// amplitude by sqrt(1 + h^2 omega^2)).
+    pub fn explicit_euler_limit(&self, alpha: f64, beta: f64) -> (f64, Option<usize>) {
+        let nd = self.n_dynamic();
+        let mut limit = (f64::INFINITY, None);
+        for j in 0..nd + self.n_relaxing() {
+            let h = self.explicit_euler_step(j, alpha, beta, j >= nd);
+            if h < limit.0 {
+                limit = (h, Some(j));
+            }
+        }
+        limit
+    }
+
+    /// The longest stable explicit Euler step of mode j as a dynamic state (q, q') or, with
+    /// `relaxing`, as a first-order one (q' = -(omega^2 / d) q).
+    pub fn explicit_euler_step(&self, j: usize, alpha: f64, beta: f64, relaxing: bool) -> f64 {
+        let (w2, d) = (self.omega[j] * self.omega[j], self.damping_rate(j, alpha, beta));
+        if relaxing {
+            2.0 * d / w2
+        } else if d < 2.0 * self.omega[j] {
+            // |1 + h lambda|^2 = 1 - h d + h^2 omega^2
+            d / w2
+        } else {
+            2.0 / (0.5 * d + (0.25 * d * d - w2).sqrt())
+        }
+    }
+
     /// Number of relaxing modes: the quasi-static modes, next after the dynamic ones, that
     /// settle slower than the cutoff (overdamped by stiffness-proportional damping, whose
     /// relaxation tends to 1/beta whatever their frequency). Model Exchange keeps them as
@@ -431,6 +461,40 @@ fn fixture_rotation_terms(n: usize) -> RotationTerms {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The growth of explicit Euler's step matrix [[1, h], [-h w^2, 1 - h d]] over many steps,
+    /// by iterating it: independent of the closed form the limit uses.
+    fn euler_growth(w: f64, d: f64, h: f64) -> f64 {
+        let (mut x, mut v) = (1.0f64, 0.0f64);
+        for _ in 0..20_000 {
+            (x, v) = (x + h * v, v - h * (w * w * x + d * v));
+        }
+        x.hypot(v / w)
+    }
+
+    #[test]
+    fn explicit_euler_limit_is_where_the_step_matrix_stops_growing() {
+        let mut body = two_mode_body();
+        // 1 % of critical on the 10 rad/s mode, Rayleigh alpha 0.5, beta 1e-4 (the 2000 rad/s
+        // mode: d = 0.5 + 400 + 40, underdamped)
+        body.modal_damping = vec![2.0 * 0.01 * 10.0, 0.0];
+        let (h, mode) = body.explicit_euler_limit(body.alpha, body.beta);
+        assert!(h > 0.0 && h.is_finite());
+        let j = mode.unwrap();
+        let d = body.damping_rate(j, body.alpha, body.beta);
+        assert!(euler_growth(body.omega[j], d, 0.99 * h) < 1.0, "stable just below the limit");
+        assert!(euler_growth(body.omega[j], d, 1.01 * h) > 1.0, "unstable just above it");
+        // undamped: no step is stable
+        let (h0, _) = body.explicit_euler_limit(0.0, 0.0);
+        body.modal_damping = vec![0.0, 0.0];
+        assert_eq!(body.explicit_euler_limit(0.0, 0.0).0, 0.0, "{h0}");
+        // above the cutoff a mode is no state and does not limit the step
+        body.dynamic_cutoff = 100.0;
+        body.modal_damping = vec![2.0 * 0.01 * 10.0, 0.0];
+        let (h1, mode1) = body.explicit_euler_limit(0.0, 0.0);
+        assert_eq!(mode1, Some(0));
+        assert!((h1 - 0.2 / 100.0).abs() < 1e-15, "d / w^2 = 0.2 / 100: {h1}");
+    }
     use crate::reduced::two_mode_body;
 
     #[test]

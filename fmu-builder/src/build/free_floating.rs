@@ -151,8 +151,10 @@ pub fn reduce(
         rotation: Some(RotationTerms { g: rot.g, o_mat: rot.o_mat, o_vec: rot.o_vec }),
         stiffening: None,
         free_floating: true,
-        dynamic_cutoff: crate::reduce::cutoff::dynamic_cutoff(&spec, &basis).0,
+        // set from the plan below, which reads the body's frequencies and damping
+        dynamic_cutoff: f64::INFINITY,
     };
+    reduced.dynamic_cutoff = crate::reduce::experiment::plan(&spec, &basis, &reduced).cutoff;
     reduced.guid = guid(&reduced);
     let accuracy = profile::phase("accuracy comparison with the full model", || {
         free_free_accuracy(&model, &solver, shift, &rigid, &basis)

@@ -392,8 +392,10 @@ pub fn reduce(
         rotation,
         stiffening,
         free_floating: false,
-        dynamic_cutoff: crate::reduce::cutoff::dynamic_cutoff(&spec, &basis).0,
+        // set from the plan below, which reads the body's frequencies and damping
+        dynamic_cutoff: f64::INFINITY,
     };
+    reduced.dynamic_cutoff = crate::reduce::experiment::plan(&spec, &basis, &reduced).cutoff;
     reduced.guid = guid(&reduced);
 
     let force_dofs: Vec<(String, usize)> =

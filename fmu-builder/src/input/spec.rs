@@ -34,6 +34,25 @@ pub struct Spec {
     pub reduction: Reduction,
     #[serde(default)]
     pub outputs: Option<Outputs>,
+    /// The FMU's DefaultExperiment, where the input names it (else chosen from the body).
+    #[serde(default)]
+    pub experiment: Option<Experiment>,
+}
+
+/// `experiment`: the run the FMU proposes to its hosts (modelDescription.xml's
+/// DefaultExperiment); the dynamic cutoff's default follows its step.
+#[derive(Debug, Clone, Default, Deserialize, serde::Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Experiment {
+    /// [s]
+    #[serde(default)]
+    pub stop_time: Option<f64>,
+    /// The output interval (fmusim, OMSimulator) or communication step [s].
+    #[serde(default)]
+    pub step_size: Option<f64>,
+    /// Relative tolerance for variable-step hosts.
+    #[serde(default)]
+    pub tolerance: Option<f64>,
 }
 
 /// What the FMU reports beside the flanges' motion.
@@ -640,6 +659,38 @@ impl Spec {
             if !ranges::within(v, (0.0, max)) {
                 return Err(BuildError::input(path, field, format!("{v:e} is outside [0, {max:e}]{unit}: {why}")));
             }
+        }
+        self.check_experiment(path)
+    }
+
+    /// A run a host can start: positive finite times, a step within the run, a tolerance a
+    /// double-precision integrator can meet.
+    fn check_experiment(&self, path: &Path) -> Result<()> {
+        let Some(e) = &self.experiment else { return Ok(()) };
+        for (field, v) in [("experiment.stop_time", e.stop_time), ("experiment.step_size", e.step_size)] {
+            if let Some(v) = v
+                && !(v > 0.0 && v <= 1e9)
+            {
+                return Err(BuildError::input(path, field, format!("{v:e} s must be positive and at most 1e9 s")));
+            }
+        }
+        if let (Some(stop), Some(step)) = (e.stop_time, e.step_size)
+            && step > stop
+        {
+            return Err(BuildError::input(
+                path,
+                "experiment.step_size",
+                format!("{step:e} s is longer than experiment.stop_time = {stop:e} s"),
+            ));
+        }
+        if let Some(tol) = e.tolerance
+            && !(1e-14..1.0).contains(&tol)
+        {
+            return Err(BuildError::input(
+                path,
+                "experiment.tolerance",
+                format!("{tol:e} must lie in [1e-14, 1): a relative tolerance double precision can meet"),
+            ));
         }
         Ok(())
     }

@@ -75,37 +75,9 @@ the undeformed part as meshed. World frame: the host's; the mount's inputs place
         r.constraint_modes,
         r.order,
     );
-    let _ = match r.dynamic_cutoff_hz {
-        Some(hz) if r.dynamic_modes < r.order => writeln!(
-            h,
-            "<p>Model Exchange: the {} modes up to {hz:.4} Hz ({}) are states (q, qd: {} states); the {} modes above \
-are quasi-static, solved from the loads and the dynamic modes at every evaluation, so static responses stay exact and \
-the host's integrator sees no frequency above the cutoff. Co-Simulation integrates the same split (the dynamic modes exactly, the others quasi-static), so both interfaces are one model. {} of the quasi-static modes settle slower than the cutoff \
-through their damping (stiffness-proportional damping makes high modes creep at about 1/beta): they keep one state \
-each, q, whose rate follows from their damping without inertia ({} states in all). Set \
-<code>reduction.dynamic_cutoff</code> [Hz] to choose another cutoff.</p>",
-            r.dynamic_modes,
-            esc(&r.dynamic_cutoff_rule),
-            2 * r.dynamic_modes,
-            r.order - r.dynamic_modes,
-            r.relaxing_modes,
-            2 * r.dynamic_modes + r.relaxing_modes
-        ),
-        _ => writeln!(
-            h,
-            "<p>Model Exchange: all {} modes are states (q, qd: {} states); Co-Simulation propagates them exactly.</p>",
-            r.order,
-            2 * r.order
-        ),
-    };
-    let _ = writeln!(
-        h,
-        "<p>Default experiment tolerance {:.0e}: the longest-ringing dynamic mode completes {:.1} periods before it \
-has decayed by e over the default experiment, and an undamped mode carries a variable-step solver's error to the end \
-of the run, so the tolerance falls a decade per decade of periods above ten. Co-Simulation's step is exact for the \
-modes whatever the tolerance.</p>",
-        r.default_tolerance, r.ringing_periods
-    );
+    for sentence in crate::output::model_exchange::sentences(r) {
+        let _ = writeln!(h, "<p>{}</p>", esc(&sentence));
+    }
     let a = &r.accuracy;
     if a.pairs.is_empty() {
         h.push_str("<h3>Eigenfrequencies of the mounted body</h3>\n<table><tr><th>mode</th><th>reduced [Hz]</th><th>full FE [Hz]</th><th>relative error</th></tr>\n");
@@ -532,8 +504,15 @@ mod tests {
             relaxing_modes: 0,
             dynamic_cutoff_hz: Some(500.0),
             dynamic_cutoff_rule: "the highest fixed-interface mode".into(),
-            default_tolerance: 1e-6,
-            ringing_periods: 12.0,
+            scene_cutoff_hz: Some(1e4),
+            host_cutoff_hz: 500.0,
+            default_experiment: crate::output::report::ExperimentReport {
+                stop_time: 2.0,
+                step_size: 2e-3,
+                tolerance: 1e-6,
+            },
+            explicit_euler_step: 0.0,
+            explicit_euler_mode_hz: Some(300.0),
             flanges: vec![FlangeReport {
                 name: "tip".into(),
                 role: "force".into(),
@@ -614,13 +593,19 @@ mod tests {
     }
 
     #[test]
-    fn the_default_tolerance_and_its_reason_are_stated() {
+    fn the_model_exchange_split_and_its_reason_are_stated() {
         let mut r = report(None);
-        r.default_tolerance = 1e-10;
-        r.ringing_periods = 29790.7;
         let html = html_of(&r);
-        assert!(html.contains("Default experiment tolerance 1e-10"), "{html}");
-        assert!(html.contains("29790.7 periods"));
+        // the host's limit chose the cutoff: its reason and the remedy are named
+        assert!(html.contains("500 solver steps"), "{html}");
+        assert!(html.contains("reduction.dynamic_cutoff"));
+        assert!(html.contains("stop 2e0 s, step 2e-3 s, tolerance 1e-6"), "{html}");
+        // an undamped dynamic mode: no explicit step is stable, and the page says so
+        assert!(html.contains("cannot carry it: the dynamic mode at 300.0000 Hz is undamped"));
+        // the scene's own cutoff below the host's: no excuse is printed
+        r.scene_cutoff_hz = Some(400.0);
+        r.host_cutoff_hz = 2000.0;
+        assert!(!html_of(&r).contains("500 solver steps"));
     }
 
     #[test]

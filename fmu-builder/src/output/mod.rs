@@ -5,11 +5,11 @@
 //! platforms).
 
 pub mod binaries;
-pub mod default_experiment;
 pub mod documentation;
 pub mod finite;
 pub mod fmu;
 pub mod mesh_view;
+pub mod model_exchange;
 pub mod package;
 pub mod plausibility;
 pub mod plot;

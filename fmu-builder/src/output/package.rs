@@ -3,7 +3,6 @@
 use crate::error::{BuildError, Result};
 use crate::input::spec::Spec;
 use crate::output::binaries::{Platform, PlatformBinary, fmi2_functions};
-use crate::output::default_experiment::default_experiment;
 use crate::output::documentation;
 use crate::output::finite;
 use crate::output::fmu;
@@ -33,7 +32,7 @@ pub fn write_fmu(
     finite::smoke_step(reduced)?;
     let id = fmu::model_identifier(&spec.name);
     let table = VariableTable::new(reduced);
-    let experiment = default_experiment(reduced);
+    let experiment = report.default_experiment;
     let info = fmu::ModelInfo {
         model_name: spec.name.clone(),
         model_identifier: id.clone(),
@@ -45,8 +44,8 @@ pub fn write_fmu(
         generation_date_time: generation_time()?,
         default_experiment: fmu::DefaultExperiment {
             start: 0.0,
-            stop: experiment.stop,
-            step: 1e-3,
+            stop: experiment.stop_time,
+            step: experiment.step_size,
             tolerance: experiment.tolerance,
         },
     };

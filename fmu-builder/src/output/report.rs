@@ -7,13 +7,20 @@ use crate::linalg::sparse::{SpdSolve, SpdSolver};
 use crate::model::flange::{Flange, FlangeCoupling};
 use crate::model::part::Part;
 use crate::model::rigid_coupling::Assembled;
-use crate::output::default_experiment::default_experiment;
 use crate::output::plausibility::{self, SceneReport};
 use crate::reduce::accuracy::Accuracy;
 use crate::reduce::basis::Basis;
-use crate::reduce::cutoff::dynamic_cutoff;
+use crate::reduce::experiment::plan;
 use fmu_runtime::reduced::ReducedBody;
 use serde::Serialize;
+
+/// modelDescription.xml's DefaultExperiment (start 0).
+#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
+pub struct ExperimentReport {
+    pub stop_time: f64,
+    pub step_size: f64,
+    pub tolerance: f64,
+}
 
 #[derive(Debug, Clone, Serialize)]
 pub struct FlangeReport {
@@ -126,11 +133,18 @@ pub struct Report {
     pub dynamic_cutoff_hz: Option<f64>,
     /// How the cutoff was chosen.
     pub dynamic_cutoff_rule: String,
-    /// The relative tolerance the FMU's default experiment proposes to Model Exchange hosts.
-    pub default_tolerance: f64,
-    /// Periods the longest-ringing dynamic mode completes within the default experiment before
-    /// it has decayed by e: the tolerance falls a decade per decade of them above 10.
-    pub ringing_periods: f64,
+    /// The scene's own cutoff [Hz] (its band, the input's, the highest normal mode) before the
+    /// limit of what a host resolves; None: every mode.
+    pub scene_cutoff_hz: Option<f64>,
+    /// The fastest dynamic mode a host resolves at the default experiment's output interval
+    /// (and a 1 s run's 1 ms) [Hz].
+    pub host_cutoff_hz: f64,
+    /// The FMU's DefaultExperiment.
+    pub default_experiment: ExperimentReport,
+    /// The longest step at which explicit Euler carries the Model Exchange states [s] (0: none,
+    /// a dynamic mode is undamped), and the frequency of the mode that limits it [Hz].
+    pub explicit_euler_step: f64,
+    pub explicit_euler_mode_hz: Option<f64>,
     pub flanges: Vec<FlangeReport>,
     /// Stress recovery points (outputs.stress), in the order of the FMU's variables.
     pub stress_points: Vec<StressPointReport>,
@@ -191,7 +205,8 @@ pub fn report_of(
     accuracy: Accuracy,
 ) -> Report {
     let props = model.mass_properties;
-    let experiment = default_experiment(reduced);
+    let host = plan(spec, basis, reduced);
+    let euler = reduced.explicit_euler_limit(reduced.alpha, reduced.beta);
     let mount = flanges.iter().find(|f| f.role == Role::Motion).map(|f| f.name.as_str());
     let mut report = Report {
         model_name: spec.name.clone(),
@@ -218,9 +233,12 @@ pub fn report_of(
             .dynamic_cutoff
             .is_finite()
             .then(|| reduced.dynamic_cutoff / (2.0 * std::f64::consts::PI)),
-        dynamic_cutoff_rule: dynamic_cutoff(spec, basis).1.into(),
-        default_tolerance: experiment.tolerance,
-        ringing_periods: experiment.ringing_periods,
+        dynamic_cutoff_rule: host.rule.clone(),
+        scene_cutoff_hz: host.scene_cutoff.is_finite().then(|| host.scene_cutoff / (2.0 * std::f64::consts::PI)),
+        host_cutoff_hz: host.host_cutoff / (2.0 * std::f64::consts::PI),
+        default_experiment: ExperimentReport { stop_time: host.stop, step_size: host.step, tolerance: host.tolerance },
+        explicit_euler_step: euler.0,
+        explicit_euler_mode_hz: euler.1.map(|j| reduced.omega[j] / (2.0 * std::f64::consts::PI)),
         flanges: flanges
             .iter()
             .map(|f| FlangeReport {

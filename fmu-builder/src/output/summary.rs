@@ -55,33 +55,8 @@ pub fn text(r: &Report) -> String {
     for refusal in &sc.refuses {
         let _ = writeln!(s, "  the FMU refuses {refusal}");
     }
-    let quasi_static = r.order - r.dynamic_modes;
-    let _ = match r.dynamic_cutoff_hz {
-        Some(hz) if quasi_static > 0 => writeln!(
-            s,
-            "  Model Exchange: {} dynamic modes (states) up to {hz:.4} Hz ({}), {quasi_static} quasi-static above{}",
-            r.dynamic_modes,
-            r.dynamic_cutoff_rule,
-            if r.relaxing_modes > 0 {
-                format!(
-                    " ({} of them relaxing: damped slower than the cutoff, one state each; {} states)",
-                    r.relaxing_modes,
-                    2 * r.dynamic_modes + r.relaxing_modes
-                )
-            } else {
-                String::new()
-            }
-        ),
-        _ => writeln!(s, "  Model Exchange: all {} modes dynamic (states)", r.order),
-    };
-    if r.default_tolerance < crate::output::default_experiment::DAMPED_TOLERANCE {
-        let _ = writeln!(
-            s,
-            "  default tolerance {:.0e}: a dynamic mode rings {:.0} periods over the default experiment \
-             (little or no damping), and a Model Exchange host's error grows with each \
-             (Co-Simulation's step is exact for it)",
-            r.default_tolerance, r.ringing_periods
-        );
+    for sentence in crate::output::model_exchange::sentences(r) {
+        let _ = writeln!(s, "  {sentence}");
     }
     let a = &r.accuracy;
     let shown = a.reduced_hz.len().min(8);

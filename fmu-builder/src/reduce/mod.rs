@@ -9,5 +9,6 @@ pub mod band_response;
 pub mod basis;
 pub mod cutoff;
 pub mod damping;
+pub mod experiment;
 pub mod frf;
 pub mod order;
