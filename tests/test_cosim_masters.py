@@ -44,8 +44,10 @@ MASTERS = ["libcosim", "ecos"]
 # agreement with FMPy's run to round-off: the masters make the same FMI calls with the same values
 # (libcosim's step sizes differ from 1 ms by an ulp, see test_force_step_matches_fmpy)
 ROUND_OFF = 1e-9
-# the acceptance figure for the spinning mount against the fine reference
-SPIN_TOLERANCE = 1e-3
+# the spinning mount against the fine reference: measured 1.3e-10 in both masters (the issue's
+# acceptance figure is 1e-3; before the FMU ended a step in the pose the step turned the mount to,
+# the world-frame outputs were one step late, 1.9e-2); 10x the measured figure
+SPIN_TOLERANCE = 2e-9
 
 
 # ---------------------------------------------------------------------------------------------
@@ -322,8 +324,7 @@ def test_spinning_mount_matches_fine_reference(master, fmus, references):
     # the body-frame deformation: measured 1.3e-10 for both masters (the step with the pose held
     # and base.w given lands on the fine run's state); 10x that
     assert body[worst_body] < 2e-9, "body-frame outputs"
-    # the acceptance figure: 1e-3 of the vector's swing. Measured 1.9e-2 (left.w[1]; base.f, base.t,
-    # left.v 1.0e-2) for both masters while the FMU reports its world-frame outputs after
-    # fmi2DoStep with the mount's pose at the step's start: FMPy reading the same run's outputs
-    # after setting the pose at t_k agrees with the fine run to 1.3e-10
+    # every output, world-frame ones included: after fmi2DoStep the FMU reports the state the
+    # step produced in the pose the step turned the mount to (measured 1.0e-10 in left.w; it was
+    # 1.9e-2 when the outputs used the pose at the step's start, one step late)
     assert errors[worst] < SPIN_TOLERANCE
