@@ -858,7 +858,7 @@ pub unsafe fn fmi2CompletedIntegratorStep<M: Model>(
             *enter = fmi2False;
             *terminate = fmi2False;
             if let Some(warning) = inst.model.completed_integrator_step(inst.time) {
-                inst.logger.warning(fmi2Warning, &format!("fmi2CompletedIntegratorStep: {warning}"));
+                inst.logger.advice(&format!("fmi2CompletedIntegratorStep: {warning}"));
                 return Ok(fmi2Warning);
             }
             Ok(fmi2OK)

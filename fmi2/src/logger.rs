@@ -80,9 +80,18 @@ impl Logger {
     }
 
     pub fn log(&self, status: fmi2Status, category: Category, text: &str) {
-        if !self.is_enabled(category) {
-            return;
+        if self.is_enabled(category) {
+            self.emit(status, category, text);
         }
+    }
+
+    /// A warning the host must see to act on it (it integrates in a way that cannot work):
+    /// logged whatever the debug logging, as errors and discards are.
+    pub fn advice(&self, text: &str) {
+        self.emit(fmi2Status::fmi2Warning, Category::LogStatusWarning, text);
+    }
+
+    fn emit(&self, status: fmi2Status, category: Category, text: &str) {
         let Some(callback) = self.callback else {
             return;
         };

@@ -53,7 +53,14 @@ impl StepWatch {
 fn euler_warning(body: &ReducedBody, alpha: f64, beta: f64, h: f64, j: usize, limit: f64) -> String {
     let hz = |k: usize| body.omega[k] / (2.0 * PI);
     let (w, d) = (body.omega[j], body.damping_rate(j, alpha, beta));
-    let growth = (1.0 - h * d + h * h * w * w).max(0.0).sqrt();
+    let growth = if j >= body.n_dynamic() {
+        (1.0 - h * w * w / d).abs()
+    } else if d < 2.0 * w {
+        (1.0 - h * d + h * h * w * w).max(0.0).sqrt()
+    } else {
+        // overdamped: the fast real root -(d/2 + sqrt(d^2/4 - w^2)) is the one that grows
+        (1.0 - h * (0.5 * d + (0.25 * d * d - w * w).sqrt())).abs()
+    };
     let need = if limit > 0.0 {
         format!("needs a step below {limit:.3e} s (damping {d:.3e} 1/s)")
     } else {
