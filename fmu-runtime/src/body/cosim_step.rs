@@ -136,7 +136,7 @@ impl FlexibleBody {
                 self.propagator.advance_ramp(&self.body.omega, &self.load, &self.load_rate, &mut self.q, &mut self.qd);
                 self.extrapolate_inputs(h);
                 self.record_stepped_inputs();
-                self.advance_held_mount(&held, h);
+                self.restore_held_mount(&held);
             } else {
                 self.propagator.advance(&self.body.omega, &self.load, &mut self.q, &mut self.qd);
                 self.record_stepped_inputs();
@@ -215,7 +215,7 @@ impl FlexibleBody {
         if ramp {
             self.extrapolate_inputs(h);
             self.record_stepped_inputs();
-            self.advance_held_mount(&held, h);
+            self.restore_held_mount(&held);
         } else {
             self.record_stepped_inputs();
         }
@@ -354,16 +354,13 @@ impl FlexibleBody {
         }
     }
 
-    /// The mount groups whose rates were filled from the kinematics end the step where those
-    /// kinematics took them: the orientation turned by the step's mean spin (exactly a rotation,
-    /// where the linear extrapolation R + h w~ R is not), the spin by z h. The outputs after the
-    /// step are then those of the state the step produced, in the mount's pose at t + h: what a
-    /// co-simulation master (libcosim, Ecos, FMPy) reads before it sets the next inputs, which
-    /// replace this pose.
-    fn advance_held_mount(&mut self, held: &HeldMount, h: f64) {
+    /// The host's own values of the mount groups whose rates were filled from the kinematics.
+    fn restore_held_mount(&mut self, held: &HeldMount) {
         if held.rot {
-            let mean = k3::scale(0.5 * h, k3::add(held.mount.w, self.mount.w));
-            self.mount.rot = k3::mat_mul(&k3::rotation_of(mean), &held.mount.rot);
+            self.mount.rot = held.mount.rot;
+        }
+        if held.w {
+            self.mount.w = held.mount.w;
         }
         self.coupling.valid = false;
         self.eval.valid = false;
