@@ -261,9 +261,9 @@ impl Model for BodyFmu {
         let b = &mut self.body;
         match q {
             Q::MountPosition(i) => b.mount_mut().r[i] = value,
-            Q::MountRotation(i, j) => b.mount_mut().rot[3 * i + j] = value,
+            Q::MountRotation(i, j) => b.set_mount_rotation(3 * i + j, value),
             Q::MountVelocity(i) => b.mount_mut().v[i] = value,
-            Q::MountAngularVelocity(i) => b.mount_mut().w[i] = value,
+            Q::MountAngularVelocity(i) => b.set_mount_spin(i, value),
             Q::MountAcceleration(i) => b.mount_mut().a[i] = value,
             Q::MountAngularAcceleration(i) => b.mount_mut().z[i] = value,
             Q::FlangeForce(k, i) => b.load_mut(k).f[i] = value,
@@ -389,6 +389,7 @@ impl Model for BodyFmu {
 
     fn exit_initialization(&mut self) -> Result<(), String> {
         self.body.start_frame();
+        self.body.start_stepping();
         if self.static_start {
             self.body.settle_static()?;
         }

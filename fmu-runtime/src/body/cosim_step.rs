@@ -90,6 +90,17 @@ impl FlexibleBody {
             self.record_stepped_inputs();
             return Ok(());
         }
+        // what the last step moved and the host did not set since: the host's values
+        if let Some(rot) = self.host_mount.rot.take() {
+            self.mount.rot = rot;
+            self.coupling.valid = false;
+            self.eval.valid = false;
+        }
+        if let Some(w) = self.host_mount.w.take() {
+            self.mount.w = w;
+            self.coupling.valid = false;
+            self.eval.valid = false;
+        }
         self.check_inputs()?;
         self.follow_input_change()?;
         self.step_mounted(h)
@@ -136,7 +147,7 @@ impl FlexibleBody {
                 self.propagator.advance_ramp(&self.body.omega, &self.load, &self.load_rate, &mut self.q, &mut self.qd);
                 self.extrapolate_inputs(h);
                 self.record_stepped_inputs();
-                self.restore_held_mount(&held);
+                self.advance_held_mount(&held, h);
             } else {
                 self.propagator.advance(&self.body.omega, &self.load, &mut self.q, &mut self.qd);
                 self.record_stepped_inputs();
@@ -215,7 +226,7 @@ impl FlexibleBody {
         if ramp {
             self.extrapolate_inputs(h);
             self.record_stepped_inputs();
-            self.restore_held_mount(&held);
+            self.advance_held_mount(&held, h);
         } else {
             self.record_stepped_inputs();
         }
@@ -354,14 +365,33 @@ impl FlexibleBody {
         }
     }
 
-    /// The host's own values of the mount groups whose rates were filled from the kinematics.
-    fn restore_held_mount(&mut self, held: &HeldMount) {
+    /// The mount groups whose rates were filled from the kinematics end the step where those
+    /// kinematics took them: the orientation turned by the step's mean spin (a rotation, where
+    /// the linear extrapolation R + h w~ R is not), the spin by z h. Co-simulation masters
+    /// (libcosim, Ecos, FMPy) read the outputs after fmi2DoStep, before they set the next
+    /// inputs: those are then the state the step produced in the pose at t + h, not one step
+    /// late. The host's own values are kept for the next step (`host_mount`), so a host that
+    /// holds the mount's pose while giving its spin steps as before.
+    fn advance_held_mount(&mut self, held: &HeldMount, h: f64) {
+        let driven = self.host_mount;
         if held.rot {
-            self.mount.rot = held.mount.rot;
+            if driven.rot_driven {
+                let mean = k3::scale(0.5 * h, k3::add(held.mount.w, self.mount.w));
+                self.mount.rot = k3::mat_mul(&k3::rotation_of(mean), &held.mount.rot);
+                self.host_mount.rot = Some(held.mount.rot);
+            } else {
+                self.mount.rot = held.mount.rot;
+            }
         }
         if held.w {
-            self.mount.w = held.mount.w;
+            if driven.w_driven {
+                self.host_mount.w = Some(held.mount.w);
+            } else {
+                self.mount.w = held.mount.w;
+            }
         }
+        self.host_mount.rot_driven = false;
+        self.host_mount.w_driven = false;
         self.coupling.valid = false;
         self.eval.valid = false;
     }

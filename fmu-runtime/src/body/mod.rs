@@ -283,6 +283,24 @@ pub struct FlexibleBody<T = f64> {
     qs_work: QuasiStaticWork<T>,
     /// Co-Simulation: the inputs of the last step, to move the algebraic modes when they change.
     stepped: SteppedInputs,
+    /// Co-Simulation: the host's view of the mount's orientation and spin where the last step
+    /// moved them by their kinematics (see `cosim_step`), and which of them the host drives.
+    host_mount: HostMount,
+}
+
+/// A Co-Simulation host that sets the mount's orientation (or spin) between steps drives it:
+/// after a step the FMU reports the state the step produced in the pose the step turned the
+/// mount to, which the host's next value replaces (what co-simulation masters read before they
+/// set the next inputs). A host that holds them (set once, before initialisation ends) keeps its
+/// own values, as Model Exchange does. `rot`, `w`: the host's values while `mount` holds the
+/// step's end pose, until the host sets an entry (the others stay the host's) or the next step
+/// starts from them.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct HostMount {
+    pub rot: Option<Mat3>,
+    pub w: Option<Vec3>,
+    pub rot_driven: bool,
+    pub w_driven: bool,
 }
 
 /// Time derivatives of the inputs over the next step (first-order hold); zero means held.
@@ -363,6 +381,7 @@ impl FlexibleBody {
             settling: false,
             qs_work: QuasiStaticWork::new(n, body.n_dynamic(), body.free_floating),
             stepped: SteppedInputs::new(n, nf),
+            host_mount: HostMount::default(),
             body,
         }
     }
@@ -412,12 +431,18 @@ impl FlexibleBody {
             qs_work: QuasiStaticWork::new(n, self.n_dynamic, self.frame.is_some()),
             // stepping is f64 only
             stepped: SteppedInputs::default(),
+            host_mount: HostMount::default(),
         }
     }
 
     pub fn state(&self) -> BodyState {
         BodyState {
-            mount: self.mount,
+            // the host's mount: a restored body starts its next step where this one would
+            mount: MountMotion {
+                rot: self.host_mount.rot.unwrap_or(self.mount.rot),
+                w: self.host_mount.w.unwrap_or(self.mount.w),
+                ..self.mount
+            },
             loads: self.loads.clone(),
             params: self.params,
             q: self.q.clone(),
@@ -523,6 +548,28 @@ impl<T: Scalar> FlexibleBody<T> {
         self.eval.valid = false;
         self.coupling.valid = false;
         &mut self.mount
+    }
+    /// Entry k (row-major) of the mount's orientation, as the host sets it: the mount returns to
+    /// the host's view of its orientation, this entry changed.
+    pub fn set_mount_rotation(&mut self, k: usize, value: T) {
+        if let Some(host) = self.host_mount.rot.take() {
+            self.mount.rot = host.map(c);
+        }
+        self.host_mount.rot_driven = true;
+        self.mount_mut().rot[k] = value;
+    }
+    /// Component i of the mount's angular velocity, as the host sets it.
+    pub fn set_mount_spin(&mut self, i: usize, value: T) {
+        if let Some(host) = self.host_mount.w.take() {
+            self.mount.w = host.map(c);
+        }
+        self.host_mount.w_driven = true;
+        self.mount_mut().w[i] = value;
+    }
+    /// Initialisation is over: what the host set so far are start values, not a drive.
+    pub fn start_stepping(&mut self) {
+        self.host_mount.rot_driven = false;
+        self.host_mount.w_driven = false;
     }
     pub fn load_mut(&mut self, flange: usize) -> &mut FlangeLoad<T> {
         self.eval.valid = false;
