@@ -9,9 +9,15 @@ two integrators of one model, nobody here wrote the ME integrators) within the i
 figures: 1e-3 of each output vector's swing at the FMU's tolerance, 1e-2 at 1e-4. An explicit
 Euler host gets a warning that names its step, the step the modes need and the remedy."""
 
+import ctypes
+import json
+import zipfile
+
+import fmpy.fmi2
 import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
+from fmpy.logging import addLoggerProxy
 
 import me_hosts as mh
 
@@ -70,16 +76,17 @@ def test_fmpy_model_exchange_at_its_defaults(fmus, name, scene, host):
     assert not [m for m in log.lines if m[0] >= 2], log.lines  # no warning, discard or error
     error, worst = compare(path, name, scene, result, table)
     print(f"\n{name}, {scene}, FMPy ME {host}: {wall:.2f} s, worst {error:.2e} ({worst}) of its swing")
-    # measured, worst of the damped examples: DefaultExperiment 5.6e-5, 1 s run 8.9e-5, rtol 1e-4
-    # 3.6e-3 (bracket-band's mount force); the undamped L-beam below
+    # measured, worst of the examples: DefaultExperiment 5.6e-5, 1 s run 8.9e-5, rtol 1e-4 3.6e-3
+    # (bracket-band's mount force); the undamped L-beam at rtol 1e-4 below
     limit = AT_1E_4 if host == "rtol 1e-4" else AT_DEFAULTS
-    if name == "l-beam" and host != "1 s run":
-        # the undamped L-beam misses the acceptance figures by a little: an undamped mode carries
-        # the host's error of every period to the end of the run. Measured in tip.w (the highest
-        # dynamic modes' angular velocity): 1.4e-3 over its 10 s DefaultExperiment at 1e-6, and
-        # 1.06e-2 over 2 s at 1e-4 (4e-3 with the cutoff at 20 Hz: the tolerance, not the
-        # cutoff, sets it). Bounded here at twice that, so that growth is caught.
-        limit = 3e-3 if host == "DefaultExperiment" else 2e-2
+    if name == "l-beam" and host == "rtol 1e-4":
+        # the undamped L-beam at rtol 1e-4 (FMPy passes the FMU no tolerance, so it cannot warn):
+        # an undamped mode carries the host's error of every period to the end of the run.
+        # Measured 1.06e-2 in tip.w over 2 s (the highest dynamic modes' angular velocity; 4e-3
+        # with the cutoff at 20 Hz: the tolerance, not the cutoff, sets it), the issue's "about
+        # 1e-2"; bounded at twice that so that growth is caught. Its default experiment asks for
+        # 1e-8 (3.4e-5 over 10 s; 1.4e-3 at 1e-6).
+        limit = 2e-2
     assert error < limit
 
 
@@ -107,8 +114,6 @@ def test_scipy_at_rtol_1e_4(fmus, name, scene, method):
 def test_default_experiment_is_what_hosts_run(fmus):
     """A stop time that shows the response, a step the dynamic modes fit, a tolerance no
     tighter than 1e-6; the fastest dynamic mode within what a host resolves at the step."""
-    import json
-    import zipfile
     for name, path in fmus.items():
         md = read_model_description(path)
         e = md.defaultExperiment
@@ -117,7 +122,9 @@ def test_default_experiment_is_what_hosts_run(fmus):
         slowest = report["accuracy"]["reduced_hz"][0]
         print(f"\n{name}: stop {stop} s, step {step} s, tolerance {tol}, {report['dynamic_modes']} dynamic modes "
               f"to {report['dynamic_cutoff_hz']:.1f} Hz, slowest mode {slowest:.1f} Hz")
-        assert tol >= 1e-6
+        # no tighter than 1e-6 unless the input asks (the undamped L-beam asks for 1e-8)
+        spec = json.loads(zipfile.ZipFile(path).read("documentation/input.json"))
+        assert tol == (spec.get("experiment") or {}).get("tolerance", 1e-6)
         assert stop * slowest >= 10.0, "ten periods of the slowest mode at least"
         assert stop / step <= 1000.0 + 1e-9
         # two periods of the fastest dynamic mode per output interval (and per 1 ms) at most
@@ -159,10 +166,35 @@ def test_explicit_euler_on_an_undamped_body_says_no_step_is_stable(fmus):
 
 
 def test_a_stable_euler_step_is_not_warned(fmus):
-    import json
-    import zipfile
     path = fmus["beam"]
     report = json.loads(zipfile.ZipFile(path).read("documentation/report.json"))
     h = 0.5 * report["explicit_euler_step"]
     _, log = euler_run(path, {"tip.f[3]": 100.0}, h, 20)
     assert not [m for s, _, m in log.lines if s == 1], log.lines
+
+
+
+def setup_messages(path, tolerance):
+    """fmi2SetupExperiment with a tolerance, as fmusim and OMSimulator call it: what is logged."""
+    from fmu_access import Fmu
+    from test_fmi_robustness import Recorder
+    recorder = Recorder()
+    f = Fmu(path, "ModelExchange", callbacks=recorder.callbacks)
+    try:
+        f.fmu.setupExperiment(tolerance=tolerance, startTime=0.0)
+    finally:
+        f.close(terminate=False)
+        # the recorder replaced FMPy's logger proxy: back to FMPy's own for the other tests
+        addLoggerProxy(ctypes.byref(fmpy.fmi2.defaultCallbacks))
+    return recorder.messages
+
+
+def test_a_loose_tolerance_on_undamped_modes_is_named(fmus):
+    # the undamped L-beam at the tolerance fmusim and OMSimulator use: the cause and the remedy
+    messages = setup_messages(fmus["l-beam"], 1e-4)
+    assert len(messages) == 1, messages
+    assert "relative tolerance 1e-4 with 14 undamped dynamic modes" in messages[0], messages
+    assert "1e-6 or tighter" in messages[0] and "Co-Simulation" in messages[0]
+    # at 1e-6, or on a damped body, nothing to say
+    assert setup_messages(fmus["l-beam"], 1e-6) == []
+    assert setup_messages(fmus["bracket"], 1e-4) == []

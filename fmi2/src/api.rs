@@ -338,6 +338,10 @@ pub unsafe fn fmi2SetupExperiment<M: Model>(
             inst.start_time = startTime;
             inst.time = startTime;
             inst.stop_time = to_bool(stopTimeDefined).then_some(stopTime);
+            if let Some(advice) = inst.tolerance.and_then(|t| inst.model.tolerance_advice(t)) {
+                inst.logger.advice(&format!("fmi2SetupExperiment: {advice}"));
+                return Ok(fmi2Warning);
+            }
             Ok(fmi2OK)
         })
     }

@@ -160,6 +160,11 @@ pub trait Model: Sized + Clone {
     fn get_real_output_derivative(&mut self, _vr: u32, _order: i32) -> Result<f64, String> {
         Err("output derivatives are not supported by this model".into())
     }
+    /// The relative tolerance the host integrates with (fmi2SetupExperiment): a warning where
+    /// the model cannot be accurate at it (the layer logs it and answers fmi2Warning).
+    fn tolerance_advice(&self, _tolerance: f64) -> Option<String> {
+        None
+    }
     /// Model Exchange: the host completed an integrator step at `time` (fmi2SetTime's last value).
     /// A warning about how the host integrates (the layer logs it once per call that returns one
     /// and answers fmi2Warning); the step stands either way.

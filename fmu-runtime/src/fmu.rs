@@ -364,6 +364,12 @@ impl Model for BodyFmu {
         Ok(())
     }
 
+    fn tolerance_advice(&self, tolerance: f64) -> Option<String> {
+        let p = self.body.parameters();
+        let undamped = self.body.reduced().n_undamped_dynamic(p.alpha, p.beta);
+        crate::explicit_host::tolerance_advice(self.body.quasi_static(), undamped, tolerance)
+    }
+
     fn completed_integrator_step(&mut self, time: f64) -> Option<String> {
         let p = self.body.parameters();
         let (alpha, beta) = (p.alpha, p.beta);

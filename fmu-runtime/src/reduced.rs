@@ -114,6 +114,12 @@ impl ReducedBody {
         if d > 0.0 { self.omega[j] * self.omega[j] / d } else { f64::INFINITY }
     }
 
+    /// Number of dynamic modes without damping at alpha, beta: a variable-step host's error in
+    /// them is never forgotten, so loose tolerances drift over long runs.
+    pub fn n_undamped_dynamic(&self, alpha: f64, beta: f64) -> usize {
+        (0..self.n_dynamic()).filter(|&j| self.damping_rate(j, alpha, beta) <= 0.0).count()
+    }
+
     /// The longest step [s] at which explicit Euler stays stable for every Model Exchange state
     /// at damping alpha, beta (|1 + h lambda| <= 1 for each eigenvalue lambda), and the mode that
     /// limits it; 0 where a dynamic mode is undamped (no step is stable: each one multiplies its

@@ -513,6 +513,7 @@ mod tests {
             },
             explicit_euler_step: 0.0,
             explicit_euler_mode_hz: Some(300.0),
+            undamped_dynamic_modes: 2,
             flanges: vec![FlangeReport {
                 name: "tip".into(),
                 role: "force".into(),
@@ -602,6 +603,8 @@ mod tests {
         assert!(html.contains("stop 2e0 s, step 2e-3 s, tolerance 1e-6"), "{html}");
         // an undamped dynamic mode: no explicit step is stable, and the page says so
         assert!(html.contains("cannot carry it: the dynamic mode at 300.0000 Hz is undamped"));
+        // undamped dynamic modes: the tolerance advice and its field
+        assert!(html.contains("2 dynamic modes are undamped") && html.contains("experiment.tolerance"), "{html}");
         // the scene's own cutoff below the host's: no excuse is printed
         r.scene_cutoff_hz = Some(400.0);
         r.host_cutoff_hz = 2000.0;

@@ -49,6 +49,15 @@ pub fn sentences(r: &Report) -> Vec<String> {
         "Default experiment: stop {:e} s, step {:e} s, tolerance {:.0e}.",
         e.stop_time, e.step_size, e.tolerance
     ));
+    if r.undamped_dynamic_modes > 0 {
+        out.push(format!(
+            "{} dynamic modes are undamped: a variable-step host's error in them grows with every period they ring \
+             (the undamped L-beam example, 10 s: 1.4e-3 of its tip's angular velocity swing at tolerance 1e-6, \
+             1e-2 over 2 s at 1e-4). Ask for a tighter tolerance with experiment.tolerance (1e-8), add damping, or \
+             use Co-Simulation (exact at any step); the FMU warns a host that sets a tolerance looser than 1e-6.",
+            r.undamped_dynamic_modes
+        ));
+    }
     out.push(if r.explicit_euler_step > 0.0 {
         format!(
             "Explicit fixed-step hosts (Euler) need a step below {:.2e} s (mode at {:.4} Hz); the FMU warns at the \

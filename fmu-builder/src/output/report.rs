@@ -145,6 +145,8 @@ pub struct Report {
     /// a dynamic mode is undamped), and the frequency of the mode that limits it [Hz].
     pub explicit_euler_step: f64,
     pub explicit_euler_mode_hz: Option<f64>,
+    /// Dynamic modes without any damping: a host's error in them grows with every period.
+    pub undamped_dynamic_modes: usize,
     pub flanges: Vec<FlangeReport>,
     /// Stress recovery points (outputs.stress), in the order of the FMU's variables.
     pub stress_points: Vec<StressPointReport>,
@@ -239,6 +241,7 @@ pub fn report_of(
         default_experiment: ExperimentReport { stop_time: host.stop, step_size: host.step, tolerance: host.tolerance },
         explicit_euler_step: euler.0,
         explicit_euler_mode_hz: euler.1.map(|j| reduced.omega[j] / (2.0 * std::f64::consts::PI)),
+        undamped_dynamic_modes: reduced.n_undamped_dynamic(reduced.alpha, reduced.beta),
         flanges: flanges
             .iter()
             .map(|f| FlangeReport {
