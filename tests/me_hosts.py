@@ -115,17 +115,23 @@ def relative_errors(outputs, me, cs):
     return errors
 
 
+def initialized(f, start, table):
+    """Fmu `f` with its start values (and the spinning mount's pose at t = 0), initialised."""
+    f.set(**start)
+    if table is not None:
+        f.set(**spin_inputs(0.0))
+    f.fmu.setupExperiment(startTime=0.0)
+    f.fmu.enterInitializationMode()
+    f.fmu.exitInitializationMode()
+    return f
+
+
 def cs_reference(path, start, table, outputs, grid, h):
     """Co-Simulation of the same FMU on `grid` (multiples of h): exact for held inputs; the
     spinning mount's pose and rate are given with their derivatives over each step."""
     f = Fmu(path, "CoSimulation")
     try:
-        f.set(**start)
-        if table is not None:
-            f.set(**spin_inputs(0.0))
-        f.fmu.setupExperiment(startTime=0.0)
-        f.fmu.enterInitializationMode()
-        f.fmu.exitInitializationMode()
+        initialized(f, start, table)
         out = [f.get(*outputs)]
         n = int(round(grid[-1] / h))
         every = int(round((grid[1] - grid[0]) / h))
@@ -181,12 +187,7 @@ def scipy_me(path, start, table, outputs, grid, rtol, method):
     inputs applied at every right-hand side; returns outputs on `grid` and derivative calls."""
     f = Fmu(path, "ModelExchange")
     try:
-        f.set(**start)
-        if table is not None:
-            f.set(**spin_inputs(0.0))
-        f.fmu.setupExperiment(startTime=0.0)
-        f.fmu.enterInitializationMode()
-        f.fmu.exitInitializationMode()
+        initialized(f, start, table)
         f.fmu.newDiscreteStates()
         f.fmu.enterContinuousTimeMode()
         x0 = f.states()

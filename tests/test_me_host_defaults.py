@@ -36,15 +36,21 @@ CASES = [(name, scene) for name in mh.EXAMPLES_ME for scene in
          (["force step", "gravity"] + (["spinning mount and force"] if name == "t-square" else []))]
 
 
+def case_of(fmus, name, scene):
+    """The FMU, its model description, the scene's start values and spin table (or None), and
+    the outputs compared."""
+    path = fmus[name]
+    md = read_model_description(path)
+    start, table = mh.loads(name, md)[scene]
+    return path, md, start, table, mh.outputs_of(md, mh.EXAMPLES_ME[name][1])
+
+
 def run_length(name):
     return 2.0 if name == "l-beam" else 1.0
 
 
-def compare(path, name, scene, result, table):
+def compare(path, start, table, outs, result):
     """Worst output error of an FMPy result against Co-Simulation on its output grid."""
-    md = read_model_description(path)
-    outs = mh.outputs_of(md, mh.EXAMPLES_ME[name][1])
-    start, _ = mh.loads(name, md)[scene]
     t = result["time"]
     dt = float(np.min(np.diff(t)[np.diff(t) > 0]))
     grid = np.arange(0.0, t[-1] + 0.5 * dt, dt)
@@ -61,12 +67,7 @@ def compare(path, name, scene, result, table):
 @pytest.mark.parametrize("name,scene", CASES)
 @pytest.mark.parametrize("host", ["DefaultExperiment", "1 s run", "rtol 1e-4"])
 def test_fmpy_model_exchange_at_its_defaults(fmus, name, scene, host):
-    path = fmus[name]
-    md = read_model_description(path)
-    if scene not in mh.loads(name, md):
-        pytest.skip(f"{name} declares no {scene}")
-    start, table = mh.loads(name, md)[scene]
-    outs = mh.outputs_of(md, mh.EXAMPLES_ME[name][1])
+    path, md, start, table, outs = case_of(fmus, name, scene)
     kwargs = {} if host == "DefaultExperiment" else {"stop_time": run_length(name)}
     if host == "rtol 1e-4":
         kwargs["relative_tolerance"] = 1e-4
@@ -74,7 +75,7 @@ def test_fmpy_model_exchange_at_its_defaults(fmus, name, scene, host):
     stop = kwargs.get("stop_time", float(md.defaultExperiment.stopTime))
     assert abs(result["time"][-1] - stop) < 1e-9 * stop, "the run completes"
     assert not [m for m in log.lines if m[0] >= 2], log.lines  # no warning, discard or error
-    error, worst = compare(path, name, scene, result, table)
+    error, worst = compare(path, start, table, outs, result)
     print(f"\n{name}, {scene}, FMPy ME {host}: {wall:.2f} s, worst {error:.2e} ({worst}) of its swing")
     # measured, worst of the examples: DefaultExperiment 5.6e-5, 1 s run 8.9e-5, rtol 1e-4 3.6e-3
     # (bracket-band's mount force); the undamped L-beam at rtol 1e-4 below
@@ -93,12 +94,7 @@ def test_fmpy_model_exchange_at_its_defaults(fmus, name, scene, host):
 @pytest.mark.parametrize("name,scene", CASES)
 @pytest.mark.parametrize("method", ["BDF", "Radau"])
 def test_scipy_at_rtol_1e_4(fmus, name, scene, method):
-    path = fmus[name]
-    md = read_model_description(path)
-    if scene not in mh.loads(name, md):
-        pytest.skip(f"{name} declares no {scene}")
-    start, table = mh.loads(name, md)[scene]
-    outs = mh.outputs_of(md, mh.EXAMPLES_ME[name][1])
+    path, md, start, table, outs = case_of(fmus, name, scene)
     stop = 0.2 if name != "l-beam" else 1.0
     grid = np.linspace(0.0, stop, int(round(stop / 1e-3)) + 1)
     me, nfev, wall = mh.scipy_me(path, start, table, outs, grid, 1e-4, method)
