@@ -61,6 +61,11 @@ CASES = [
      ["scene.geometric_stiffening", "mounted"]),
     ("unknown element", lambda s: set_path(s, ["geometry", "element"], "tet4"), ["geometry.element"]),
     ("negative damping", lambda s: set_path(s, ["damping", "alpha"], -1.0), ["damping.alpha"]),
+    ("negative stop time", lambda s: s.update(experiment={"stop_time": -1.0}), ["experiment.stop_time"]),
+    ("tolerance 1", lambda s: s.update(experiment={"tolerance": 1.0}), ["experiment.tolerance"]),
+    ("step longer than the run", lambda s: s.update(experiment={"stop_time": 0.1, "step_size": 0.5}),
+     ["experiment.step_size", "longer than experiment.stop_time"]),
+    ("unknown experiment field", lambda s: s.update(experiment={"solver": "euler"}), ["experiment", "solver"]),
     # found by fuzzing: each used to abort, hang, print a Debug dump or build an FMU of NaNs
     ("huge box", lambda s: set_path(s, ["geometry", "boxes", 0, "elements"], [100000] * 3),
      ["geometry.boxes[0].elements", "GiB", "available", "fewer elements"]),
