@@ -151,8 +151,8 @@ def test_free_free_frequencies_equal_calculix(etype, tmp_path):
     of its own assembled K and M (LAPACK on (M, K + s M), which also copes with a singular M).
     C3D4's one-point mass is rank one per element; on this mesh CalculiX's assembled M is
     singular (asserted), and ARPACK inside CalculiX then misses the 6th digit (measured 2.5e-6
-    while we agree with the exact eigenvalues of its matrices to 4e-13), so for C3D4 the printed
-    table is held to 5e-6. Against CalculiX's matrices, which carry 14 significant digits (each
+    while we agree with the exact eigenvalues of its matrices to 4e-13); the printed table is
+    held to 5e-6 for every type (see the assertion). Against CalculiX's matrices, which carry 14 significant digits (each
     entry rounded by up to 5e-15 relative, amplified by the eigenproblem's conditioning), every
     type is held to 2e-11: ten times the measured worst (4.1e-13, 1.2e-12, 2.0e-13, 1.3e-12,
     2.2e-12 for C3D4, C3D10, C3D8, C3D20, C3D20R)."""
@@ -177,7 +177,12 @@ def test_free_free_frequencies_equal_calculix(etype, tmp_path):
     assert err_exact <= 2e-11
     if etype == "C3D4":
         assert singular_mass
-    assert err_printed <= (5e-6 if etype == "C3D4" else PRINTED)
+    # the printed table: CalculiX's ARPACK in the free-free shift-invert converges to its own
+    # tolerance, not to the 7 printed digits, and its last digit moves with the machine's BLAS
+    # (measured 1.2e-6 and 1.4e-6 for C3D8 and C3D20R on one machine, below 1e-6 on another,
+    # while the exact eigenvalues of CalculiX's own matrices agree to 2e-12 above): 5e-6 for
+    # every type, as for C3D4's singular mass
+    assert err_printed <= 5e-6
 
 
 @pytest.mark.parametrize("etype", ELEMENT_TYPES)
@@ -541,9 +546,14 @@ def test_damping_matrix_acts_like_the_rayleigh_damping_it_equals(small_matrices,
     k = scipy.io.mmread(small_matrices / "m" / "K.mtx").tocsr()
     m = scipy.io.mmread(small_matrices / "m" / "M.mtx").tocsr()
     scipy.io.mmwrite(small_matrices / "m" / "D.mtx", (alpha * m + beta * k).tocoo(), symmetry="symmetric", precision=17)
-    with_d, _, _ = build(small_matrices, matrix_spec(damping="m/D.mtx"), "with_d")
-    rayleigh, _, _ = build(small_matrices, {**matrix_spec(), "damping": {"alpha": alpha, "beta": beta}}, "rayleigh")
-    undamped, _, _ = build(small_matrices, matrix_spec(), "undamped")
+    # every mode dynamic: the default cutoff (what a Model Exchange host resolves, 2 kHz) would
+    # leave this stiff box's step response almost all quasi-static, and damping nothing to act on
+    def every_mode_dynamic(spec):
+        return {**spec, "reduction": {**spec["reduction"], "dynamic_cutoff": 1e6}}
+    with_d, _, _ = build(small_matrices, every_mode_dynamic(matrix_spec(damping="m/D.mtx")), "with_d")
+    rayleigh, _, _ = build(small_matrices, every_mode_dynamic({**matrix_spec(), "damping": {"alpha": alpha, "beta": beta}}),
+                           "rayleigh")
+    undamped, _, _ = build(small_matrices, every_mode_dynamic(matrix_spec()), "undamped")
     a, b, c = tip_step_response(with_d), tip_step_response(rayleigh), tip_step_response(undamped)
     dev = np.max(np.abs(a - b)) / np.max(np.abs(b))
     print(f"\nD matrix vs Rayleigh parameters: {dev:.1e} of the peak; undamped differs by "
