@@ -6,38 +6,78 @@
 use crate::reduced::ReducedBody;
 use std::f64::consts::PI;
 
-/// Equal steps of one evaluation each before the host counts as explicit Euler: a variable-step
-/// solver changes its step or evaluates more than once per step within that many.
-const EQUAL_STEPS: u32 = 3;
+/// Steps of explicit Euler's form in a row before the host counts as explicit Euler.
+const EULER_STEPS: u32 = 3;
+/// How exactly a step must be x + h f(x) (relative to the states and the update): explicit
+/// Euler's states are that to rounding; a variable-step solver's (CVode interpolating to an
+/// output point, BDF, Runge-Kutta stages) are not.
+const EULER_MATCH: f64 = 1e-10;
 
+/// Explicit Euler's fingerprint: every completed step has one derivative evaluation, at the
+/// states x the previous step ended with, and ends at exactly x + h f(x), h the same each time.
 #[derive(Debug, Clone, Default)]
 pub struct StepWatch {
-    last_time: Option<f64>,
-    last_step: f64,
-    equal_steps: u32,
+    /// States, derivatives and time of the last evaluation (buffers sized at instantiation).
+    x_eval: Vec<f64>,
+    dx_eval: Vec<f64>,
+    t_eval: Option<f64>,
+    /// The states at the last completed step.
+    x_now: Vec<f64>,
     evaluations: u32,
+    last_step: f64,
+    euler_steps: u32,
     warned: bool,
 }
 
 impl StepWatch {
-    /// A derivative evaluation (fmi2GetDerivatives).
-    pub fn evaluated(&mut self) {
+    /// A watch for `nx` continuous states.
+    pub fn new(nx: usize) -> Self {
+        Self { x_eval: vec![0.0; nx], dx_eval: vec![0.0; nx], x_now: vec![0.0; nx], ..Self::default() }
+    }
+
+    /// The states buffer, taken out for the host's model to fill with the states of the
+    /// evaluation (no allocation); [`StepWatch::evaluated`] takes it back.
+    pub fn take_state_buffer(&mut self) -> Vec<f64> {
+        std::mem::take(&mut self.x_eval)
+    }
+
+    /// A derivative evaluation at `time`: the states `x` (the buffer taken out) and derivatives.
+    pub fn evaluated(&mut self, time: f64, x: Vec<f64>, dx: &[f64]) {
+        self.x_eval = x;
+        if dx.len() == self.dx_eval.len() && self.x_eval.len() == dx.len() {
+            self.dx_eval.copy_from_slice(dx);
+            self.t_eval = Some(time);
+        }
         self.evaluations = self.evaluations.saturating_add(1);
     }
 
-    /// A completed integrator step at `time`: the warning, once, when the steps so far are
-    /// explicit Euler's and too long for the body at damping alpha, beta.
-    pub fn completed(&mut self, time: f64, body: &ReducedBody, alpha: f64, beta: f64) -> Option<String> {
+    /// A buffer for the states at a completed step, taken out for the host's model to fill;
+    /// [`StepWatch::completed`] takes it back.
+    pub fn take_state_buffer_now(&mut self) -> Vec<f64> {
+        std::mem::take(&mut self.x_now)
+    }
+
+    /// A completed integrator step at `time` with states `x` (the buffer taken out): the
+    /// warning, once, when the steps so far are explicit Euler's and too long for the body at
+    /// damping alpha, beta.
+    pub fn completed(&mut self, time: f64, x: Vec<f64>, body: &ReducedBody, alpha: f64, beta: f64) -> Option<String> {
+        self.x_now = x;
         let evaluations = std::mem::take(&mut self.evaluations);
-        let previous = self.last_time.replace(time)?;
-        let h = time - previous;
-        if self.warned || !(h > 0.0) {
+        let t0 = self.t_eval.take()?;
+        let h = time - t0;
+        if self.warned || !(h > 0.0) || self.x_now.len() != self.x_eval.len() {
             return None;
         }
+        let x = &self.x_now;
         let same = (h - self.last_step).abs() <= 1e-9 * h.max(self.last_step);
-        self.equal_steps = if same && evaluations == 1 { self.equal_steps + 1 } else { 0 };
         self.last_step = h;
-        if self.equal_steps + 1 < EQUAL_STEPS {
+        self.euler_steps =
+            if evaluations == 1 && euler_update(x, &self.x_eval, &self.dx_eval, h) && (same || self.euler_steps == 0) {
+                self.euler_steps + 1
+            } else {
+                0
+            };
+        if self.euler_steps < EULER_STEPS {
             return None;
         }
         let (limit, mode) = body.explicit_euler_limit(alpha, beta);
@@ -48,6 +88,20 @@ impl StepWatch {
         self.warned = true;
         Some(euler_warning(body, alpha, beta, h, j, limit))
     }
+}
+
+/// Whether x = x0 + h dx0 to rounding, with an update that moves the states at all (at rest any
+/// solver's step is that).
+fn euler_update(x: &[f64], x0: &[f64], dx0: &[f64], h: f64) -> bool {
+    let mut moved = 0.0f64;
+    for ((&x, &x0), &d) in x.iter().zip(x0).zip(dx0) {
+        let update = h * d;
+        if (x - (x0 + update)).abs() > EULER_MATCH * (x0.abs() + update.abs()) {
+            return false;
+        }
+        moved = moved.max(update.abs() / (x0.abs() + f64::MIN_POSITIVE));
+    }
+    moved > EULER_MATCH
 }
 
 fn euler_warning(body: &ReducedBody, alpha: f64, beta: f64, h: f64, j: usize, limit: f64) -> String {
@@ -109,31 +163,55 @@ mod tests {
     use super::*;
     use crate::reduced::two_mode_body;
 
-    fn run(watch: &mut StepWatch, body: &ReducedBody, h: f64, steps: usize, evaluations: usize) -> Vec<String> {
+    /// A host stepping one oscillator (q, q'; omega, d) from q = 1: explicit Euler, or the exact
+    /// solution sampled at the same instants with `evaluations` evaluations per step (what a
+    /// variable-step solver interpolating to output points hands over).
+    fn run(
+        watch: &mut StepWatch,
+        body: &ReducedBody,
+        h: f64,
+        steps: usize,
+        euler: bool,
+        evaluations: usize,
+    ) -> Vec<String> {
+        let (w, d) = (body.omega[0], body.damping_rate(0, body.alpha, body.beta));
+        let f = |x: [f64; 2]| [x[1], -w * w * x[0] - d * x[1]];
+        let exact = |t: f64| {
+            let wd = (w * w - 0.25 * d * d).sqrt();
+            let e = (-0.5 * d * t).exp();
+            let q = e * ((wd * t).cos() + 0.5 * d / wd * (wd * t).sin());
+            let qd = -e * w * w / wd * (wd * t).sin();
+            [q, qd]
+        };
         let mut out = Vec::new();
-        for k in 0..=steps {
+        let mut x = [1.0, 0.0];
+        for k in 0..steps {
+            let t = k as f64 * h;
             for _ in 0..evaluations {
-                watch.evaluated();
+                watch.evaluated(t, x.to_vec(), &f(x));
             }
-            out.extend(watch.completed(k as f64 * h, body, body.alpha, body.beta));
+            x = if euler { [x[0] + h * f(x)[0], x[1] + h * f(x)[1]] } else { exact(t + h) };
+            out.extend(watch.completed(t + h, x.to_vec(), body, body.alpha, body.beta));
         }
         out
     }
 
-    #[test]
-    fn a_loose_tolerance_is_named_only_for_undamped_modes_in_model_exchange() {
-        let advice = tolerance_advice(true, 3, 1e-4).expect("undamped at 1e-4");
-        assert!(advice.contains("1e-4") && advice.contains("3 undamped") && advice.contains("1e-6"), "{advice}");
-        assert!(tolerance_advice(true, 3, 1e-6).is_none());
-        assert!(tolerance_advice(true, 0, 1e-3).is_none(), "damped modes forget the error");
-        assert!(tolerance_advice(false, 3, 1e-3).is_none(), "Co-Simulation's step is exact");
+    /// The two-mode body with only its slow mode a state, 1 % damped.
+    fn one_state_body() -> ReducedBody {
+        let mut body = two_mode_body();
+        body.dynamic_cutoff = 100.0;
+        body.alpha = 0.0;
+        body.beta = 0.0;
+        body.modal_damping = vec![2.0 * 0.01 * body.omega[0], 0.0];
+        body
     }
 
     #[test]
     fn euler_too_long_for_the_modes_is_named_once_with_the_step_it_needs() {
-        let body = two_mode_body();
+        let body = one_state_body();
         let (limit, _) = body.explicit_euler_limit(body.alpha, body.beta);
-        let warnings = run(&mut StepWatch::default(), &body, 10.0 * limit, 50, 1);
+        let mut watch = StepWatch::new(2);
+        let warnings = run(&mut watch, &body, 10.0 * limit, 50, true, 1);
         assert_eq!(warnings.len(), 1, "{warnings:?}");
         assert!(warnings[0].contains(&format!("h = {:.3e} s", 10.0 * limit)), "{}", warnings[0]);
         assert!(warnings[0].contains(&format!("below {limit:.3e} s")), "{}", warnings[0]);
@@ -141,20 +219,15 @@ mod tests {
     }
 
     #[test]
-    fn stable_euler_and_variable_step_solvers_are_left_alone() {
-        let body = two_mode_body();
+    fn stable_euler_and_other_solvers_are_left_alone() {
+        let body = one_state_body();
         let (limit, _) = body.explicit_euler_limit(body.alpha, body.beta);
-        assert!(run(&mut StepWatch::default(), &body, 0.5 * limit, 50, 1).is_empty());
-        // several evaluations per step: not Euler (an implicit or multi-stage solver)
-        assert!(run(&mut StepWatch::default(), &body, 10.0 * limit, 50, 3).is_empty());
-        // changing steps: a variable-step solver
-        let mut watch = StepWatch::default();
-        let mut t = 0.0;
-        for k in 0..50 {
-            watch.evaluated();
-            assert!(watch.completed(t, &body, body.alpha, body.beta).is_none());
-            t += limit * (2.0 + (k % 3) as f64);
-        }
+        assert!(run(&mut StepWatch::new(2), &body, 0.5 * limit, 50, true, 1).is_empty());
+        // a solver whose states are not x + h f(x), even with one evaluation per equal step (CVode
+        // interpolating to output points)
+        assert!(run(&mut StepWatch::new(2), &body, 10.0 * limit, 50, false, 1).is_empty());
+        // several evaluations per step (an implicit or multi-stage solver)
+        assert!(run(&mut StepWatch::new(2), &body, 10.0 * limit, 50, true, 3).is_empty());
     }
 
     #[test]
@@ -164,10 +237,28 @@ mod tests {
         body.beta = 0.0;
         // the slow mode damped (5 %), the fast one undamped
         body.modal_damping = vec![2.0 * 0.05 * body.omega[0], 0.0];
-        let warnings = run(&mut StepWatch::default(), &body, 1e-4, 10, 1);
+        let (w0, w1) = (body.omega[0], body.omega[1]);
+        let f = |x: [f64; 4]| [x[2], x[3], -w0 * w0 * x[0] - 0.1 * w0 * x[2], -w1 * w1 * x[1]];
+        let mut watch = StepWatch::new(4);
+        let (h, mut x, mut warnings) = (1e-4, [1.0, 1.0, 0.0, 0.0], Vec::new());
+        for k in 0..10 {
+            let d = f(x);
+            watch.evaluated(k as f64 * h, x.to_vec(), &d);
+            x = [x[0] + h * d[0], x[1] + h * d[1], x[2] + h * d[2], x[3] + h * d[3]];
+            warnings.extend(watch.completed((k + 1) as f64 * h, x.to_vec(), &body, 0.0, 0.0));
+        }
         assert_eq!(warnings.len(), 1);
         let w = &warnings[0];
         assert!(w.contains("mode 2") && w.contains("undamped"), "{w}");
         assert!(w.contains(&format!("dynamic_cutoff = {:.4} Hz", body.omega[0] / (2.0 * PI))), "{w}");
+    }
+
+    #[test]
+    fn a_loose_tolerance_is_named_only_for_undamped_modes_in_model_exchange() {
+        let advice = tolerance_advice(true, 3, 1e-4).expect("undamped at 1e-4");
+        assert!(advice.contains("1e-4") && advice.contains("3 undamped") && advice.contains("1e-6"), "{advice}");
+        assert!(tolerance_advice(true, 3, 1e-6).is_none());
+        assert!(tolerance_advice(true, 0, 1e-3).is_none(), "damped modes forget the error");
+        assert!(tolerance_advice(false, 3, 1e-3).is_none(), "Co-Simulation's step is exact");
     }
 }

@@ -25,13 +25,23 @@ pub struct BodyFmu {
     body: FlexibleBody,
     static_start: bool,
     steps: crate::explicit_host::StepWatch,
+    /// fmi2SetTime's last value (Model Exchange), for the host's step sizes.
+    time: f64,
 }
 
 impl BodyFmu {
     /// The model of a reduced body for Co-Simulation (every mode integrated by the exact step).
     pub fn from_reduced(reduced: ReducedBody) -> Self {
         let table = Arc::new(VariableTable::new(&reduced));
-        Self { table, body: FlexibleBody::new(Arc::new(reduced)), static_start: false, steps: Default::default() }
+        let mut fmu = Self {
+            table,
+            body: FlexibleBody::new(Arc::new(reduced)),
+            static_start: false,
+            steps: Default::default(),
+            time: 0.0,
+        };
+        fmu.steps = crate::explicit_host::StepWatch::new(fmu.n_states());
+        fmu
     }
 
     /// The model for `interface`: Model Exchange hands the modes above the cutoff to no
@@ -40,6 +50,7 @@ impl BodyFmu {
     pub fn for_interface(reduced: ReducedBody, interface: Interface) -> Self {
         let mut fmu = Self::from_reduced(reduced);
         fmu.body.set_quasi_static(interface == Interface::ModelExchange);
+        fmu.steps = crate::explicit_host::StepWatch::new(fmu.n_states());
         fmu
     }
 
@@ -50,6 +61,23 @@ impl BodyFmu {
     /// Model Exchange's modal states: q, q' of the dynamic modes and q of the relaxing ones.
     fn n_modal_states(&self) -> usize {
         2 * self.body.n_dynamic() + self.body.n_relaxing()
+    }
+
+    /// d/dt of Model Exchange's states: q, q' of the dynamic modes, q of the relaxing ones, a
+    /// free body's frame.
+    fn state_derivatives(&mut self, dx: &mut [f64]) -> Result<(), String> {
+        let (n, nr) = (self.body.n_dynamic(), self.body.n_relaxing());
+        let (modal, frame_part) = dx.split_at_mut(2 * n + nr);
+        let (dq, rest) = modal.split_at_mut(n);
+        let (dqd, dr) = rest.split_at_mut(n);
+        self.body.derivatives(dq, dqd)?;
+        // a relaxing mode's rate is its q', solved with the evaluation
+        dr.copy_from_slice(&self.body.qd()[n..n + nr]);
+        if self.body.frame().is_some() {
+            let rate = self.body.frame_rate()?;
+            write_frame(frame_part, &rate);
+        }
+        Ok(())
     }
 
     fn name(&self, vr: u32) -> String {
@@ -318,8 +346,9 @@ impl Model for BodyFmu {
     fn n_event_indicators(&self) -> usize {
         0
     }
-    fn set_time(&mut self, _t: f64) {
-        // autonomous: time enters only through the inputs
+    fn set_time(&mut self, t: f64) {
+        // autonomous: time enters only through the inputs (and the host's steps, `steps`)
+        self.time = t;
     }
 
     // state order: q, q' of the dynamic modes, q of the relaxing modes, a free body's frame
@@ -349,18 +378,13 @@ impl Model for BodyFmu {
     }
 
     fn get_derivatives(&mut self, dx: &mut [f64]) -> Result<(), String> {
-        self.steps.evaluated();
-        let (n, nr) = (self.body.n_dynamic(), self.body.n_relaxing());
-        let (modal, frame_part) = dx.split_at_mut(2 * n + nr);
-        let (dq, rest) = modal.split_at_mut(n);
-        let (dqd, dr) = rest.split_at_mut(n);
-        self.body.derivatives(dq, dqd)?;
-        // a relaxing mode's rate is its q', solved with the evaluation
-        dr.copy_from_slice(&self.body.qd()[n..n + nr]);
-        if self.body.frame().is_some() {
-            let rate = self.body.frame_rate()?;
-            write_frame(frame_part, &rate);
+        self.state_derivatives(dx)?;
+        // the states it was evaluated at, into the watch's own buffer (no allocation)
+        let mut x = self.steps.take_state_buffer();
+        if x.len() == dx.len() {
+            self.get_continuous_states(&mut x);
         }
+        self.steps.evaluated(self.time, x, dx);
         Ok(())
     }
 
@@ -373,9 +397,12 @@ impl Model for BodyFmu {
     fn completed_integrator_step(&mut self, time: f64) -> Option<String> {
         let p = self.body.parameters();
         let (alpha, beta) = (p.alpha, p.beta);
-        self.steps.completed(time, self.body.reduced(), alpha, beta)
+        let mut x = self.steps.take_state_buffer_now();
+        if x.len() == self.n_states() {
+            self.get_continuous_states(&mut x);
+        }
+        self.steps.completed(time, x, self.body.reduced(), alpha, beta)
     }
-
     fn get_nominals(&self, nominals: &mut [f64]) {
         // the same numbers as modelDescription.xml's `nominal` (one table); a frame state
         // (metres, m/s, quaternion) is of order one
