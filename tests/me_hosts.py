@@ -217,3 +217,42 @@ def scipy_me(path, start, table, outputs, grid, rtol, method):
         return np.array(out), sol.nfev, wall
     finally:
         f.close()
+
+
+def cvode_oscillator_floor(frequency, stop, rtol, intervals=500):
+    """The error FMPy's own CVode makes on the best-posed undamped mode there is: one exact
+    two-state oscillator x'' = w^2 (1 - x) from rest (a unit step load), nominals 1e-3 and
+    1e-3 w as the FMU's, output every stop/500 as `simulate_fmu` samples; returns the worst
+    velocity error over the run / its swing 2w, against the closed form w sin(wt). Nothing of
+    the FMU is in it: it is the host's floor for an undamped mode at that frequency."""
+    from fmpy.sundials import CVodeSolver
+    w = 2.0 * np.pi * frequency
+    state = {"x": np.zeros(2)}
+
+    def view(p, n):
+        return np.ctypeslib.as_array(p, (n,))
+
+    def get_x(p, n):
+        view(p, n)[:] = state["x"]
+
+    def set_x(p, n):
+        state["x"] = view(p, n).copy()
+
+    def get_dx(p, n):
+        x, v = state["x"]
+        view(p, n)[:] = (v, w * w * (1.0 - x))
+
+    def nominals(p, n):
+        view(p, n)[:] = (1e-3, 1e-3 * w)
+
+    class NoInputs:
+        def apply(self, t):
+            pass
+
+    solver = CVodeSolver(2, 0, get_x, set_x, get_dx, lambda p, n: None, nominals, lambda t: None, NoInputs(),
+                         0.0, maxStep=stop / 50.0, relativeTolerance=rtol)
+    worst = 0.0
+    for k in range(1, intervals + 1):
+        _, _, t = solver.step(0.0, k * stop / intervals)
+        worst = max(worst, abs(state["x"][1] - w * np.sin(w * t)))
+    return worst / (2.0 * w)
