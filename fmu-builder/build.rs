@@ -176,7 +176,7 @@ fn build_runtime(manifest_dir: &Path, manifest: &Path, target_dir: &Path) -> (Pa
         println!(
             "cargo:warning=fmu-runtime is linked natively, so the FMUs' linux64 binary needs this machine's glibc or newer ({why_native}). \
              For one that loads on glibc {GLIBC_BASELINE}+ (RHEL/Rocky 8, Ubuntu 20.04, Debian 11): pip install ziglang (or zig on the PATH) and \
-             cargo install --locked cargo-zigbuild (bash tests/run.sh sets up both), then rebuild (touch fmu-builder/build.rs)"
+             cargo install --locked cargo-zigbuild (bash tests/run.sh --setup-only sets up both), then build again: the build notices them"
         );
     }
     (build_native(manifest, target_dir), "native, glibc of the build machine or newer".to_string())

@@ -190,7 +190,7 @@ def test_free_free_frequencies_equal_calculix(etype, tmp_path):
     #   the same for lambda, half of it for f ~ sqrt(lambda). The gap is taken from the printed
     #   table (the top mode's with its lower neighbour only; the next is not printed).
     # Together 4e-5 to 3e-3 here, far above the 1.2e-6 and 1.4e-6 measured for C3D8 and C3D20R
-    # (2.5e-6 for C3D4; the digits alone allow 3.5e-7 where C3D8 deviates 1.2e-6): ARPACK
+    # (1.0e-6 to 2.5e-6 for C3D4; the digits alone allow 3.5e-7 where C3D8 deviates 1.2e-6): ARPACK
     # converges well beyond what CalculiX asks of it, but promises no more; the exact eigenvalues
     # of CalculiX's own matrices hold us to 2e-11 above.
     arpack_tol = 1e-2
