@@ -9,9 +9,10 @@ its first code block writes it, the set-up part of the second (`bash tests/run.s
 --setup-only`), then the first command again; the FMU it writes must need at most GLIBC_2.17
 (objdump -T, as test_portable.py reads it) and the builder's `--version` must say "portable".
 
-Slow (a build from scratch in a fresh target folder, and a fresh virtual environment from PyPI;
-about NN minutes on a 2-core machine), so marked `slow`, which tests/run.sh leaves out unless
-asked for:
+Slow (a build from scratch in a fresh target folder, the runtime a second time with zig, and a
+fresh virtual environment from PyPI: a cold release build alone took 37 minutes on a 2-core
+machine shared with other builds), so marked `slow`, which tests/run.sh leaves out unless asked
+for:
 
     cd tests && .venv/bin/python -m pytest -m slow test_fresh_clone.py
     bash tests/run.sh -m slow -k fresh_clone
