@@ -19,7 +19,20 @@
 //!   `$CARGO_HOME/bin`).
 //!
 //! The builder's `--version` says which kind of linux64 binary it embeds
-//! (`FMU_RUNTIME_LINUX64`).
+//! (`FMU_RUNTIME_LINUX64`) and, for a native one, the newest glibc it needs
+//! (`FMU_RUNTIME_NATIVE_GLIBC`, empty for a portable or prebuilt one), so that the builder can
+//! warn on every FMU it packages.
+//!
+//! The tools usually appear after the first build: the README's first command builds the
+//! builder, its second (`bash tests/run.sh`) then installs ziglang into tests/.venv and
+//! cargo-zigbuild into `$CARGO_HOME/bin`. So this script asks cargo to rerun it when anything it
+//! looked at changes: the environment it reads and every path it probed, found or not. Cargo
+//! takes a path that does not exist as changed on every build (and would rebuild the builder each
+//! time), so a missing path is watched through its nearest existing folder, at most up to a
+//! bound set per probe (the PATH folder itself, the Python's site-packages, `$CARGO_HOME/bin`,
+//! the repository's tests/): a file appearing there changes that folder. Cargo scans a watched
+//! folder recursively; the largest is the Python's site-packages (some 50 000 files, 0.5 s
+//! per cargo command measured), watched only while no zig is found.
 
 use std::env;
 use std::path::{Path, PathBuf};
@@ -42,7 +55,20 @@ fn main() {
     let fmi2 = manifest_dir.join("../fmi2");
     println!("cargo:rerun-if-changed={}", fmi2.join("src").display());
     println!("cargo:rerun-if-changed={}", fmi2.join("Cargo.toml").display());
-    for var in ["FMU_RUNTIME_SO", "FMU_RUNTIME_PORTABLE", "FMU_RUNTIME_ZIG", "FMU_RUNTIME_CARGO_ZIGBUILD"] {
+    // what this script reads, and what decides where the Pythons it runs import ziglang from
+    for var in [
+        "FMU_RUNTIME_SO",
+        "FMU_RUNTIME_PORTABLE",
+        "FMU_RUNTIME_ZIG",
+        "FMU_RUNTIME_CARGO_ZIGBUILD",
+        "PATH",
+        "CARGO_HOME",
+        "HOME",
+        "PYTHONPATH",
+        "PYTHONHOME",
+        "PYTHONUSERBASE",
+        "PYTHONNOUSERSITE",
+    ] {
         println!("cargo:rerun-if-env-changed={var}");
     }
 
@@ -58,6 +84,52 @@ fn main() {
         std::fs::write(&dest, &bytes).unwrap_or_else(|e| panic!("cannot write {}: {e}", dest.display()));
     }
     println!("cargo:rustc-env=FMU_RUNTIME_LINUX64={kind}");
+    // a native binary needs the build machine's glibc: name the version, for the builder's warning
+    let native_glibc =
+        if kind.starts_with("native") { newest_glibc(&bytes).unwrap_or_default() } else { String::new() };
+    println!("cargo:rustc-env=FMU_RUNTIME_NATIVE_GLIBC={native_glibc}");
+}
+
+/// The newest `GLIBC_x.y[.z]` symbol version named in a shared library (the names of its version
+/// needs are plain strings in its dynamic string table), e.g. "2.34".
+fn newest_glibc(so: &[u8]) -> Option<String> {
+    const TAG: &[u8] = b"GLIBC_";
+    let mut newest: Option<Vec<u32>> = None;
+    let mut i = 0;
+    while let Some(pos) = so[i..].windows(TAG.len()).position(|w| w == TAG) {
+        let start = i + pos + TAG.len();
+        let end = start + so[start..].iter().take_while(|b| b.is_ascii_digit() || **b == b'.').count();
+        let parts: Option<Vec<u32>> =
+            std::str::from_utf8(&so[start..end]).ok().and_then(|v| v.split('.').map(|p| p.parse().ok()).collect());
+        if let Some(parts) = parts.filter(|p| p.len() >= 2)
+            && newest.as_ref().is_none_or(|n| parts > *n)
+        {
+            newest = Some(parts);
+        }
+        i = end.max(start);
+    }
+    newest.map(|v| v.iter().map(u32::to_string).collect::<Vec<_>>().join("."))
+}
+
+/// Ask cargo to rerun this script when `path` changes, or, while it does not exist, when it may
+/// have appeared: its nearest existing folder not above `bound` is watched instead (a missing
+/// path itself would make every build rerun the script and rebuild the builder). Nothing where
+/// even `bound` does not exist.
+fn watch(path: &Path, bound: &Path) {
+    let mut p = path;
+    loop {
+        if p.exists() {
+            println!("cargo:rerun-if-changed={}", p.display());
+            return;
+        }
+        if p == bound {
+            return;
+        }
+        match p.parent() {
+            Some(parent) if parent.starts_with(bound) => p = parent,
+            _ => return,
+        }
+    }
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -104,7 +176,7 @@ fn build_runtime(manifest_dir: &Path, manifest: &Path, target_dir: &Path) -> (Pa
         println!(
             "cargo:warning=fmu-runtime is linked natively, so the FMUs' linux64 binary needs this machine's glibc or newer ({why_native}). \
              For one that loads on glibc {GLIBC_BASELINE}+ (RHEL/Rocky 8, Ubuntu 20.04, Debian 11): pip install ziglang (or zig on the PATH) and \
-             cargo install --locked cargo-zigbuild (bash tests/run.sh sets up both), then rebuild (touch fmu-builder/build.rs)"
+             cargo install --locked cargo-zigbuild (bash tests/run.sh --setup-only sets up both), then build again: the build notices them"
         );
     }
     (build_native(manifest, target_dir), "native, glibc of the build machine or newer".to_string())
@@ -171,14 +243,13 @@ fn build_portable(tools: &ZigToolchain, manifest: &Path, target_dir: &Path) -> R
 fn zig_toolchain(manifest_dir: &Path) -> Result<ZigToolchain, String> {
     let (zig, zig_version) = find_zig(manifest_dir)?;
     let cargo_zigbuild = find_cargo_zigbuild()?;
-    println!("cargo:rerun-if-changed={}", zig.display());
-    println!("cargo:rerun-if-changed={}", cargo_zigbuild.display());
     Ok(ZigToolchain { zig, zig_version, cargo_zigbuild })
 }
 
 fn find_zig(manifest_dir: &Path) -> Result<(PathBuf, String), String> {
     if let Some(zig) = env::var_os("FMU_RUNTIME_ZIG") {
         let zig = PathBuf::from(zig);
+        watch(&zig, zig.parent().unwrap_or(&zig));
         let version =
             zig_version(&zig).ok_or_else(|| format!("FMU_RUNTIME_ZIG={}: `zig version` fails", zig.display()))?;
         return Ok((zig, version));
@@ -193,10 +264,13 @@ fn find_zig(manifest_dir: &Path) -> Result<(PathBuf, String), String> {
         tried.push("zig on the PATH".to_string());
     }
     // the virtual environment tests/run.sh creates, then the Python on the PATH
-    let venv = manifest_dir.join("../tests/.venv/bin/python");
-    let pythons: Vec<PathBuf> =
-        [Some(venv).filter(|p| p.is_file()), on_path("python3")].into_iter().flatten().collect();
-    for python in pythons {
+    let tests = manifest_dir.join("../tests");
+    let venv = tests.join(".venv/bin/python");
+    // the repository's tests/ bounds the watch: before run.sh, tests/ gains .venv
+    watch(&venv, &tests);
+    let venv = Some(venv).filter(|p| p.is_file());
+    // the Python on the PATH only where the virtual environment has no zig: probed lazily
+    for python in venv.into_iter().map(Some).chain(std::iter::once_with(|| on_path("python3"))).flatten() {
         match ziglang_zig(&python) {
             Some(zig) => {
                 if let Some(version) = zig_version(&zig) {
@@ -210,15 +284,49 @@ fn find_zig(manifest_dir: &Path) -> Result<(PathBuf, String), String> {
     Err(format!("no zig found (tried {})", tried.join(", ")))
 }
 
-/// The zig executable inside the `ziglang` package of `python`, if it has one.
+/// Where `python` installs packages (lines "install DIR") and its `ziglang` package if it has
+/// one ("found DIR").
+const ZIGLANG_PROBE: &str = "\
+import os, site, sysconfig
+paths = sysconfig.get_paths()
+dirs = {paths['purelib'], paths['platlib']}
+if site.ENABLE_USER_SITE:
+    dirs.add(site.getusersitepackages())
+for d in sorted(dirs):
+    print('install', d)
+try:
+    import ziglang
+except ImportError:
+    pass
+else:
+    print('found', os.path.dirname(ziglang.__file__))
+";
+
+/// The zig executable inside the `ziglang` package of `python`, if it has one. Watches it, or,
+/// without one, the folders pip would install it into.
 fn ziglang_zig(python: &Path) -> Option<PathBuf> {
-    let output = Command::new(python)
-        .args(["-c", "import os, ziglang; print(os.path.dirname(ziglang.__file__))"])
-        .output()
-        .ok()
-        .filter(|o| o.status.success())?;
-    let dir = PathBuf::from(String::from_utf8(output.stdout).ok()?.trim());
-    Some(dir.join(format!("zig{}", env::consts::EXE_SUFFIX))).filter(|z| z.is_file())
+    watch(python, python.parent().unwrap_or(python));
+    let output = Command::new(python).args(["-c", ZIGLANG_PROBE]).output().ok().filter(|o| o.status.success())?;
+    let stdout = String::from_utf8(output.stdout).ok()?;
+    let zig_name = format!("zig{}", env::consts::EXE_SUFFIX);
+    let mut zig = None;
+    for line in stdout.lines() {
+        if let Some(dir) = line.strip_prefix("found ") {
+            let dir = PathBuf::from(dir);
+            let z = dir.join(&zig_name);
+            watch(&z, dir.parent().unwrap_or(&dir));
+            zig = Some(z).filter(|z| z.is_file());
+        }
+    }
+    if zig.is_none() {
+        for line in stdout.lines() {
+            if let Some(dir) = line.strip_prefix("install ") {
+                let dir = Path::new(dir);
+                watch(&dir.join("ziglang").join(&zig_name), dir);
+            }
+        }
+    }
+    zig
 }
 
 fn zig_version(zig: &Path) -> Option<String> {
@@ -229,6 +337,7 @@ fn zig_version(zig: &Path) -> Option<String> {
 fn find_cargo_zigbuild() -> Result<PathBuf, String> {
     if let Some(path) = env::var_os("FMU_RUNTIME_CARGO_ZIGBUILD") {
         let path = PathBuf::from(path);
+        watch(&path, path.parent().unwrap_or(&path));
         return if path.is_file() {
             Ok(path)
         } else {
@@ -241,11 +350,23 @@ fn find_cargo_zigbuild() -> Result<PathBuf, String> {
         .map(PathBuf::from)
         .or_else(|| env::var_os("HOME").map(|h| Path::new(&h).join(".cargo")));
     on_path(&name)
-        .or_else(|| cargo_home.map(|h| h.join("bin").join(&name)).filter(|p| p.is_file()))
+        .or_else(|| {
+            let bin = cargo_home?.join("bin");
+            let path = bin.join(&name);
+            // `cargo install` adds the file to $CARGO_HOME/bin
+            watch(&path, &bin);
+            Some(path).filter(|p| p.is_file())
+        })
         .ok_or_else(|| "no cargo-zigbuild found on the PATH or in $CARGO_HOME/bin".to_string())
 }
 
+/// The first `name` in the PATH's folders. Watches each folder looked into (a folder the PATH
+/// names but that does not exist is not: its nearest existing folder may be the home folder,
+/// which cargo would scan whole).
 fn on_path(name: &str) -> Option<PathBuf> {
     let path = env::var_os("PATH")?;
-    env::split_paths(&path).map(|dir| dir.join(name)).find(|p| p.is_file())
+    env::split_paths(&path).map(|dir| (dir.join(name), dir)).find_map(|(p, dir)| {
+        watch(&p, &dir);
+        Some(p).filter(|p| p.is_file())
+    })
 }

@@ -14,6 +14,11 @@ BUILDER = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target")) / "release" 
 EXAMPLES = ROOT / "examples"
 
 
+def pytest_configure(config):
+    # tests/run.sh deselects these unless asked (-m slow): they build the project from scratch
+    config.addinivalue_line("markers", "slow: takes many minutes (a build from scratch); run with -m slow")
+
+
 def run_builder(args, check=True):
     """Run fmu-builder; returns the CompletedProcess (stdout/stderr as text). A build with -o
     may replace its own earlier output (--force): the tests write into their temporary folders,

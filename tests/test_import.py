@@ -152,7 +152,8 @@ def test_free_free_frequencies_equal_calculix(etype, tmp_path):
     C3D4's one-point mass is rank one per element; on this mesh CalculiX's assembled M is
     singular (asserted), and ARPACK inside CalculiX then misses the 6th digit (measured 2.5e-6
     while we agree with the exact eigenvalues of its matrices to 4e-13); the printed table is
-    held to 5e-6 for every type (see the assertion). Against CalculiX's matrices, which carry 14 significant digits (each
+    held to what its digits and CalculiX's ARPACK promise (see the assertion). Against
+    CalculiX's matrices, which carry 14 significant digits (each
     entry rounded by up to 5e-15 relative, amplified by the eigenproblem's conditioning), every
     type is held to 2e-11: ten times the measured worst (4.1e-13, 1.2e-12, 2.0e-13, 1.3e-12,
     2.2e-12 for C3D4, C3D10, C3D8, C3D20, C3D20R)."""
@@ -177,12 +178,30 @@ def test_free_free_frequencies_equal_calculix(etype, tmp_path):
     assert err_exact <= 2e-11
     if etype == "C3D4":
         assert singular_mass
-    # the printed table: CalculiX's ARPACK in the free-free shift-invert converges to its own
-    # tolerance, not to the 7 printed digits, and its last digit moves with the machine's BLAS
-    # (measured 1.2e-6 and 1.4e-6 for C3D8 and C3D20R on one machine, below 1e-6 on another,
-    # while the exact eigenvalues of CalculiX's own matrices agree to 2e-12 above): 5e-6 for
-    # every type, as for C3D4's singular mass
-    assert err_printed <= 5e-6
+    # the printed table, held to what it promises, mode by mode:
+    # - its digits: CalculiX writes each frequency as E14.7, 0.ddddddd times a power of ten, so
+    #   rounding moves it by up to half a unit in the 7th digit, 0.5e-7 / mantissa of the value
+    #   (5e-8 to 5e-7); the frequency is printed itself, computed in double from the eigenvalue;
+    # - its ARPACK: CalculiX asks it for tol = 1e-2 (frequencies.f), and ARPACK's dsaupd accepts
+    #   a Ritz value theta of the shift-invert operator, theta = 1 / (lambda - sigma) with sigma
+    #   = (2 pi 1 Hz)^2 its shift, once its residual is below tol |theta|. For a symmetric
+    #   problem a Ritz value with residual r lies within |r|^2 / gap of an eigenvalue
+    #   (Kato-Temple), gap its distance to the other eigenvalues: tol^2 |theta| / gap relative,
+    #   the same for lambda, half of it for f ~ sqrt(lambda). The gap is taken from the printed
+    #   table (the top mode's with its lower neighbour only; the next is not printed).
+    # Together 4e-5 to 3e-3 here, far above the 1.2e-6 and 1.4e-6 measured for C3D8 and C3D20R
+    # (1.0e-6 to 2.5e-6 for C3D4; the digits alone allow 3.5e-7 where C3D8 deviates 1.2e-6): ARPACK
+    # converges well beyond what CalculiX asks of it, but promises no more; the exact eigenvalues
+    # of CalculiX's own matrices hold us to 2e-11 above.
+    arpack_tol = 1e-2
+    sigma = (2 * np.pi * 1.0) ** 2
+    theta = 1 / (np.array(result.eigenvalues) - sigma)
+    gap = np.array([np.min(np.abs(np.delete(theta, i) - t)) for i, t in enumerate(theta)])[:8]
+    digits = 0.5 * 10.0 ** (np.floor(np.log10(printed)) - 6) / printed
+    bound = digits + 0.5 * arpack_tol ** 2 * np.abs(theta[:8]) / gap
+    dev = np.abs(ours / printed - 1)
+    print(f"printed table: deviation {dev.max():.1e}, bound {bound.min():.1e} .. {bound.max():.1e}")
+    assert np.all(dev <= bound), f"deviation {dev} vs bound {bound}"
 
 
 @pytest.mark.parametrize("etype", ELEMENT_TYPES)

@@ -14,7 +14,7 @@ import pytest
 from fmpy import simulate_fmu
 from fmpy.validation import validate_fmu
 
-from conftest import BUILDER
+from conftest import BUILDER, EXAMPLES, run_builder
 
 # Rust's own minimum for x86_64-unknown-linux-gnu (RHEL/CentOS 7); RHEL/Rocky 8 has 2.28,
 # Ubuntu 20.04 2.31, Debian 11 2.31
@@ -86,7 +86,27 @@ def test_linux64_binary_links_only_glibc(packaged_so):
     needed = set(re.findall(r"\(NEEDED\)\s+Shared library: \[([^\]]+)\]", out))
     print("\nNEEDED:", ", ".join(sorted(needed)))
     glibc = {"libc.so.6", "libm.so.6", "libpthread.so.0", "libdl.so.2", "librt.so.1", "ld-linux-x86-64.so.2"}
+    kind = builder_kind()
+    # rustc links a native cdylib against libgcc_s (unwinding); zig's link does not need it
+    if not needed <= glibc and "native" in kind and not os.environ.get("CI"):
+        pytest.skip(f"the builder embeds a native runtime ({kind.splitlines()[0]}), which links "
+                    f"{', '.join(sorted(needed - glibc))}: see test_linux64_binary_needs_at_most_glibc_2_17")
     assert needed and needed <= glibc, needed - glibc
+
+
+def test_native_runtime_is_announced(tmp_path):
+    """A natively linked runtime is said loudly, with the glibc it needs and the way to the
+    portable one: by `--version` and after every FMU's summary; a portable one is not warned of."""
+    kind = builder_kind()
+    proc = run_builder([EXAMPLES / "beam.json", "-o", tmp_path / "Beam.fmu"])
+    warning = "warning: the FMU's linux64 binary is linked natively"
+    print(f"\n{kind}")
+    if "native" in kind.splitlines()[0]:
+        assert re.search(r"^warning: .*GLIBC_2\.\d+.*tests/run\.sh --setup-only", kind, re.MULTILINE), kind
+        assert warning in proc.stderr, proc.stderr
+    else:
+        assert "warning" not in kind, kind
+        assert warning not in proc.stderr, proc.stderr
 
 
 def test_portable_fmu_validates_and_simulates(beam):

@@ -7,8 +7,8 @@ use std::process::ExitCode;
 #[derive(Parser)]
 #[command(
     // which linux64 binary the FMUs get: portable (glibc 2.17+) or only for glibc as new as the
-    // build machine's (build.rs)
-    version = concat!(env!("CARGO_PKG_VERSION"), " (linux64 runtime: ", env!("FMU_RUNTIME_LINUX64"), ")"),
+    // build machine's (build.rs), with a warning for the latter
+    version = version_text(),
     about = "Turn a finite-element model of an elastic part into an FMI 2.0 FMU (Model Exchange + Co-Simulation)"
 )]
 struct Args {
@@ -79,6 +79,20 @@ struct Args {
     /// with wall time, peak resident memory and its counts
     #[arg(long)]
     timings: bool,
+}
+
+/// `--version`: the builder's version, its linux64 runtime's kind, and for a natively linked one
+/// a warning saying which glibc it needs and how to get the portable one.
+fn version_text() -> &'static str {
+    static TEXT: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    TEXT.get_or_init(|| {
+        use fmu_builder::output::package::{RUNTIME_KIND, native_runtime_warning};
+        let mut text = format!("{} (linux64 runtime: {RUNTIME_KIND})", env!("CARGO_PKG_VERSION"));
+        if let Some(w) = native_runtime_warning(&[]) {
+            text.push_str(&format!("\nwarning: {w}"));
+        }
+        text
+    })
 }
 
 fn main() -> ExitCode {
@@ -322,6 +336,10 @@ fn build(
                     println!("peak memory {mib:.0} MiB");
                 }
                 println!("wrote {}", output.display());
+                // after the summary, last, so that it is not scrolled away
+                if let Some(w) = fmu_builder::output::package::native_runtime_warning(binaries) {
+                    eprintln!("warning: {w}");
+                }
             }
             if args.timings {
                 print!("{}", fmu_builder::profile::table(&built.profile));

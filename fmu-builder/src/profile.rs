@@ -4,35 +4,56 @@
 //! sizing a machine for a large model, and whoever makes the builder faster, reads it.
 //!
 //! Phases nest (a factorisation inside the Craig-Bampton basis); the recorder is per thread, so
-//! stages need not pass it along. Peak memory per phase: Linux keeps one high-water mark of the
-//! resident set (VmHWM), which writing "5" to /proc/self/clear_refs resets. A phase resets it
-//! when it starts, after folding the mark so far into every enclosing phase, and reads it when
-//! it ends; so each phase's peak is its own, and an enclosing phase's peak covers its children.
-//! The reset also lowers what outside tools (`/usr/bin/time`, getrusage's ru_maxrss) see, so it
-//! happens only when per-phase memory is asked for (`per_phase_memory(true)`, `--timings`); every
-//! mark is folded into the process's own peak first (`process_peak_mib`). Without the reset, or
-//! where it is not possible, a phase reports the process's peak so far (never less than its own).
+//! stages need not pass it along. Peak memory per phase: the resident set (VmRSS) read when a
+//! phase starts and ends and, while per-phase memory is asked for (`per_phase_memory(true)`,
+//! `--timings`), every millisecond by a sampler thread, the largest reading going to every phase
+//! open then; so each phase's peak is its own, and an enclosing phase's peak covers its
+//! children's. Linux's own high-water mark (VmHWM) is never reset (writing to
+//! /proc/self/clear_refs would): it stays the process's peak for `process_peak_mib`,
+//! `/usr/bin/time -v` and getrusage alike. A resident set that rises and falls back within one
+//! sampling interval is missed by the phases, not by the process's peak: pages are touched at
+//! some 10 GB/s, so what a millisecond hides is about 10 MB. Without per-phase memory, a phase
+//! reports the process's peak so far (never less than its own).
 
 use std::cell::RefCell;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
-/// Whether phases reset the high-water mark (per-phase peaks) or not (the process's peak stays
-/// visible to outside tools).
+/// Whether the sampler thread reads the resident set between phase boundaries.
 static PER_PHASE_MEMORY: AtomicBool = AtomicBool::new(false);
-/// The largest high-water mark read before any reset [KiB].
-static PROCESS_PEAK_KIB: AtomicU64 = AtomicU64::new(0);
+/// Whether the sampler thread has been started (once per process).
+static SAMPLER_STARTED: AtomicBool = AtomicBool::new(false);
+/// The largest resident set read since the last phase boundary [KiB].
+static WINDOW_PEAK_KIB: AtomicU64 = AtomicU64::new(0);
+/// How often the sampler reads the resident set: reading /proc/self/statm costs some
+/// microseconds, so a millisecond keeps the sampler under a percent of a core.
+const SAMPLE_INTERVAL: Duration = Duration::from_millis(1);
 
-/// Ask for each phase's own peak memory (resets the process's high-water mark between phases).
+/// Ask for each phase's own peak memory (a sampler thread reads the resident set meanwhile).
 pub fn per_phase_memory(on: bool) {
     PER_PHASE_MEMORY.store(on, Ordering::Relaxed);
+    if on && !SAMPLER_STARTED.swap(true, Ordering::Relaxed) {
+        let started = std::thread::Builder::new().name("rss-sampler".into()).spawn(|| {
+            // the thread lives as long as the process; it only sleeps while not asked for
+            loop {
+                if PER_PHASE_MEMORY.load(Ordering::Relaxed)
+                    && let Some(rss) = resident_kib()
+                {
+                    WINDOW_PEAK_KIB.fetch_max(rss, Ordering::Relaxed);
+                }
+                std::thread::sleep(SAMPLE_INTERVAL);
+            }
+        });
+        // without a thread, phase boundaries still bound each phase's peak from below
+        if started.is_err() {
+            SAMPLER_STARTED.store(false, Ordering::Relaxed);
+        }
+    }
 }
 
-/// Peak resident memory of the whole process so far [MiB], resets included.
+/// Peak resident memory of the whole process so far [MiB] (Linux: VmHWM, never reset).
 pub fn process_peak_mib() -> Option<f64> {
-    let now = high_water_kib();
-    let folded = PROCESS_PEAK_KIB.load(Ordering::Relaxed);
-    now.map(|k| k.max(folded) as f64 / 1024.0)
+    high_water_kib().map(|k| k as f64 / 1024.0)
 }
 
 /// One finished phase.
@@ -51,7 +72,7 @@ pub struct Phase {
 struct Open {
     index: usize,
     start: Instant,
-    /// Peak seen so far in this phase, before a child's reset cleared the mark [KiB].
+    /// Peak seen so far in this phase, up to the last phase boundary [KiB].
     peak_kib: Option<u64>,
 }
 
@@ -65,20 +86,32 @@ thread_local! {
     static RECORDER: RefCell<Recorder> = RefCell::new(Recorder::default());
 }
 
-/// Peak resident set of this process since the last reset [KiB] (Linux: VmHWM).
+/// Peak resident set of this process [KiB] (Linux: VmHWM).
 fn high_water_kib() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     line.split_whitespace().nth(1)?.parse().ok()
 }
 
-/// Reset the high-water mark to the present resident set, after folding it into the process's
-/// peak; false where not possible.
-pub fn reset_high_water() -> bool {
-    if let Some(mark) = high_water_kib() {
-        PROCESS_PEAK_KIB.fetch_max(mark, Ordering::Relaxed);
+/// Resident set of this process now [KiB] (Linux: the second field of /proc/self/statm, in
+/// pages; statm rather than status because the sampler reads it a thousand times a second).
+fn resident_kib() -> Option<u64> {
+    let statm = std::fs::read_to_string("/proc/self/statm").ok()?;
+    let pages: u64 = statm.split_whitespace().nth(1)?.parse().ok()?;
+    // SAFETY: sysconf only reads a system constant
+    let page = unsafe { libc::sysconf(libc::_SC_PAGESIZE) };
+    Some(pages * u64::try_from(page).ok().filter(|&p| p > 0)? / 1024)
+}
+
+/// The largest resident set since the last boundary, the present one included; the window then
+/// starts again from the present one. Where per-phase memory is not asked for: the process's
+/// peak so far.
+fn close_window() -> Option<u64> {
+    if !PER_PHASE_MEMORY.load(Ordering::Relaxed) {
+        return high_water_kib();
     }
-    std::fs::write("/proc/self/clear_refs", "5").is_ok()
+    let now = resident_kib()?;
+    Some(WINDOW_PEAK_KIB.swap(now, Ordering::Relaxed).max(now))
 }
 
 fn max_opt(a: Option<u64>, b: Option<u64>) -> Option<u64> {
@@ -94,12 +127,10 @@ pub fn phase<T>(name: impl Into<String>, f: impl FnOnce() -> T) -> T {
     crate::progress::phase(&name);
     RECORDER.with(|r| {
         let mut r = r.borrow_mut();
-        let mark = high_water_kib();
+        // what the enclosing phases reached before this one starts is theirs
+        let mark = close_window();
         for open in r.open.iter_mut() {
             open.peak_kib = max_opt(open.peak_kib, mark);
-        }
-        if PER_PHASE_MEMORY.load(Ordering::Relaxed) {
-            reset_high_water();
         }
         let index = r.finished.len();
         let depth = r.open.len();
@@ -111,7 +142,7 @@ pub fn phase<T>(name: impl Into<String>, f: impl FnOnce() -> T) -> T {
     RECORDER.with(|r| {
         let mut r = r.borrow_mut();
         let Some(open) = r.open.pop() else { return };
-        let peak = max_opt(open.peak_kib, high_water_kib());
+        let peak = max_opt(open.peak_kib, close_window());
         for parent in r.open.iter_mut() {
             parent.peak_kib = max_opt(parent.peak_kib, peak);
         }

@@ -1,7 +1,17 @@
-//! The build profile's recorder on its own (one test per process: the resident-set high-water
-//! mark it resets is the process's, so no other test may allocate meanwhile).
+//! The build profile's recorder on its own (a test binary of its own: the resident set it samples
+//! is the process's, so nothing else may allocate much meanwhile; the other test here only reads
+//! the sources).
 
-use fmu_builder::profile::{note, per_phase_memory, phase, process_peak_mib, reset_high_water, table, take};
+use fmu_builder::profile::{note, per_phase_memory, phase, process_peak_mib, table, take};
+
+/// Peak resident set as getrusage reports it (what `/usr/bin/time` shows) [MiB].
+fn rusage_max_rss_mib() -> f64 {
+    // SAFETY: getrusage writes into the zeroed struct it is given
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    let rc = unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut usage) };
+    assert_eq!(rc, 0, "getrusage failed");
+    usage.ru_maxrss as f64 / 1024.0
+}
 
 #[test]
 fn nested_phases_keep_their_order_depth_time_and_own_peaks() {
@@ -11,7 +21,7 @@ fn nested_phases_keep_their_order_depth_time_and_own_peaks() {
     let outer = phase("outer", || {
         note(|| "first".into());
         let inner = phase("inner", || {
-            // 200 MiB touched: the inner phase's peak must show it
+            // 200 MiB touched and freed inside the phase: only the sampler sees them
             let v = vec![1u8; 200 * MIB];
             std::thread::sleep(std::time::Duration::from_millis(20));
             v.iter().map(|&b| b as usize).sum::<usize>()
@@ -28,16 +38,44 @@ fn nested_phases_keep_their_order_depth_time_and_own_peaks() {
     if let (Some(outer), Some(inner), Some(small)) = (phases[0].peak_mib, phases[1].peak_mib, phases[2].peak_mib) {
         assert!(inner >= 200.0, "inner peak {inner} MiB");
         assert!(outer >= inner, "the enclosing phase covers its child: {outer} < {inner}");
-        // measured: the small phase's own peak stays far below the inner one's when the
-        // high-water mark can be reset; where it cannot, every phase reports the peak so far
-        if reset_high_water() {
-            assert!(small < inner - 100.0, "small phase peak {small} MiB vs inner {inner}");
-        }
+        // the small phase starts after the 200 MiB went back to the system: its own peak stays
+        // far below the inner one's
+        assert!(small < inner - 100.0, "small phase peak {small} MiB vs inner {inner}");
     }
-    // the resets do not hide the process's own peak: the inner phase's 200 MiB stay in it
+    // the process's own high-water mark is never reset: the kernel's (VmHWM) and getrusage's
+    // (what /usr/bin/time reports) keep the inner phase's 200 MiB
     if let (Some(process), Some(inner)) = (process_peak_mib(), phases[1].peak_mib) {
         assert!(process >= inner, "process peak {process} MiB below the inner phase's {inner}");
+        let rusage = rusage_max_rss_mib();
+        assert!(rusage >= inner, "getrusage's peak {rusage} MiB below the inner phase's {inner}");
     }
     assert!(take().is_empty());
     assert!(table(&phases).lines().count() == 4 && table(&phases).contains("  inner"));
+}
+
+/// Writing to /proc/self/clear_refs resets the high-water mark that `/usr/bin/time -v`,
+/// getrusage and the summary's peak read: no source of the builder may do it.
+#[test]
+fn no_source_resets_the_high_water_mark() {
+    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut stack = vec![src];
+    let mut offenders = Vec::new();
+    let mut files = 0;
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display())) {
+            let path = entry.unwrap_or_else(|e| panic!("{}: {e}", dir.display())).path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if path.extension().is_some_and(|e| e == "rs") {
+                files += 1;
+                let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                // the path as code would name it, in a string literal (the docs may mention it)
+                if text.contains("clear_refs\"") {
+                    offenders.push(path.display().to_string());
+                }
+            }
+        }
+    }
+    assert!(files > 10, "only {files} sources found under src/");
+    assert!(offenders.is_empty(), "/proc/self/clear_refs written in {offenders:?}");
 }

@@ -14,6 +14,34 @@ use std::path::Path;
 
 /// The runtime cdylib, built by build.rs: the FMU's binaries/linux64/<id>.so.
 pub const RUNTIME_SO: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/fmu_runtime.so"));
+/// Which kind of binary `RUNTIME_SO` is ("portable, ...", "native, ...", "prebuilt, ..."; build.rs).
+pub const RUNTIME_KIND: &str = env!("FMU_RUNTIME_LINUX64");
+/// The newest glibc version a natively linked `RUNTIME_SO` needs, e.g. "2.34" (build.rs); empty
+/// for a portable or prebuilt one.
+const RUNTIME_NATIVE_GLIBC: &str = env!("FMU_RUNTIME_NATIVE_GLIBC");
+
+/// Why an FMU with the builder's own linux64 binary may not load on an older Linux, where that
+/// binary was linked natively (zig or cargo-zigbuild missing when the builder was built); None
+/// for a portable one or where `others` brings its own linux64 binary. Said on every FMU built
+/// (and by `--version`): the FMU works on the build machine, so nothing else would show it before
+/// a user on RHEL/Rocky 8 or Ubuntu 20.04 fails to load it.
+pub fn native_runtime_warning(others: &[PlatformBinary]) -> Option<String> {
+    if !RUNTIME_KIND.starts_with("native") || others.iter().any(|b| b.platform == Platform::Linux64) {
+        return None;
+    }
+    let needs = if RUNTIME_NATIVE_GLIBC.is_empty() {
+        "this build machine's glibc or newer".to_string()
+    } else {
+        format!("glibc {RUNTIME_NATIVE_GLIBC} or newer (GLIBC_{RUNTIME_NATIVE_GLIBC}, this build machine's)")
+    };
+    Some(format!(
+        "the FMU's linux64 binary is linked natively and needs {needs}: it does not load where glibc is older \
+         (RHEL/Rocky 8: 2.28, Ubuntu 20.04 and Debian 11: 2.31). For one that loads on glibc 2.17 or newer, set up \
+         zig and cargo-zigbuild (`bash tests/run.sh --setup-only` in the source tree, or `pip install ziglang` and \
+         `cargo install --locked cargo-zigbuild`), then rebuild the builder (`cargo build --release -p fmu-builder`, \
+         or `cargo install` again): it is linked portable from then on"
+    ))
+}
 
 /// The FMU of a reduced body, with the builder's linux64 runtime and `others` (runtimes built for
 /// other platforms, the command line's `--platform-binary`; a linux64 one replaces the builder's

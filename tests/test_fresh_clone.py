@@ -1,0 +1,126 @@
+"""A fresh clone, built in the README's order, packages the portable linux64 binary.
+
+The README's first command builds the builder before its second (`bash tests/run.sh`) has set up
+zig (the ziglang package in tests/.venv) and cargo-zigbuild, so the first build links the FMU's
+runtime natively; fmu-builder/build.rs must notice the tools when they appear and link it with
+zig against glibc 2.17 at the next build, without anyone touching a file. This follows a user:
+`git clone` of the committed HEAD into a temporary folder, the README's first command exactly as
+its first code block writes it, the set-up part of the second (`bash tests/run.sh
+--setup-only`), then the first command again; the FMU it writes must need at most GLIBC_2.17
+(objdump -T, as test_portable.py reads it) and the builder's `--version` must say "portable".
+
+Slow (a build from scratch in a fresh target folder, the runtime a second time with zig, and a
+fresh virtual environment from PyPI: a cold release build alone took 37 minutes on a 2-core
+machine shared with other builds), so marked `slow`, which tests/run.sh leaves out unless asked
+for:
+
+    cd tests && .venv/bin/python -m pytest -m slow test_fresh_clone.py
+    bash tests/run.sh -m slow -k fresh_clone
+"""
+
+import os
+import shlex
+import subprocess
+import time
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from conftest import ROOT
+from test_portable import BASELINE, glibc_versions_objdump, version_tuple
+
+pytestmark = pytest.mark.slow
+
+# a build from scratch on a busy 2-core machine takes tens of minutes; a hang must still end
+STEP_TIMEOUT = 2 * 3600
+
+
+def readme_commands():
+    """The commands of README.md's first fenced code block, each as its argument list (comments
+    dropped, as the shell does)."""
+    lines = (ROOT / "README.md").read_text().splitlines()
+    fences = [i for i, line in enumerate(lines) if line.lstrip().startswith("```")]
+    assert len(fences) >= 2, "README.md has no fenced code block"
+    block = lines[fences[0] + 1:fences[1]]
+    commands = [shlex.split(line, comments=True) for line in block]
+    return [c for c in commands if c]
+
+
+def user_env(clone):
+    """The environment of a user who has just cloned: none of this session's build settings,
+    and no Python environment of the tested checkout on the PATH (its ziglang would be found)."""
+    env = {k: v for k, v in os.environ.items()
+           if not k.startswith("FMU_RUNTIME_") and k not in ("CARGO_TARGET_DIR", "VIRTUAL_ENV", "CI")}
+    venv = (ROOT / "tests" / ".venv").resolve()
+    path = [p for p in env.get("PATH", "").split(os.pathsep)
+            if p and not Path(p).resolve().is_relative_to(venv) and not Path(p).resolve().is_relative_to(ROOT)]
+    env["PATH"] = os.pathsep.join(path)
+    return env
+
+
+def run(argv, clone, env, log):
+    """Run a step in the clone; its output goes to the log (a build's output is long)."""
+    start = time.monotonic()
+    with open(log, "a") as out:
+        out.write(f"\n$ {shlex.join(argv)}\n")
+        out.flush()
+        proc = subprocess.run(argv, cwd=clone, env=env, stdin=subprocess.DEVNULL, stdout=out,
+                              stderr=subprocess.STDOUT, timeout=STEP_TIMEOUT)
+    seconds = time.monotonic() - start
+    print(f"{shlex.join(argv)}: {seconds:.0f} s, exit {proc.returncode}")
+    assert proc.returncode == 0, f"{shlex.join(argv)} failed in {clone}; its output is in {log}"
+    return seconds
+
+
+def test_fresh_clone_in_readme_order_packages_portable_binary(tmp_path):
+    commands = readme_commands()
+    assert len(commands) >= 2 and commands[0][:2] == ["cargo", "run"], commands
+    first = commands[0]
+    setup = next((c for c in commands if c[:2] == ["bash", "tests/run.sh"]), None)
+    assert setup is not None, f"README's first block has no `bash tests/run.sh`: {commands}"
+    assert "-o" in first, f"the README's first command names no output FMU: {first}"
+    fmu = first[first.index("-o") + 1]
+
+    head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True,
+                          check=True).stdout.strip()
+    clone = tmp_path / "clone"
+    subprocess.run(["git", "clone", "--quiet", str(ROOT), str(clone)], check=True)
+    subprocess.run(["git", "checkout", "--quiet", head], cwd=clone, check=True)
+    env = user_env(clone)
+    log = tmp_path / "fresh-clone.log"
+    builder = clone / "target" / "release" / "fmu-builder"
+    print(f"\nclone of {head[:12]} in {clone}, log {log}")
+
+    # 1. the README's first command, before any set-up
+    t_first = run(first, clone, env, log)
+    kind_first = subprocess.run([str(builder), "--version"], capture_output=True, text=True,
+                                check=True).stdout
+    print(f"first build: {kind_first.strip()}")
+    if "native" in kind_first:
+        # a native runtime is said loudly: by --version and after each FMU's summary
+        assert "warning:" in kind_first and "GLIBC_" in kind_first, kind_first
+        assert "warning: the FMU's linux64 binary is linked natively" in log.read_text(), \
+            "the first FMU's build printed no native-runtime warning"
+
+    # 2. the set-up part of the README's second command
+    t_setup = run([*setup, "--setup-only"], clone, env, log)
+    assert (clone / "tests" / ".venv" / "bin" / "python").is_file()
+
+    # 3. the first command again, as the user rebuilds: build.rs must see the tools now
+    t_again = run(first, clone, env, log)
+    kind = subprocess.run([str(builder), "--version"], capture_output=True, text=True, check=True).stdout
+    print(f"after the set-up: {kind.strip()}")
+    print(f"wall time: first command {t_first:.0f} s, set-up {t_setup:.0f} s, rebuild {t_again:.0f} s")
+
+    with zipfile.ZipFile(clone / fmu) as z:
+        names = [n for n in z.namelist() if n.startswith("binaries/linux64/") and n.endswith(".so")]
+        assert len(names) == 1, names
+        so = tmp_path / Path(names[0]).name
+        so.write_bytes(z.read(names[0]))
+    versions = glibc_versions_objdump(so)
+    assert versions, f"{names[0]}: objdump -T shows no GLIBC symbol version"
+    newest = max(versions, key=version_tuple)
+    print(f"newest GLIBC version of {names[0]}: {newest} ({', '.join(sorted(versions[newest]))})")
+    assert version_tuple(newest) <= BASELINE, f"{names[0]} needs {newest}: {', '.join(versions[newest])}"
+    assert "portable" in kind and "warning" not in kind, kind
