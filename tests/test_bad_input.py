@@ -3,6 +3,7 @@ status, and never a panic."""
 
 import copy
 import json
+import re
 import zipfile
 
 import numpy as np
@@ -10,6 +11,7 @@ import numpy as np
 import pytest
 
 from conftest import EXAMPLES, run_builder
+from meshes import BoxMesh
 
 BASE = json.loads((EXAMPLES / "beam.json").read_text())
 BASE["geometry"]["boxes"][0]["elements"] = [10, 1, 1]  # small: these runs must fail fast anyway
@@ -142,6 +144,10 @@ CASES = [
      ["reduction.backend", "petsc"]),
     ("zero MPI ranks", lambda s: set_path(s, ["reduction", "backend"], {"kind": "petsc", "ranks": 0}),
      ["reduction.backend.ranks"]),
+    ("unknown length unit", lambda s: set_path(s, ["geometry", "length_unit"], "km"),
+     ["geometry.length_unit", '"km"', '"m", "cm", "mm", "in", "ft"']),
+    ("modes above the builder's 1000", lambda s: set_path(s, ["reduction", "modes"], 1500),
+     ["reduction.modes", "1500", "maximum of 1000"]),
     ("box far from the origin",
      lambda s: (set_path(s, ["geometry", "boxes", 0, "min"], [1e15, 0, 0]),
                 set_path(s, ["geometry", "boxes", 0, "max"], [1e15 + 1, 0.01, 0.02])),
@@ -267,3 +273,147 @@ def test_stress_outputs_from_matrix_input_are_refused(tmp_path):
     for expected in [str(path), "outputs.stress", "matrices", "without elements"]:
         assert expected in proc.stderr, f"{expected!r} not in {proc.stderr!r}"
     assert not (tmp_path / "bad.fmu").exists()
+
+
+# A steel bar 0.2 x 0.02 x 0.03 m of C3D20 elements, the same mesh written in metres and in
+# millimetres: held at x = 0 by its node set, a force flange selected by a plane at the tip.
+BAR = (0.2, 0.02, 0.03)
+STEEL = (2.1e11, 0.3, 7850.0)
+
+
+def bar_input(tmp_path, unit_scale, name, length_unit=None):
+    """The bar's deck with coordinates times `unit_scale` (1: metres, 1000: millimetres) and its
+    input; the tip flange's plane is given in the same unit."""
+    mesh = BoxMesh("C3D20", [c * unit_scale for c in BAR], (8, 1, 2))
+    base = mesh.nodes_where(lambda x: x[0] == 0.0)
+    (tmp_path / f"{name}.inp").write_text(mesh.deck({"BASE": base}, material=STEEL))
+    spec = {"name": name, "geometry": {"mesh": f"{name}.inp"},
+            "flanges": [{"name": "base", "role": "motion", "nodes": {"node_set": "BASE"}},
+                        {"name": "tip", "role": "force",
+                         "nodes": {"plane": {"point": [BAR[0] * unit_scale, 0, 0], "normal": [1, 0, 0]}}}],
+            "reduction": {"modes": 4}}
+    if length_unit is not None:
+        spec["geometry"]["length_unit"] = length_unit
+    path = tmp_path / f"{name}.json"
+    path.write_text(json.dumps(spec))
+    return path
+
+
+def build_report(tmp_path, path):
+    fmu = tmp_path / (path.stem + ".fmu")
+    proc = run_builder([path, "-o", fmu])
+    return json.loads(zipfile.ZipFile(fmu).read("documentation/report.json")), proc
+
+
+def test_a_mesh_in_millimetres_with_its_unit_builds_the_metre_part(tmp_path):
+    """geometry.length_unit "mm" scales the mesh and the selectors: the same mass as rho V and
+    the same frequencies as the mesh written in metres."""
+    metres, _ = build_report(tmp_path, bar_input(tmp_path, 1.0, "BarM"))
+    millimetres, proc = build_report(tmp_path, bar_input(tmp_path, 1000.0, "BarMM", "mm"))
+    mass = STEEL[2] * BAR[0] * BAR[1] * BAR[2]
+    # the mass of a C3D20 mesh of a box is exact to round-off (measured 1.1e-14 relative for both)
+    for r in (metres, millimetres):
+        assert abs(r["mass"] - mass) <= 1e-13 * mass, (r["mass"], mass)
+    f_m, f_mm = np.array(metres["accuracy"]["full_hz"]), np.array(millimetres["accuracy"]["full_hz"])
+    assert len(f_m) == len(f_mm) >= 4
+    # the coordinates differ by the round-off of scaling by 1e-3 (measured 5.0e-12 relative)
+    assert np.abs(f_mm / f_m - 1).max() <= 5e-11, (f_m, f_mm)
+    assert [f["slave_nodes"] for f in millimetres["flanges"]] == [f["slave_nodes"] for f in metres["flanges"]]
+    assert "warning" not in proc.stderr, proc.stderr
+
+
+def test_a_mesh_in_millimetres_without_its_unit_is_named_with_its_mass(tmp_path):
+    """Read as metres the bar is 1000 times too long each way: the warning states the absurd
+    mass and the field that fixes it."""
+    path = bar_input(tmp_path, 1000.0, "BarRaw")
+    _, proc = build_report(tmp_path, path)
+    warning = next(l for l in proc.stderr.splitlines() if "across" in l)
+    assert '"geometry": {"length_unit": "mm"}' in warning, warning
+    weighs = re.search(r"would weigh ([0-9.e+-]+) kg", warning)
+    assert weighs, warning
+    mass = STEEL[2] * BAR[0] * BAR[1] * BAR[2] * 1e9
+    # printed with four digits
+    assert abs(float(weighs.group(1)) - mass) <= 1e-3 * mass, (weighs.group(1), mass)
+
+
+def test_unreadable_mesh_and_matrix_paths_name_field_path_and_folder(tmp_path):
+    """A file that cannot be read is named by its field, its path as resolved and the folder
+    relative paths start from."""
+    sub = tmp_path / "inputs"
+    sub.mkdir()
+    spec = {"name": "Missing", "geometry": {"mesh": "meshes/part.inp"},
+            "material": {"E": 2e11, "nu": 0.3, "rho": 7850},
+            "flanges": [{"name": "base", "role": "motion", "nodes": {"node_set": "BASE"}}],
+            "reduction": {"modes": 2}}
+    path = sub / "in.json"
+    path.write_text(json.dumps(spec))
+    proc = run_builder([path, "-o", tmp_path / "x.fmu"], check=False)
+    assert proc.returncode == 1 and "panicked" not in proc.stderr
+    for text in [str(path), "geometry.mesh", str(sub / "meshes" / "part.inp"),
+                 f"relative paths resolve from the input file's folder {sub}", "No such file"]:
+        assert text in proc.stderr, f"{text!r} not in {proc.stderr!r}"
+    spec["geometry"] = {"matrices": {"stiffness": "K.mtx", "mass": "M.mtx", "dofs": "d.txt", "nodes": "n.txt"}}
+    spec.pop("material")
+    (sub / "K.mtx").mkdir()
+    path.write_text(json.dumps(spec))
+    proc = run_builder([path, "-o", tmp_path / "x.fmu"], check=False)
+    assert proc.returncode == 1 and "panicked" not in proc.stderr
+    for text in ["geometry.matrices.stiffness", str(sub / "K.mtx"), "is a folder", str(sub)]:
+        assert text in proc.stderr, f"{text!r} not in {proc.stderr!r}"
+
+
+def save_all_deck(tmp_path, volume):
+    """A deck as Gmsh writes it with "save all elements": nodes, two CPS6 triangles of the
+    boundary in their own element set, (optionally) the C3D4 volume, and a physical group's
+    element set listing the triangles."""
+    mesh = BoxMesh("C3D4", (0.1, 0.02, 0.02), (5, 1, 1))
+    base = mesh.nodes_where(lambda x: x[0] == 0.0)
+    deck = mesh.deck({"BASE": base}, material=STEEL) if volume else "\n".join(
+        ["*NODE"] + [f"{n}, {float(x[0])!r}, {float(x[1])!r}, {float(x[2])!r}" for n, x in ((n, mesh.coords[n - 1]) for n in mesh.used)]
+        + ["*NSET, NSET=BASE", ", ".join(map(str, base))]) + "\n"
+    first = 1000
+    tri = mesh.used[:6]
+    deck += "*ELEMENT, type=CPS6, ELSET=Surface1\n"
+    deck += "".join(f"{first + k}, " + ", ".join(map(str, tri)) + "\n" for k in range(2))
+    deck += f"*ELSET, ELSET=PhysicalSurface\n{first}, {first + 1}\n"
+    path = tmp_path / "saveall.inp"
+    path.write_text(deck)
+    spec = {"name": "SaveAll", "geometry": {"mesh": path.name},
+            "flanges": [{"name": "base", "role": "motion", "nodes": {"node_set": "BASE"}}],
+            "reduction": {"modes": 2}}
+    if not volume:
+        spec["material"] = {"E": STEEL[0], "nu": STEEL[1], "rho": STEEL[2]}
+    (tmp_path / "saveall.json").write_text(json.dumps(spec))
+    return tmp_path / "saveall.json", path
+
+
+def test_surface_elements_of_a_save_all_deck_are_skipped_with_a_warning(tmp_path):
+    spec, deck = save_all_deck(tmp_path, volume=True)
+    report, proc = build_report(tmp_path, spec)
+    expected = (f"warning: skipped 2 surface elements (CPS6) of {deck}: export only volume elements "
+                "(Gmsh: uncheck 'save all elements' / use physical groups of the volume)")
+    assert expected in proc.stderr, proc.stderr
+    # the part is the volume alone: its mass is rho V (C3D4 integrates a box's volume exactly;
+    # measured 8.8e-16 relative)
+    mass = STEEL[2] * 0.1 * 0.02 * 0.02
+    assert abs(report["mass"] - mass) <= 1e-14 * mass, report["mass"]
+
+
+def test_a_save_all_deck_without_volume_elements_is_refused(tmp_path):
+    spec, deck = save_all_deck(tmp_path, volume=False)
+    proc = run_builder([spec, "-o", tmp_path / "x.fmu"], check=False)
+    assert proc.returncode == 1 and "panicked" not in proc.stderr
+    for text in [str(deck), "no volume elements, only 2 surface elements (CPS6)", "uncheck 'save all elements'",
+                 "physical groups of the volume", "C3D4"]:
+        assert text in proc.stderr, f"{text!r} not in {proc.stderr!r}"
+    assert not (tmp_path / "x.fmu").exists()
+
+
+def test_a_body_without_flanges_builds_as_a_free_floating_body(tmp_path):
+    """No flange at all is a valid free body (driven by its initial conditions): it builds, and
+    the report says what it is instead of speaking of a mount."""
+    path = tmp_path / "free.json"
+    path.write_text(json.dumps(variant(lambda s: s.update(flanges=[]))))
+    report, _ = build_report(tmp_path, path)
+    assert report["flanges"] == []
+    assert report["scene"]["body"] == "free-floating body without flanges"

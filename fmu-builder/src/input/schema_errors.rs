@@ -132,10 +132,45 @@ fn describe(schema: &Value, e: &ValidationError<'_>, out: &mut Vec<Problem>) {
                 message: format!("found {}, expected one of {}{hint}", short(found), choices.join(", ")),
             });
         }
+        ValidationErrorKind::Minimum { .. }
+        | ValidationErrorKind::Maximum { .. }
+        | ValidationErrorKind::ExclusiveMinimum { .. }
+        | ValidationErrorKind::ExclusiveMaximum { .. } => {
+            // the range and what it stands for (the property's description): a value off by a
+            // unit slip says so, not only that it is too small
+            let why = parent(schema, &schema_path)
+                .and_then(|p| p.get("description"))
+                .and_then(Value::as_str)
+                .map(|d| format!(" ({d})"))
+                .unwrap_or_default();
+            let range = parent(schema, &schema_path).map(range_of).unwrap_or_default();
+            out.push(Problem { field, message: format!("found {}, outside {range}: {e}{why}", short(e.instance())) });
+        }
         _ => {
             out.push(Problem { field, message: format!("found {}: {}", short(e.instance()), e) });
         }
     }
+}
+
+/// A bound as a person writes it: 1000, 0.49999, 1e13, 1e-14.
+fn number(x: f64) -> String {
+    if x == 0.0 || (1e-3..1e6).contains(&x.abs()) { format!("{x}") } else { format!("{x:e}") }
+}
+
+/// The numeric range a property schema allows, as "[0, 1e6]" or "(0, inf)".
+fn range_of(property: &Value) -> String {
+    let bound = |key: &str| property.get(key).and_then(Value::as_f64).map(number);
+    let (lo, lo_open) = match (bound("minimum"), bound("exclusiveMinimum")) {
+        (_, Some(x)) => (x, true),
+        (Some(x), None) => (x, false),
+        (None, None) => ("-inf".to_string(), true),
+    };
+    let (hi, hi_open) = match (bound("maximum"), bound("exclusiveMaximum")) {
+        (_, Some(x)) => (x, true),
+        (Some(x), None) => (x, false),
+        (None, None) => ("inf".to_string(), true),
+    };
+    format!("{}{lo}, {hi}{}", if lo_open { '(' } else { '[' }, if hi_open { ')' } else { ']' })
 }
 
 /// A `oneOf` (or `anyOf`) that no alternative satisfies. Where the input picks one of them (the

@@ -7,6 +7,7 @@ use crate::error::{BuildError, Result};
 use crate::input::element::ElementKind;
 use crate::input::{json_keys, ranges, schema_errors, variable_names};
 use crate::linalg::distributed::{Backend, PetscBackend};
+pub use crate::linalg::eigen::MAX_MODES;
 use serde::Deserialize;
 use std::path::Path;
 
@@ -131,6 +132,56 @@ pub struct Geometry {
     pub mesh: Option<String>,
     #[serde(default)]
     pub matrices: Option<MatrixSpec>,
+    /// The unit of every length of the geometry: the mesh file's coordinates, the boxes, the
+    /// flange selectors and reference points and the stress points. Material data and
+    /// everything else stay SI.
+    #[serde(default)]
+    pub length_unit: LengthUnit,
+}
+
+/// `geometry.length_unit`: CAD and Gmsh meshes come in millimetres as often as in metres; the
+/// builder scales the geometry to metres before anything else, so a mesh in mm needs no editing.
+#[derive(Debug, Clone, Copy, Default, Deserialize, serde::Serialize, PartialEq, Eq)]
+pub enum LengthUnit {
+    #[default]
+    #[serde(rename = "m")]
+    Metre,
+    #[serde(rename = "cm")]
+    Centimetre,
+    #[serde(rename = "mm")]
+    Millimetre,
+    #[serde(rename = "in")]
+    Inch,
+    #[serde(rename = "ft")]
+    Foot,
+}
+
+impl LengthUnit {
+    /// Every unit, in the schema's order.
+    pub const ALL: [LengthUnit; 5] =
+        [LengthUnit::Metre, LengthUnit::Centimetre, LengthUnit::Millimetre, LengthUnit::Inch, LengthUnit::Foot];
+
+    /// One of this unit in metres (the inch and the foot exactly, by their 1959 definition).
+    pub fn metres(self) -> f64 {
+        match self {
+            LengthUnit::Metre => 1.0,
+            LengthUnit::Centimetre => 0.01,
+            LengthUnit::Millimetre => 0.001,
+            LengthUnit::Inch => 0.0254,
+            LengthUnit::Foot => 0.3048,
+        }
+    }
+
+    /// The name the input uses ("mm").
+    pub fn symbol(self) -> &'static str {
+        match self {
+            LengthUnit::Metre => "m",
+            LengthUnit::Centimetre => "cm",
+            LengthUnit::Millimetre => "mm",
+            LengthUnit::Inch => "in",
+            LengthUnit::Foot => "ft",
+        }
+    }
 }
 
 #[derive(Debug, Clone, Deserialize, serde::Serialize)]
@@ -276,6 +327,31 @@ pub enum NodeSelector {
     },
 }
 
+impl NodeSelector {
+    /// The selector with its lengths (points, sizes, tolerances) multiplied by `scale`: a
+    /// selector is given in the geometry's length unit, and the part is meshed in metres.
+    pub fn scaled(&self, scale: f64) -> NodeSelector {
+        let p = |v: &[f64; 3]| v.map(|c| c * scale);
+        match self {
+            NodeSelector::BoxFace { .. } | NodeSelector::NodeSet(_) => self.clone(),
+            // a normal and an axis are directions: no unit
+            NodeSelector::Plane { point, normal, tolerance } => {
+                NodeSelector::Plane { point: p(point), normal: *normal, tolerance: tolerance.map(|t| t * scale) }
+            }
+            NodeSelector::Box { min, max } => NodeSelector::Box { min: p(min), max: p(max) },
+            NodeSelector::Sphere { center, radius } => {
+                NodeSelector::Sphere { center: p(center), radius: radius * scale }
+            }
+            NodeSelector::Cylinder { point, axis, radius, length } => NodeSelector::Cylinder {
+                point: p(point),
+                axis: *axis,
+                radius: radius * scale,
+                length: length.map(|l| l * scale),
+            },
+        }
+    }
+}
+
 #[derive(Debug, Clone, Copy, Deserialize, serde::Serialize, PartialEq, Eq)]
 pub enum Face {
     #[serde(rename = "-x")]
@@ -418,7 +494,8 @@ const MAX_ELEMENT_ASPECT: f64 = 1e4;
 /// edges: Jacobians turn negative by round-off alone.
 const MAX_OFFSET_IN_SIZES: f64 = 1e8;
 
-fn check_box_proportions(path: &Path, i: usize, b: &BoxSpec) -> Result<()> {
+fn check_box_proportions(path: &Path, i: usize, b: &BoxSpec, unit: LengthUnit) -> Result<()> {
+    let unit = unit.symbol();
     let edge: Vec<f64> = (0..3).map(|a| (b.max[a] - b.min[a]) / b.elements[a].max(1) as f64).collect();
     let (short, long) = edge.iter().fold((f64::INFINITY, 0.0f64), |(s, l), &e| (s.min(e), l.max(e)));
     if long > MAX_ELEMENT_ASPECT * short {
@@ -429,7 +506,7 @@ fn check_box_proportions(path: &Path, i: usize, b: &BoxSpec) -> Result<()> {
             path,
             format!("geometry.boxes[{i}].elements"),
             format!(
-                "{:?} elements give edges of {:.3e}, {:.3e} and {:.3e} m: an aspect ratio of {:.1e}, above {MAX_ELEMENT_ASPECT:.0e}, \
+                "{:?} elements give edges of {:.3e}, {:.3e} and {:.3e} {unit}: an aspect ratio of {:.1e}, above {MAX_ELEMENT_ASPECT:.0e}, \
                  where the stiffness loses the digits the solver needs; choose counts in the box's proportions \
                  (e.g. [{}]) or check the box's min and max",
                 b.elements,
@@ -448,7 +525,7 @@ fn check_box_proportions(path: &Path, i: usize, b: &BoxSpec) -> Result<()> {
             path,
             format!("geometry.boxes[{i}]"),
             format!(
-                "the box lies {far:.3e} m from the origin, more than {MAX_OFFSET_IN_SIZES:.0e} times its smallest side {size:.3e} m: \
+                "the box lies {far:.3e} {unit} from the origin, more than {MAX_OFFSET_IN_SIZES:.0e} times its smallest side {size:.3e} {unit}: \
                  its coordinates keep too few digits for the element shapes; move the part near the origin"
             ),
         ));
@@ -602,6 +679,18 @@ impl Spec {
         }
         self.check_part(path)?;
         self.check_ranges(path)?;
+        if let Some(n) = self.reduction.modes
+            && n > MAX_MODES
+        {
+            return Err(BuildError::input(
+                path,
+                "reduction.modes",
+                format!(
+                    "{n} modes requested, at most {MAX_MODES} are supported: a reduced body for system simulation needs the \
+                     modes of its scene's band (use reduction.max_frequency, or scene.band with scene.tolerance)"
+                ),
+            ));
+        }
         if let Some([lo, hi]) = self.scene.as_ref().and_then(|s| s.band)
             && !(hi > lo)
         {
@@ -624,7 +713,7 @@ impl Spec {
                     ));
                 }
             }
-            check_box_proportions(path, i, b)?;
+            check_box_proportions(path, i, b, self.geometry.length_unit)?;
         }
         Ok(())
     }
@@ -721,6 +810,17 @@ impl Spec {
             }
         }
         if g.matrices.is_some() {
+            if g.length_unit != LengthUnit::Metre {
+                return Err(BuildError::input(
+                    path,
+                    "geometry.length_unit",
+                    format!(
+                        "\"{}\" cannot apply to matrices: their stiffness, mass and node coordinates must be in SI units \
+                         (N/m, kg, m); remove length_unit and export the matrices in SI",
+                        g.length_unit.symbol()
+                    ),
+                ));
+            }
             if self.material.is_some() || !self.materials.is_empty() {
                 return Err(BuildError::input(
                     path,
@@ -743,6 +843,40 @@ impl Spec {
     pub fn resolve(input: &Path, name: &str) -> std::path::PathBuf {
         let p = Path::new(name);
         if p.is_absolute() { p.to_path_buf() } else { input.parent().unwrap_or(Path::new(".")).join(p) }
+    }
+
+    /// The file `name` of the input's `field`, resolved as `resolve` does, or why it cannot be
+    /// read: the field, the path as resolved, and the folder relative paths start from (a path
+    /// that is right from the shell's folder but not from the input's is the usual slip).
+    pub fn readable_file(input: &Path, field: &str, name: &str) -> Result<std::path::PathBuf> {
+        let resolved = Self::resolve(input, name);
+        let problem = match std::fs::metadata(&resolved) {
+            Ok(m) if m.is_dir() => "is a folder, not a file".to_string(),
+            Ok(_) => match std::fs::File::open(&resolved) {
+                Ok(_) => return Ok(resolved),
+                Err(e) => format!("cannot be read: {e}"),
+            },
+            Err(e) => format!("cannot be read: {e}"),
+        };
+        let folder = input.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        // the folder as the user finds it: absolute, where the working directory is known
+        let shown = std::path::absolute(folder).unwrap_or_else(|_| folder.to_path_buf());
+        let how = if Path::new(name).is_absolute() {
+            "the path is absolute".to_string()
+        } else if input == Path::new("<stdin>") {
+            format!(
+                "relative paths resolve from the working directory {} (the input came from standard input)",
+                shown.display()
+            )
+        } else {
+            format!("relative paths resolve from the input file's folder {}", shown.display())
+        };
+        Err(BuildError::input(input, field, format!("\"{name}\" ({}) {problem}; {how}", resolved.display())))
+    }
+
+    /// Metres per unit of the geometry's lengths.
+    pub fn length_scale(&self) -> f64 {
+        self.geometry.length_unit.metres()
     }
 
     /// Drop the force flanges the scene does not connect: the FMU models only what the scene uses.
@@ -819,6 +953,46 @@ mod tests {
         assert_eq!(s.geometry.element, ElementKind::Hex20);
         assert_eq!(s.mount_index(), Some(0));
         assert_eq!(s.reduction.modes, Some(4));
+    }
+
+    #[test]
+    fn the_length_unit_scales_the_selectors_and_not_directions() {
+        let mm = GOOD.replace("\"elements\": [10,1,1] } ]", "\"elements\": [10,1,1] } ], \"length_unit\": \"mm\"");
+        let s = Spec::from_str(Path::new("in.json"), &mm).unwrap();
+        assert_eq!(s.geometry.length_unit, LengthUnit::Millimetre);
+        assert_eq!(s.length_scale(), 1e-3);
+        let plane = NodeSelector::Plane { point: [1000.0, 0.0, 0.0], normal: [1.0, 0.0, 0.0], tolerance: Some(2.0) };
+        let NodeSelector::Plane { point, normal, tolerance } = plane.scaled(1e-3) else { unreachable!() };
+        assert_eq!((point, normal, tolerance), ([1.0, 0.0, 0.0], [1.0, 0.0, 0.0], Some(2e-3)));
+        // the inch and the foot exactly
+        assert_eq!((LengthUnit::Inch.metres(), LengthUnit::Foot.metres()), (0.0254, 0.3048));
+        let e = err(&GOOD.replace("\"elements\": [10,1,1] } ]", "\"elements\": [10,1,1] } ], \"length_unit\": \"km\""));
+        assert!(e.contains("geometry.length_unit") && e.contains("\"km\"") && e.contains("\"mm\""), "{e}");
+        let matrices = r#"{"name": "M", "reduction": {"modes": 1}, "flanges": [],
+            "geometry": {"matrices": {"stiffness": "K", "mass": "M", "dofs": "d", "nodes": "n"}, "length_unit": "mm"}}"#;
+        let e = err(matrices);
+        assert!(e.contains("geometry.length_unit") && e.contains("SI"), "{e}");
+    }
+
+    #[test]
+    fn an_unreadable_file_names_its_field_path_and_folder() {
+        let dir = std::env::temp_dir().join(format!("fmu-builder-readable-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let input = dir.join("in.json");
+        let e = Spec::readable_file(&input, "geometry.mesh", "meshes/part.inp").unwrap_err().to_string();
+        let folder = std::path::absolute(&dir).unwrap();
+        for part in [
+            "in.json: geometry.mesh: \"meshes/part.inp\"",
+            &dir.join("meshes/part.inp").display().to_string(),
+            &format!("relative paths resolve from the input file's folder {}", folder.display()),
+        ] {
+            assert!(e.contains(part), "{part:?} not in {e}");
+        }
+        let e = Spec::readable_file(&input, "geometry.matrices.mass", ".").unwrap_err().to_string();
+        assert!(e.contains("geometry.matrices.mass") && e.contains("is a folder"), "{e}");
+        std::fs::write(dir.join("part.inp"), "").unwrap();
+        assert_eq!(Spec::readable_file(&input, "geometry.mesh", "part.inp").unwrap(), dir.join("part.inp"));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

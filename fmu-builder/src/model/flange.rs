@@ -144,11 +144,13 @@ pub fn select_flanges(spec: &Spec, file: &Path, part: &Part) -> Result<Vec<Flang
     let mut flanges = Vec::with_capacity(spec.flanges.len());
     // every selector failure states where the part is: a selector in millimetres on a part in
     // metres (or the other way round) shows at once
+    // ... in the unit the selectors are given in (geometry.length_unit)
+    let (unit, scale) = (spec.geometry.length_unit.symbol(), part.length_scale);
     let (lo, hi) = bounds(mesh);
-    let spans = format!("the part spans {lo:?} to {hi:?} [m]");
+    let spans = format!("the part spans {:?} to {:?} [{unit}]", lo.map(|c| c / scale), hi.map(|c| c / scale));
     for (k, fs) in spec.flanges.iter().enumerate() {
         let field = format!("flanges[{k}].nodes");
-        let slaves = select(&fs.nodes, part, size)
+        let slaves = select(&fs.nodes.scaled(scale), part, size)
             .map_err(|m| BuildError::input(file, format!("{field}.node_set"), format!("{m}; {spans}")))?;
         if slaves.is_empty() {
             return Err(BuildError::input(
@@ -156,7 +158,7 @@ pub fn select_flanges(spec: &Spec, file: &Path, part: &Part) -> Result<Vec<Flang
                 field,
                 format!(
                     "flange \"{}\" selects no node of the part (check the set, face, plane, box, sphere or cylinder and its size, \
-                     in metres; {spans})",
+                     in {unit}; {spans})",
                     fs.name
                 ),
             ));
@@ -169,7 +171,7 @@ pub fn select_flanges(spec: &Spec, file: &Path, part: &Part) -> Result<Vec<Flang
                 field,
                 format!(
                     "flange \"{}\" selects {} node(s) on a line (from {plo:?} to {phi:?}); a rigid flange needs at least three \
-                     non-collinear nodes: widen the selector (in metres; {spans})",
+                     non-collinear nodes: widen the selector (in {unit}; {spans})",
                     fs.name,
                     slaves.len()
                 ),
@@ -190,7 +192,7 @@ pub fn select_flanges(spec: &Spec, file: &Path, part: &Part) -> Result<Vec<Flang
             }
             owner[s] = Some(k);
         }
-        let reference = fs.reference_point.unwrap_or_else(|| centroid(&points).into());
+        let reference = fs.reference_point.map(|r| r.map(|c| c * scale)).unwrap_or_else(|| centroid(&points).into());
         let lever = (Vector3::from(reference) - centroid(&points)).norm();
         if !(lever <= MAX_LEVER_IN_SIZES * size) {
             return Err(BuildError::input(
@@ -199,7 +201,7 @@ pub fn select_flanges(spec: &Spec, file: &Path, part: &Part) -> Result<Vec<Flang
                 format!(
                     "the reference point {reference:?} lies {lever:.3e} m from the flange's nodes, more than {MAX_LEVER_IN_SIZES:.0e} \
                      times the part's size ({size:.3e} m): the rigid lever to it swamps the part's own stiffness and mass in \
-                     double precision; put it at the joint the flange stands for (in metres; {spans})"
+                     double precision; put it at the joint the flange stands for (in {unit}; {spans})"
                 ),
             ));
         }

@@ -38,6 +38,11 @@ pub struct Part {
     /// File ids of the nodes and elements (empty for boxes: they have none).
     pub node_ids: Vec<u64>,
     pub element_ids: Vec<u64>,
+    /// Metres per unit of the input's lengths (`geometry.length_unit`): the mesh is in metres,
+    /// and the flange selectors and stress points, given in the input's unit, are scaled by it.
+    pub length_scale: f64,
+    /// What the import left out, said as warnings (surface elements of a "save all" deck).
+    pub notes: Vec<String>,
 }
 
 impl From<ImportError> for BuildError {
@@ -113,7 +118,7 @@ impl Part {
 
 pub fn part_of(spec: &Spec, file: &Path) -> Result<Part> {
     if let Some(name) = &spec.geometry.mesh {
-        return mesh_file_part(spec, file, &Spec::resolve(file, name));
+        return mesh_file_part(spec, file, &Spec::readable_file(file, "geometry.mesh", name)?);
     }
     if let Some(m) = &spec.geometry.matrices {
         return matrix_part(spec, file, m);
@@ -125,8 +130,14 @@ fn box_part(spec: &Spec, file: &Path) -> Result<Part> {
     let kind = spec.geometry.element;
     let counts: Vec<[usize; 3]> = spec.geometry.boxes.iter().map(|b| b.elements).collect();
     size::check_boxes(file, &counts, kind, Memory::of_this_machine())?;
-    let boxes: Vec<BoxRegion> =
-        spec.geometry.boxes.iter().map(|b| BoxRegion { min: b.min, max: b.max, divisions: b.elements }).collect();
+    // the boxes in metres (given in geometry.length_unit)
+    let scale = spec.length_scale();
+    let boxes: Vec<BoxRegion> = spec
+        .geometry
+        .boxes
+        .iter()
+        .map(|b| BoxRegion { min: b.min.map(|c| c * scale), max: b.max.map(|c| c * scale), divisions: b.elements })
+        .collect();
     let mesh = mesh::mesh_boxes(&boxes, kind).map_err(|e| {
         let field = match &e {
             MeshError::DegenerateBox { box_index, .. } | MeshError::TooLarge { box_index } => {
@@ -155,6 +166,8 @@ fn box_part(spec: &Spec, file: &Path) -> Result<Part> {
         origin: file.to_path_buf(),
         node_ids: Vec::new(),
         element_ids: Vec::new(),
+        length_scale: scale,
+        notes: Vec::new(),
     })
 }
 
@@ -238,7 +251,14 @@ fn mesh_file_part(spec: &Spec, file: &Path, mesh_path: &Path) -> Result<Part> {
         element_material.push(materials.len());
         materials.push(m);
     }
-    let (nodes, new_index) = compact(&imported);
+    let (mut nodes, new_index) = compact(&imported);
+    // the mesh file's coordinates are in geometry.length_unit: metres from here on
+    let scale = spec.length_scale();
+    if scale != 1.0 {
+        for p in &mut nodes {
+            *p = p.map(|c| c * scale);
+        }
+    }
     let kept_ids: Vec<u64> =
         imported.node_ids.iter().zip(&new_index).filter(|(_, k)| k.is_some()).map(|(id, _)| *id).collect();
     let mut mesh = Mesh::nodes_only(nodes);
@@ -266,6 +286,8 @@ fn mesh_file_part(spec: &Spec, file: &Path, mesh_path: &Path) -> Result<Part> {
         origin: mesh_path.to_path_buf(),
         node_ids: kept_ids,
         element_ids: imported.element_ids.clone(),
+        length_scale: scale,
+        notes: imported.notes.clone(),
     })
 }
 
@@ -354,9 +376,10 @@ fn resolve_material(
 }
 
 fn matrix_part(_spec: &Spec, file: &Path, m: &crate::input::spec::MatrixSpec) -> Result<Part> {
-    let path = |name: &str| -> PathBuf { Spec::resolve(file, name) };
-    let (k, mm, d, dofs, nodes) =
-        (path(&m.stiffness), path(&m.mass), m.damping.as_deref().map(path), path(&m.dofs), path(&m.nodes));
+    let path = |field: &str, name: &str| Spec::readable_file(file, &format!("geometry.matrices.{field}"), name);
+    let (k, mm, dofs, nodes) =
+        (path("stiffness", &m.stiffness)?, path("mass", &m.mass)?, path("dofs", &m.dofs)?, path("nodes", &m.nodes)?);
+    let d = m.damping.as_deref().map(|name| path("damping", name)).transpose()?;
     let nodes_path = nodes.clone();
     let files = import::matrices::MatrixFiles {
         stiffness: &k,
@@ -388,6 +411,9 @@ fn matrix_part(_spec: &Spec, file: &Path, m: &crate::input::spec::MatrixSpec) ->
         origin: nodes_path,
         node_ids: model.node_ids,
         element_ids: Vec::new(),
+        // matrices are SI (the input check refuses another length unit for them)
+        length_scale: 1.0,
+        notes: Vec::new(),
     })
 }
 

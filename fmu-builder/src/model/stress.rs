@@ -184,7 +184,9 @@ pub fn requested_points(file: &Path, request: &StressOutputs, part: &Part) -> Re
             push(n, PointOrigin::NodeSet(set.clone()));
         }
     }
-    for q in &request.points {
+    for given in &request.points {
+        // given in geometry.length_unit (and named so), the mesh is in metres
+        let q = &given.map(|c| c * part.length_scale);
         let distance = |n: usize| {
             let p = part.mesh.nodes[n];
             (0..3).map(|a| (p[a] - q[a]) * (p[a] - q[a])).sum::<f64>()
@@ -192,7 +194,7 @@ pub fn requested_points(file: &Path, request: &StressOutputs, part: &Part) -> Re
         let nearest =
             (0..part.mesh.n_nodes()).filter(|&n| used[n]).min_by(|&a, &b| distance(a).total_cmp(&distance(b)));
         if let Some(n) = nearest {
-            push(n, PointOrigin::Nearest(*q));
+            push(n, PointOrigin::Nearest(*given));
         }
     }
     let total = points.len() + request.hot_spots;

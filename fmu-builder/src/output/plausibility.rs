@@ -3,7 +3,9 @@
 //! whose lowest frequency no engineering part has; and, stated plainly, what the scene lets the
 //! FMU do and which inputs it will refuse.
 
+use crate::input::element::MAX_NODES_PER_ELEMENT;
 use crate::input::spec::{SceneLoad, Spec};
+use crate::model::fe::element_mass;
 use crate::model::flange::model_size;
 use crate::model::part::Part;
 use serde::Serialize;
@@ -17,9 +19,17 @@ const SIZE_RANGE: [f64; 2] = [1e-4, 100.0];
 /// Lowest frequencies of elastic parts [Hz]: a slender boom ~0.1, a micro-part ~1e6.
 const FREQUENCY_RANGE: [f64; 2] = [0.1, 1e6];
 
+/// `SceneReport::body` of a body without any flange: a valid FMU (a free flexible body whose
+/// motion starts from its initial conditions), but nothing in it is "the mount".
+pub const FREE_WITHOUT_FLANGES: &str = "free-floating body without flanges";
+
 /// What the scene lets the FMU model, and what it refuses.
 #[derive(Debug, Clone, Serialize, Default)]
 pub struct SceneReport {
+    /// What holds the body, in words: "mounted at flange base", "free-floating, driven by its
+    /// force flanges" or "free-floating body without flanges" (no inputs at all: it moves by
+    /// its initial conditions alone, and its frame is its centre of mass, not a mount).
+    pub body: String,
     /// Rotating-frame terms (Coriolis, centrifugal, Euler): a rotating mount is accepted.
     pub rotation: bool,
     /// Static shapes of gravity / mount acceleration in the basis (their statics exact).
@@ -42,7 +52,13 @@ pub fn scene(spec: &Spec, mount: Option<&str>) -> SceneReport {
     if let Some(m) = mount {
         refuses.push(format!("a {m}.R that is not a rotation matrix"));
     }
+    let body = match mount {
+        Some(m) => format!("mounted at flange {m}"),
+        None if spec.flanges.is_empty() => FREE_WITHOUT_FLANGES.to_string(),
+        None => "free-floating, driven by its force flanges".to_string(),
+    };
     SceneReport {
+        body,
         rotation,
         gravity: spec.declares(SceneLoad::Gravity),
         acceleration: spec.declares(SceneLoad::Acceleration),
@@ -86,12 +102,23 @@ pub fn warnings(part: &Part, lowest_hz: Option<f64>, mounted: bool) -> Vec<Strin
     if let Some(size) = (!part.mesh.nodes.is_empty()).then(|| model_size(&part.mesh))
         && outside(size, SIZE_RANGE)
     {
-        let hint = if size > SIZE_RANGE[1] { " (a mesh in millimetres? scale it to metres)" } else { "" };
+        // a mesh in millimetres read as metres is a billion times too heavy: the mass says so
+        // in a number the user recognises at once
+        let mass = match mesh_mass(part) {
+            Some(m) => format!(" and would weigh {m:.3e} kg"),
+            None => String::new(),
+        };
+        let hint = if size > SIZE_RANGE[1] {
+            " (a mesh in millimetres? give its unit: \"geometry\": {\"length_unit\": \"mm\"})"
+        } else {
+            " (a mesh in kilometres, or scaled twice? check geometry.length_unit)"
+        };
         out.push(format!(
-            "the part is {size:.4e} m across (its bounding box's diagonal), outside the {:e} .. {} m of parts a system model holds{hint}; the input is in SI units",
+            "the part is {size:.4e} m across (its bounding box's diagonal){mass}, outside the {:e} .. {} m of parts a system model holds{hint}; lengths are in metres unless geometry.length_unit says otherwise",
             SIZE_RANGE[0], SIZE_RANGE[1]
         ));
     }
+    out.extend(part.notes.iter().cloned());
     if let Some(f) = lowest_hz
         && outside(f, FREQUENCY_RANGE)
     {
@@ -103,4 +130,24 @@ pub fn warnings(part: &Part, lowest_hz: Option<f64>, mounted: bool) -> Vec<Strin
         ));
     }
     out
+}
+
+/// The mesh's mass [kg] (the sum of its elements' consistent mass matrices), for the size
+/// warning; None for matrix input (no elements) or an element the mass cannot be integrated on.
+fn mesh_mass(part: &Part) -> Option<f64> {
+    let mesh = &part.mesh;
+    if mesh.n_elements() == 0 {
+        return None;
+    }
+    let mut coords = [[0.0; 3]; MAX_NODES_PER_ELEMENT];
+    let mut me = vec![0.0; MAX_NODES_PER_ELEMENT * MAX_NODES_PER_ELEMENT];
+    let mut total = 0.0;
+    for e in 0..mesh.n_elements() {
+        let kind = mesh.kind(e);
+        let n = kind.nodes_per_element();
+        let rho = part.materials.get(mesh.material[e])?.rho;
+        element_mass(kind, mesh.element_coords(e, &mut coords), rho, &mut me[..n * n]).ok()?;
+        total += me[..n * n].iter().sum::<f64>();
+    }
+    Some(total)
 }

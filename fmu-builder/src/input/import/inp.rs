@@ -63,6 +63,23 @@ const SKIPPED: &[&str] = &[
 /// Material options: they do not end the current `*MATERIAL` block.
 const MATERIAL_OPTIONS: &[&str] = &["ELASTIC", "DENSITY", "EXPANSION", "CONDUCTIVITY", "SPECIFIC HEAT", "PLASTIC"];
 
+/// Whether an element type is a surface (plane, axisymmetric, shell, membrane) or line (truss,
+/// beam) element of Abaqus/CalculiX: "surface", "line", or None for any other type. These are
+/// what Gmsh writes beside the volume when "save all elements" is on.
+fn lower_dimensional(name: &str) -> Option<&'static str> {
+    let n = name.to_ascii_uppercase();
+    let starts = |prefixes: &[&str]| prefixes.iter().any(|p| n.starts_with(p));
+    // shells: S3, S3R, S4, S4R, S6, S8, S8R, S9R5 (and STRI3, STRI65 below)
+    let shell = n.len() >= 2 && n.starts_with('S') && n.as_bytes()[1].is_ascii_digit();
+    if shell || starts(&["CPS", "CPE", "CAX", "M3D", "STRI", "DC2D"]) {
+        Some("surface")
+    } else if starts(&["T2D", "T3D", "B21", "B22", "B23", "B31", "B32", "B33"]) {
+        Some("line")
+    } else {
+        None
+    }
+}
+
 /// Reads an Abaqus/CalculiX input deck.
 pub fn read_inp(path: &Path) -> Result<ImportedMesh, ImportError> {
     let text = super::read_text(path)?;
@@ -226,6 +243,10 @@ struct Parser {
     elastic_seen: Vec<bool>,
     density_seen: Vec<bool>,
     sections: Vec<(String, String, Loc)>,
+    /// Surface and line elements left out: count per type name, in the order met.
+    skipped: Vec<(String, usize)>,
+    /// Their ids: element sets may list them (Gmsh writes a set per physical group).
+    skipped_ids: std::collections::HashSet<u64>,
 }
 
 type Res<T> = Result<T, ImportError>;
@@ -247,6 +268,8 @@ impl Parser {
             elastic_seen: Vec::new(),
             density_seen: Vec::new(),
             sections: Vec::new(),
+            skipped: Vec::new(),
+            skipped_ids: std::collections::HashSet::new(),
         }
     }
 
@@ -323,6 +346,27 @@ impl Parser {
             }
         }
         self.finish()
+    }
+
+    /// The skipped elements in words: ("12 surface elements", "CPS6") or, with several kinds,
+    /// ("14 surface and line elements", "CPS6: 12, T3D3: 2").
+    fn skipped_summary(&self) -> Option<(String, String)> {
+        let total: usize = self.skipped.iter().map(|(_, c)| c).sum();
+        if self.skipped.is_empty() {
+            return None;
+        }
+        let has = |d: &str| self.skipped.iter().any(|(n, _)| lower_dimensional(n) == Some(d));
+        let kind = match (has("surface"), has("line")) {
+            (true, true) => "surface and line",
+            (false, true) => "line",
+            _ => "surface",
+        };
+        let types = if self.skipped.len() == 1 {
+            self.skipped[0].0.clone()
+        } else {
+            self.skipped.iter().map(|(n, c)| format!("{n}: {c}")).collect::<Vec<_>>().join(", ")
+        };
+        Some((format!("{total} {kind} element{}", if total == 1 { "" } else { "s" }), types))
     }
 
     fn check_params(&self, kw: &Keyword, allowed: &[&str]) -> Res<()> {
@@ -421,6 +465,9 @@ impl Parser {
     fn element_block(&mut self, kw: &Keyword, data: &[Line]) -> Res<()> {
         self.check_params(kw, &["TYPE", "ELSET"])?;
         let tname = self.required(kw, "TYPE")?;
+        if ElementKind::from_calculix_name(tname).is_none() && lower_dimensional(tname).is_some() {
+            return self.skip_elements(kw, tname, data);
+        }
         let ty = ElementKind::from_calculix_name(tname).ok_or_else(|| {
             self.err(
                 kw.loc,
@@ -478,6 +525,36 @@ impl Parser {
         }
         if let Some(name) = kw.param("ELSET") {
             self.set_ops.push(SetOp { kind: SetKind::Element, name: name.to_ascii_uppercase(), items: members });
+        }
+        Ok(())
+    }
+
+    /// A block of surface or line elements (a Gmsh "save all elements" deck writes the
+    /// boundary's triangles and the edges' lines beside the volume): they add no stiffness or
+    /// mass to a solid model, so they are counted and left out, and their ids remembered for the
+    /// element sets that list them. Without any volume element `finish` refuses the deck.
+    fn skip_elements(&mut self, kw: &Keyword, tname: &str, data: &[Line]) -> Res<()> {
+        let name = tname.to_ascii_uppercase();
+        let mut count = 0;
+        let mut continued = false;
+        for line in data {
+            // a record continues on the next line when its line ends with a comma (the node
+            // count of a type the importer does not model is not known); the id is the first
+            // field of the record's first line
+            if !continued && let Some(first) = self.fields(line)?.first() {
+                let id = self.parse_id(first, line.loc, "element id")?;
+                self.skipped_ids.insert(id);
+                count += 1;
+            }
+            continued = line.text.ends_with(',');
+        }
+        match self.skipped.iter_mut().find(|(n, _)| *n == name) {
+            Some((_, c)) => *c += count,
+            None => self.skipped.push((name, count)),
+        }
+        if let Some(set) = kw.param("ELSET") {
+            // the set exists (a later *ELSET may name it), and holds no volume element
+            self.set_ops.push(SetOp { kind: SetKind::Element, name: set.to_ascii_uppercase(), items: Vec::new() });
         }
         Ok(())
     }
@@ -620,6 +697,26 @@ impl Parser {
     }
 
     fn finish(self) -> Res<ImportedMesh> {
+        let file = self.files[0].display().to_string();
+        let notes = match self.skipped_summary() {
+            Some((what, types)) if self.elements.is_empty() => {
+                return Err(ImportError::new(
+                    &self.files[0],
+                    0,
+                    format!(
+                        "no volume elements, only {what} ({types}): the builder needs the solid's volume elements \
+                         (supported: {}); export only volume elements (Gmsh: mesh in 3D, uncheck 'save all elements' \
+                         / use physical groups of the volume)",
+                        ElementKind::supported_names()
+                    ),
+                ));
+            }
+            Some((what, types)) => vec![format!(
+                "skipped {what} ({types}) of {file}: export only volume elements (Gmsh: uncheck 'save all elements' \
+                 / use physical groups of the volume)"
+            )],
+            None => Vec::new(),
+        };
         let mut connectivity = Vec::with_capacity(self.elements.len());
         for e in &self.elements {
             let conn = e
@@ -648,15 +745,20 @@ impl Parser {
                     self.err(loc, format!("*{} {}: {} {id} is not defined", op.kind.keyword(), op.name, op.kind.what()))
                 })
             };
+            // skipped surface and line elements leave the sets that list them
+            let skipped = |id: u64| op.kind == SetKind::Element && self.skipped_ids.contains(&id);
             for (item, loc) in &op.items {
                 match item {
+                    SetItem::Id(id) if skipped(*id) => {}
                     SetItem::Id(id) => {
                         members.insert(lookup(*id, *loc)?);
                     }
                     SetItem::Range(a, b, s) => {
                         let mut id = *a;
                         while id <= *b {
-                            members.insert(lookup(id, *loc)?);
+                            if !skipped(id) {
+                                members.insert(lookup(id, *loc)?);
+                            }
                             id = match id.checked_add(*s) {
                                 Some(v) => v,
                                 None => break,
@@ -703,6 +805,7 @@ impl Parser {
             element_sets: element_sets.into_iter().map(|(k, v)| (k, v.into_iter().collect())).collect(),
             materials: self.materials,
             sections,
+            notes,
         })
     }
 }
@@ -839,10 +942,50 @@ U
     #[test]
     fn error_unknown_element_type() {
         check(
-            &format!("{TET}** shell\n*ELEMENT, TYPE=S4R\n1, 1, 2, 3, 4\n"),
+            &format!("{TET}** wedge\n*ELEMENT, TYPE=C3D15\n1, 1, 2, 3, 4\n"),
             7,
-            &["S4R", "C3D4, C3D10, C3D8, C3D20, C3D20R"],
+            &["unsupported element type C3D15", "C3D4, C3D10, C3D8, C3D20, C3D20R"],
         );
+    }
+
+    /// Gmsh's "save all elements" writes the boundary's triangles and the edges' lines beside
+    /// the volume: they are left out with a note, and the element sets listing them lose them.
+    #[test]
+    fn surface_and_line_elements_are_skipped_beside_volume_elements() {
+        let deck = format!(
+            "{TET}*ELEMENT, type=CPS6, ELSET=Surface1\n7, 1, 2, 3, 1, 2, 3\n8, 1, 2, 4, 1, 2, 4\n\
+             *ELEMENT, type=T3D2, ELSET=Line1\n9, 1, 2\n\
+             *ELEMENT, type=C3D4, ELSET=Volume1\n1, 1, 2, 3, 4\n\
+             *ELSET, ELSET=Physical\n7, 8, 1\n*ELSET, ELSET=Edges\n9\n"
+        );
+        let m = parse_inp(&deck, Path::new("saveall.inp")).unwrap();
+        assert_eq!(m.element_types, vec![ElementKind::Tet4]);
+        assert_eq!(m.element_sets["PHYSICAL"], vec![0]);
+        assert!(m.element_sets["EDGES"].is_empty() && m.element_sets["SURFACE1"].is_empty());
+        assert_eq!(
+            m.notes,
+            vec![
+                "skipped 3 surface and line elements (CPS6: 2, T3D2: 1) of saveall.inp: export only volume elements \
+                 (Gmsh: uncheck 'save all elements' / use physical groups of the volume)"
+            ]
+        );
+        let one = parse_inp(
+            &format!("{TET}*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n*ELEMENT, TYPE=S4R\n2, 1, 2, 3, 4\n"),
+            Path::new("a.inp"),
+        );
+        assert!(one.unwrap().notes[0].starts_with("skipped 1 surface element (S4R) of a.inp: "));
+    }
+
+    #[test]
+    fn a_deck_of_surface_elements_only_is_refused_with_the_way_out() {
+        // the whole file is meant (line 0)
+        let e = err(&format!("{TET}** shell\n*ELEMENT, TYPE=S4R\n1, 1, 2, 3, 4\n*ELEMENT, TYPE=T3D2\n2, 1, 2\n"));
+        assert_eq!(e.line, 0, "{e}");
+        for part in
+            ["no volume elements, only 2 surface and line elements (S4R: 1, T3D2: 1)", "C3D4", "save all elements"]
+        {
+            assert!(e.to_string().starts_with("bad.inp: ") && e.message.contains(part), "{e}");
+        }
     }
 
     #[test]

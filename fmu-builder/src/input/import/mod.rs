@@ -52,6 +52,9 @@ pub struct ImportedMesh {
     pub materials: Vec<ImportedMaterial>,
     /// Solid sections as (element set name, material name), both upper-cased.
     pub sections: Vec<(String, String)>,
+    /// What the importer left out and the user should know (surface and line elements of a
+    /// deck written with Gmsh's "save all elements"), one sentence each.
+    pub notes: Vec<String>,
 }
 
 impl ImportedMesh {
