@@ -118,6 +118,7 @@ residual-flexibility mode, there to make statics exact, not a vibration mode of 
 compliance (relative to its largest entry): {:.2e}. Constraint modes make it exact up to round-off.</p>\n",
         a.compliance_max_relative_error
     );
+    h.push_str(&crate::output::verdict::html(&r.verdict));
     if let Some(fr) = &a.frequency_response {
         h.push_str(&accuracy_over_band_html(fr, &a.compliance_flanges));
     }
@@ -526,6 +527,7 @@ mod tests {
             scene: Default::default(),
             warnings: Vec::new(),
             pictures: Vec::new(),
+            verdict: Default::default(),
             accuracy: Accuracy {
                 reduced_hz: vec![300.0, 1500.0],
                 full_hz: vec![299.0, 1490.0],

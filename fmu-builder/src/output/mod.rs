@@ -1,6 +1,6 @@
-//! Stage 5, output: what the user gets. The report of a build (`report`) and its printed summary
-//! (`summary`), the HTML documentation (`documentation`), the FMU's modelDescription.xml and
-//! archive (`fmu`), the check that everything it carries is finite (`finite`), and the packaging
+//! Stage 5, output: what the user gets. The report of a build (`report`), its printed summary
+//! (`summary`) and the verdict on how far the FMU holds (`verdict`), the HTML documentation
+//! (`documentation`), the FMU's modelDescription.xml and archive (`fmu`), the check that everything it carries is finite (`finite`), and the packaging
 //! of it all with the runtime binaries (`package`; `binaries` checks those built on other
 //! platforms).
 
@@ -15,3 +15,4 @@ pub mod plausibility;
 pub mod plot;
 pub mod report;
 pub mod summary;
+pub mod verdict;

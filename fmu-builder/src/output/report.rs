@@ -8,6 +8,7 @@ use crate::model::flange::{Flange, FlangeCoupling};
 use crate::model::part::Part;
 use crate::model::rigid_coupling::Assembled;
 use crate::output::plausibility::{self, SceneReport};
+use crate::output::verdict::{self, Verdict};
 use crate::reduce::accuracy::Accuracy;
 use crate::reduce::basis::Basis;
 use crate::reduce::experiment::plan;
@@ -113,6 +114,7 @@ pub struct Report {
     pub rigid_body_residual: Option<[f64; 6]>,
     pub nodes: usize,
     pub elements: usize,
+    /// DoFs after flange coupling (each flange's slave nodes tied to its reference point's six).
     pub dofs_constrained: usize,
     pub mass: f64,
     pub volume: Option<f64>,
@@ -160,6 +162,8 @@ pub struct Report {
     #[serde(skip)]
     pub pictures: Vec<(String, String)>,
     pub accuracy: Accuracy,
+    /// How far the FMU can be trusted: the valid range and the errors within it.
+    pub verdict: Verdict,
 }
 
 /// Components below 1e-12 of the vector's size are round-off of a symmetric part's zeros:
@@ -266,6 +270,7 @@ pub fn report_of(
         scene: plausibility::scene(spec, mount),
         warnings: Vec::new(),
         pictures: Vec::new(),
+        verdict: verdict::of(&accuracy, spec.scene.as_ref().and_then(|s| s.tolerance)),
         accuracy,
     };
     report.warnings = plausibility::warnings(part, report.accuracy.full_hz.first().copied(), mount.is_some());

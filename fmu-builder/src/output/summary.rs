@@ -1,27 +1,41 @@
 //! The short terminal summary printed after a build.
 
 use crate::output::report::Report;
+use crate::output::verdict;
 use std::fmt::Write;
+
+/// `v` with `decimals` places, where a value that rounds to zero (-0.0, -1e-9) prints as 0: a
+/// minus sign on a zero reads as a direction the part does not have.
+fn fixed(v: f64, decimals: usize) -> String {
+    let s = format!("{v:.decimals$}");
+    match s.strip_prefix('-') {
+        Some(magnitude) if magnitude.chars().all(|c| c == '0' || c == '.') => magnitude.to_string(),
+        _ => s,
+    }
+}
+
+/// A point or vector [m] as "(x, y, z)", six places each.
+fn point(p: [f64; 3]) -> String {
+    format!("({}, {}, {})", fixed(p[0], 6), fixed(p[1], 6), fixed(p[2], 6))
+}
 
 pub fn text(r: &Report) -> String {
     let mut s = String::new();
-    let c = r.center_of_mass;
     let _ = writeln!(
         s,
-        "{}: {} mesh, {} nodes, {} elements, {} constrained DoFs",
+        "{}: {} mesh, {} nodes, {} elements, {} DoFs after flange coupling",
         r.model_name, r.element, r.nodes, r.elements, r.dofs_constrained
     );
-    let _ = writeln!(
-        s,
-        "  mass {:.6e} kg, centre of mass ({:.6}, {:.6}, {:.6}) m from the mount",
-        r.mass, c[0], c[1], c[2]
-    );
+    let _ = writeln!(s, "  mass {:.6e} kg, centre of mass {} m from the mount", r.mass, point(r.center_of_mass));
     for f in &r.flanges {
-        let p = f.reference_point;
         let _ = writeln!(
             s,
-            "  flange {:<12} {:<6} at ({:.6}, {:.6}, {:.6}) m, {} slave nodes, {}",
-            f.name, f.role, p[0], p[1], p[2], f.slave_nodes, f.coupling
+            "  flange {:<12} {:<6} at {} m, {} slave nodes, {}",
+            f.name,
+            f.role,
+            point(f.reference_point),
+            f.slave_nodes,
+            f.coupling
         );
     }
     let _ = writeln!(
@@ -93,11 +107,6 @@ pub fn text(r: &Report) -> String {
         );
     }
     let _ = writeln!(s, "  vs full FE: static flange compliance within {:.1e}", a.compliance_max_relative_error);
-    if let Some(worst) =
-        a.frequency_response.as_ref().and_then(|fr| fr.stress_relative_error.iter().copied().reduce(f64::max))
-    {
-        let _ = writeln!(s, "  vs full FE: stress responses at the recovery points within {worst:.1e} over the band");
-    }
     if !r.stress_points.is_empty() {
         let hot = r.stress_points.iter().filter(|p| p.description.contains("hot spot")).count();
         let _ = writeln!(
@@ -109,15 +118,23 @@ pub fn text(r: &Report) -> String {
             let _ = writeln!(s, "    {}: {}", p.name, p.description);
         }
     }
-    if let Some(frf) = &a.frequency_response {
-        let _ = writeln!(
-            s,
-            "  vs full FE: flange transfer functions over {:.4}..{:.4} Hz within {:.2e} ({} frequencies)",
-            frf.band_hz[0],
-            frf.band_hz[1],
-            frf.max_relative_error,
-            frf.frequencies_hz.len()
-        );
+    if let (Some(band), Some(frf)) = (verdict::band_sentence(&r.verdict), &a.frequency_response) {
+        let _ = writeln!(s, "  {band}; {} frequencies", frf.frequencies_hz.len());
     }
+    let _ = writeln!(s, "  verdict: {}", verdict::sentence(&r.verdict));
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fixed;
+
+    #[test]
+    fn zeros_print_without_a_sign() {
+        assert_eq!(fixed(-0.0, 6), "0.000000");
+        assert_eq!(fixed(-4e-9, 6), "0.000000");
+        assert_eq!(fixed(-4e-6, 6), "-0.000004");
+        assert_eq!(fixed(0.0300745, 6), "0.030075");
+        assert_eq!(fixed(-1.0, 0), "-1");
+    }
 }
