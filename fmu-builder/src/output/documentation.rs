@@ -120,7 +120,7 @@ residual-flexibility mode, there to make statics exact, not a vibration mode of 
                         String::new()
                     } else {
                         across.push((p.reduced, j));
-                        format!(" <sup>{}</sup>", ACROSS_MARK)
+                        format!(" <sup>{ACROSS_MARK}</sup>")
                     };
                     (format!("{j}{note}"), format!("{f:.6}"), format!("{e:.2e}"))
                 }
