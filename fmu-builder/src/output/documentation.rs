@@ -5,7 +5,7 @@
 
 use crate::output::plot::{Annotation, PALETTE, PlotSpec, Series, Stroke, esc, line_plot};
 use crate::output::report::{Report, StressPointReport};
-use crate::reduce::accuracy::Accuracy;
+use crate::reduce::accuracy::{Accuracy, MAC_PAIRED, ModePair};
 use crate::reduce::frf::{ComparisonDamping, FrequencyResponse};
 use fmu_runtime::interface::VariableTable;
 use std::fmt::Write;
@@ -16,7 +16,8 @@ pub fn index_html(r: &Report, table: &VariableTable, input: &str) -> String {
         h,
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{name}</title>\
 <style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}}table{{border-collapse:collapse}}\
-td,th{{border:1px solid #bbb;padding:0.2em 0.6em;text-align:right}}th{{background:#eee}}</style></head><body>\n\
+td,th{{border:1px solid #bbb;padding:0.2em 0.6em;text-align:right}}th{{background:#eee}}tr.outside td{{background:#fde4e4}}\
+.legend{{font-size:90%}}</style></head><body>\n\
 <h1>{name}: reduced flexible body</h1>\n<p>Built by {tool} from a {el} mesh of {nodes} nodes and {els} elements \
 ({dofs} DoFs after flange coupling). GUID {guid}.</p>\n",
         tool = esc(&r.tool),
@@ -79,13 +80,25 @@ the undeformed part as meshed. World frame: the host's; the mount's inputs place
         let _ = writeln!(h, "<p>{}</p>", esc(&sentence));
     }
     let a = &r.accuracy;
+    let tolerance = frequency_tolerance(input);
+    let mut marked = 0usize;
+    let mut across = Vec::new();
     if a.pairs.is_empty() {
         h.push_str("<h3>Eigenfrequencies of the mounted body</h3>\n<table><tr><th>mode</th><th>reduced [Hz]</th><th>full FE [Hz]</th><th>relative error</th></tr>\n");
         for i in 0..a.reduced_hz.len() {
             let full = a.full_hz.get(i).map(|f| format!("{f:.6}")).unwrap_or_default();
-            let err = a.relative_error.get(i).map(|e| format!("{e:.2e}")).unwrap_or_default();
-            let _ =
-                writeln!(h, "<tr><td>{}</td><td>{:.6}</td><td>{full}</td><td>{err}</td></tr>", i + 1, a.reduced_hz[i]);
+            let e = a.relative_error.get(i).copied();
+            let out = e.is_some_and(|e| !(e.abs() <= tolerance));
+            marked += usize::from(out);
+            let err = e.map(|e| format!("{e:.2e}")).unwrap_or_default();
+            let _ = writeln!(
+                h,
+                "<tr{}><td>{}</td><td>{:.6}</td><td>{full}</td><td>{err}{}</td></tr>",
+                row_class(out),
+                i + 1,
+                a.reduced_hz[i],
+                mark(out)
+            );
         }
     } else {
         h.push_str(
@@ -97,18 +110,35 @@ residual-flexibility mode, there to make statics exact, not a vibration mode of 
 <th>relative error</th></tr>\n",
         );
         for p in &a.pairs {
+            let out = outside_valid_range(p, tolerance);
+            marked += usize::from(out);
             let (full, full_hz, err) = match (p.full, p.full_hz, p.relative_error) {
-                (Some(j), Some(f), Some(e)) => (j.to_string(), format!("{f:.6}"), format!("{e:.2e}")),
+                (Some(j), Some(f), Some(e)) => {
+                    // a pair across indices is the one place a negative error is no sign of a
+                    // broken projection: it gets its note below the table
+                    let note = if j == p.reduced {
+                        String::new()
+                    } else {
+                        across.push((p.reduced, j));
+                        format!(" <sup>{ACROSS_MARK}</sup>")
+                    };
+                    (format!("{j}{note}"), format!("{f:.6}"), format!("{e:.2e}"))
+                }
                 _ => ("-".to_string(), "-".to_string(), "outside the valid range".to_string()),
             };
             let _ = writeln!(
                 h,
-                "<tr><td>{}</td><td>{:.6}</td><td>{full}</td><td>{full_hz}</td><td>{:.4}</td><td>{err}</td></tr>",
-                p.reduced, p.reduced_hz, p.mac
+                "<tr{}><td>{}</td><td>{:.6}</td><td>{full}</td><td>{full_hz}</td><td>{:.4}</td><td>{err}{}</td></tr>",
+                row_class(out),
+                p.reduced,
+                p.reduced_hz,
+                p.mac,
+                mark(out)
             );
         }
     }
     h.push_str("</table>\n");
+    h.push_str(&eigenfrequency_legend(a.pairs.is_empty(), tolerance, input, marked, &across));
     if let Some(plot) = frequency_error_plot(a) {
         let _ = write!(h, "<div class=\"plot\">\n{plot}</div>\n");
     }
@@ -125,12 +155,192 @@ compliance (relative to its largest entry): {:.2e}. Constraint modes make it exa
     h.push_str(&variables_html(table));
     let _ = write!(
         h,
-        "<h2>Input</h2>\n<p>The input as the builder read it (defaults filled in), also <code>input.json</code> beside this \
+        "<h2>Input</h2>\n<p>The input as the builder read it (defaults filled in, unset fields left out), also <code>input.json</code> beside this \
 file:</p>\n<pre>{}</pre>\n",
         esc(input)
     );
     h.push_str("<p>The machine-readable report, with the full compliance matrices, is <code>report.json</code> beside this file.</p>\n</body></html>\n");
     h
+}
+
+/// Largest relative eigenfrequency error of a mode still counted as represented where the scene
+/// names no tolerance of its own.
+pub const DEFAULT_FREQUENCY_TOLERANCE: f64 = 0.01;
+/// Marks a pair of a reduced and a full mode of different indices.
+const ACROSS_MARK: &str = "&Dagger;";
+
+/// The scene's tolerance (`scene.tolerance` of the input listing) or [`DEFAULT_FREQUENCY_TOLERANCE`]:
+/// read from the listing as the page shows it, so that the limit the marks use is the one printed.
+fn frequency_tolerance(input: &str) -> f64 {
+    scene_tolerance(input).unwrap_or(DEFAULT_FREQUENCY_TOLERANCE)
+}
+
+fn scene_tolerance(input: &str) -> Option<f64> {
+    let v: serde_json::Value = serde_json::from_str(input).ok()?;
+    v.get("scene")?.get("tolerance")?.as_f64().filter(|t| t.is_finite() && *t > 0.0)
+}
+
+/// A mode the reduced model does not represent: no full mode resembles it (MAC below
+/// [`MAC_PAIRED`]) or its frequency misses the full mode's by more than `tolerance`. The MAC alone
+/// lets through modes of the right shape at the wrong frequency (MAC 0.914 at 26 % error).
+fn outside_valid_range(p: &ModePair, tolerance: f64) -> bool {
+    p.full.is_none() || !(p.mac >= MAC_PAIRED) || p.relative_error.is_none_or(|e| !(e.abs() <= tolerance))
+}
+
+fn row_class(outside: bool) -> &'static str {
+    if outside { " class=\"outside\"" } else { "" }
+}
+
+fn mark(outside: bool) -> &'static str {
+    if outside { " <sup title=\"outside the valid range\">&dagger;</sup>" } else { "" }
+}
+
+/// What the marks of the eigenfrequency table mean, and why a pair across indices may show a
+/// negative error.
+fn eigenfrequency_legend(
+    by_index: bool,
+    tolerance: f64,
+    input: &str,
+    marked: usize,
+    across: &[(usize, usize)],
+) -> String {
+    let source = if scene_tolerance(input).is_some() {
+        "the scene's tolerance, scene.tolerance".to_string()
+    } else {
+        "the scene names no tolerance".to_string()
+    };
+    let mac = if by_index { String::new() } else { format!(" or a MAC below {MAC_PAIRED}") };
+    let mut h = format!(
+        "<p class=\"legend\"><sup>&dagger;</sup> (shaded row): outside the valid range, a relative frequency error \
+above {} ({source}){mac}. {marked} mode{} marked.</p>\n",
+        fmt_percent(tolerance),
+        if marked == 1 { "" } else { "s" },
+    );
+    if !across.is_empty() {
+        let pairs = across.iter().map(|(r, f)| format!("reduced mode {r} with full mode {f}")).collect::<Vec<_>>();
+        let _ = writeln!(
+            h,
+            "<p class=\"legend\"><sup>{ACROSS_MARK}</sup> Paired by MAC across indices: {}. Reduction bounds each \
+reduced frequency from below by the full model's frequency of the same index, not by that of the full mode of the \
+same shape: where two full modes lie close, a pair across indices may show a negative error.</p>",
+            pairs.join(", ")
+        );
+    }
+    h
+}
+
+/// "1 %", "0.1 %", "2.5e-4 %".
+fn fmt_percent(fraction: f64) -> String {
+    format!("{} %", fmt_num(100.0 * fraction))
+}
+
+/// A stress [Pa] in MPa to 4 significant digits: a column of mixed magnitudes reads alike
+/// (1.521 and 0.6314, not 1.521e6 and 631357.8008).
+fn fmt_mpa(pa: f64) -> String {
+    let v = pa / 1e6;
+    if !v.is_finite() {
+        return format!("{v}");
+    }
+    if v == 0.0 {
+        return "0".to_string();
+    }
+    // fixed point down to 1 Pa: the stresses per unit load of a small part are thousandths of a
+    // MPa, and a column of them reads alike without exponents
+    let magnitude = v.abs().log10().floor();
+    if !(-6.0..4.0).contains(&magnitude) {
+        return format!("{v:.3e}");
+    }
+    let s = format!("{v:.*}", (3.0 - magnitude) as usize);
+    // rounding may carry into a new digit (9.9996 -> 10.000): one decimal too many then
+    let digits = s.chars().filter(char::is_ascii_digit).skip_while(|c| *c == '0').count();
+    if digits > 4 && s.contains('.') { s[..s.len() - 1].trim_end_matches('.').to_string() } else { s }
+}
+
+/// The input as the page and `documentation/input.json` list it: the builder's reading of it
+/// (defaults filled in) without the fields left unset, which serialise as `null` and would bury
+/// what the user wrote; fields keep their order.
+pub fn input_listing<T: serde::Serialize>(spec: &T) -> serde_json::Result<String> {
+    let text = serde_json::to_string(spec)?;
+    let tree: Ordered = serde_json::from_str(&text)?;
+    serde_json::to_string_pretty(&tree)
+}
+
+/// JSON in the order written (serde_json's `Value` sorts object keys), objects without their
+/// `null` members.
+enum Ordered {
+    Leaf(serde_json::Value),
+    Array(Vec<Ordered>),
+    Object(Vec<(String, Ordered)>),
+}
+
+impl<'de> serde::Deserialize<'de> for Ordered {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Ordered;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("JSON")
+            }
+            fn visit_unit<E>(self) -> Result<Ordered, E> {
+                Ok(Ordered::Leaf(serde_json::Value::Null))
+            }
+            fn visit_bool<E>(self, v: bool) -> Result<Ordered, E> {
+                Ok(Ordered::Leaf(v.into()))
+            }
+            fn visit_i64<E>(self, v: i64) -> Result<Ordered, E> {
+                Ok(Ordered::Leaf(v.into()))
+            }
+            fn visit_u64<E>(self, v: u64) -> Result<Ordered, E> {
+                Ok(Ordered::Leaf(v.into()))
+            }
+            fn visit_f64<E>(self, v: f64) -> Result<Ordered, E> {
+                Ok(Ordered::Leaf(v.into()))
+            }
+            fn visit_str<E>(self, v: &str) -> Result<Ordered, E> {
+                Ok(Ordered::Leaf(v.into()))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut a: A) -> Result<Ordered, A::Error> {
+                let mut out = Vec::new();
+                while let Some(x) = a.next_element()? {
+                    out.push(x);
+                }
+                Ok(Ordered::Array(out))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, mut a: A) -> Result<Ordered, A::Error> {
+                let mut out = Vec::new();
+                while let Some((k, v)) = a.next_entry::<String, Ordered>()? {
+                    if !matches!(v, Ordered::Leaf(serde_json::Value::Null)) {
+                        out.push((k, v));
+                    }
+                }
+                Ok(Ordered::Object(out))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl serde::Serialize for Ordered {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::{SerializeMap, SerializeSeq};
+        match self {
+            Ordered::Leaf(v) => v.serialize(s),
+            Ordered::Array(items) => {
+                let mut seq = s.serialize_seq(Some(items.len()))?;
+                for x in items {
+                    seq.serialize_element(x)?;
+                }
+                seq.end()
+            }
+            Ordered::Object(members) => {
+                let mut map = s.serialize_map(Some(members.len()))?;
+                for (k, v) in members {
+                    map.serialize_entry(k, v)?;
+                }
+                map.end()
+            }
+        }
+    }
 }
 
 /// The mesh with its flanges and the first mode shapes.
@@ -208,20 +418,21 @@ fn stress_points_html(points: &[StressPointReport]) -> String {
 <code>.mises</code> [Pa] at each node below: nodal stresses as CalculiX computes them (integration-point stresses \
 extrapolated to the element's nodes, averaged over the elements sharing the node), linear in the modal coordinates. \
 Hot spots are the nodes with the highest von Mises stress under the unit load cases, each case relative to its own \
-peak; nodes tied to a flange are not candidates. The static stresses per unit load follow each point.</p>\n",
+peak; nodes tied to a flange are not candidates. The static stresses per unit load follow each point, in MPa \
+(4 significant digits).</p>\n",
     );
     for p in points {
         let _ = write!(
             h,
-            "<h3>{}</h3>\n<p>{}</p>\n<table><tr><th>unit load case</th><th>sxx</th><th>syy</th><th>szz</th><th>sxy</th>\
-<th>syz</th><th>szx</th><th>von Mises [Pa]</th></tr>\n",
+            "<h3>{}</h3>\n<p>{}</p>\n<table><tr><th>unit load case</th><th>sxx [MPa]</th><th>syy [MPa]</th><th>szz [MPa]</th>\
+<th>sxy [MPa]</th><th>syz [MPa]</th><th>szx [MPa]</th><th>von Mises [MPa]</th></tr>\n",
             esc(&p.name),
             esc(&p.description)
         );
         for c in &p.unit_cases {
             let _ = write!(h, "<tr><td>{}</td>", esc(&c.case));
             for v in c.stress.iter().chain(std::iter::once(&c.von_mises)) {
-                let _ = write!(h, "<td>{}</td>", fmt_num(*v));
+                let _ = write!(h, "<td>{}</td>", fmt_mpa(*v));
             }
             h.push_str("</tr>\n");
         }
@@ -553,6 +764,131 @@ mod tests {
             rest = &rest[b..];
         }
         out
+    }
+
+    fn pair(reduced: usize, full: Option<usize>, mac: f64, err: f64) -> ModePair {
+        ModePair {
+            reduced,
+            full,
+            mac,
+            reduced_hz: 100.0 * reduced as f64,
+            full_hz: full.map(|_| 100.0 * reduced as f64 / (1.0 + err)),
+            relative_error: full.map(|_| err),
+        }
+    }
+
+    /// The rows of the eigenfrequency table that carry the outside-the-valid-range mark.
+    fn marked_rows(html: &str) -> Vec<String> {
+        html.lines()
+            .filter(|l| l.starts_with("<tr class=\"outside\">"))
+            .map(|l| l.split("<td>").nth(1).unwrap_or("").trim_end_matches("</td>").to_string())
+            .collect()
+    }
+
+    #[test]
+    fn modes_are_marked_by_frequency_error_or_mac() {
+        let mut r = report(None);
+        r.accuracy.pairs = vec![
+            pair(1, Some(1), 0.999, 2e-3),
+            // the right shape at the wrong frequency: the MAC alone let it through
+            pair(2, Some(2), 0.914, 0.26),
+            pair(3, None, 0.4, 0.0),
+            pair(4, Some(4), 0.95, -0.012),
+        ];
+        let html = html_of(&r);
+        assert_eq!(marked_rows(&html), ["2", "3", "4"], "{html}");
+        assert!(
+            html.contains("above 1 % (the scene names no tolerance) or a MAC below 0.9. 3 modes marked."),
+            "{html}"
+        );
+        // the scene's tolerance replaces the 1 %
+        let table = VariableTable::new(&fmu_runtime::reduced::two_mode_body());
+        let html = index_html(&r, &table, "{\"name\": \"b\", \"scene\": {\"tolerance\": 0.5}}");
+        assert_eq!(marked_rows(&html), ["3"]);
+        assert!(html.contains("above 50 % (the scene's tolerance, scene.tolerance)"), "{html}");
+        // without pairs, by index: the frequency error alone
+        r.accuracy.pairs.clear();
+        r.accuracy.relative_error = vec![3e-3, 0.02];
+        let html = html_of(&r);
+        assert_eq!(marked_rows(&html), ["2"]);
+        assert!(!html.contains("MAC below") && html.contains("1 mode marked."));
+    }
+
+    #[test]
+    fn a_pair_across_indices_is_noted() {
+        let mut r = report(None);
+        r.accuracy.pairs =
+            vec![pair(16, Some(16), 0.99, 1e-4), pair(17, Some(18), 0.97, -3e-3), pair(18, Some(17), 0.97, 4e-3)];
+        let html = html_of(&r);
+        assert!(html.contains("<td>18 <sup>&Dagger;</sup></td>") && html.contains("<td>17 <sup>&Dagger;</sup></td>"));
+        assert_eq!(html.matches("<sup>&Dagger;</sup>").count(), 3, "two cells and the note");
+        assert!(html.contains(
+            "Paired by MAC across indices: reduced mode 17 with full mode 18, reduced mode 18 with full mode 17."
+        ));
+        assert!(html.contains("negative error"));
+        r.accuracy.pairs.remove(1);
+        r.accuracy.pairs.remove(1);
+        assert!(!html_of(&r).contains("&Dagger;"));
+    }
+
+    #[test]
+    fn stresses_in_mpa_to_four_digits() {
+        for (pa, text) in [
+            (1.521e6, "1.521"),
+            (631357.8008, "0.6314"),
+            (-1.5214e8, "-152.1"),
+            (2.0e9, "2000"),
+            (9.99996e6, "10.00"),
+            (0.0, "0"),
+            (12.0, "0.00001200"),
+            (0.5, "5.000e-7"),
+            (3.2e10, "3.200e4"),
+            (f64::NAN, "NaN"),
+        ] {
+            assert_eq!(fmt_mpa(pa), text, "{pa}");
+        }
+        let mut r = report(None);
+        r.stress_points = vec![StressPointReport {
+            name: "hot1".into(),
+            description: "node 7".into(),
+            position: [0.0; 3],
+            unit_cases: vec![crate::output::report::UnitCaseStress {
+                case: "tip f_z".into(),
+                stress: [1.521e6, 631357.8008, 0.0, -2.5e5, 1.0, 7.0e7],
+                von_mises: 1.9e6,
+            }],
+        }];
+        let html = html_of(&r);
+        assert!(html.contains("<th>von Mises [MPa]</th>") && !html.contains("[Pa]</th>"), "{html}");
+        assert!(html.contains("<td>1.521</td><td>0.6314</td><td>0</td><td>-0.2500</td><td>0.000001000</td><td>70.00</td><td>1.900</td>"), "{html}");
+    }
+
+    #[test]
+    fn the_input_listing_leaves_out_unset_fields_in_order() {
+        #[derive(serde::Serialize)]
+        struct Inner {
+            b: Option<f64>,
+            a: Vec<Option<u32>>,
+        }
+        #[derive(serde::Serialize)]
+        struct Outer {
+            name: &'static str,
+            unset: Option<u32>,
+            inner: Inner,
+            e: f64,
+        }
+        let text = input_listing(&Outer {
+            name: "x",
+            unset: None,
+            inner: Inner { b: None, a: vec![Some(1), None] },
+            e: 2.1e11,
+        })
+        .unwrap();
+        // an array keeps its nulls: their positions carry meaning
+        assert_eq!(
+            text,
+            "{\n  \"name\": \"x\",\n  \"inner\": {\n    \"a\": [\n      1,\n      null\n    ]\n  },\n  \"e\": 210000000000.0\n}"
+        );
     }
 
     #[test]

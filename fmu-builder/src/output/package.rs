@@ -83,7 +83,7 @@ pub fn write_fmu(
         ))
     })?;
     let input =
-        serde_json::to_string_pretty(spec).map_err(|e| BuildError::Numerical(format!("serialising the input: {e}")))?;
+        documentation::input_listing(spec).map_err(|e| BuildError::Numerical(format!("serialising the input: {e}")))?;
     let report_json =
         serde_json::to_vec_pretty(report).map_err(|e| BuildError::Numerical(format!("serialising the report: {e}")))?;
     let required = fmi2_functions::required(&xml);
