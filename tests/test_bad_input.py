@@ -414,6 +414,7 @@ def test_a_body_without_flanges_builds_as_a_free_floating_body(tmp_path):
     the report says what it is instead of speaking of a mount."""
     path = tmp_path / "free.json"
     path.write_text(json.dumps(variant(lambda s: s.update(flanges=[]))))
-    report, _ = build_report(tmp_path, path)
+    report, proc = build_report(tmp_path, path)
     assert report["flanges"] == []
     assert report["scene"]["body"] == "free-floating body without flanges"
+    assert "free-floating body without flanges" in proc.stdout and "mount" not in proc.stdout, proc.stdout

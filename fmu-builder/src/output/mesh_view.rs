@@ -412,6 +412,8 @@ mod tests {
             origin: "test.json".into(),
             node_ids: Vec::new(),
             element_ids: Vec::new(),
+            length_scale: 1.0,
+            notes: Vec::new(),
         }
     }
 

@@ -26,7 +26,13 @@ pub fn text(r: &Report) -> String {
         "{}: {} mesh, {} nodes, {} elements, {} DoFs after flange coupling",
         r.model_name, r.element, r.nodes, r.elements, r.dofs_constrained
     );
-    let _ = writeln!(s, "  mass {:.6e} kg, centre of mass {} m from the mount", r.mass, point(r.center_of_mass));
+    // a free body's frame is not a mount: say what holds it (or that nothing does)
+    let frame = if r.scene.body.starts_with("mounted") {
+        "from the mount".to_string()
+    } else {
+        format!("at the body frame's origin: {}", r.scene.body)
+    };
+    let _ = writeln!(s, "  mass {:.6e} kg, centre of mass {} m {frame}", r.mass, point(r.center_of_mass));
     for f in &r.flanges {
         let _ = writeln!(
             s,
