@@ -371,11 +371,9 @@ fn to3(s: &[f64]) -> [f64; 3] {
 }
 
 /// A two-mode body with one force flange: a small, valid body for tests (here and in the
-/// builder's packaging tests). Compiled always rather than behind a test-only feature: a feature
-/// only the tests enable gave the workspace's test build and its release build two versions of
-/// this crate and of the builder on top of it, compiled twice in the test command. Nothing
-/// calls it outside tests, so the linker drops it from the FMU's binary (which exports only the
-/// FMI functions).
+/// builder's packaging tests). Not in the FMU's binary: compiled for this crate's tests and
+/// with the `fixtures` feature, which only dev-dependencies enable.
+#[cfg(any(test, feature = "fixtures"))]
 #[doc(hidden)]
 pub fn two_mode_body() -> ReducedBody {
     ReducedBody {
@@ -406,6 +404,7 @@ pub fn two_mode_body() -> ReducedBody {
 
 /// [`two_mode_body`] with rotating-frame terms and geometric stiffening: a spinning mount's
 /// gyroscopic coupling and prestress for tests.
+#[cfg(any(test, feature = "fixtures"))]
 #[doc(hidden)]
 pub fn rotating_two_mode_body() -> ReducedBody {
     let mut body = two_mode_body();
@@ -430,6 +429,7 @@ pub fn rotating_two_mode_body() -> ReducedBody {
 }
 
 /// [`two_mode_body`] free-floating: no mount, body frame at the centre of mass, rotation terms.
+#[cfg(any(test, feature = "fixtures"))]
 #[doc(hidden)]
 pub fn free_two_mode_body() -> ReducedBody {
     let mut body = two_mode_body();
@@ -444,6 +444,7 @@ pub fn free_two_mode_body() -> ReducedBody {
 }
 
 /// Rotating-frame invariants of the right structure (G skew, O symmetric per mode pair).
+#[cfg(any(test, feature = "fixtures"))]
 fn fixture_rotation_terms(n: usize) -> RotationTerms {
     let nn = n * n;
     let mut g = vec![0.0; 3 * nn];
