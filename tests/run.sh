@@ -101,4 +101,5 @@ for arg in "$@"; do
         -m | -m?* | --markexpr | --markexpr=*) markers=() ;;
     esac
 done
-.venv/bin/python -m pytest -v -s "${markers[@]}" "$@"
+# the slowest tests listed at the end: where the CI budget goes
+.venv/bin/python -m pytest -v -s --durations=20 "${markers[@]}" "$@"
