@@ -134,7 +134,7 @@ def test_the_default_band_is_a_tenth_of_the_dynamic_cutoff(built, example):
     summary, report, _, _ = built(example)
     band = report["accuracy"]["frequency_response"]["band_hz"]
     assert band[0] == 0 and band[1] == pytest.approx(report["scene_cutoff_hz"] / 10, rel=1e-12)
-    assert "by default a tenth of the dynamic cutoff" in summary
+    assert "by default a tenth of the reduction's cutoff" in summary
 
 
 def test_an_explicit_band_is_kept(built):

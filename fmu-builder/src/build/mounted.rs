@@ -152,7 +152,7 @@ fn default_band(spec: &Spec, basis: &Basis, full_hz: &[f64]) -> ([f64; 2], Strin
         (
             [0.0, claimed],
             format!(
-                "by default a tenth of the dynamic cutoff ({rule}, {hz:.1} Hz), the range the reduction is built \
+                "by default a tenth of the reduction's cutoff ({rule}, {hz:.1} Hz), the range the reduction is built \
                  for: the modes it leaves out answer there within 1 % of their static response, which its static \
                  shapes carry exactly (scene.band compares another)"
             ),
