@@ -85,6 +85,11 @@ def test_the_summary_states_a_verdict_consistent_with_the_report(built, example)
     assert "constrained DoFs" not in summary
     assert "DoFs after flange coupling" in summary.splitlines()[0]
     assert not NEGATIVE_ZERO.findall(summary), NEGATIVE_ZERO.findall(summary)
+    # the documentation's rigid-body and flange tables too (the pictures' SVG coordinates are not
+    # read by anyone), and no round-off residue (1e-18 products of inertia) posing as a value
+    tables = html[:html.index("<h2>Pictures")]
+    assert not NEGATIVE_ZERO.findall(tables), NEGATIVE_ZERO.findall(tables)
+    assert not re.findall(r"\de-1[5-9]|\de-2\d", tables), re.findall(r"\d\.\d+e-(?:1[5-9]|2\d)", tables)
 
     # the stated eigenfrequency error: the full modes up to the valid range, mode by mode
     full, rel = np.array(acc["full_hz"]), np.abs(np.array(acc["relative_error"]))

@@ -3,6 +3,7 @@
 //! external files) drawn by `output::plot`: [`frequency_response_plot`] and
 //! [`relative_error_plot`].
 
+use crate::output::numbers::{fixed, scientific};
 use crate::output::plot::{Annotation, PALETTE, PlotSpec, Series, Stroke, esc, line_plot};
 use crate::output::report::{Report, StressPointReport};
 use crate::reduce::accuracy::{Accuracy, MAC_PAIRED, ModePair};
@@ -32,21 +33,15 @@ td,th{{border:1px solid #bbb;padding:0.2em 0.6em;text-align:right}}th{{backgroun
     let _ = write!(
         h,
         "<h2>Rigid body</h2>\n<table><tr><th>mass [kg]</th><td>{:.6e}</td></tr><tr><th>volume [m^3]</th><td>{}</td></tr>\
-<tr><th>centre of mass [m] (body frame)</th><td>{:.6e}, {:.6e}, {:.6e}</td></tr>\
+<tr><th>centre of mass [m] (body frame)</th><td>{}</td></tr>\
 <tr><th>inertia tensor about the body frame's origin [kg m^2] (rows)</th><td>{}</td></tr>\
 <tr><th>damping applied</th><td>{}</td></tr></table>\n\
 <p>Body frame: origin at the mount flange's reference point (for a free body: the centre of mass), axes those of \
 the undeformed part as meshed. World frame: the host's; the mount's inputs place the body frame in it.</p>\n",
         r.mass,
         r.volume.map_or("(matrix input)".to_string(), |v| format!("{v:.6e}")),
-        c[0],
-        c[1],
-        c[2],
-        r.inertia_about_origin
-            .chunks(3)
-            .map(|row| row.iter().map(|v| format!("{v:.6e}")).collect::<Vec<_>>().join(", "))
-            .collect::<Vec<_>>()
-            .join("<br>"),
+        scientific(&c).join(", "),
+        scientific(&r.inertia_about_origin).chunks(3).map(|row| row.join(", ")).collect::<Vec<_>>().join("<br>"),
         esc(&r.damping)
     );
     h.push_str("<h2>Flanges</h2>\n<table><tr><th>name</th><th>role</th><th>reference point [m]</th><th>slave nodes</th><th>coupling</th></tr>\n");
@@ -54,12 +49,12 @@ the undeformed part as meshed. World frame: the host's; the mount's inputs place
         let p = f.reference_point;
         let _ = writeln!(
             h,
-            "<tr><td>{}</td><td>{}</td><td>{:.6}, {:.6}, {:.6}</td><td>{}</td><td>{}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}, {}, {}</td><td>{}</td><td>{}</td></tr>",
             esc(&f.name),
             esc(&f.role),
-            p[0],
-            p[1],
-            p[2],
+            fixed(p[0], 6),
+            fixed(p[1], 6),
+            fixed(p[2], 6),
             f.slave_nodes,
             esc(&f.coupling)
         );

@@ -1,5 +1,5 @@
 //! Stage 5, output: what the user gets. The report of a build (`report`), its printed summary
-//! (`summary`) and the verdict on how far the FMU holds (`verdict`), the HTML documentation
+//! (`summary`, its numbers formatted by `numbers`) and the verdict on how far the FMU holds (`verdict`), the HTML documentation
 //! (`documentation`), the FMU's modelDescription.xml and archive (`fmu`), the check that everything it carries is finite (`finite`), and the packaging
 //! of it all with the runtime binaries (`package`; `binaries` checks those built on other
 //! platforms).
@@ -10,6 +10,7 @@ pub mod finite;
 pub mod fmu;
 pub mod mesh_view;
 pub mod model_exchange;
+pub mod numbers;
 pub mod package;
 pub mod plausibility;
 pub mod plot;

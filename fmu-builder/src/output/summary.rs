@@ -1,18 +1,9 @@
 //! The short terminal summary printed after a build.
 
+use crate::output::numbers::fixed;
 use crate::output::report::Report;
 use crate::output::verdict;
 use std::fmt::Write;
-
-/// `v` with `decimals` places, where a value that rounds to zero (-0.0, -1e-9) prints as 0: a
-/// minus sign on a zero reads as a direction the part does not have.
-fn fixed(v: f64, decimals: usize) -> String {
-    let s = format!("{v:.decimals$}");
-    match s.strip_prefix('-') {
-        Some(magnitude) if magnitude.chars().all(|c| c == '0' || c == '.') => magnitude.to_string(),
-        _ => s,
-    }
-}
 
 /// A point or vector [m] as "(x, y, z)", six places each.
 fn point(p: [f64; 3]) -> String {
@@ -129,18 +120,4 @@ pub fn text(r: &Report) -> String {
     }
     let _ = writeln!(s, "  verdict: {}", verdict::sentence(&r.verdict));
     s
-}
-
-#[cfg(test)]
-mod tests {
-    use super::fixed;
-
-    #[test]
-    fn zeros_print_without_a_sign() {
-        assert_eq!(fixed(-0.0, 6), "0.000000");
-        assert_eq!(fixed(-4e-9, 6), "0.000000");
-        assert_eq!(fixed(-4e-6, 6), "-0.000004");
-        assert_eq!(fixed(0.0300745, 6), "0.030075");
-        assert_eq!(fixed(-1.0, 0), "-1");
-    }
 }
