@@ -152,6 +152,10 @@ CASES = [
      lambda s: (set_path(s, ["geometry", "boxes", 0, "min"], [1e15, 0, 0]),
                 set_path(s, ["geometry", "boxes", 0, "max"], [1e15 + 1, 0.01, 0.02])),
      ["geometry.boxes[0]", "origin"]),
+    # a float that becomes a Duration: refused at input (it used to panic in Duration::from_secs_f64)
+    ("connect timeout beyond a Duration",
+     lambda s: s["reduction"].update(backend={"kind": "petsc", "connect_timeout": 1e19}),
+     ["reduction.backend.connect_timeout", "1e+19", "at most 1e6 s"]),
 ]
 
 
@@ -169,6 +173,33 @@ def test_bad_input_is_named(tmp_path, name, change, expected):
     for text in expected:
         assert text in proc.stderr, f"{name}: {text!r} not in {proc.stderr!r}"
     assert not (tmp_path / "bad.fmu").exists()
+
+
+LONG = "x" * 100_000
+
+
+@pytest.mark.parametrize("where", ["enum value", "string for a number", "unknown key", "huge number"])
+def test_a_huge_bad_value_is_quoted_cut(tmp_path, where):
+    """A 100 KB value pasted into a field: the message names the field and quotes the value's
+    start and length, not all of it."""
+    change = {
+        "enum value": lambda s: set_path(s, ["reduction", "method"], LONG),
+        "string for a number": lambda s: set_path(s, ["material", "E"], LONG),
+        "unknown key": lambda s: s["material"].update({LONG: 1}),
+        "huge number": lambda s: set_path(s, ["reduction", "modes"], int("9" * 4000)),
+    }[where]
+    path = tmp_path / "bad.json"
+    text = json.dumps(variant(change))
+    path.write_text(text)
+    proc = run_builder([path, "-o", tmp_path / "bad.fmu"], check=False)
+    assert proc.returncode == 1 and "panicked" not in proc.stderr
+    field = {"enum value": "reduction.method", "string for a number": "material.E", "unknown key": "material.",
+             # beyond a double: refused by the JSON reader, which names the line and column
+             "huge number": "number out of range at line 1 column"}[where]
+    assert field in proc.stderr, proc.stderr[:2000]
+    # the file, the field, what was found (60 characters of it) and what is expected fit in a
+    # few lines; the 100 KB value took 100 KB per mention before
+    assert len(proc.stderr) < 2000, f"{len(proc.stderr)} characters: {proc.stderr[:3000]}"
 
 
 def test_duplicate_key_is_named_with_its_line(tmp_path):

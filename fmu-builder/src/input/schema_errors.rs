@@ -89,8 +89,27 @@ pub fn nearest<'k>(key: &str, allowed: &'k [String]) -> Option<&'k str> {
 }
 
 fn short(value: &Value) -> String {
-    let text = value.to_string();
-    if text.chars().count() > 60 { format!("{}...", text.chars().take(57).collect::<String>()) } else { text }
+    cut(&value.to_string())
+}
+
+/// Longest quoted value or key a message repeats: a 100 KB string pasted into a field is
+/// recognisable by its start, and a message that echoes it in full buries the field and the fix.
+const QUOTED_CHARS: usize = 60;
+
+fn cut(text: &str) -> String {
+    if text.chars().count() > QUOTED_CHARS {
+        format!("{}... ({} characters)", text.chars().take(QUOTED_CHARS - 3).collect::<String>(), text.chars().count())
+    } else {
+        text.to_string()
+    }
+}
+
+/// The validator's own sentence ("... is greater than the maximum of 1000"), which quotes the
+/// instance in full: quoted as `short` does instead.
+fn said(e: &ValidationError<'_>) -> String {
+    let text = e.to_string();
+    let full = e.instance().to_string();
+    if full.chars().count() > QUOTED_CHARS { text.replace(&full, &short(e.instance())) } else { text }
 }
 
 fn describe(schema: &Value, e: &ValidationError<'_>, out: &mut Vec<Problem>) {
@@ -104,8 +123,9 @@ fn describe(schema: &Value, e: &ValidationError<'_>, out: &mut Vec<Problem>) {
                     Some(near) => format!("did you mean \"{near}\"? "),
                     None => String::new(),
                 };
+                let key = cut(key);
                 out.push(Problem {
-                    field: join(&field, key),
+                    field: join(&field, &key),
                     message: format!("unknown key \"{key}\"; {hint}allowed here: {}", allowed.join(", ")),
                 });
             }
@@ -144,10 +164,13 @@ fn describe(schema: &Value, e: &ValidationError<'_>, out: &mut Vec<Problem>) {
                 .map(|d| format!(" ({d})"))
                 .unwrap_or_default();
             let range = parent(schema, &schema_path).map(range_of).unwrap_or_default();
-            out.push(Problem { field, message: format!("found {}, outside {range}: {e}{why}", short(e.instance())) });
+            out.push(Problem {
+                field,
+                message: format!("found {}, outside {range}: {}{why}", short(e.instance()), said(e)),
+            });
         }
         _ => {
-            out.push(Problem { field, message: format!("found {}: {}", short(e.instance()), e) });
+            out.push(Problem { field, message: format!("found {}: {}", short(e.instance()), said(e)) });
         }
     }
 }
