@@ -44,10 +44,14 @@ fn nested_phases_keep_their_order_depth_time_and_own_peaks() {
     }
     // the process's own high-water mark is never reset: the kernel's (VmHWM) and getrusage's
     // (what /usr/bin/time reports) keep the inner phase's 200 MiB
+    // (less the slack of the kernel's resident-set counters: they are kept per thread and folded
+    // in batches, so a VmRSS sample and the high-water mark can differ by tens of pages; measured
+    // 0.14 MiB on the CI machine, allowed 2 MiB, far below the 200 MiB a reset would lose)
+    const COUNTER_SLACK_MIB: f64 = 2.0;
     if let (Some(process), Some(inner)) = (process_peak_mib(), phases[1].peak_mib) {
-        assert!(process >= inner, "process peak {process} MiB below the inner phase's {inner}");
+        assert!(process >= inner - COUNTER_SLACK_MIB, "process peak {process} MiB below the inner phase's {inner}");
         let rusage = rusage_max_rss_mib();
-        assert!(rusage >= inner, "getrusage's peak {rusage} MiB below the inner phase's {inner}");
+        assert!(rusage >= inner - COUNTER_SLACK_MIB, "getrusage's peak {rusage} MiB below the inner phase's {inner}");
     }
     assert!(take().is_empty());
     assert!(table(&phases).lines().count() == 4 && table(&phases).contains("  inner"));
