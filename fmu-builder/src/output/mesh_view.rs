@@ -66,6 +66,13 @@ pub fn outline(part: &Part) -> Vec<[usize; 2]> {
     out
 }
 
+/// The smallest and largest of each coordinate of 2-D points (the box a picture must hold).
+fn bounds(points: impl Iterator<Item = [f64; 2]>) -> ([f64; 2], [f64; 2]) {
+    points.fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), q| {
+        ([lo[0].min(q[0]), lo[1].min(q[1])], [hi[0].max(q[0]), hi[1].max(q[1])])
+    })
+}
+
 /// Isometric projection (view from (1, -1, 1), z up) onto the page.
 struct View {
     right: [f64; 3],
@@ -80,14 +87,7 @@ impl View {
         let right = unit(cross([0.0, 0.0, 1.0], d));
         let up = cross(d, right);
         let mut v = View { right, up, scale: 1.0, offset: [0.0, 0.0] };
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for p in points {
-            let q = v.raw(p);
-            for a in 0..2 {
-                lo[a] = lo[a].min(q[a]);
-                hi[a] = hi[a].max(q[a]);
-            }
-        }
+        let (lo, hi) = bounds(points.map(|p| v.raw(p)));
         let span = [(hi[0] - lo[0]).max(1e-300), (hi[1] - lo[1]).max(1e-300)];
         let (left, width) = (MARGIN + TRIAD_COLUMN, WIDTH - 2.0 * MARGIN - TRIAD_COLUMN);
         v.scale = (width / span[0]).min((HEIGHT - 2.0 * MARGIN) / span[1]);
@@ -196,14 +196,7 @@ pub fn mesh_picture(part: &Part, flanges: &[Flange], edges: &[[usize; 2]]) -> St
     let all = edges.iter().flat_map(|e| [nodes[e[0]], nodes[e[1]]]).chain(flanges.iter().map(|f| f.reference));
     let view = View::fit(all.clone());
     // the part's middle on the page: labels move away from it
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in all {
-        let q = view.page(p);
-        for a in 0..2 {
-            lo[a] = lo[a].min(q[a]);
-            hi[a] = hi[a].max(q[a]);
-        }
-    }
+    let (lo, hi) = bounds(all.map(|p| view.page(p)));
     let middle = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
     let mut s = svg_open("the mesh's outline, flanges' slave nodes and reference points");
     let mut clusters = Vec::new();
