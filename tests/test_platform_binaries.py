@@ -188,7 +188,8 @@ def refusal(workdir, platform, path):
     assert proc.returncode != 0 and not out.exists(), proc.stderr
     print(f"\n{proc.stderr.strip()}")
     # the file and the platform are named
-    assert f"{path}: refused as the FMU's {platform} binary: it " in proc.stderr, proc.stderr
+    assert f"{path}: refused as the FMU's {platform} binary (--platform-binary {platform}=...): it " \
+        in proc.stderr, proc.stderr
     return proc.stderr
 
 
@@ -246,7 +247,8 @@ def test_command_line_mistakes_are_refused(workdir, stub):
         (["--platform-binary", f"win64={dll}", "--platform-binary", f"win64={dll}"],
          "--platform-binary win64: given twice"),
         (["--platform-binary", f"win64={workdir / 'missing.dll'}"],
-         f"{workdir / 'missing.dll'}: refused as the FMU's win64 binary: it cannot be read"),
+         f"{workdir / 'missing.dll'}: refused as the FMU's win64 binary (--platform-binary win64=...): it "
+         "cannot be read"),
     ]
     for extra, reason in cases:
         out = workdir / "mistake.fmu"

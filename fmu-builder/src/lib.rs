@@ -2,7 +2,7 @@
 //! reduced flexible body.
 //!
 //! The modules are the stages of the data flow, in order; a stage uses only the stages before it
-//! (and `linalg`/`error`/`profile`, which every stage may use):
+//! (and `linalg`/`error`/`profile`/`out_of_memory`, which every stage may use):
 //!
 //! 1. [`input`]: what the user wrote: the JSON spec, the built-in box mesher, the importers of
 //!    Abaqus/CalculiX decks, Gmsh meshes and Matrix Market matrices, the element catalogue.
@@ -19,6 +19,7 @@
 
 pub mod error;
 pub mod linalg;
+pub mod out_of_memory;
 pub mod profile;
 pub mod progress;
 

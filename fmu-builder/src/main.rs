@@ -4,6 +4,10 @@ use clap::Parser;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+/// A failed allocation ends the build with the size estimate and the limit, not an abort.
+#[global_allocator]
+static ALLOCATOR: fmu_builder::out_of_memory::ReportingAllocator = fmu_builder::out_of_memory::ReportingAllocator;
+
 #[derive(Parser)]
 #[command(
     // which linux64 binary the FMUs get: portable (glibc 2.17+) or only for glibc as new as the
@@ -110,15 +114,20 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    if args.sweep {
-        return sweep(&args, &input);
-    }
-    let output = match output_path(&args, &input) {
+    let output = if args.sweep { None } else { Some(output_path(&args, &input)) };
+    let output = match output.transpose() {
         Ok(output) => output,
         Err(e) => {
             eprintln!("error: {e}");
             return ExitCode::FAILURE;
         }
+    };
+    if let Err(e) = check_destinations(&args, &input, output.as_deref()) {
+        eprintln!("error: {e}");
+        return ExitCode::FAILURE;
+    }
+    let Some(output) = output else {
+        return sweep(&args, &input);
     };
     let binaries = match platform_binaries(&args.platform_binary) {
         Ok(binaries) => binaries,
@@ -145,15 +154,15 @@ impl Input {
                 .map_err(|e| format!("<stdin>: cannot read the input: {e}"))?;
             return Ok(Self { path: PathBuf::from("<stdin>"), text });
         }
-        let text =
-            std::fs::read_to_string(path).map_err(|e| format!("{}: cannot read the input: {e}", path.display()))?;
+        use fmu_builder::input::{file_read, size::Memory};
+        let text = file_read::read_text(path, file_read::FileKind::Input, Memory::of_this_machine().bytes)
+            .map_err(|e| format!("{}: cannot read the input: it {e}", path.display()))?;
         Ok(Self { path: path.to_path_buf(), text })
     }
 }
 
 /// The FMU to write: `-o`, or `<name>.fmu` beside the input (in the working directory for
-/// standard input). Refused before any work when it cannot be written: a folder, a missing or
-/// read-only folder, or an existing file without --force.
+/// standard input); `check_destinations` decides whether it can be written.
 fn output_path(args: &Args, input: &Input) -> Result<PathBuf, String> {
     let output = match &args.output {
         Some(o) => o.clone(),
@@ -163,38 +172,52 @@ fn output_path(args: &Args, input: &Input) -> Result<PathBuf, String> {
             folder.join(format!("{}.fmu", spec.name))
         }
     };
-    if output.is_dir() {
-        return Err(format!(
-            "{}: is a folder; give the FMU's file name, e.g. -o {}",
-            output.display(),
-            output.join("Model.fmu").display()
-        ));
-    }
-    let folder = output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    if !folder.is_dir() {
-        return Err(format!(
-            "{}: cannot write the FMU: the folder {} does not exist",
-            output.display(),
-            folder.display()
-        ));
-    }
-    if output.exists() && !args.force {
-        return Err(format!("{}: exists; pass --force to overwrite it, or -o to write elsewhere", output.display()));
-    }
-    let probe = folder.join(format!(".fmu-builder-probe-{}", std::process::id()));
-    match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
-        Ok(_) => {
-            let _ = std::fs::remove_file(&probe);
-        }
-        Err(e) => {
-            return Err(format!(
-                "{}: cannot write the FMU into the folder {}: {e}",
-                output.display(),
-                folder.display()
-            ));
-        }
-    }
     Ok(output)
+}
+
+/// The FMU and every export, refused before any work when one cannot be written or would
+/// overwrite the input, another output or (without --force) an existing file.
+fn check_destinations(args: &Args, input: &Input, output: Option<&Path>) -> Result<(), String> {
+    use fmu_builder::output::destinations::{self, Destination};
+    let mut list = Vec::new();
+    if let Some(o) = output {
+        list.push(Destination::file("-o", o));
+    }
+    let files = [
+        ("--report", &args.report),
+        ("--export-inp", &args.export_inp),
+        ("--export-vtk", &args.export_vtk),
+        ("--sweep-svg", &args.sweep_svg),
+    ];
+    for (option, path) in files {
+        if let Some(p) = path {
+            list.push(Destination::file(option, p));
+        }
+    }
+    if let Some(p) = &args.export_matrices {
+        list.push(Destination::folder("--export-matrices", p, destinations::MOUNTED_MATRIX_FILES));
+    }
+    if let Some(p) = &args.export_free_free {
+        list.push(Destination::folder("--export-free-free", p, destinations::FREE_FREE_FILES));
+    }
+    let mut inputs = Vec::new();
+    if input.path != Path::new("<stdin>") {
+        inputs.push(input.path.clone());
+    }
+    // the files the input names; an input that does not parse fails the build later, with its reason
+    if let Ok(spec) = fmu_builder::input::spec::Spec::from_str(&input.path, &input.text) {
+        inputs.extend(spec.input_files(&input.path));
+        let by_matrices = spec.geometry.matrices.is_some();
+        for (option, path) in [("--export-inp", &args.export_inp), ("--export-free-free", &args.export_free_free)] {
+            if by_matrices && let Some(p) = path {
+                return Err(format!(
+                    "{option} {}: the part is given by its matrices (geometry.matrices), so it has no elements to                      export; export from the mesh the matrices came from",
+                    p.display()
+                ));
+            }
+        }
+    }
+    destinations::check(&list, &inputs, args.force)
 }
 
 /// The `--platform-binary` files, read and checked before the build starts: a wrong file is
@@ -248,7 +271,7 @@ fn sweep(args: &Args, input: &Input) -> ExitCode {
             if let Some(path) = &args.sweep_svg
                 && let Err(e) = std::fs::write(path, fmu_builder::build::sweep::plot(&rows))
             {
-                eprintln!("error: {}: {e}", path.display());
+                eprintln!("error: --sweep-svg {}: {e}", path.display());
                 return ExitCode::FAILURE;
             }
             ExitCode::SUCCESS
@@ -283,48 +306,8 @@ fn build(
     fmu_builder::progress::finish();
     match result {
         Ok(built) => {
-            if let Some(path) = &args.report {
-                let json = serde_json::to_string_pretty(&built.report).unwrap_or_default();
-                if let Err(e) = std::fs::write(path, json) {
-                    eprintln!("error: {}: {e}", path.display());
-                    return ExitCode::FAILURE;
-                }
-            }
-            if let Some(path) = &args.export_inp {
-                let b = &built;
-                if let Err(e) = fmu_builder::model::export::write_abaqus_deck(path, &b.part, &b.flanges) {
-                    eprintln!("error: {e}");
-                    return ExitCode::FAILURE;
-                }
-            }
-            if let Some(path) = &args.export_vtk {
-                let b = &built;
-                let shapes =
-                    fmu_builder::ffrf::inertia::expand(&b.model, &b.part.mesh.nodes, &b.flanges, b.basis.phi.as_ref());
-                let names: Vec<String> = b
-                    .basis
-                    .omega
-                    .iter()
-                    .enumerate()
-                    .map(|(j, w)| format!("shape_{:02}_{:.4}Hz", j + 1, w / (2.0 * std::f64::consts::PI)))
-                    .collect();
-                if let Err(e) =
-                    fmu_builder::model::vtk::write_vtk(path, &b.spec.name, &b.part, &b.flanges, shapes.as_ref(), &names)
-                {
-                    eprintln!("error: {e}");
-                    return ExitCode::FAILURE;
-                }
-            }
-            if let Some(dir) = &args.export_free_free
-                && let Err(e) = fmu_builder::model::export::write_free_free_matrices(dir, &built.part)
-            {
-                eprintln!("error: {e}");
-                return ExitCode::FAILURE;
-            }
-            if let Some(dir) = &args.export_matrices
-                && let Err(e) = fmu_builder::model::export::write_matrix_market(dir, &built.model)
-            {
-                eprintln!("error: {e}");
+            if let Err(e) = write_exports(args, &built) {
+                eprintln!("error: {e}; the FMU {} was written", output.display());
                 return ExitCode::FAILURE;
             }
             if !args.quiet {
@@ -351,4 +334,35 @@ fn build(
             ExitCode::FAILURE
         }
     }
+}
+
+/// The exports asked for besides the FMU; an error names the option.
+fn write_exports(args: &Args, b: &fmu_builder::build::Built) -> Result<(), String> {
+    let named = |option: &str, e: &dyn std::fmt::Display| format!("{option}: {e}");
+    if let Some(path) = &args.report {
+        let json = serde_json::to_string_pretty(&b.report).unwrap_or_default();
+        std::fs::write(path, json).map_err(|e| named("--report", &format!("{}: {e}", path.display())))?;
+    }
+    if let Some(path) = &args.export_inp {
+        fmu_builder::model::export::write_abaqus_deck(path, &b.part, &b.flanges).map_err(|e| named("--export-inp", &e))?;
+    }
+    if let Some(path) = &args.export_vtk {
+        let shapes = fmu_builder::ffrf::inertia::expand(&b.model, &b.part.mesh.nodes, &b.flanges, b.basis.phi.as_ref());
+        let names: Vec<String> = b
+            .basis
+            .omega
+            .iter()
+            .enumerate()
+            .map(|(j, w)| format!("shape_{:02}_{:.4}Hz", j + 1, w / (2.0 * std::f64::consts::PI)))
+            .collect();
+        fmu_builder::model::vtk::write_vtk(path, &b.spec.name, &b.part, &b.flanges, shapes.as_ref(), &names)
+            .map_err(|e| named("--export-vtk", &e))?;
+    }
+    if let Some(dir) = &args.export_free_free {
+        fmu_builder::model::export::write_free_free_matrices(dir, &b.part).map_err(|e| named("--export-free-free", &e))?;
+    }
+    if let Some(dir) = &args.export_matrices {
+        fmu_builder::model::export::write_matrix_market(dir, &b.model).map_err(|e| named("--export-matrices", &e))?;
+    }
+    Ok(())
 }

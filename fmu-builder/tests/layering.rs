@@ -1,16 +1,16 @@
 //! The builder's layout, checked on its sources: a stage uses only the stages before it (input,
-//! model, reduce, ffrf, output, then the driver `build`; `error`, `linalg`, `profile` and `progress`
-//! serve all), and no
-//! module imports a module that imports it back. docs/ARCHITECTURE.md describes the stages.
+//! model, reduce, ffrf, output, then the driver `build`; `error`, `linalg`, `profile`,
+//! `out_of_memory` and `progress` serve all), and no module imports a module that imports it back. docs/ARCHITECTURE.md describes the stages.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// Top-level modules and their place in the data flow.
-const STAGES: [(&str, usize); 10] = [
+const STAGES: [(&str, usize); 11] = [
     ("error", 0),
     ("linalg", 0),
     ("profile", 0),
+    ("out_of_memory", 0),
     ("progress", 0),
     ("input", 1),
     ("model", 2),

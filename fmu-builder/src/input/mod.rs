@@ -3,6 +3,7 @@
 //! and matrices from other FE tools.
 
 pub mod element;
+pub mod file_read;
 pub mod import;
 pub mod json_keys;
 pub mod mesh;

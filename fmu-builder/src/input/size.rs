@@ -117,6 +117,7 @@ impl SizeEstimate {
     /// Ok when the estimate fits in `available` bytes; else the complaint, for the caller to
     /// put against the field that made the model this large.
     pub fn fits(&self, available: Memory) -> std::result::Result<(), String> {
+        crate::out_of_memory::record_estimate(self.bytes, available.bytes, available.source);
         if self.bytes <= available.bytes {
             return Ok(());
         }
@@ -154,8 +155,9 @@ pub struct Memory {
 }
 
 impl Memory {
-    /// MemAvailable of /proc/meminfo (MemTotal on old kernels), capped by a cgroup v2 limit;
-    /// a fixed 8 GiB elsewhere.
+    /// MemAvailable of /proc/meminfo (MemTotal on old kernels), capped by the cgroup v2 limit
+    /// and the process's own limits (`ulimit -v`: RLIMIT_AS, less what the process has mapped
+    /// already; `ulimit -d`: RLIMIT_DATA); a fixed 8 GiB where none can be read.
     pub fn of_this_machine() -> Memory {
         let meminfo = std::fs::read_to_string("/proc/meminfo").unwrap_or_default();
         let field = |name: &str| {
@@ -168,13 +170,48 @@ impl Memory {
         };
         let cgroup =
             std::fs::read_to_string("/sys/fs/cgroup/memory.max").ok().and_then(|s| s.trim().parse::<f64>().ok());
-        if let Some(limit) = cgroup
-            && limit < bytes
-        {
-            (bytes, source) = (limit, "the cgroup limit /sys/fs/cgroup/memory.max");
+        let limits = [
+            (cgroup, "the cgroup limit /sys/fs/cgroup/memory.max"),
+            (address_space_left(), "the process's address-space limit (ulimit -v, RLIMIT_AS) less what it has mapped"),
+            (rlimit(libc::RLIMIT_DATA), "the process's data limit (ulimit -d, RLIMIT_DATA)"),
+        ];
+        for (limit, name) in limits {
+            if let Some(limit) = limit
+                && limit < bytes
+            {
+                (bytes, source) = (limit, name);
+            }
         }
         Memory { bytes, source }
     }
+}
+
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+type RlimitResource = libc::__rlimit_resource_t;
+#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+type RlimitResource = libc::c_int;
+
+/// The soft limit `resource` of this process in bytes; None when unlimited or unreadable.
+fn rlimit(resource: RlimitResource) -> Option<f64> {
+    let mut r = libc::rlimit { rlim_cur: 0, rlim_max: 0 };
+    // SAFETY: getrlimit writes one rlimit struct we own
+    if unsafe { libc::getrlimit(resource, &mut r) } != 0 || r.rlim_cur == libc::RLIM_INFINITY {
+        return None;
+    }
+    Some(r.rlim_cur as f64)
+}
+
+/// RLIMIT_AS less the address space already mapped (VmSize: the binary, its libraries, thread
+/// stacks), which the build cannot use.
+fn address_space_left() -> Option<f64> {
+    let limit = rlimit(libc::RLIMIT_AS)?;
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    let mapped_kib = status
+        .lines()
+        .find(|l| l.starts_with("VmSize:"))
+        .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+        .unwrap_or(0.0);
+    Some((limit - mapped_kib * 1024.0).max(0.0))
 }
 
 /// Elements and nodes of one box of the mesher, by checked arithmetic (None: beyond u128).

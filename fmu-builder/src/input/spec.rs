@@ -549,8 +549,20 @@ fn check_flange_names(path: &Path, value: &serde_json::Value) -> Result<()> {
 
 impl Spec {
     pub fn from_file(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| BuildError::io(path, e))?;
+        use crate::input::{file_read, size::Memory};
+        let text = file_read::read_text(path, file_read::FileKind::Input, Memory::of_this_machine().bytes)
+            .map_err(|e| BuildError::io(path, format!("cannot read the input: it {e}")))?;
         Self::from_str(path, &text)
+    }
+
+    /// The files this input names (its mesh or matrices), resolved as the build resolves them:
+    /// what no output may overwrite.
+    pub fn input_files(&self, input: &Path) -> Vec<std::path::PathBuf> {
+        let mut names: Vec<&str> = self.geometry.mesh.iter().map(String::as_str).collect();
+        if let Some(m) = &self.geometry.matrices {
+            names.extend([m.stiffness.as_str(), m.mass.as_str(), m.dofs.as_str(), m.nodes.as_str()]);
+        }
+        names.into_iter().map(|n| Self::resolve(input, n)).collect()
     }
 
     /// Parse `text` (read from `path`, used in messages).
@@ -849,12 +861,23 @@ impl Spec {
     /// read: the field, the path as resolved, and the folder relative paths start from (a path
     /// that is right from the shell's folder but not from the input's is the usual slip).
     pub fn readable_file(input: &Path, field: &str, name: &str) -> Result<std::path::PathBuf> {
+        use std::os::unix::fs::OpenOptionsExt;
         let resolved = Self::resolve(input, name);
+        use crate::input::file_read::{self, FileKind};
+        let kind = if field == "geometry.mesh" { FileKind::Mesh } else { FileKind::Matrix };
         let problem = match std::fs::metadata(&resolved) {
             Ok(m) if m.is_dir() => "is a folder, not a file".to_string(),
-            Ok(_) => match std::fs::File::open(&resolved) {
-                Ok(_) => return Ok(resolved),
-                Err(e) => format!("cannot be read: {e}"),
+            Ok(_) => match file_read::check(&resolved, kind, crate::input::size::Memory::of_this_machine().bytes) {
+                // opened non-blocking: a FIFO that slipped past the check must not block here
+                Ok(_) => match std::fs::OpenOptions::new()
+                    .read(true)
+                    .custom_flags(libc::O_NONBLOCK)
+                    .open(&resolved)
+                {
+                    Ok(_) => return Ok(resolved),
+                    Err(e) => format!("cannot be read: {e}"),
+                },
+                Err(refusal) => refusal.0,
             },
             Err(e) => format!("cannot be read: {e}"),
         };

@@ -2,9 +2,11 @@
 //! (`summary`, its numbers formatted by `numbers`) and the verdict on how far the FMU holds (`verdict`), the HTML documentation
 //! (`documentation`), the FMU's modelDescription.xml and archive (`fmu`), the check that everything it carries is finite (`finite`), and the packaging
 //! of it all with the runtime binaries (`package`; `binaries` checks those built on other
-//! platforms).
+//! platforms). `destinations` checks, before any work, that every output can be written and
+//! overwrites nothing it should not.
 
 pub mod binaries;
+pub mod destinations;
 pub mod documentation;
 pub mod finite;
 pub mod fmu;

@@ -7,6 +7,7 @@
 //! and solid sections. Every error carries the file and line it refers to.
 
 use crate::input::element::ElementKind;
+use crate::input::file_read::FileKind;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -106,11 +107,13 @@ pub fn read_mesh(path: &Path) -> Result<ImportedMesh, ImportError> {
 /// Reads a file as text (invalid UTF-8 is replaced, which only matters in
 /// comments). Errors are reported against the file itself (line 0).
 pub(crate) fn read_text(path: &Path) -> Result<String, ImportError> {
-    let bytes = std::fs::read(path).map_err(|e| ImportError::new(path, 0, format!("cannot read file: {e}")))?;
-    Ok(match String::from_utf8(bytes) {
-        Ok(s) => s,
-        Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
-    })
+    read_text_of_kind(path, FileKind::Mesh)
+}
+
+/// `read_text` with the size limit of `kind` (matrices may be larger than meshes).
+pub(crate) fn read_text_of_kind(path: &Path, kind: FileKind) -> Result<String, ImportError> {
+    crate::input::file_read::read_text(path, kind, crate::input::size::Memory::of_this_machine().bytes)
+        .map_err(|e| ImportError::new(path, 0, format!("cannot read the file: it {e}")))
 }
 
 #[cfg(test)]

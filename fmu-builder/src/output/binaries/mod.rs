@@ -46,7 +46,9 @@ impl PlatformBinary {
         if path.is_dir() {
             return Err(refused(path, platform, format!("is a folder; give the {} file", platform.runtime_file())));
         }
-        let data = std::fs::read(path).map_err(|e| refused(path, platform, format!("cannot be read: {e}")))?;
+        use crate::input::{file_read, size::Memory};
+        let data = file_read::read(path, file_read::FileKind::PlatformBinary, Memory::of_this_machine().bytes)
+            .map_err(|e| refused(path, platform, e.0))?;
         Ok(Self { platform, path: path.to_owned(), data })
     }
 
@@ -60,7 +62,10 @@ impl PlatformBinary {
 }
 
 fn refused(path: &Path, platform: Platform, reason: String) -> BuildError {
-    BuildError::Io { path: path.to_owned(), message: format!("refused as the FMU's {platform} binary: it {reason}") }
+    BuildError::Io {
+        path: path.to_owned(),
+        message: format!("refused as the FMU's {platform} binary (--platform-binary {platform}=...): it {reason}"),
+    }
 }
 
 /// At most one binary per platform.

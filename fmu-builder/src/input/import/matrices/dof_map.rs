@@ -2,7 +2,8 @@
 //! of the parent module).
 
 use super::{DIRECTIONS, clip, split_fields};
-use crate::input::import::{ImportError, read_text};
+use crate::input::file_read::FileKind;
+use crate::input::import::{ImportError, read_text_of_kind};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -30,7 +31,7 @@ pub struct DofRow {
 
 /// Reads a DoF map; see [`parse_dof_map`].
 pub fn read_dof_map(path: &Path) -> Result<(DofMapFormat, Vec<DofRow>), ImportError> {
-    parse_dof_map(&read_text(path)?, path)
+    parse_dof_map(&read_text_of_kind(path, FileKind::Matrix)?, path)
 }
 
 enum Direction {

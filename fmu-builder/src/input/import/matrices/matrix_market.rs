@@ -2,7 +2,8 @@
 //! module).
 
 use super::{clip, parse_f64};
-use crate::input::import::{ImportError, read_text};
+use crate::input::file_read::FileKind;
+use crate::input::import::{ImportError, read_text_of_kind};
 use faer::sparse::{SparseColMat, Triplet};
 use std::path::Path;
 
@@ -70,7 +71,7 @@ pub(super) fn read_mm(
     expect: Option<(usize, &Path)>,
     label: &dyn Fn(usize) -> String,
 ) -> Result<SymMatrix, ImportError> {
-    parse_mm(&read_text(path)?, path, expect, label)
+    parse_mm(&read_text_of_kind(path, FileKind::Matrix)?, path, expect, label)
 }
 
 /// The next line that is neither blank nor a `%` comment; `last` follows

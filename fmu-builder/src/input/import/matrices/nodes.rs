@@ -2,7 +2,8 @@
 //! of `id x y z` lines.
 
 use super::{DIRECTIONS, clip, parse_f64, split_fields};
-use crate::input::import::{ImportError, parse_msh, read_mesh, read_text};
+use crate::input::file_read::FileKind;
+use crate::input::import::{ImportError, parse_msh, read_mesh, read_text_of_kind};
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
@@ -19,7 +20,7 @@ pub(super) fn read_nodes(path: &Path) -> Result<NodeFile, ImportError> {
     let mesh = match ext.as_deref() {
         Some("inp") => read_mesh(path)?,
         Some("msh") => {
-            let mut text = read_text(path)?;
+            let mut text = read_text_of_kind(path, FileKind::Matrix)?;
             // The .msh reader insists on an $Elements section; a node-only
             // export gets an empty one appended, past every real line, so
             // line numbers in messages stay right.
@@ -33,7 +34,7 @@ pub(super) fn read_nodes(path: &Path) -> Result<NodeFile, ImportError> {
             parse_msh(&text, path)?
         }
         _ => {
-            let (ids, coords) = parse_node_table(&read_text(path)?, path)?;
+            let (ids, coords) = parse_node_table(&read_text_of_kind(path, FileKind::Matrix)?, path)?;
             return Ok(NodeFile { ids, coords, sets: BTreeMap::new() });
         }
     };

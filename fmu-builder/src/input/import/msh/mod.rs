@@ -48,7 +48,9 @@ use std::path::Path;
 
 /// Reads a Gmsh MSH 4.1 file, ASCII or binary.
 pub fn read_msh(path: &Path) -> Result<ImportedMesh, ImportError> {
-    let bytes = std::fs::read(path).map_err(|e| ImportError::new(path, 0, format!("cannot read file: {e}")))?;
+    use crate::input::file_read::{self, FileKind};
+    let bytes = file_read::read(path, FileKind::Mesh, crate::input::size::Memory::of_this_machine().bytes)
+        .map_err(|e| ImportError::new(path, 0, format!("cannot read the file: it {e}")))?;
     parse_msh_bytes(&bytes, path)
 }
 

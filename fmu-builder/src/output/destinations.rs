@@ -1,0 +1,213 @@
+//! Where the builder writes, checked before any work: the FMU and every export. Nothing the user
+//! named is overwritten by surprise (an export naming the input, the FMU or another export; an
+//! existing file without `--force`), and a destination that cannot be written (a folder where a
+//! file is meant, a missing or read-only folder) is refused in a second, naming its option,
+//! rather than after minutes of reduction with the FMU already written.
+//!
+//! Files are compared by identity, not by spelling: the device and inode of an existing file
+//! (so links and `./a/../b` are seen through), else the canonical folder and the file name.
+
+use std::path::{Path, PathBuf};
+
+/// One place the builder will write: a file, or a folder and the files it writes into it.
+#[derive(Debug, Clone)]
+pub struct Destination {
+    /// The command-line option that names it (`-o`, `--export-vtk`, ...), for messages.
+    pub option: &'static str,
+    pub path: PathBuf,
+    /// Empty for a file; the names written into the folder `path` for a folder export.
+    pub files_in_folder: &'static [&'static str],
+}
+
+impl Destination {
+    pub fn file(option: &'static str, path: &Path) -> Self {
+        Destination { option, path: path.to_path_buf(), files_in_folder: &[] }
+    }
+    pub fn folder(option: &'static str, path: &Path, files: &'static [&'static str]) -> Self {
+        Destination { option, path: path.to_path_buf(), files_in_folder: files }
+    }
+
+    /// The files this destination writes.
+    fn files(&self) -> Vec<PathBuf> {
+        if self.files_in_folder.is_empty() {
+            vec![self.path.clone()]
+        } else {
+            self.files_in_folder.iter().map(|f| self.path.join(f)).collect()
+        }
+    }
+}
+
+/// What `--export-matrices` writes into its folder.
+pub const MOUNTED_MATRIX_FILES: &[&str] = &["K.mtx", "M.mtx", "flange_dofs.txt"];
+/// What `--export-free-free` writes into its folder.
+pub const FREE_FREE_FILES: &[&str] = &["K.mtx", "M.mtx", "dofs.txt", "nodes.txt"];
+
+/// A file's identity: (device, inode) when it exists, else its canonical folder and name.
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum Identity {
+    Inode(u64, u64),
+    Named(PathBuf),
+}
+
+fn identity(path: &Path) -> Option<Identity> {
+    use std::os::unix::fs::MetadataExt;
+    if let Ok(m) = std::fs::metadata(path) {
+        return Some(Identity::Inode(m.dev(), m.ino()));
+    }
+    let name = path.file_name()?;
+    let folder = folder_of(path);
+    let folder = std::fs::canonicalize(folder).ok()?;
+    Some(Identity::Named(folder.join(name)))
+}
+
+/// The folder a path's file goes into ("." for a bare name).
+fn folder_of(path: &Path) -> &Path {
+    path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."))
+}
+
+/// Checks every destination before the build: Ok, or the refusal naming the option, the path,
+/// what is wrong and what to do. `inputs` are the files the build reads (the input file, its
+/// meshes and matrices): never overwritten, `--force` or not.
+pub fn check(destinations: &[Destination], inputs: &[PathBuf], force: bool) -> Result<(), String> {
+    let input_ids: Vec<(Identity, &PathBuf)> = inputs.iter().filter_map(|p| Some((identity(p)?, p))).collect();
+    let mut written: Vec<(Identity, &Destination, PathBuf)> = Vec::new();
+    for d in destinations {
+        let shown = format!("{} {}", d.option, d.path.display());
+        if d.files_in_folder.is_empty() {
+            check_file_place(d, &shown)?;
+        } else {
+            check_folder_place(d, &shown)?;
+        }
+        for file in d.files() {
+            let Some(id) = identity(&file) else { continue };
+            if let Some((_, input)) = input_ids.iter().find(|(i, _)| *i == id) {
+                return Err(format!(
+                    "{shown}: {} is the input {}; writing it would destroy the input. Name another file",
+                    if d.files_in_folder.is_empty() { "this".to_string() } else { file.display().to_string() },
+                    input.display()
+                ));
+            }
+            if let Some((_, other, _)) = written.iter().find(|(i, _, _)| *i == id) {
+                return Err(format!(
+                    "{shown}: {} is also written by {} {}; the one written last would replace the other. Give \
+                     each output its own name",
+                    file.display(),
+                    other.option,
+                    other.path.display()
+                ));
+            }
+            if !force && std::fs::symlink_metadata(&file).is_ok() {
+                return Err(format!(
+                    "{shown}: {} exists; pass --force to overwrite it, or name another {}",
+                    file.display(),
+                    if d.files_in_folder.is_empty() { "file" } else { "folder" }
+                ));
+            }
+            written.push((id, d, file));
+        }
+    }
+    Ok(())
+}
+
+fn check_file_place(d: &Destination, shown: &str) -> Result<(), String> {
+    if d.path.is_dir() {
+        let example = d.path.join(match d.option {
+            "-o" => "Model.fmu",
+            "--export-vtk" => "part.vtk",
+            "--export-inp" => "part.inp",
+            "--sweep-svg" => "sweep.svg",
+            _ => "report.json",
+        });
+        return Err(format!("{shown}: is a folder; give a file name, e.g. {} {}", d.option, example.display()));
+    }
+    writable_folder(folder_of(&d.path), shown)
+}
+
+fn check_folder_place(d: &Destination, shown: &str) -> Result<(), String> {
+    match std::fs::metadata(&d.path) {
+        Ok(m) if m.is_dir() => writable_folder(&d.path, shown),
+        Ok(_) => Err(format!("{shown}: is a file; this option writes several files into a folder: name a folder")),
+        // created by the export, in a folder that must exist
+        Err(_) => writable_folder(folder_of(&d.path), shown),
+    }
+}
+
+/// Ok when `folder` exists and a file can be created in it (probed: permissions alone miss
+/// read-only mounts and ACLs).
+fn writable_folder(folder: &Path, shown: &str) -> Result<(), String> {
+    if !folder.is_dir() {
+        return Err(format!("{shown}: the folder {} does not exist; create it first", folder.display()));
+    }
+    let probe = folder.join(format!(".fmu-builder-probe-{}", std::process::id()));
+    match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => Err(format!("{shown}: cannot write into the folder {}: {e}", folder.display())),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("destinations-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn an_export_naming_the_input_is_refused_even_with_force_and_through_a_link() {
+        let dir = scratch("input");
+        let input = dir.join("beam.json");
+        std::fs::write(&input, "{}").unwrap();
+        let link = dir.join("link.vtk");
+        std::os::unix::fs::symlink(&input, &link).unwrap();
+        for path in [input.clone(), link, dir.join(".").join("beam.json")] {
+            let e = check(&[Destination::file("--export-vtk", &path)], std::slice::from_ref(&input), true).unwrap_err();
+            assert!(e.starts_with("--export-vtk ") && e.contains("would destroy the input"), "{e}");
+        }
+        assert_eq!(std::fs::read_to_string(&input).unwrap(), "{}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn two_outputs_naming_one_file_are_refused_whether_or_not_it_exists() {
+        let dir = scratch("twice");
+        let fmu = dir.join("B.fmu");
+        let both = [Destination::file("-o", &fmu), Destination::file("--report", &dir.join("..").join(dir.file_name().unwrap()).join("B.fmu"))];
+        let e = check(&both, &[], false).unwrap_err();
+        assert!(e.starts_with("--report ") && e.contains("is also written by -o"), "{e}");
+        std::fs::write(&fmu, "x").unwrap();
+        let e = check(&both, &[], true).unwrap_err();
+        assert!(e.contains("is also written by -o"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn folders_missing_folders_existing_files_and_folder_exports_are_checked() {
+        let dir = scratch("places");
+        let e = check(&[Destination::file("--export-inp", &dir)], &[], false).unwrap_err();
+        assert!(e.contains("is a folder; give a file name, e.g. --export-inp"), "{e}");
+        let e = check(&[Destination::file("--report", &dir.join("no/such/r.json"))], &[], false).unwrap_err();
+        assert!(e.starts_with("--report ") && e.contains("does not exist"), "{e}");
+        let existing = dir.join("r.json");
+        std::fs::write(&existing, "old").unwrap();
+        let e = check(&[Destination::file("--report", &existing)], &[], false).unwrap_err();
+        assert!(e.contains("exists; pass --force"), "{e}");
+        assert!(check(&[Destination::file("--report", &existing)], &[], true).is_ok());
+        // a folder export onto a file, and onto a folder holding the input's matrices
+        let e = check(&[Destination::folder("--export-free-free", &existing, FREE_FREE_FILES)], &[], false).unwrap_err();
+        assert!(e.contains("is a file; this option writes several files into a folder"), "{e}");
+        let k = dir.join("K.mtx");
+        std::fs::write(&k, "%%MatrixMarket").unwrap();
+        let e = check(&[Destination::folder("--export-free-free", &dir, FREE_FREE_FILES)], std::slice::from_ref(&k), true)
+            .unwrap_err();
+        assert!(e.contains("K.mtx is the input"), "{e}");
+        assert!(check(&[Destination::folder("--export-matrices", &dir.join("new"), MOUNTED_MATRIX_FILES)], &[], false).is_ok());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
