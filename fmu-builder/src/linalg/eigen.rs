@@ -299,6 +299,11 @@ fn search(
     if let Some(on) = k.distributed() {
         return distributed_search(k, on, m, want, tol, shift, deflate);
     }
+    if k.n() <= crate::linalg::dense_eigen::DENSE_MAX_DOFS
+        && let Some(pairs) = dense_search(k, m, want, shift, deflate)?
+    {
+        return Ok(pairs);
+    }
     crate::profile::phase("eigen-solve (block shift-invert Lanczos)", || {
         let n = k.n();
         let n_free = n - deflate.map_or(0, |d| d.vectors.ncols());
@@ -963,6 +968,50 @@ fn distributed_search(
     })
 }
 
+/// `search` for a small model: every pair at once (`dense_eigen`), the wanted ones kept and
+/// checked as Lanczos's are; None where the dense path does not apply (M singular).
+fn dense_search(
+    k: &dyn SpdSolve,
+    m: &Sparse,
+    want: Want,
+    shift: f64,
+    deflate: Option<&Deflation>,
+) -> Result<Option<Eigenpairs>> {
+    crate::profile::phase("eigen-solve (dense, a small model)", || {
+        let n = k.n();
+        let leading;
+        let m = if m.nrows() > n {
+            leading = crate::linalg::sparse::block(m, 0..n, 0..n)?;
+            &leading
+        } else {
+            m
+        };
+        let Some(all) = crate::linalg::dense_eigen::all_pairs(k, m, shift, deflate)? else {
+            return Ok(None);
+        };
+        let available = all.values.len();
+        let keep = match want {
+            Want::Lowest(c) => c.min(available),
+            Want::Below { omega_max, min_count } => {
+                let below = all.values.iter().filter(|&&l| l.sqrt() < omega_max).count();
+                below.max(min_count).min(available).min(MAX_MODES)
+            }
+        };
+        let pairs = Eigenpairs { values: all.values[..keep].to_vec(), vectors: all.vectors.subcols(0, keep).to_owned() };
+        let (pairs, residuals) = checked(k, m, pairs, shift, true);
+        let (worst, at) = residuals.iter().enumerate().fold((0.0f64, 0), worst_of);
+        crate::profile::note(|| format!("{keep} of {available} modes, {n} DoFs"));
+        if worst > RESIDUAL_TOL {
+            return Err(BuildError::Numerical(format!(
+                "eigensolver: mode {} of the dense solve of this {n}-DoF model has the residual {worst:.1e} \
+                 (accepted {RESIDUAL_TOL:.0e}): check the mesh for extreme element proportions",
+                at + 1
+            )));
+        }
+        Ok(Some(pairs))
+    })
+}
+
 /// Rayleigh-Ritz of the shift-invert operator on span(X): S = X^T M K^-1 M X (a refined solve)
 /// against H = X^T M X, X Z with S z = theta H z, eigenvalues 1/theta - shift ascending.
 ///
@@ -971,7 +1020,7 @@ fn distributed_search(
 /// the shift-invert residual `checked` measures (1.2e-6 there, 5e4 times). The products of this
 /// step resolve the low modes with the accuracy of the operator itself, as the in-process
 /// Lanczos does: the same vectors then measure 1e-11.
-fn shift_invert_ritz(k: &dyn SpdSolve, m: &Sparse, x: Mat<f64>, shift: f64) -> Result<Eigenpairs> {
+pub(crate) fn shift_invert_ritz(k: &dyn SpdSolve, m: &Sparse, x: Mat<f64>, shift: f64) -> Result<Eigenpairs> {
     let count = x.ncols();
     if count == 0 {
         return Ok(Eigenpairs { values: Vec::new(), vectors: x });

@@ -1,6 +1,7 @@
 //! Linear algebra every stage uses: sparse matrices and their factorisations, the shift-invert
 //! Lanczos eigen-solver, and the dense symmetric eigen-solver whose backward error is checked.
 
+pub mod dense_eigen;
 pub mod distributed;
 pub mod dot2;
 pub mod eigen;
