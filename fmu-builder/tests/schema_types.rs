@@ -274,6 +274,12 @@ fn the_base_documents_use_every_field_and_the_types_take_them() {
     );
 }
 
+/// Fields whose real limit is a count in the same input (a box index below the number of
+/// boxes), which a schema cannot state: the schema holds an outer limit (so 1e300 or 2^64 is
+/// refused with the field named before any parsing), and at it the builder refuses with the field
+/// named too.
+const BOUND_BY_THE_INPUT: &[&str] = &["flanges[0].nodes.box_face.box"];
+
 #[test]
 fn every_bound_of_the_schema_is_the_builders() {
     let root = schema();
@@ -289,6 +295,8 @@ fn every_bound_of_the_schema_is_the_builders() {
                 tested += 1;
                 match (inside, by_schema, &by_builder) {
                     (true, true, Ok(())) => {}
+                    // the schema's bound is an outer one; the builder's is the input's own count
+                    (true, true, Err(m)) if BOUND_BY_THE_INPUT.contains(&at.field.as_str()) && m.contains(&at.field) => {}
                     // refused by both, and the builder says which field
                     (false, false, Err(m)) if m.contains(&at.field) => {}
                     _ => disagreements.push(format!(
