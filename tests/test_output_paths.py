@@ -6,6 +6,7 @@ filling memory."""
 
 import json
 import os
+import socket
 import subprocess
 import time
 
@@ -146,6 +147,20 @@ def test_fifos_and_devices_are_refused_at_once_wherever_a_file_is_read(tmp_path)
         ([spec_file(tmp_path, as_mesh_dev, "dev-mesh.json"), "-o", fmu],
          "geometry.mesh: \"/dev/zero\" (/dev/zero) is a character device, not a regular file"),
     ]
+    # as outputs: a write into a FIFO would wait for a reader forever, --force or not
+    for option in ["-o", "--report", "--export-inp", "--export-vtk"]:
+        extra = [] if option == "-o" else ["-o", fmu]
+        cases.append(([path, *extra, option, fifo, "--force"],
+                      f"error: {option} {fifo}: {fifo} is a FIFO (named pipe), not a regular file; name a file"))
+    # nor a socket or a device: the FMU, written to a temporary file and renamed, once replaced
+    # /dev/null itself when the fuzzer ran as root (a socket stands in for it here: renaming over
+    # it, were the check lost, harms nothing)
+    sock = socket.socket(socket.AF_UNIX)
+    sock.bind(str(tmp_path / "sock"))
+    cases.append(([path, "-o", tmp_path / "sock", "--force"],
+                  f"error: -o {tmp_path / 'sock'}: {tmp_path / 'sock'} is a socket, not a regular file"))
+    cases.append(([path, "-o", fmu, "--export-vtk", "/dev/null", "--force"],
+                  "error: --export-vtk /dev/null: /dev/null is a character device, not a regular file"))
     for args, text in cases:
         proc = builder(*args, "-q")
         refused(proc, text)

@@ -54,7 +54,7 @@ impl std::fmt::Display for Refusal {
 }
 
 /// What a non-regular file is, in words.
-fn file_type_words(t: std::fs::FileType) -> &'static str {
+pub fn file_type_words(t: std::fs::FileType) -> &'static str {
     use std::os::unix::fs::FileTypeExt;
     if t.is_dir() {
         "a folder"

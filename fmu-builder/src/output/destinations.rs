@@ -79,6 +79,16 @@ pub fn check(destinations: &[Destination], inputs: &[PathBuf], force: bool) -> R
             check_folder_place(d, &shown)?;
         }
         for file in d.files() {
+            if let Ok(m) = std::fs::metadata(&file)
+                && !m.is_file()
+            {
+                // a FIFO would block the write until some reader came; a device is no file to keep
+                return Err(format!(
+                    "{shown}: {} is {}, not a regular file; name a file",
+                    file.display(),
+                    crate::input::file_read::file_type_words(m.file_type())
+                ));
+            }
             let Some(id) = identity(&file) else { continue };
             if let Some((_, input)) = input_ids.iter().find(|(i, _)| *i == id) {
                 return Err(format!(
@@ -208,6 +218,8 @@ mod tests {
             .unwrap_err();
         assert!(e.contains("K.mtx is the input"), "{e}");
         assert!(check(&[Destination::folder("--export-matrices", &dir.join("new"), MOUNTED_MATRIX_FILES)], &[], false).is_ok());
+        let e = check(&[Destination::file("--export-inp", Path::new("/dev/null"))], &[], true).unwrap_err();
+        assert!(e.contains("/dev/null is a character device, not a regular file"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
