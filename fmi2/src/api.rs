@@ -824,9 +824,9 @@ pub unsafe fn fmi2GetDirectionalDerivative<M: Model>(
                     )));
                 }
                 // the seed is a rate along the known: the range fmi2SetRealInputDerivatives has
-                inst.model.admissible_direction(r, dv).map_err(|e| {
-                    usage(format!("dvKnown[{i}] = {dv:e} for known {}: {e}", describe(&inst.model, r)))
-                })?;
+                inst.model
+                    .admissible_direction(r, dv)
+                    .map_err(|e| usage(format!("dvKnown[{i}] = {dv:e} for known {}: {e}", describe(&inst.model, r))))?;
             }
             inst.logger.trace(|| format!("fmi2GetDirectionalDerivative: {nUnknown} unknowns, {nKnown} knowns"));
             let computed = inst.model.directional_derivative(unknowns, knowns, seed, result);

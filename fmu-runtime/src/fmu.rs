@@ -304,9 +304,7 @@ impl Model for BodyFmu {
     /// 1e200 turns any step into an overflow).
     fn admissible_direction(&self, _vr: u32, value: f64) -> Result<(), String> {
         if value.abs() > REAL_LIMIT {
-            return Err(format!(
-                "|{value:e}| is beyond {REAL_LIMIT:e}, the range of any physical rate in SI units"
-            ));
+            return Err(format!("|{value:e}| is beyond {REAL_LIMIT:e}, the range of any physical rate in SI units"));
         }
         Ok(())
     }

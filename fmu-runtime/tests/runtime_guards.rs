@@ -190,7 +190,9 @@ fn input_derivatives_beyond_the_range_are_refused_and_the_instance_stays_usable(
     let order = [1, 1];
     for rate in [1e200, 1e300, -1e308] {
         let values = [1.0, rate];
-        let s = unsafe { fmu_runtime::fmi2SetRealInputDerivatives(fmu.c, vrs.as_ptr(), 2, order.as_ptr(), values.as_ptr()) };
+        let s = unsafe {
+            fmu_runtime::fmi2SetRealInputDerivatives(fmu.c, vrs.as_ptr(), 2, order.as_ptr(), values.as_ptr())
+        };
         assert_eq!(s, fmi2Error);
         assert_contains(&fmu.reason(fmi2Error), &["fmi2SetRealInputDerivatives", "tip.f[2]", "beyond 1e100"]);
     }
@@ -199,7 +201,8 @@ fn input_derivatives_beyond_the_range_are_refused_and_the_instance_stays_usable(
     assert_eq!(fmu.get("tip.f[1]"), (fmi2OK, 0.0));
     // a rate in range, over a step that carries the input beyond it: not taken
     let values = [1e99, 0.0];
-    let s = unsafe { fmu_runtime::fmi2SetRealInputDerivatives(fmu.c, vrs.as_ptr(), 2, order.as_ptr(), values.as_ptr()) };
+    let s =
+        unsafe { fmu_runtime::fmi2SetRealInputDerivatives(fmu.c, vrs.as_ptr(), 2, order.as_ptr(), values.as_ptr()) };
     assert_eq!(s, fmi2OK);
     let saved = fmu.save();
     assert_eq!(fmu.step(1e-3, 1e10), fmi2Discard);
@@ -208,7 +211,8 @@ fn input_derivatives_beyond_the_range_are_refused_and_the_instance_stays_usable(
     assert_eq!(fmu.last_successful_time(), 1e-3);
     fmu.restore(saved);
     assert_eq!(fmu.step(1e-3, 1e-3), fmi2OK, "{:?}", fmu.log.last());
-    assert_eq!(fmu.get("tip.f[1]"), (fmi2OK, 1e96));
+    let (status, f) = fmu.get("tip.f[1]");
+    assert!(status == fmi2OK && (f / 1e96 - 1.0).abs() < 1e-12, "{f}");
 }
 
 /// A directional derivative's seed of 1e308 is refused with the known's name, in both
@@ -221,7 +225,8 @@ fn directional_seeds_beyond_the_range_are_refused() {
         let (unknown, known) = (fmu.vr("tip.u[2]"), fmu.vr("tip.f[2]"));
         let directional = |seed: f64| {
             let mut out = f64::NAN;
-            let s = unsafe { fmu_runtime::fmi2GetDirectionalDerivative(fmu.c, &unknown, 1, &known, 1, &seed, &mut out) };
+            let s =
+                unsafe { fmu_runtime::fmi2GetDirectionalDerivative(fmu.c, &unknown, 1, &known, 1, &seed, &mut out) };
             (s, out)
         };
         let (s, out) = directional(1e308);
@@ -331,10 +336,11 @@ fn a_long_step_of_a_fast_spinning_free_body_is_bounded_in_time() {
     let start = Instant::now();
     let status = fmu.step(0.0, 16.0);
     let took = start.elapsed().as_secs_f64();
+    println!("h = 16 s at 300 rad/s: {status:?} in {took:.4} s");
     assert!(took < 2.0, "a step of 16 s took {took} s");
     assert_eq!(status, fmi2Discard, "{:?}", fmu.log.last());
     let reason = fmu.reason(fmi2Discard);
-    assert_contains(&reason, &["960000 substeps", "largest step at this spin is h = "]);
+    assert_contains(&reason, &["needs 96000", "substeps of at most 0.005 rad", "largest step at this spin is h = "]);
     assert_eq!(fmu.last_successful_time(), 0.0);
     let largest: f64 =
         reason.split("largest step at this spin is h = ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
@@ -343,6 +349,7 @@ fn a_long_step_of_a_fast_spinning_free_body_is_bounded_in_time() {
     let start = Instant::now();
     assert_eq!(fmu.step(0.0, largest), fmi2OK, "{:?}", fmu.log.last());
     let took = start.elapsed().as_secs_f64();
+    println!("the largest step, h = {largest} s: {took:.4} s");
     assert!(took < 2.0, "the largest step took {took} s");
     // halving: 8 s, then 4 s, ... until one is taken
     fmu.restore(saved);

@@ -1232,7 +1232,7 @@ fn derivative_failures_of_the_model_enter_the_error_state() {
     assert_eq!(model_state_of(c), ModelState::Error);
     // Allowed in Error (diagnostics); the model still fails.
     assert_eq!(output_derivatives(c, &[ACC], &[1]).0, fmi2Error);
-    assert_eq!(log.last(), "fmi2GetRealOutputDerivatives: value reference 11: no derivative after a failure");
+    assert_eq!(log.last(), "fmi2GetRealOutputDerivatives: value reference 11 (acc): no derivative after a failure");
     unsafe {
         assert_eq!(api::fmi2Reset::<Spring>(c), fmi2OK);
         initialize(c, 0.0);
@@ -1408,7 +1408,13 @@ fn seeds_beyond_the_models_range_are_refused_and_the_instance_stays_usable() {
         let c = instantiate(&log, kind);
         initialize(c, 0.0);
         let (status, out) = directional(c, &[ACC], &[U], &[1e300]);
-        assert_refused(c, &log, status, "fmi2GetDirectionalDerivative", "dvKnown[0] = 1e300 for known value reference 3 (u): beyond the input's range of rates 1e100");
+        assert_refused(
+            c,
+            &log,
+            status,
+            "fmi2GetDirectionalDerivative",
+            "dvKnown[0] = 1e300 for known value reference 3 (u): beyond the input's range of rates 1e100",
+        );
         assert!(out[0].is_nan());
         assert_eq!(directional(c, &[ACC], &[U], &[1.0]), (fmi2OK, vec![1.0]));
         unsafe { api::fmi2FreeInstance::<Spring>(c) };

@@ -51,14 +51,20 @@ fn residual_coupling_force(c: &Coupling<f64>, reference: (&[f64], &[f64]), i: us
 /// per substep is of third order in it.
 pub const SUBSTEP_ANGLE: f64 = 0.005;
 
-/// Most substeps one Co-Simulation step of a free body takes (a step that needs more is not
-/// taken: `StepError::NotTaken`, naming the longest step that fits). A substep costs two
-/// evaluations of the free body's equations, about 40 n^2 multiply-adds for n modes plus a fixed
-/// part: 1.3 us for the 6-mode beam of the FMI fuzzer and 7 us for 26 modes on the 2-core
-/// machine of docs/FUZZING.md's runs (release build). The budget is a count of such
-/// multiply-adds, so that one call stays below about 0.1 s there and 0.5 s on a machine five
-/// times slower, whatever the number of modes.
-const SUBSTEP_WORK: f64 = 4.0e8;
+/// Most substeps one Co-Simulation step of a free body takes, as a budget of work (a step that
+/// needs more is not taken: `StepError::NotTaken`, naming the longest step that fits). A substep
+/// costs two evaluations of the free body's equations, some 40 n^2 multiply-adds each for n
+/// modes plus a fixed part; measured (release build) on the 2-core machine of docs/FUZZING.md's
+/// runs: 22 us for the fuzzer's 18-mode free beam, 3.7 to 7 us for 2 to 12 modes, within
+/// (n^2 + 60) units of 0.06 us. The budget keeps one call near 0.15 s there (6 510 substeps of
+/// the 18-mode beam, 39 000 of 2 modes), below 0.5 s on a machine three times slower (the
+/// fuzzing machine that found it took 38 us per substep of the beam).
+const SUBSTEP_WORK: f64 = 2.5e6;
+
+/// Work units of one substep of a body of n modes (see [`SUBSTEP_WORK`]).
+fn substep_work(n: usize) -> f64 {
+    (n * n) as f64 + 60.0
+}
 
 /// Why a Co-Simulation step was not taken; the body is as it was before the step either way.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -218,9 +224,9 @@ impl FlexibleBody {
             let unit = 10f64.powi(longest.log10().floor() as i32 - 3);
             let longest = (longest / unit).floor() * unit;
             return Err(StepError::NotTaken(format!(
-                "a step of h = {h} s of this free-floating body spinning at |W| = {spin:.6} rad/s needs \
+                "a step of h = {h} s of this free-floating body spinning at |W| = {spin:.3} rad/s needs \
                  {needed:.0} substeps of at most {SUBSTEP_ANGLE} rad, more than the {most} one call takes; \
-                 the largest step at this spin is h = {longest:e} s (substeps = |W| h / {SUBSTEP_ANGLE} rad)"
+                 the largest step at this spin is h = {longest:.3e} s (substeps = |W| h / {SUBSTEP_ANGLE} rad)"
             )));
         }
         Ok((needed as usize).max(1))
@@ -228,8 +234,7 @@ impl FlexibleBody {
 
     /// The substep budget of one call for this body's size (see [`SUBSTEP_WORK`]).
     pub fn max_free_substeps(&self) -> usize {
-        let n = self.q.len() as f64;
-        (SUBSTEP_WORK / (40.0 * n * n + 400.0)) as usize
+        (SUBSTEP_WORK / substep_work(self.q.len())) as usize
     }
 
     /// Everything the step changes, copied into the preallocated [`StepStart`].
@@ -273,7 +278,7 @@ impl FlexibleBody {
         self.eval.valid = false;
     }
 
-    /// Err naming the first state or input the step left non-finite or beyond [`REAL_LIMIT`]
+    /// Err naming the first input or state the step left non-finite or beyond [`REAL_LIMIT`]
     /// (inputs move by their derivatives over the step): no state to go on from, and outputs
     /// computed from it would overflow.
     fn check_step_end(&self, h: f64) -> Result<(), StepError> {
@@ -291,21 +296,11 @@ impl FlexibleBody {
                 }
             )))
         };
-        for (name, x) in [("q", &self.q), ("qd", &self.qd)] {
-            if let Some(j) = x.iter().position(|v| out_of_range(*v)) {
-                return fail(format!("the modal state {name}[{}]", j + 1), x[j]);
-            }
-        }
-        if let Some(f) = &self.frame {
-            for (name, x) in [("r", &f.r[..]), ("Q", &f.quat), ("v", &f.v), ("W", &f.w_body)] {
-                if let Some(i) = x.iter().position(|v| out_of_range(*v)) {
-                    return fail(format!("the frame state frame.{name}[{}]", i + 1), x[i]);
-                }
-            }
-        }
+        // a free body's mount is its frame's motion, no input
         let m = &self.mount;
         let mount = &self.body.mount;
-        for (name, x) in [("r", &m.r[..]), ("R", &m.rot), ("v", &m.v), ("w", &m.w), ("a", &m.a), ("z", &m.z)] {
+        let inputs = [("r", &m.r[..]), ("R", &m.rot), ("v", &m.v), ("w", &m.w), ("a", &m.a), ("z", &m.z)];
+        for (name, x) in inputs.into_iter().filter(|_| self.frame.is_none()) {
             if let Some(i) = x.iter().position(|v| out_of_range(*v)) {
                 let entry = if name == "R" { format!("{},{}", i / 3 + 1, i % 3 + 1) } else { format!("{}", i + 1) };
                 return fail(format!("the input {mount}.{name}[{entry}]"), x[i]);
@@ -315,6 +310,19 @@ impl FlexibleBody {
             for (name, x) in [("f", &load.f), ("t", &load.t)] {
                 if let Some(i) = x.iter().position(|v| out_of_range(*v)) {
                     return fail(format!("the input {}.{name}[{}]", flange.name, i + 1), x[i]);
+                }
+            }
+        }
+        // the state after the inputs: an input carried out of range by its rate is the cause
+        for (name, x) in [("q", &self.q), ("qd", &self.qd)] {
+            if let Some(j) = x.iter().position(|v| out_of_range(*v)) {
+                return fail(format!("the modal state {name}[{}]", j + 1), x[j]);
+            }
+        }
+        if let Some(f) = &self.frame {
+            for (name, x) in [("r", &f.r[..]), ("Q", &f.quat), ("v", &f.v), ("W", &f.w_body)] {
+                if let Some(i) = x.iter().position(|v| out_of_range(*v)) {
+                    return fail(format!("the frame state frame.{name}[{}]", i + 1), x[i]);
                 }
             }
         }

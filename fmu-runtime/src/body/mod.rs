@@ -28,12 +28,12 @@ mod reaction;
 mod statics;
 mod stress;
 
-use cosim_step::StepStart;
 use crate::coupled_propagator::CoupledPropagator;
 use crate::kinematics::{self as k3, Mat3, Vec3};
 use crate::propagator::ModalPropagator;
 use crate::reduced::ReducedBody;
 use crate::scalar::{Dual, Scalar, c};
+use cosim_step::StepStart;
 use dense::shape_dot;
 use input_jump::SteppedInputs;
 use quasi_static::QuasiStaticWork;
