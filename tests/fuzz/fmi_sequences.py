@@ -607,7 +607,10 @@ class Runner:
             last = ctypes.c_double(float("nan"))
             s2, mark2 = self.call("fmi2GetRealStatus", c, ctypes.c_int(2), ctypes.byref(last))
             self.check("fmi2GetRealStatus", s2, mark2)
-            if s2 != OK or last.value != self.slots[slot][4]:
+            # the FMU accepts a communication point within 1e-9 (relative) of its time and keeps
+            # its own: the fuzzer's bookkeeping may differ by as much
+            expected = self.slots[slot][4]
+            if s2 != OK or not abs(last.value - expected) <= 1e-9 * max(1.0, abs(expected), abs(h)):
                 self.violate("discard-time:fmi2DoStep", f"after fmi2Discard fmi2LastSuccessfulTime is {last.value} "
                              f"(status {s2}), the step started at {self.slots[slot][4]}")
             self.read_state(slot, "fmi2DoStep(discard)", required=True)
