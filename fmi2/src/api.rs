@@ -22,7 +22,7 @@ use super::serial;
 use super::state::{self as spec, FnSpec, ModelState};
 use super::types::fmi2Status::{fmi2Discard, fmi2Error, fmi2Fatal, fmi2OK, fmi2Warning};
 use super::types::*;
-use super::{Causality, Interface, Model, VarInfo, VarType};
+use super::{Causality, Interface, Model, ModelError, VarInfo, VarType};
 
 /// Why a call failed; decides what happens to the instance.
 pub enum Failure {
@@ -168,6 +168,26 @@ fn settable<M: Model>(inst: &Instance<M>, vr: u32, expected: VarType) -> Result<
 
 fn model_err(vr: u32) -> impl FnOnce(String) -> Failure {
     move |e| Failure::Model(format!("value reference {vr}: {e}"))
+}
+
+/// A model's failure as the layer answers it: unknown state (Error), nothing changed and the
+/// host may retry (Discard), or inputs refused like a value out of range (a usage error).
+fn model_failure(e: ModelError) -> Failure {
+    match e {
+        ModelError::Failed(msg) => Failure::Model(msg),
+        ModelError::Discard(msg) => Failure::Discard(msg),
+        ModelError::Refused(msg) => Failure::Usage(msg),
+    }
+}
+
+/// An evaluation's failure as the model classifies it (`Model::evaluation_failure`).
+fn evaluation_failed<M: Model>(model: &M) -> impl FnOnce(String) -> Failure {
+    |e| model_failure(model.evaluation_failure(e))
+}
+
+/// [`evaluation_failed`] of a call about one variable, naming it.
+fn evaluation_failed_at<M: Model>(model: &M, vr: u32) -> impl FnOnce(String) -> Failure {
+    move |e| model_failure(model.evaluation_failure(format!("{}: {e}", describe(model, vr))))
 }
 
 /// A non-finite number the model computed is never handed out with fmi2OK. In Model Exchange
@@ -409,7 +429,7 @@ pub unsafe fn fmi2GetReal<M: Model>(
             let values = out_slice(value, nvr, "value[]")?;
             for (&r, v) in vrs.iter().zip(values) {
                 var_of_type(&inst.model, r, VarType::Real)?;
-                let x = inst.model.get_real(r).map_err(model_err(r))?;
+                let x = inst.model.get_real(r).map_err(evaluation_failed_at(&inst.model, r))?;
                 if !x.is_finite() {
                     return Err(non_finite(inst, describe(&inst.model, r), x));
                 }
@@ -499,6 +519,8 @@ pub unsafe fn fmi2SetReal<M: Model>(
                 settable(inst, r, VarType::Real)?;
                 admissible(&inst.model, r, v)?;
             }
+            // values that only make sense together (a rotation matrix's nine entries)
+            inst.model.admissible_reals(vrs, values).map_err(usage)?;
             for (&r, &v) in vrs.iter().zip(values) {
                 inst.model.set_real(r, v).map_err(model_err(r))?;
             }
@@ -801,9 +823,14 @@ pub unsafe fn fmi2GetDirectionalDerivative<M: Model>(
                         describe(&inst.model, r)
                     )));
                 }
+                // the seed is a rate along the known: the range fmi2SetRealInputDerivatives has
+                inst.model
+                    .admissible_direction(r, dv)
+                    .map_err(|e| usage(format!("dvKnown[{i}] = {dv:e} for known {}: {e}", describe(&inst.model, r))))?;
             }
             inst.logger.trace(|| format!("fmi2GetDirectionalDerivative: {nUnknown} unknowns, {nKnown} knowns"));
-            inst.model.directional_derivative(unknowns, knowns, seed, result).map_err(Failure::Model)?;
+            let computed = inst.model.directional_derivative(unknowns, knowns, seed, result);
+            computed.map_err(evaluation_failed(&inst.model))?;
             check_finite(inst, result, "dvUnknown")?;
             Ok(fmi2OK)
         })
@@ -902,7 +929,8 @@ pub unsafe fn fmi2GetDerivatives<M: Model>(c: fmi2Component, derivatives: *mut f
         guarded::<M>(c, &spec::fmi2GetDerivatives, |inst| {
             check_len(nx, inst.model.n_states(), "nx")?;
             let dx = out_slice(derivatives, nx, "derivatives[]")?;
-            inst.model.get_derivatives(dx).map_err(Failure::Model)?;
+            let computed = inst.model.get_derivatives(dx);
+            computed.map_err(evaluation_failed(&inst.model))?;
             check_finite(inst, dx, "derivatives")?;
             Ok(fmi2OK)
         })
@@ -973,6 +1001,7 @@ pub unsafe fn fmi2SetRealInputDerivatives<M: Model>(
             let vrs = in_slice(vr, nvr, "vr[]")?;
             let orders = in_slice(order, nvr, "order[]")?;
             let values = in_slice(value, nvr, "value[]")?;
+            // all checked before any is set, as fmi2SetReal does: a refused call changes nothing
             for ((&r, &k), &v) in vrs.iter().zip(orders).zip(values) {
                 let info = var_of_type(&inst.model, r, VarType::Real)?;
                 if info.causality != Causality::Input {
@@ -987,6 +1016,11 @@ pub unsafe fn fmi2SetRealInputDerivatives<M: Model>(
                 if !v.is_finite() {
                     return Err(usage(format!("{}: input derivative {v} is not finite", describe(&inst.model, r))));
                 }
+                inst.model
+                    .admissible_direction(r, v)
+                    .map_err(|e| usage(format!("{}: input derivative {v:e}: {e}", describe(&inst.model, r))))?;
+            }
+            for (&r, &v) in vrs.iter().zip(values) {
                 inst.model.set_real_input_derivative(r, v).map_err(model_err(r))?;
             }
             Ok(fmi2OK)
@@ -1031,7 +1065,7 @@ pub unsafe fn fmi2GetRealOutputDerivatives<M: Model>(
             }
             inst.logger.trace(|| format!("fmi2GetRealOutputDerivatives: {nvr} values"));
             for ((&r, &k), v) in vrs.iter().zip(orders).zip(values) {
-                let x = inst.model.get_real_output_derivative(r, k).map_err(model_err(r))?;
+                let x = inst.model.get_real_output_derivative(r, k).map_err(evaluation_failed_at(&inst.model, r))?;
                 if !x.is_finite() {
                     return Err(non_finite(inst, format!("derivative {k} of {}", describe(&inst.model, r)), x));
                 }
@@ -1071,9 +1105,29 @@ pub unsafe fn fmi2DoStep<M: Model>(
                 )));
             }
             inst.logger.trace(|| format!("fmi2DoStep: t = {t}, h = {h}"));
-            let result = inst.model.do_step(inst.time, h);
-            inst.last_do_step_status = if result.is_ok() { fmi2OK } else { fmi2Error };
-            result.map_err(Failure::Model)?;
+            match inst.model.try_step(inst.time, h) {
+                Ok(()) => {}
+                // Not taken, the model as before the step: the standard's stepFailed, from which
+                // the master restores a saved FMU state and retries with a shorter step (FMI 2.0.x
+                // section 4.2.2); fmi2LastSuccessfulTime stays at the step's start
+                Err(ModelError::Discard(msg)) => {
+                    inst.state = ModelState::StepFailed;
+                    inst.last_do_step_status = fmi2Discard;
+                    return Err(Failure::Discard(format!("step from t = {t} by h = {h} not taken: {msg}")));
+                }
+                // refused before anything was done, as fmi2SetReal refuses a value: same state
+                Err(ModelError::Refused(msg)) => {
+                    return Err(usage(format!(
+                        "{msg}; the step is refused with fmi2Error before anything was done, the instance \
+                         unchanged: set valid inputs and step again"
+                    )));
+                }
+                Err(ModelError::Failed(msg)) => {
+                    inst.last_do_step_status = fmi2Error;
+                    return Err(Failure::Model(msg));
+                }
+            }
+            inst.last_do_step_status = fmi2OK;
             inst.time += h;
             if let Some(warning) = inst.model.take_warning() {
                 inst.logger.warning(fmi2Warning, warning);

@@ -69,6 +69,34 @@ pub struct VarInfo {
     pub initial: Option<Initial>,
 }
 
+/// Why a model method failed: what becomes of the instance follows from it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ModelError {
+    /// The model's state is unknown: the instance enters the FMI Error state.
+    Failed(String),
+    /// The model cannot evaluate (or step from) the present states and inputs and changed
+    /// nothing: fmi2Discard, the instance stays usable. Model Exchange: the host may retry with
+    /// other states (a smaller integrator step). Co-Simulation: a step answered so was not taken
+    /// (fmi2LastSuccessfulTime stays at its start); the slave is in stepFailed, from which the
+    /// host restores a saved FMU state and retries with a shorter step, or resets.
+    Discard(String),
+    /// The host's inputs are refused before anything was computed, as fmi2SetReal refuses a
+    /// value out of range: fmi2Error, the instance unchanged and in its state.
+    Refused(String),
+}
+
+impl From<String> for ModelError {
+    fn from(reason: String) -> Self {
+        ModelError::Failed(reason)
+    }
+}
+
+impl From<&str> for ModelError {
+    fn from(reason: &str) -> Self {
+        ModelError::Failed(reason.to_string())
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Interface {
     ModelExchange,
@@ -81,7 +109,9 @@ pub enum Interface {
 ///
 /// Any `Err` (and any panic) puts the instance into the FMI Error state: the host may
 /// then only read values for diagnostics, restore an FMU state, reset or free it.
-/// (`load_state` is the exception: its `Err` refuses the bytes and changes nothing.)
+/// (`load_state` is the exception: its `Err` refuses the bytes and changes nothing; methods
+/// [`Model::evaluation_failure`] and [`Model::try_step`] say which failures leave the instance
+/// usable.)
 pub trait Model: Sized + Clone {
     /// Load the model from the FMU's resources folder (None: host gave no resource location).
     fn instantiate(resources: Option<&std::path::Path>, interface: Interface) -> Result<Self, String>;
@@ -99,6 +129,18 @@ pub trait Model: Sized + Clone {
     /// instance stays usable. For the model's physical range (a negative damping, a load whose
     /// square overflows); the same rule applies to restored FMU states.
     fn admissible_real(&self, _vr: u32, _value: f64) -> Result<(), String> {
+        Ok(())
+    }
+    /// Whether the values of one fmi2SetReal call, each admissible alone, may be set together:
+    /// for variables that are only meaningful as a group (the nine entries of a rotation matrix
+    /// handed over in one call). Err refuses the whole call before anything is set.
+    fn admissible_reals(&self, _vrs: &[u32], _values: &[f64]) -> Result<(), String> {
+        Ok(())
+    }
+    /// Whether the finite `value` may be a rate of change along Real variable `vr`: an input
+    /// derivative (fmi2SetRealInputDerivatives) or a directional derivative's seed. Err refuses
+    /// the call before anything is set, the instance stays usable (as for `admissible_real`).
+    fn admissible_direction(&self, _vr: u32, _value: f64) -> Result<(), String> {
         Ok(())
     }
     fn set_real(&mut self, vr: u32, value: f64) -> Result<(), String>;
@@ -173,6 +215,20 @@ pub trait Model: Sized + Clone {
     }
     /// Co-Simulation: advance from t to t + h exactly.
     fn do_step(&mut self, t: f64, h: f64) -> Result<(), String>;
+    /// What fmi2DoStep calls: `do_step` with its failures told apart. `ModelError::Discard`:
+    /// the step was not taken (too costly, or its result not finite) and the model is as before
+    /// it; `ModelError::Refused`: the inputs were refused before anything was done. The default
+    /// takes every failure for an unknown state.
+    fn try_step(&mut self, t: f64, h: f64) -> Result<(), ModelError> {
+        self.do_step(t, h).map_err(ModelError::Failed)
+    }
+    /// How the layer answers an `Err` of an evaluation (get_real, get_derivatives,
+    /// directional_derivative, get_real_output_derivative): a model whose evaluations change
+    /// nothing but caches answers `ModelError::Discard` for states or inputs it cannot evaluate.
+    /// The default takes the failure for an unknown state.
+    fn evaluation_failure(&self, reason: String) -> ModelError {
+        ModelError::Failed(reason)
+    }
     /// A warning about the last successful step (the layer logs it and returns fmi2Warning).
     fn take_warning(&mut self) -> Option<&'static str> {
         None

@@ -3,7 +3,7 @@
 
 use crate::body::{
     BodyState, CouplingReference, FlangeLoad, FlexibleBody, FrameState, InitialFrame, InputRates, MountMotion,
-    Parameters, SteppedState,
+    Parameters, REAL_LIMIT, StepError, SteppedState,
 };
 use crate::format::RESOURCE_FILE;
 use crate::interface::{FlangeOutput, Quantity, VariableTable};
@@ -11,7 +11,7 @@ use crate::kinematics as k3;
 use crate::reduced::ReducedBody;
 use crate::scalar::{Scalar, c};
 use fmi2::bytes::{Reader, Writer};
-use fmi2::{Causality, Interface, Model, VarInfo, VarType};
+use fmi2::{Causality, Interface, Model, ModelError, VarInfo, VarType};
 use std::sync::Arc;
 
 /// Capabilities the model implements; the builder writes them into modelDescription.xml.
@@ -281,6 +281,41 @@ impl Model for BodyFmu {
         admissible(self.quantity(vr)?, value)
     }
 
+    /// A rotation matrix is one only as a whole: a call that sets all nine entries of the
+    /// mount's orientation hands over a complete matrix, refused here unless it is a rotation
+    /// within the tolerance the step and the evaluations use. Set entry by entry, the matrix
+    /// passes through non-rotations on its way (from one rotation to the next), so a partial
+    /// call is accepted and the whole matrix is checked where it is used: the next evaluation
+    /// answers fmi2Discard, the next step refuses its inputs (fmi2Error), each naming base.R, and
+    /// the instance stays usable.
+    fn admissible_reals(&self, vrs: &[u32], values: &[f64]) -> Result<(), String> {
+        let mut rot = self.body.host_rotation();
+        let mut set = [false; 9];
+        for (&vr, &value) in vrs.iter().zip(values) {
+            if let Ok(Quantity::MountRotation(i, j)) = self.quantity(vr) {
+                rot[3 * i + j] = value;
+                set[3 * i + j] = true;
+            }
+        }
+        if set.iter().all(|s| *s) { self.body.check_rotation(&rot) } else { Ok(()) }
+    }
+
+    /// Input derivatives and directional seeds: the range of the values themselves (a rate of
+    /// 1e200 turns any step into an overflow).
+    fn admissible_direction(&self, _vr: u32, value: f64) -> Result<(), String> {
+        if value.abs() > REAL_LIMIT {
+            return Err(format!("|{value:e}| is beyond {REAL_LIMIT:e}, the range of any physical rate in SI units"));
+        }
+        Ok(())
+    }
+
+    /// An evaluation changes nothing but caches, so states or inputs it cannot evaluate (a free
+    /// body's quaternion of norm 0 or overflowing, a mount orientation off the rotations) are
+    /// the host's to change: fmi2Discard in both interfaces, the instance usable.
+    fn evaluation_failure(&self, reason: String) -> ModelError {
+        ModelError::Discard(reason)
+    }
+
     fn set_real(&mut self, vr: u32, value: f64) -> Result<(), String> {
         use Quantity as Q;
         let name = || self.table.get(vr).map(|v| v.name.clone()).unwrap_or_default();
@@ -431,8 +466,19 @@ impl Model for BodyFmu {
         self.body.qdd().map(|_| ())
     }
 
-    fn do_step(&mut self, _t: f64, h: f64) -> Result<(), String> {
-        self.body.step(h)
+    fn do_step(&mut self, t: f64, h: f64) -> Result<(), String> {
+        self.try_step(t, h).map_err(|e| match e {
+            ModelError::Failed(r) | ModelError::Discard(r) | ModelError::Refused(r) => r,
+        })
+    }
+
+    /// A step not taken leaves the body as before it (`FlexibleBody::step`): refused inputs
+    /// are the host's to correct, anything else a step to retry shorter.
+    fn try_step(&mut self, _t: f64, h: f64) -> Result<(), ModelError> {
+        self.body.step(h).map_err(|e| match e {
+            StepError::Inputs(r) => ModelError::Refused(r),
+            StepError::NotTaken(r) => ModelError::Discard(r),
+        })
     }
 
     fn take_warning(&mut self) -> Option<&'static str> {
@@ -597,12 +643,6 @@ impl Model for BodyFmu {
         Ok(())
     }
 }
-
-/// Largest magnitude of a Real the host sets: beyond any load, speed, acceleration or damping
-/// in SI units by scores of orders of magnitude, and small enough that products of three such
-/// values (a centrifugal load w^2 r) stay finite. A value past it is a unit or host error that
-/// would otherwise surface as NaN outputs many calls later.
-const REAL_LIMIT: f64 = 1e100;
 
 /// Whether `value` is in the physical range of `quantity` (the host's values are finite: the
 /// FMI layer has checked).

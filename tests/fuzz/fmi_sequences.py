@@ -9,11 +9,21 @@ value references, set time and continuous states, derivatives, event indicators,
 event and continuous-time mode, do step with random step sizes, get/set/free FMU state,
 serialize/deserialize (bit flips, truncation, bytes of another FMU or instance), directional and
 output derivatives, input derivatives, debug logging, reset, terminate, free. Values include NaN,
-+-inf, +-1e308, 0, -0, denormals.
++-inf, +-1e308, 0, -0, denormals. Classes aimed at the range checks: huge steps (1e200, 1e306,
+1e308) and long ones (16 s, 100 s) of a free body spun to 300 rad/s, input derivatives and
+directional seeds of 1e200..1e308, mount rotations set whole or entry by entry (rotations,
+interpolated ones, non-orthogonal and mirrored matrices), free-body states whose quaternion is
+no orientation (norm 0 or 1e200).
 
 Oracle, after every call: no crash, no hang, no panic reported by the model, every status other
 than fmi2OK comes with a message logged during the call (logging is on), and nothing non-finite
-is returned with fmi2OK or fmi2Warning (every output array is checked). Each distinct violation
+is returned with fmi2OK or fmi2Warning (every output array is checked). A step answered with
+fmi2OK or fmi2Warning leaves a state that reads (fmi2GetReal of every modal and frame state:
+fmi2OK, finite); a step answered with fmi2Discard leaves the slave in stepFailed with
+fmi2LastSuccessfulTime at the step's start and its state readable; a refusal (fmi2Error) of
+fmi2SetReal, fmi2SetRealInputDerivatives, fmi2GetDirectionalDerivative or fmi2DoStep does not
+put the instance into the Error state (the state is probed with fmi2CancelStep, which is refused
+in every state and names it). Each distinct violation
 is printed once with a minimal reproducer (calls removed while the violation stays).
 
     python tests/fuzz/fmi_sequences.py --seconds 60 --seed 1 [--fmu A.fmu B.fmu ...]
@@ -47,7 +57,10 @@ BUILDER = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target")) / "release" 
 
 VALUES = [float("nan"), float("inf"), float("-inf"), 1e308, -1e308, 0.0, -0.0, 5e-324, 2.2250738585072014e-308,
           -1.0, 1.0, 0.5, 3.0, 10.0, 1e3, 1e6, -1e6, 1e-9]
-STEPS = [0.0, -1.0, 1e-12, 1e-6, 1e-3, 0.01, 0.1, 1.0, 100.0, 1e308, float("nan"), float("inf"), 5e-324]
+STEPS = [0.0, -1.0, 1e-12, 1e-6, 1e-3, 0.01, 0.1, 1.0, 16.0, 100.0, 1e200, 1e306, 1e308, float("nan"), float("inf"),
+         5e-324]
+# rates (input derivatives, directional seeds) beyond the range of any physical quantity
+HUGE = [1e200, -1e250, 1e300, 1e306, 1e308, -1e308]
 INTS = [0, 1, -1, 2, 2**31 - 1, -2**31]
 BAD_VRS = [999999, 2**32 - 1, 2**31, 12345678]
 
@@ -119,9 +132,18 @@ def random_call(rng, fmus):
               "set_string", "get_string", "set_input_derivatives", "get_output_derivatives"):
         n = rng.choice([0, 1, 1, 2, 3, 8])
         vrs = [("bad", rng.choice(BAD_VRS)) if r() < 0.1 else ("idx", rng.randrange(10**6)) for _ in range(n)]
-        values = [rng.choice(VALUES) if r() < 0.7 else rng.uniform(-10, 10) for _ in range(n)]
+        pool = VALUES + HUGE if op == "set_input_derivatives" else VALUES
+        values = [rng.choice(pool) if r() < 0.7 else rng.uniform(-10, 10) for _ in range(n)]
         ints = [rng.choice(INTS) for _ in range(n)]
         return [op, slot, vrs, values, ints]
+    if op == "set_rotation":
+        return [op, slot, rng.choice(["rotation", "interpolated", "sheared", "random", "mirrored", "huge"]),
+                rng.uniform(-3.2, 3.2), rng.choice([9, 9, 9, 1, 3]), rng.randrange(9)]
+    if op == "bad_quaternion":
+        return [op, slot, rng.choice([[0.0, 0.0, 0.0, 0.0], [1e200, 0.0, 0.0, 0.0], [1e200, 1e200, -1e200, 1e200],
+                                      [1e-200, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]])]
+    if op == "spin":
+        return [op, slot, rng.choice([30.0, 300.0, 3000.0, 1e6])]
     if op == "set_time":
         return [op, slot, rng.choice(VALUES + [0.0, 0.1, 1.0])]
     if op in ("set_states", "get_states", "get_derivatives", "get_event_indicators", "get_nominals"):
@@ -139,7 +161,7 @@ def random_call(rng, fmus):
     if op == "directional":
         n, m = rng.choice([1, 2, 3]), rng.choice([1, 2, 3])
         return [op, slot, [rng.randrange(10**6) for _ in range(n)], [rng.randrange(10**6) for _ in range(m)],
-                [rng.choice(VALUES) if r() < 0.5 else rng.uniform(-1, 1) for _ in range(m)], r() < 0.1]
+                [rng.choice(VALUES + HUGE) if r() < 0.5 else rng.uniform(-1, 1) for _ in range(m)], r() < 0.1]
     if op == "debug_logging":
         return [op, slot, rng.choice([0, 1])]
     if op == "real_status":
@@ -155,7 +177,8 @@ OPS = (["instantiate"] * 3 + ["setup", "enter_init", "exit_init"] * 3 + ["termin
           "completed_integrator_step"]
        + ["do_step"] * 6 + ["get_state", "set_state", "free_state", "serialize", "deserialize", "deserialize"]
        + ["directional", "directional", "set_input_derivatives", "get_output_derivatives", "debug_logging",
-          "real_status", "cancel_step"])
+          "real_status", "cancel_step"]
+       + ["set_rotation", "set_rotation", "bad_quaternion", "spin"])
 
 
 def random_sequence(rng, fmus, length):
@@ -235,6 +258,48 @@ class Runner:
         bad = [v for v in values if not math.isfinite(v)]
         if bad:
             self.violate(f"nonfinite:{function}", f"{function} returned {bad[0]} with fmi2OK/fmi2Warning")
+
+    def probe_state(self, slot):
+        """The instance's FMI state as fmi2CancelStep names it (refused in every state we enter);
+        None for Model Exchange or when it cannot tell."""
+        c, info, kind = self.need(slot)
+        if kind != 1:
+            return None
+        mark = len(self.log)
+        self.slot_lib.fmi2CancelStep.restype = ctypes.c_int
+        self.slot_lib.fmi2CancelStep(c)
+        for _, text in self.log[mark:]:
+            if "called in state " in text:
+                return text.split("called in state ")[1].split(";")[0]
+        return None
+
+    def still_usable(self, slot, function, status, before):
+        """A refusal (fmi2Error) of a range or input check keeps the instance out of Error."""
+        if status == ERROR and before not in (None, "Error") and self.probe_state(slot) == "Error":
+            self.violate(f"unusable:{function}", f"{function} refused with fmi2Error and left the instance in Error "
+                         f"(it was in {before})")
+
+    def state_vars(self, info):
+        return [vr for vr, causality, variability, name in info["vars"].get("Real", [])
+                if name.startswith(("q[", "qd[", "frame."))]
+
+    def read_state(self, slot, function, required):
+        """Every modal and frame state through fmi2GetReal: fmi2OK and finite where `required`."""
+        c, info, kind = self.need(slot)
+        vrs = self.state_vars(info)
+        if not vrs:
+            return
+        vr = (ctypes.c_uint * len(vrs))(*vrs)
+        out = (ctypes.c_double * len(vrs))()
+        status, mark = self.call("fmi2GetReal", c, vr, ctypes.c_size_t(len(vrs)), out)
+        self.check("fmi2GetReal", status, mark)
+        if required and status != OK:
+            self.violate(f"unreadable-after:{function}", f"{function}: the state then reads with status {status}: "
+                         + "; ".join(t for _, t in self.log[mark:]))
+        if status in (OK, WARNING):
+            bad = [v for v in out[:len(vrs)] if not math.isfinite(v)]
+            if bad:
+                self.violate(f"nonfinite-state-after:{function}", f"{function} left the state value {bad[0]}")
 
     def violate(self, key, text):
         self.violations.append((key, text, self.call_index))
@@ -353,7 +418,66 @@ class Runner:
         c, info, kind = self.need(slot)
         vr = (ctypes.c_uint * max(1, len(picks)))(*self.vrs(info, picks))
         val = (ctypes.c_double * max(1, len(values)))(*values)
+        before = self.probe_state(slot)
         status, mark = self.call("fmi2SetReal", c, vr, ctypes.c_size_t(len(picks)), val)
+        self.check("fmi2SetReal", status, mark)
+        self.still_usable(slot, "fmi2SetReal", status, before)
+
+    def op_set_rotation(self, slot, kind_of, angle, count, first):
+        """The mount's orientation base.R: all nine entries in one call, or some of them."""
+        c, info, kind = self.need(slot)
+        names = {name: vr for vr, _, _, name in info["vars"].get("Real", [])}
+        entries = [f"base.R[{i},{j}]" for i in (1, 2, 3) for j in (1, 2, 3)]
+        if entries[0] not in names:
+            raise _Skip()
+        ca, sa = math.cos(angle), math.sin(angle)
+        rot = [ca, -sa, 0.0, sa, ca, 0.0, 0.0, 0.0, 1.0]
+        if kind_of == "interpolated":
+            cb, sb = math.cos(angle + 0.1), math.sin(angle + 0.1)
+            rot = [0.5 * (x + y) for x, y in zip(rot, [cb, -sb, 0.0, sb, cb, 0.0, 0.0, 0.0, 1.0])]
+        elif kind_of == "sheared":
+            rot[1] += 0.8
+        elif kind_of == "random":
+            rng = random.Random(angle)
+            rot = [rng.uniform(-1, 1) for _ in range(9)]
+        elif kind_of == "mirrored":
+            rot[8] = -1.0
+        elif kind_of == "huge":
+            rot = [1e200 * x for x in rot]
+        picked = [(first + k) % 9 for k in range(count)]
+        vr = (ctypes.c_uint * count)(*[names[entries[k]] for k in picked])
+        val = (ctypes.c_double * count)(*[rot[k] for k in picked])
+        before = self.probe_state(slot)
+        status, mark = self.call("fmi2SetReal", c, vr, ctypes.c_size_t(count), val)
+        self.check("fmi2SetReal", status, mark)
+        self.still_usable(slot, "fmi2SetReal", status, before)
+
+    def op_bad_quaternion(self, slot, quat):
+        """A free body's states (Model Exchange) with its quaternion replaced."""
+        c, info, kind = self.need(slot)
+        names = [name for _, _, _, name in info["vars"].get("Real", [])]
+        if kind != 0 or "frame.Q[1]" not in names or info["nx"] < 13:
+            raise _Skip()
+        n = info["nx"]
+        x = (ctypes.c_double * n)()
+        status, mark = self.call("fmi2GetContinuousStates", c, x, ctypes.c_size_t(n))
+        if not self.check("fmi2GetContinuousStates", status, mark):
+            return
+        # the frame's states come last: r[3], Q[4], v[3], W[3]
+        for k in range(4):
+            x[n - 10 + k] = quat[k]
+        status, mark = self.call("fmi2SetContinuousStates", c, x, ctypes.c_size_t(n))
+        self.check("fmi2SetContinuousStates", status, mark)
+
+    def op_spin(self, slot, w):
+        """A free body's initial spin (a parameter: accepted before initialisation ends)."""
+        c, info, kind = self.need(slot)
+        names = {name: vr for vr, _, _, name in info["vars"].get("Real", [])}
+        if "initial.w[3]" not in names:
+            raise _Skip()
+        vr = (ctypes.c_uint * 1)(names["initial.w[3]"])
+        val = (ctypes.c_double * 1)(w)
+        status, mark = self.call("fmi2SetReal", c, vr, ctypes.c_size_t(1), val)
         self.check("fmi2SetReal", status, mark)
 
     def op_get_real(self, slot, picks, values, ints):
@@ -415,8 +539,10 @@ class Runner:
         vr = (ctypes.c_uint * max(1, n))(*self.vrs(info, picks))
         order = (ctypes.c_int * max(1, n))(*[1 if i % 3 else abs(i) % 3 for i in ints])
         val = (ctypes.c_double * max(1, n))(*values)
+        before = self.probe_state(slot)
         status, mark = self.call("fmi2SetRealInputDerivatives", c, vr, ctypes.c_size_t(n), order, val)
         self.check("fmi2SetRealInputDerivatives", status, mark)
+        self.still_usable(slot, "fmi2SetRealInputDerivatives", status, before)
 
     def op_get_output_derivatives(self, slot, picks, values, ints):
         c, info, kind = self.need(slot)
@@ -467,9 +593,29 @@ class Runner:
     def op_do_step(self, slot, t, h, no_prior):
         c, info, kind = self.need(slot)
         start = self.slots[slot][4] if t == "cur" else t
+        before = self.probe_state(slot)
         status, mark = self.call("fmi2DoStep", c, ctypes.c_double(start), ctypes.c_double(h), ctypes.c_int(no_prior))
         if self.check("fmi2DoStep", status, mark):
             self.slots[slot][4] = start + h
+            # no fmi2OK with a state that is not finite
+            self.read_state(slot, "fmi2DoStep", required=True)
+        elif status == DISCARD:
+            # not taken: stepFailed, at the step's start, the state as before and readable
+            state = self.probe_state(slot)
+            if state != "StepFailed":
+                self.violate("discard-state:fmi2DoStep", f"fmi2DoStep returned fmi2Discard and left state {state}")
+            last = ctypes.c_double(float("nan"))
+            s2, mark2 = self.call("fmi2GetRealStatus", c, ctypes.c_int(2), ctypes.byref(last))
+            self.check("fmi2GetRealStatus", s2, mark2)
+            # the FMU accepts a communication point within 1e-9 (relative) of its time and keeps
+            # its own: the fuzzer's bookkeeping may differ by as much
+            expected = self.slots[slot][4]
+            if s2 != OK or not abs(last.value - expected) <= 1e-9 * max(1.0, abs(expected), abs(h)):
+                self.violate("discard-time:fmi2DoStep", f"after fmi2Discard fmi2LastSuccessfulTime is {last.value} "
+                             f"(status {s2}), the step started at {self.slots[slot][4]}")
+            self.read_state(slot, "fmi2DoStep(discard)", required=True)
+        else:
+            self.still_usable(slot, "fmi2DoStep", status, before)
 
     def op_get_state(self, slot, k):
         c, info, kind = self.need(slot)
@@ -543,10 +689,12 @@ class Runner:
         kk = (ctypes.c_uint * len(k))(*k)
         dd = (ctypes.c_double * len(dv))(*dv)
         out = (ctypes.c_double * len(u))()
+        before = self.probe_state(slot)
         status, mark = self.call("fmi2GetDirectionalDerivative", c, uu, ctypes.c_size_t(len(u)), kk,
                                  ctypes.c_size_t(len(k)), dd, out)
         if self.check("fmi2GetDirectionalDerivative", status, mark):
             self.finite("fmi2GetDirectionalDerivative", out[:len(u)])
+        self.still_usable(slot, "fmi2GetDirectionalDerivative", status, before)
 
 
 class _Skip(Exception):

@@ -7,13 +7,15 @@
 use std::path::Path;
 
 use crate::bytes::{Reader, Writer};
-use crate::{Causality as C, Initial as I, Interface, Model, VarInfo, VarType as T, Variability as V};
+use crate::{Causality as C, Initial as I, Interface, Model, ModelError, VarInfo, VarType as T, Variability as V};
 
 pub const GUID: &str = "{8c4e810f-3df3-4a00-8276-176fa3c9f000}";
 /// The GUID of another FMU carrying the same runtime (resources containing "other-model").
 pub const OTHER_GUID: &str = "{8c4e810f-3df3-4a00-8276-176fa3c9f001}";
 /// The input's physical range: |u| beyond it is refused by `admissible_real`.
 pub const U_LIMIT: f64 = 1e100;
+/// Longer steps are not taken (fmi2Discard, nothing changed).
+pub const MAX_STEP: f64 = 1e3;
 
 pub const X: u32 = 0;
 pub const V_: u32 = 1;
@@ -118,6 +120,12 @@ impl Model for Spring {
     fn admissible_real(&self, vr: u32, value: f64) -> Result<(), String> {
         if vr == U && value.abs() > U_LIMIT {
             return Err(format!("|u| = {value:e} is beyond the input's range {U_LIMIT:e}"));
+        }
+        Ok(())
+    }
+    fn admissible_direction(&self, vr: u32, value: f64) -> Result<(), String> {
+        if vr == U && value.abs() > U_LIMIT {
+            return Err(format!("beyond the input's range of rates {U_LIMIT:e}"));
         }
         Ok(())
     }
@@ -245,6 +253,12 @@ impl Model for Spring {
             ACC => -self.k * self.v - self.d * self.accel(self.x, self.v),
             _ => unreachable!("the layer checks for outputs"),
         })
+    }
+    fn try_step(&mut self, t: f64, h: f64) -> Result<(), ModelError> {
+        if h > MAX_STEP {
+            return Err(ModelError::Discard(format!("h = {h} needs more than {MAX_STEP} s of RK4 substeps")));
+        }
+        self.do_step(t, h).map_err(ModelError::Failed)
     }
     fn do_step(&mut self, t: f64, h: f64) -> Result<(), String> {
         if self.fail {

@@ -1232,7 +1232,7 @@ fn derivative_failures_of_the_model_enter_the_error_state() {
     assert_eq!(model_state_of(c), ModelState::Error);
     // Allowed in Error (diagnostics); the model still fails.
     assert_eq!(output_derivatives(c, &[ACC], &[1]).0, fmi2Error);
-    assert_eq!(log.last(), "fmi2GetRealOutputDerivatives: value reference 11: no derivative after a failure");
+    assert_eq!(log.last(), "fmi2GetRealOutputDerivatives: value reference 11 (acc): no derivative after a failure");
     unsafe {
         assert_eq!(api::fmi2Reset::<Spring>(c), fmi2OK);
         initialize(c, 0.0);
@@ -1362,5 +1362,61 @@ fn fmu_states_of_another_model_or_no_state_at_all_are_refused() {
         free_state(other, foreign);
         api::fmi2FreeInstance::<Spring>(other);
         api::fmi2FreeInstance::<Spring>(c);
+    }
+}
+
+/// A step the model does not take (ModelError::Discard) answers fmi2Discard with its reason:
+/// the slave is in stepFailed with its time and state as before the step, can be read, and
+/// restoring the FMU state saved before the step lets the master retry with a shorter step.
+#[test]
+fn a_step_not_taken_is_discarded_and_the_master_retries_from_a_saved_state() {
+    let log = Log::default();
+    let c = instantiate(&log, fmi2CoSimulation);
+    initialize(c, 0.0);
+    assert_eq!(set_real(c, U, 1.0), fmi2OK);
+    let t = run_cs(c, 0.0, 0.2, 0.1);
+    let x = get_real(c, X);
+    unsafe {
+        let mut saved: fmi2FMUstate = null_mut();
+        assert_eq!(api::fmi2GetFMUstate::<Spring>(c, &mut saved), fmi2OK);
+        assert_eq!(api::fmi2DoStep::<Spring>(c, t, 1e4, 0), fmi2Discard);
+        assert!(log.last().starts_with("fmi2DoStep: step from t = "), "{}", log.last());
+        assert!(log.last().contains("needs more than 1000 s"), "{}", log.last());
+        assert_eq!(model_state_of(c), crate::state::ModelState::StepFailed);
+        let mut status = fmi2OK;
+        assert_eq!(api::fmi2GetStatus::<Spring>(c, fmi2DoStepStatus, &mut status), fmi2OK);
+        assert_eq!(status, fmi2Discard);
+        let mut last = f64::NAN;
+        assert_eq!(api::fmi2GetRealStatus::<Spring>(c, fmi2LastSuccessfulTime, &mut last), fmi2OK);
+        assert_eq!(last, t);
+        assert_eq!(get_real(c, X), x);
+        // stepFailed takes no step (the standard's table): the master restores and retries
+        assert_eq!(api::fmi2DoStep::<Spring>(c, t, 500.0, 0), fmi2Error);
+        assert_eq!(api::fmi2SetFMUstate::<Spring>(c, saved), fmi2OK);
+        assert_eq!(api::fmi2DoStep::<Spring>(c, t, 500.0, 0), fmi2OK);
+        assert_eq!(api::fmi2FreeFMUstate::<Spring>(c, &mut saved), fmi2OK);
+        api::fmi2FreeInstance::<Spring>(c);
+    }
+}
+
+/// Rates (input derivatives, directional seeds) beyond the model's range are refused as
+/// fmi2SetReal refuses a value: fmi2Error naming the variable, nothing set, same state.
+#[test]
+fn seeds_beyond_the_models_range_are_refused_and_the_instance_stays_usable() {
+    let log = Log::default();
+    for kind in [fmi2CoSimulation, fmi2ModelExchange] {
+        let c = instantiate(&log, kind);
+        initialize(c, 0.0);
+        let (status, out) = directional(c, &[ACC], &[U], &[1e300]);
+        assert_refused(
+            c,
+            &log,
+            status,
+            "fmi2GetDirectionalDerivative",
+            "dvKnown[0] = 1e300 for known value reference 3 (u): beyond the input's range of rates 1e100",
+        );
+        assert!(out[0].is_nan());
+        assert_eq!(directional(c, &[ACC], &[U], &[1.0]), (fmi2OK, vec![1.0]));
+        unsafe { api::fmi2FreeInstance::<Spring>(c) };
     }
 }

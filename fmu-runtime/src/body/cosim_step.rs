@@ -3,7 +3,10 @@
 //! the coupling's drift from the transition's) and the free body's substeps.
 
 use super::mounted::fill_coupling;
-use super::{Coupling, FlangeLoad, FlexibleBody, FrameState, FreeWork, InputRates, MountMotion, UNSTABLE_STIFFNESS};
+use super::{
+    Coupling, FlangeLoad, FlexibleBody, FrameState, FreeWork, HostMount, InputRates, MountMotion, Parameters,
+    REAL_LIMIT, UNSTABLE_STIFFNESS,
+};
 use crate::coupled_propagator::Prepared;
 use crate::kinematics::{self as k3, Mat3, Vec3};
 
@@ -44,6 +47,91 @@ fn residual_coupling_force(c: &Coupling<f64>, reference: (&[f64], &[f64]), i: us
     s
 }
 
+/// Largest rotation of a free body within one of its substeps (rad): the Heun splitting's error
+/// per substep is of third order in it.
+pub const SUBSTEP_ANGLE: f64 = 0.005;
+
+/// Most substeps one Co-Simulation step of a free body takes, as a budget of work (a step that
+/// needs more is not taken: `StepError::NotTaken`, naming the longest step that fits). A substep
+/// costs two evaluations of the free body's equations, some 40 n^2 multiply-adds each for n
+/// modes plus a fixed part; measured (release build) on the 2-core machine of docs/FUZZING.md's
+/// runs: 22 us for the fuzzer's 18-mode free beam, 3.7 to 7 us for 2 to 12 modes, within
+/// (n^2 + 60) units of 0.06 us. The budget keeps one call near 0.15 s there (6 510 substeps of
+/// the 18-mode beam, 39 000 of 2 modes), below 0.5 s on a machine three times slower (the
+/// fuzzing machine that found it took 38 us per substep of the beam).
+const SUBSTEP_WORK: f64 = 2.5e6;
+
+/// Work units of one substep of a body of n modes (see [`SUBSTEP_WORK`]).
+fn substep_work(n: usize) -> f64 {
+    (n * n) as f64 + 60.0
+}
+
+/// Why a Co-Simulation step was not taken; the body is as it was before the step either way.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum StepError {
+    /// The inputs are none the body can be stepped with (a mount orientation off the rotations,
+    /// a spin the body was not built for): the host sets valid ones and steps again.
+    Inputs(String),
+    /// The step would cost more than one call may take, or its result would not have been
+    /// finite and in range: a shorter step (or other inputs) may be taken.
+    NotTaken(String),
+}
+
+impl StepError {
+    pub fn reason(&self) -> &str {
+        match self {
+            StepError::Inputs(r) | StepError::NotTaken(r) => r,
+        }
+    }
+}
+
+/// For callers that report a step's failure as text (the builder's checks, the benchmarks).
+impl From<StepError> for String {
+    fn from(e: StepError) -> String {
+        e.reason().to_string()
+    }
+}
+
+impl std::fmt::Display for StepError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.reason())
+    }
+}
+
+/// What a step changes, kept from its start (preallocated: a step allocates nothing), so that a
+/// step that is not taken leaves the body as it was: the host can read it, save it, or restore
+/// an earlier state and go on.
+#[derive(Debug, Clone, Default)]
+pub(super) struct StepStart {
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    mount: MountMotion,
+    loads: Vec<FlangeLoad>,
+    frame: Option<FrameState>,
+    rate_mount: MountMotion,
+    rate_loads: Vec<FlangeLoad>,
+    rates_any: bool,
+    host_mount: HostMount,
+    stepped_valid: bool,
+    stepped_a: [f64; 3],
+    stepped_z: [f64; 3],
+    stepped_loads: Vec<FlangeLoad>,
+    stepped_params: Option<Parameters>,
+}
+
+impl StepStart {
+    pub(super) fn new(n: usize, flanges: usize) -> Self {
+        Self {
+            q: vec![0.0; n],
+            qd: vec![0.0; n],
+            loads: vec![FlangeLoad::default(); flanges],
+            rate_loads: vec![FlangeLoad::default(); flanges],
+            stepped_loads: vec![FlangeLoad::default(); flanges],
+            ..Self::default()
+        }
+    }
+}
+
 /// The mount as the host set it, and which of its groups moved by their kinematic rates
 /// (position and velocity do not enter the body's equations: they are left alone).
 struct HeldMount {
@@ -75,15 +163,33 @@ impl FlexibleBody {
     /// which keeps an undamped spinning body's energy at any step (see `coupled_propagator`).
     /// An input changed since the last step moves the algebraic modes with their equilibrium
     /// first (`input_jump`).
-    pub fn step(&mut self, h: f64) -> Result<(), String> {
+    ///
+    /// A step whose cost is beyond one call's budget (a free body spinning fast over a long
+    /// step) is refused before any work; one whose end state or extrapolated inputs are not
+    /// finite or beyond [`REAL_LIMIT`] (a step or load far beyond the body's range) is undone.
+    /// Either way the body is as before the step, with the reason in the error.
+    pub fn step(&mut self, h: f64) -> Result<(), StepError> {
         if !(h > 0.0 && h.is_finite()) {
-            return Err(format!("step size {h} must be positive and finite"));
+            return Err(StepError::Inputs(format!("step size {h} must be positive and finite")));
         }
         if self.frame.is_some() {
-            self.follow_input_change()?;
+            self.free_substeps_within_budget(h)?;
+        }
+        self.keep_step_start();
+        let result = self.step_from_start(h).and_then(|()| self.check_step_end(h));
+        if result.is_err() {
+            self.restore_step_start();
+        }
+        result
+    }
+
+    fn step_from_start(&mut self, h: f64) -> Result<(), StepError> {
+        let not_taken = StepError::NotTaken;
+        if self.frame.is_some() {
+            self.follow_input_change().map_err(not_taken)?;
             // free bodies hold their flange loads over the step; the inputs still end the step
             // at their interpolated values
-            self.step_free(h)?;
+            self.step_free(h).map_err(not_taken)?;
             if self.rates.any {
                 self.extrapolate_inputs(h);
             }
@@ -101,9 +207,126 @@ impl FlexibleBody {
             self.coupling.valid = false;
             self.eval.valid = false;
         }
-        self.check_inputs()?;
-        self.follow_input_change()?;
-        self.step_mounted(h)
+        self.check_inputs().map_err(StepError::Inputs)?;
+        self.follow_input_change().map_err(not_taken)?;
+        self.step_mounted(h).map_err(not_taken)
+    }
+
+    /// Substeps of a free body's step of h at its present spin, and Err if more than one call
+    /// may take (before anything is done).
+    fn free_substeps_within_budget(&self, h: f64) -> Result<usize, StepError> {
+        let spin = self.frame.map_or(0.0, |f| k3::dot(f.w_body, f.w_body).sqrt());
+        let needed = (h * spin / SUBSTEP_ANGLE).ceil();
+        let most = self.max_free_substeps();
+        if needed.is_nan() || needed > most as f64 {
+            // the longest step within the budget, rounded down to four digits so that it fits
+            let longest = most as f64 * SUBSTEP_ANGLE / spin;
+            let unit = 10f64.powi(longest.log10().floor() as i32 - 3);
+            let longest = (longest / unit).floor() * unit;
+            return Err(StepError::NotTaken(format!(
+                "a step of h = {h} s of this free-floating body spinning at |W| = {spin:.3} rad/s needs \
+                 {needed:.0} substeps of at most {SUBSTEP_ANGLE} rad, more than the {most} one call takes; \
+                 the largest step at this spin is h = {longest:.3e} s (substeps = |W| h / {SUBSTEP_ANGLE} rad)"
+            )));
+        }
+        Ok((needed as usize).max(1))
+    }
+
+    /// The substep budget of one call for this body's size (see [`SUBSTEP_WORK`]).
+    pub fn max_free_substeps(&self) -> usize {
+        (SUBSTEP_WORK / substep_work(self.q.len())) as usize
+    }
+
+    /// Everything the step changes, copied into the preallocated [`StepStart`].
+    fn keep_step_start(&mut self) {
+        let s = &mut self.step_start;
+        s.q.copy_from_slice(&self.q);
+        s.qd.copy_from_slice(&self.qd);
+        s.mount = self.mount;
+        s.loads.copy_from_slice(&self.loads);
+        s.frame = self.frame;
+        s.rate_mount = self.rates.mount;
+        s.rate_loads.copy_from_slice(&self.rates.loads);
+        s.rates_any = self.rates.any;
+        s.host_mount = self.host_mount;
+        s.stepped_valid = self.stepped.valid;
+        s.stepped_a = self.stepped.a;
+        s.stepped_z = self.stepped.z;
+        s.stepped_loads.copy_from_slice(&self.stepped.loads);
+        s.stepped_params = self.stepped.params;
+    }
+
+    /// The body as [`keep_step_start`](Self::keep_step_start) found it; caches are recomputed.
+    fn restore_step_start(&mut self) {
+        let s = &self.step_start;
+        self.q.copy_from_slice(&s.q);
+        self.qd.copy_from_slice(&s.qd);
+        self.mount = s.mount;
+        self.loads.copy_from_slice(&s.loads);
+        self.frame = s.frame;
+        self.rates.mount = s.rate_mount;
+        self.rates.loads.copy_from_slice(&s.rate_loads);
+        self.rates.any = s.rates_any;
+        self.host_mount = s.host_mount;
+        self.stepped.valid = s.stepped_valid;
+        self.stepped.a = s.stepped_a;
+        self.stepped.z = s.stepped_z;
+        self.stepped.loads.copy_from_slice(&s.stepped_loads);
+        self.stepped.params = s.stepped_params;
+        self.warning = None;
+        self.coupling.valid = false;
+        self.eval.valid = false;
+    }
+
+    /// Err naming the first input or state the step left non-finite or beyond [`REAL_LIMIT`]
+    /// (inputs move by their derivatives over the step): no state to go on from, and outputs
+    /// computed from it would overflow.
+    fn check_step_end(&self, h: f64) -> Result<(), StepError> {
+        let out_of_range = |v: f64| !(v.abs() <= REAL_LIMIT);
+        // a spin above a critical speed makes the deformation grow without bound: say so
+        let unstable = self.frame.is_none() && self.coupled.has_storage() && !self.coupled.definite();
+        let fail = |what: String, v: f64| {
+            Err(StepError::NotTaken(format!(
+                "{what} would be {v:e} after this step of h = {h:e} s, {}: {}; the state before the step is kept",
+                if v.is_finite() { format!("beyond {REAL_LIMIT:e}") } else { "not finite".to_string() },
+                if unstable {
+                    format!("the deformation grew without bound: {UNSTABLE_STIFFNESS}")
+                } else {
+                    "a step, load or input rate far beyond the body's range".to_string()
+                }
+            )))
+        };
+        // a free body's mount is its frame's motion, no input
+        let m = &self.mount;
+        let mount = &self.body.mount;
+        let inputs = [("r", &m.r[..]), ("R", &m.rot), ("v", &m.v), ("w", &m.w), ("a", &m.a), ("z", &m.z)];
+        for (name, x) in inputs.into_iter().filter(|_| self.frame.is_none()) {
+            if let Some(i) = x.iter().position(|v| out_of_range(*v)) {
+                let entry = if name == "R" { format!("{},{}", i / 3 + 1, i % 3 + 1) } else { format!("{}", i + 1) };
+                return fail(format!("the input {mount}.{name}[{entry}]"), x[i]);
+            }
+        }
+        for (flange, load) in self.body.flanges.iter().zip(&self.loads) {
+            for (name, x) in [("f", &load.f), ("t", &load.t)] {
+                if let Some(i) = x.iter().position(|v| out_of_range(*v)) {
+                    return fail(format!("the input {}.{name}[{}]", flange.name, i + 1), x[i]);
+                }
+            }
+        }
+        // the state after the inputs: an input carried out of range by its rate is the cause
+        for (name, x) in [("q", &self.q), ("qd", &self.qd)] {
+            if let Some(j) = x.iter().position(|v| out_of_range(*v)) {
+                return fail(format!("the modal state {name}[{}]", j + 1), x[j]);
+            }
+        }
+        if let Some(f) = &self.frame {
+            for (name, x) in [("r", &f.r[..]), ("Q", &f.quat), ("v", &f.v), ("W", &f.w_body)] {
+                if let Some(i) = x.iter().position(|v| out_of_range(*v)) {
+                    return fail(format!("the frame state frame.{name}[{}]", i + 1), x[i]);
+                }
+            }
+        }
+        Ok(())
     }
 
     fn step_mounted(&mut self, h: f64) -> Result<(), String> {
@@ -429,12 +652,11 @@ impl FlexibleBody {
 
 impl FlexibleBody {
     /// A free-floating body over one step, by substeps short against its rotation
-    /// (|W| h_sub <= 0.005) of a second-order (Heun) splitting: the modes propagate exactly under
+    /// (|W| h_sub <= SUBSTEP_ANGLE) of a second-order (Heun) splitting: the modes propagate exactly under
     /// the coupling load (trapezoidal in time), the rigid motion by the averaged rates, the
     /// attitude by the exact rotation of the mean angular velocity.
     fn step_free(&mut self, h: f64) -> Result<(), String> {
-        let spin = self.frame.map_or(0.0, |f| k3::dot(f.w_body, f.w_body).sqrt());
-        let substeps = ((h * spin / 0.005).ceil() as usize).clamp(1, 1_000_000);
+        let substeps = self.free_substeps_within_budget(h).map_err(|e| e.reason().to_string())?;
         let hs = h / substeps as f64;
         self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, hs);
         // the preallocated workspace, taken out for the substeps (leaves an empty Vec: no allocation)
@@ -553,6 +775,6 @@ mod tests {
         let mut b = FlexibleBody::new(Arc::new(two_mode_body()));
         b.mount_mut().rot = [1.1, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
         let e = b.step(0.1).unwrap_err();
-        assert!(e.contains("base.R"), "{e}");
+        assert!(matches!(&e, super::StepError::Inputs(r) if r.contains("base.R")), "{e}");
     }
 }

@@ -38,8 +38,16 @@ impl<T: Scalar> FlexibleBody<T> {
         let rot_terms = b.rotation.as_ref().ok_or("a free-floating body needs its rotation invariants")?;
         let [q0, q1, q2, q3] = frame.quat;
         let norm = (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3).sqrt();
+        // the state holds an orientation only near the unit sphere (a host's integrator keeps it
+        // there to its tolerance); the rates below keep the norm, so a state off it is the host's
         if !(norm.value() > 0.5 && norm.value() < 2.0) {
-            return Err(format!("the orientation quaternion has drifted to norm {}", norm.value()));
+            return Err(format!(
+                "the orientation quaternion frame.Q = {:?} has norm {:e}, which is no orientation \
+                 (a state of norm between 0.5 and 2 is normalised; retry with states nearer the last \
+                 accepted ones)",
+                frame.quat.map(|x| x.value()),
+                norm.value()
+            ));
         }
         let quat = frame.quat.map(|x| x / norm);
         let a = k3::rotation_of_quaternion(quat);

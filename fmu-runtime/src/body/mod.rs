@@ -18,6 +18,7 @@
 //! dense kernels (dot products and the small in-place solver).
 
 mod cosim_step;
+pub use cosim_step::{SUBSTEP_ANGLE, StepError};
 mod dense;
 mod free_floating;
 mod input_jump;
@@ -32,6 +33,7 @@ use crate::kinematics::{self as k3, Mat3, Vec3};
 use crate::propagator::ModalPropagator;
 use crate::reduced::ReducedBody;
 use crate::scalar::{Dual, Scalar, c};
+use cosim_step::StepStart;
 use dense::shape_dot;
 use input_jump::SteppedInputs;
 use quasi_static::QuasiStaticWork;
@@ -286,7 +288,16 @@ pub struct FlexibleBody<T = f64> {
     /// Co-Simulation: the host's view of the mount's orientation and spin where the last step
     /// moved them by their kinematics (see `cosim_step`), and which of them the host drives.
     host_mount: HostMount,
+    /// Co-Simulation: what the step in progress changes, as it was at its start.
+    step_start: StepStart,
 }
+
+/// Largest magnitude of a Real the host sets (and of a rate it gives, and of a state a step may
+/// end in): beyond any load, speed, acceleration or damping in SI units by scores of orders of
+/// magnitude, and small enough that products of three such values (a centrifugal load w^2 r)
+/// stay finite. A value past it is a unit or host error that would otherwise surface as NaN
+/// outputs many calls later.
+pub const REAL_LIMIT: f64 = 1e100;
 
 /// A Co-Simulation host that sets the mount's orientation (or spin) between steps drives it:
 /// after a step the FMU reports the state the step produced in the pose the step turned the
@@ -382,6 +393,7 @@ impl FlexibleBody {
             qs_work: QuasiStaticWork::new(n, body.n_dynamic(), body.free_floating),
             stepped: SteppedInputs::new(n, nf),
             host_mount: HostMount::default(),
+            step_start: StepStart::new(n, nf),
             body,
         }
     }
@@ -432,6 +444,7 @@ impl FlexibleBody {
             // stepping is f64 only
             stepped: SteppedInputs::default(),
             host_mount: HostMount::default(),
+            step_start: StepStart::default(),
         }
     }
 

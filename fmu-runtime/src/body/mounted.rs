@@ -6,23 +6,48 @@ use crate::kinematics::{self as k3, Mat3, Vec3};
 use crate::reduced::ReducedBody;
 use crate::scalar::{Scalar, c};
 
-/// Largest |A^T A - I| accepted for the mount orientation. Hosts interpolate rotation-matrix
-/// inputs entry by entry (FMPy between samples, masters with first-order hold), which leaves them
-/// slightly off orthonormal; within this tolerance the nearest rotation is used.
-const ROTATION_TOLERANCE: f64 = 1e-2;
+/// Largest entry of |A^T A - I| accepted for the mount orientation (absolute: a rotation's
+/// entries are of order one). Hosts interpolate rotation-matrix inputs entry by entry (FMPy
+/// between samples, masters with first-order hold: the mean of two rotations 0.1 rad apart is
+/// off by 1e-3), which leaves them slightly off orthonormal; within this tolerance the nearest
+/// rotation is used. A matrix beyond it is no orientation (a unit, transposition or indexing
+/// error of the host) and is refused.
+pub const ROTATION_TOLERANCE: f64 = 1e-2;
+
+impl FlexibleBody {
+    /// The mount orientation as the host last set it (not the pose a step turned it to).
+    pub fn host_rotation(&self) -> [f64; 9] {
+        self.host_mount.rot.unwrap_or(self.mount.rot)
+    }
+
+    /// Err with the reason unless `rot` is a rotation within [`ROTATION_TOLERANCE`].
+    pub fn check_rotation(&self, rot: &[f64; 9]) -> Result<(), String> {
+        rotation_refusal(&self.body.mount, k3::rotation_defect(rot))
+    }
+}
+
+fn rotation_refusal(mount: &str, defect: f64) -> Result<(), String> {
+    // a NaN defect (non-finite entries) is refused too
+    if defect.is_nan() || defect > ROTATION_TOLERANCE {
+        let found = if defect.is_infinite() {
+            "its determinant is not positive".to_string()
+        } else {
+            format!("|R^T R - I| = {defect:.3e}")
+        };
+        return Err(format!(
+            "{mount}.R is not a proper rotation matrix ({found}; a rotation has R^T R = I within \
+             {ROTATION_TOLERANCE:e} per entry and det R = +1)"
+        ));
+    }
+    Ok(())
+}
 
 impl<T: Scalar> FlexibleBody<T> {
     /// Refuse a mount orientation off the rotations or a spin the body was not built for; set
     /// the orientation in use.
     pub(super) fn check_inputs(&mut self) -> Result<(), String> {
         let defect = k3::rotation_defect(&self.mount.rot.map(T::value));
-        // a NaN defect (non-finite entries) is refused too
-        if defect.is_nan() || defect > ROTATION_TOLERANCE {
-            return Err(format!(
-                "{}.R is not a proper rotation matrix (|R^T R - I| = {defect:.3e}, det must be +1)",
-                self.body.mount
-            ));
-        }
+        rotation_refusal(&self.body.mount, defect)?;
         // a derivative goes through the projection even at an exact rotation: a change of R
         // off the rotations moves the body only by its rotational part
         self.rot = if defect > 1e-14 || T::CARRIES_DERIVATIVE {
