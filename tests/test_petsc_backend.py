@@ -229,7 +229,7 @@ def test_a_launcher_that_fails_is_reported(tmp_path):
     if shutil.which("mpirun"):
         err = refused([EXAMPLES / "beam.json", "-o", out, "--backend", "petsc", "--launcher", LAUNCHER,
                        "--python", "/nonexistent/python3"])
-        assert "ended" in err and "before it connected" in err, err
+        assert "the launcher ended" in err and "while the builder waited for the driver to connect" in err, err
     assert not out.exists()
 
 

@@ -73,9 +73,13 @@ struct Args {
     /// "srun" ["-n <ranks> <python> driver.py job.json" follow; default "mpirun"]
     #[arg(long, conflicts_with = "sweep")]
     launcher: Option<String>,
-    /// petsc back-end: the Python with petsc4py, slepc4py and mpi4py on every rank [default python3]
+    /// petsc back-end: the Python with petsc4py, slepc4py and mpi4py on every rank [default: the
+    /// first of /usr/bin/python3 and python3 in PATH that imports them]
     #[arg(long, conflicts_with = "sweep")]
     python: Option<String>,
+    /// petsc back-end: seconds to wait for the driver to connect [default 300]
+    #[arg(long, value_name = "SECONDS", value_parser = connect_timeout, conflicts_with = "sweep")]
+    connect_timeout: Option<f64>,
     /// Print nothing but errors
     #[arg(short, long)]
     quiet: bool,
@@ -84,6 +88,12 @@ struct Args {
     /// with wall time, peak resident memory and its counts
     #[arg(long)]
     timings: bool,
+}
+
+/// `--connect-timeout`: seconds in (0, 1e6], as the input's reduction.backend.connect_timeout.
+fn connect_timeout(text: &str) -> Result<f64, String> {
+    let v: f64 = text.parse().map_err(|_| format!("expected seconds, e.g. 60; found \"{text}\""))?;
+    if v > 0.0 && v <= 1e6 { Ok(v) } else { Err(format!("expected seconds in (0, 1e6]; found {text}")) }
 }
 
 /// `--version`: the builder's version, its linux64 runtime's kind, and for a natively linked one
@@ -301,6 +311,7 @@ fn build(
         ranks: args.ranks.map(|r| r as usize),
         launcher: args.launcher.clone(),
         python: args.python.clone(),
+        connect_timeout: args.connect_timeout,
         ..Default::default()
     };
     let result = fmu_builder::build::build_from_text(&input.text, &input.path, output, binaries, &backend);

@@ -42,6 +42,17 @@ pub fn build_from_text(
     profile::take();
     let mut spec = profile::phase("read and check the input", || Spec::from_str(input, text))?;
     spec.reduction.backend = spec.reduction.backend.merged(backend);
+    if let crate::linalg::distributed::Backend::Petsc(petsc) =
+        spec.reduction.backend.backend(input.parent().unwrap_or(Path::new("")))
+    {
+        // a missing launcher or a Python without petsc4py is found in a second, not after assembly
+        let (python, report) = profile::phase("PETSc back-end: launcher and Python checked", || {
+            petsc.preflight(spec.reduction.backend.python.is_some())
+        })?;
+        profile::note(|| format!("{python}: {report}"));
+        crate::progress::step(|| format!("PETSc back-end: the driver runs under {python}"));
+        spec.reduction.backend.python = Some(python);
+    }
     build_spec(spec, input, output, binaries)
 }
 

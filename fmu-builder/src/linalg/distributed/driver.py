@@ -493,6 +493,10 @@ def reason(e):
 
 
 def main():
+    if sys.argv[1:] == ["--probe"]:
+        # the builder's check before any work: this Python imports all the driver needs
+        print(json.dumps({"petsc": PETSc.Sys.getVersion(), "slepc": SLEPc.Sys.getVersion(), "python": sys.executable}))
+        return 0
     job_path = sys.argv[1]
     with open(job_path) as f:
         job = json.load(f)
@@ -503,11 +507,21 @@ def main():
         started = driver.started()
     except Exception as e:  # noqa: BLE001 -- the builder reports it
         channel.answer({"ok": False, "error": reason(e)})
-        return 1
+        # a rank that failed alone leaves the others in a collective call: end them all
+        comm.Abort(1)
     channel.answer(started)
     driver.serve(channel)
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # any failure ends every rank (MPI_Abort): no rank may wait in a collective call for one
+    # that is gone, outliving the builder
+    try:
+        code = main()
+    except Exception:  # noqa: BLE001 -- reported on stderr, then the job ends
+        traceback.print_exc()
+        sys.stderr.write("driver rank %d of %d failed: aborting the job\n" % (rank, size))
+        sys.stderr.flush()
+        comm.Abort(1)
+    sys.exit(code)

@@ -5,7 +5,9 @@
 //! small driver (`driver.py`, petsc4py and slepc4py) started under the MPI launcher holds the
 //! distributed matrices and the factor, and answers requests over one TCP connection.
 
+pub mod job_folder;
 mod petsc_binary;
+pub mod process_group;
 pub mod session;
 
 pub use session::Session;
@@ -57,10 +59,48 @@ impl Default for PetscBackend {
 }
 
 impl PetscBackend {
-    /// The address the builder listens at: the loopback for a local run, every interface for
-    /// ranks on other machines.
+    /// The address the builder listens at: the loopback for a local run, else the address the
+    /// input names (which must be this machine's: the ranks reach the builder there), never
+    /// every interface.
     fn listen_address(&self) -> &str {
-        if self.host == "127.0.0.1" || self.host == "localhost" { "127.0.0.1" } else { "0.0.0.0" }
+        if self.host == "127.0.0.1" || self.host == "localhost" { "127.0.0.1" } else { &self.host }
+    }
+
+    /// Checks, before any FE work, that the launcher can be started and finds the Python whose
+    /// imports the driver needs (petsc4py, slepc4py, mpi4py): `python` alone when the user named
+    /// one, else Debian's /usr/bin/python3 first, then `python3` in PATH (another Python first in
+    /// PATH, a virtual environment's, has none of Debian's packages). Returns that Python and
+    /// what it reported (PETSc's and SLEPc's versions).
+    pub fn preflight(&self, python_named: bool) -> crate::error::Result<(String, String)> {
+        use crate::error::BuildError;
+        let launcher = self.launcher.first().map_or("mpirun", String::as_str);
+        if find_program(launcher).is_none() {
+            return Err(BuildError::Backend(format!(
+                "the launcher `{launcher}` is not found{}; install OpenMPI (mpirun) or name the launcher \
+                 (reduction.backend.launcher, --launcher)",
+                if launcher.contains('/') { "" } else { " in PATH" }
+            )));
+        }
+        let candidates: Vec<String> = if python_named {
+            vec![self.python.clone()]
+        } else {
+            let mut c = vec!["/usr/bin/python3".to_string(), "python3".to_string()];
+            c.dedup();
+            c
+        };
+        let mut tried = Vec::new();
+        for python in &candidates {
+            match probe_python(python) {
+                Ok(report) => return Ok((python.clone(), report)),
+                Err(why) => tried.push(format!("{python}: {why}")),
+            }
+        }
+        Err(BuildError::Backend(format!(
+            "no Python that imports petsc4py, slepc4py and mpi4py ({}); install Debian's python3-petsc4py-real, \
+             python3-slepc4py-real and python3-mpi4py, or name the Python that has them (--python, \
+             reduction.backend.python)",
+            tried.join("; ")
+        )))
     }
 
     /// The program and arguments that start the driver on every rank.
@@ -72,6 +112,41 @@ impl PetscBackend {
         words.push(job.display().to_string());
         (program, words)
     }
+}
+
+/// `name` as the system would run it: a path that exists and is executable, or found in PATH.
+fn find_program(name: &str) -> Option<PathBuf> {
+    use std::os::unix::fs::PermissionsExt;
+    let executable = |p: &Path| std::fs::metadata(p).is_ok_and(|m| m.is_file() && m.permissions().mode() & 0o111 != 0);
+    if name.contains('/') {
+        let p = PathBuf::from(name);
+        return executable(&p).then_some(p);
+    }
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path).map(|d| d.join(name)).find(|p| executable(p))
+}
+
+/// Runs the driver's import check (`--probe`) under `python`: Ok with what it printed, or the
+/// last line of its error.
+fn probe_python(python: &str) -> Result<String, String> {
+    use std::io::Write;
+    use std::process::{Command, Stdio};
+    let mut command = Command::new(python);
+    command.args(["-", "--probe"]).stdin(Stdio::piped()).stdout(Stdio::piped()).stderr(Stdio::piped());
+    // SAFETY: geteuid only reads the process's user id
+    if unsafe { libc::geteuid() } == 0 {
+        command.env("OMPI_ALLOW_RUN_AS_ROOT", "1").env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
+    }
+    let mut child = command.spawn().map_err(|e| format!("cannot be started: {e}"))?;
+    if let Some(mut stdin) = child.stdin.take() {
+        stdin.write_all(session::DRIVER.as_bytes()).map_err(|e| format!("cannot be given the driver: {e}"))?;
+    }
+    let output = child.wait_with_output().map_err(|e| e.to_string())?;
+    if output.status.success() {
+        return Ok(String::from_utf8_lossy(&output.stdout).trim().to_string());
+    }
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    Err(stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("failed without a message").trim().to_string())
 }
 
 /// An eigen-solve for SLEPc: `count` lowest pairs, or (with `below`) every pair with lambda

@@ -23,7 +23,7 @@ pub fn write_symmetric(path: &Path, a: &Sparse) -> Result<()> {
         )));
     };
     let io = |e: std::io::Error| BuildError::Numerical(format!("writing {}: {e}", path.display()));
-    let mut out = std::io::BufWriter::with_capacity(1 << 20, std::fs::File::create(path).map_err(io)?);
+    let mut out = std::io::BufWriter::with_capacity(1 << 20, super::job_folder::private_file(path)?);
     for v in [MAT_FILE_CLASSID, n32, fits(a.nrows()).unwrap_or(i32::MAX), nnz32] {
         out.write_all(&v.to_be_bytes()).map_err(io)?;
     }

@@ -3,7 +3,7 @@
 //! connection rank 0 opens back to the builder. Requests go one at a time (a JSON line, then
 //! little-endian doubles); a failed request is an error naming what the driver reported.
 
-use super::petsc_binary;
+use super::{job_folder, petsc_binary, process_group};
 use super::{EigenRequest, PetscBackend};
 use crate::error::{BuildError, Result};
 use faer::sparse::SparseColMat;
@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 
 /// The driver, shipped inside the builder and written into each job folder: builder and driver
 /// always speak the same protocol.
-const DRIVER: &str = include_str!("driver.py");
+pub(super) const DRIVER: &str = include_str!("driver.py");
 const PROTOCOL: u64 = 1;
 
 /// The builder's sparse matrices (`linalg::sparse::Sparse`, which builds on this module).
@@ -46,6 +46,9 @@ pub struct Started {
 pub struct Session {
     connection: Mutex<Connection>,
     child: Mutex<Child>,
+    /// The launcher's process group: it and every local rank.
+    group: i32,
+    launched: String,
     folder: PathBuf,
     keep_folder: bool,
     rows: usize,
@@ -61,25 +64,65 @@ fn io_error(what: &str) -> impl Fn(std::io::Error) -> BuildError + '_ {
     move |e| BuildError::Backend(format!("{what}: {e}"))
 }
 
-/// A token the driver must present: a stray connection to the port is not taken for it.
-fn token() -> String {
-    let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
-    format!("{:x}{:x}", nanos, std::process::id())
-}
+/// How long a connection may take to greet before it is dropped: the driver greets at once.
+const GREETING_SECONDS: u64 = 10;
 
-/// The last lines of a file (the driver's standard error), for a message.
+/// How often a wait for the driver looks at the launcher and the ranks.
+const WATCH_INTERVAL: Duration = Duration::from_secs(1);
+
+/// Longest greeting line read from a connection (the driver's is about 150 bytes).
+const GREETING_BYTES: u64 = 4096;
+
+/// The launcher's report (the driver's standard error), for a message: its first lines (mpirun
+/// puts its headline there, "not enough slots"), then its last; or that it said nothing.
 fn tail(path: &Path, lines: usize) -> String {
     let text = std::fs::read_to_string(path).unwrap_or_default();
     let all: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
-    all[all.len().saturating_sub(lines)..].join("\n")
+    if all.is_empty() {
+        return "(nothing on its standard error)".to_string();
+    }
+    if all.len() <= 2 * lines {
+        return all.join("\n");
+    }
+    format!("{}\n...\n{}", all[..lines].join("\n"), all[all.len() - lines..].join("\n"))
+}
+
+/// What a wait for the driver watches: the launcher (ended?) and its process group (a rank
+/// stopped?), and where the launcher's report is.
+struct Watch<'a> {
+    child: &'a Mutex<Child>,
+    group: i32,
+    stderr: PathBuf,
+    launched: String,
+}
+
+impl Watch<'_> {
+    /// Err when the launcher has ended or a rank is stopped, naming which.
+    fn check(&self, waiting_for: &str) -> Result<()> {
+        let ended = self.child.lock().ok().and_then(|mut c| c.try_wait().ok().flatten());
+        if let Some(status) = ended {
+            return Err(BuildError::Backend(format!(
+                "the launcher ended ({status}) while the builder waited for {waiting_for}; `{}` reported:\n{}",
+                self.launched,
+                tail(&self.stderr, 12)
+            )));
+        }
+        if let Some((pid, rank, cmdline)) = process_group::stopped_member(self.group) {
+            let who = rank.map_or_else(|| "a process of the job".to_string(), |r| format!("rank {r}"));
+            return Err(BuildError::Backend(format!(
+                "{who} (process {pid}: {cmdline}) is stopped (SIGSTOP, a debugger) while the builder waited for \
+                 {waiting_for}; the job was ended"
+            )));
+        }
+        Ok(())
+    }
 }
 
 impl Session {
     /// Launch the driver on `backend.ranks` ranks and have it load, partition and factor `k`.
     pub fn start(backend: &PetscBackend, k: &Sparse, what: &str) -> Result<Self> {
         let base = backend.job_folder.clone().unwrap_or_else(std::env::temp_dir);
-        let folder = base.join(format!("fmu-builder-petsc-{}", token()));
-        std::fs::create_dir_all(&folder).map_err(io_error("creating the job folder"))?;
+        let folder = job_folder::create(&base)?;
         let started =
             crate::profile::phase(format!("PETSc back-end: {what}"), || Self::launch(backend, k, what, &folder));
         match started {
@@ -95,11 +138,17 @@ impl Session {
 
     fn launch(backend: &PetscBackend, k: &Sparse, what: &str, folder: &Path) -> Result<Self> {
         let driver = folder.join("driver.py");
-        std::fs::write(&driver, DRIVER).map_err(io_error("writing the driver"))?;
+        job_folder::write_private(&driver, DRIVER)?;
         crate::profile::phase("job files written", || petsc_binary::write_symmetric(&folder.join("stiffness.bin"), k))?;
-        let listener = TcpListener::bind((backend.listen_address(), 0)).map_err(io_error("opening a port"))?;
+        let address = backend.listen_address();
+        let listener = TcpListener::bind((address, 0)).map_err(|e| {
+            BuildError::Backend(format!(
+                "cannot listen at {address} (reduction.backend.host: the address of this machine the ranks reach \
+                 the builder at): {e}"
+            ))
+        })?;
         let port = listener.local_addr().map_err(io_error("opening a port"))?.port();
-        let token = token();
+        let token = job_folder::random_hex(32)?;
         let job = json!({
             "host": backend.host,
             "port": port,
@@ -108,66 +157,124 @@ impl Session {
             "partitioner": backend.partitioner,
         });
         let job_path = folder.join("job.json");
-        std::fs::write(&job_path, job.to_string()).map_err(io_error("writing the job"))?;
+        job_folder::write_private(&job_path, &job.to_string())?;
         let (program, arguments) = backend.command(&driver, &job_path);
         let stderr_path = folder.join("driver.err");
-        let stdout = std::fs::File::create(folder.join("driver.out")).map_err(io_error("creating driver.out"))?;
-        let stderr = std::fs::File::create(&stderr_path).map_err(io_error("creating driver.err"))?;
+        let stdout = job_folder::private_file(&folder.join("driver.out"))?;
+        let stderr = job_folder::private_file(&stderr_path)?;
         let launched = format!("{program} {}", arguments.join(" "));
         crate::profile::note(|| format!("launched: {launched}"));
-        let mut child = Command::new(&program)
-            .args(&arguments)
-            .stdin(Stdio::null())
-            .stdout(stdout)
-            .stderr(stderr)
-            .spawn()
-            .map_err(|e| {
-                BuildError::Backend(format!(
-                    "could not start `{program}`: {e}; install OpenMPI (mpirun) or name the launcher \
-                     (reduction.backend.launcher, --launcher)"
-                ))
-            })?;
-        // rank 0 connects once PETSc is up; a launcher that ends first failed (its error says why)
+        let mut command = Command::new(&program);
+        command.args(&arguments).stdin(Stdio::null()).stdout(stdout).stderr(stderr);
+        // its own process group, so that the builder ends the launcher and every rank it forked
+        // together, and a Ctrl-C reaches the builder only (process_group.rs)
+        std::os::unix::process::CommandExt::process_group(&mut command, 0);
+        // idle ranks wait in the kernel instead of spinning a core each (rank 0 spun at 83 %
+        // while the builder computed)
+        command.env("OMPI_MCA_mpi_yield_when_idle", "1");
+        // SAFETY: geteuid only reads the process's user id
+        if unsafe { libc::geteuid() } == 0 {
+            // OpenMPI refuses root without both (containers and CI machines run as root)
+            for v in ["OMPI_ALLOW_RUN_AS_ROOT", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM"] {
+                if std::env::var_os(v).is_none() {
+                    command.env(v, "1");
+                }
+            }
+        }
+        let child = command.spawn().map_err(|e| {
+            BuildError::Backend(format!(
+                "could not start `{program}`: {e}; install OpenMPI (mpirun) or name the launcher \
+                 (reduction.backend.launcher, --launcher)"
+            ))
+        })?;
+        let group = child.id() as i32;
+        process_group::register(group, folder, backend.keep_job_folder);
+        let child = Mutex::new(child);
+        let watch = Watch { child: &child, group, stderr: stderr_path.clone(), launched: launched.clone() };
+        let connected = Self::connect(backend, &listener, port, &token, &watch, what);
+        drop(watch);
+        let (connection, started) = match connected {
+            Ok(c) => c,
+            Err(e) => {
+                process_group::kill_group(group);
+                if let Ok(mut c) = child.lock() {
+                    c.wait().ok();
+                }
+                process_group::unregister(group);
+                return Err(e);
+            }
+        };
+        Ok(Self {
+            connection: Mutex::new(connection),
+            child,
+            group,
+            launched,
+            folder: folder.to_path_buf(),
+            keep_folder: backend.keep_job_folder,
+            rows: k.nrows(),
+            loaded: Mutex::new(Vec::new()),
+            failure: Mutex::new(None),
+            started,
+        })
+    }
+
+    /// Waits for the driver's connection and its factor: a connection that does not greet with
+    /// the job's token within GREETING_SECONDS is dropped and the wait goes on, so no other
+    /// process can take the driver's place or hold the builder up.
+    fn connect(
+        backend: &PetscBackend,
+        listener: &TcpListener,
+        port: u16,
+        token: &str,
+        watch: &Watch<'_>,
+        what: &str,
+    ) -> Result<(Connection, Started)> {
         listener.set_nonblocking(true).map_err(io_error("listening"))?;
-        let deadline = Instant::now() + Duration::from_secs_f64(backend.connect_timeout_seconds);
-        let stream = loop {
+        let began = Instant::now();
+        let deadline = began + Duration::from_secs_f64(backend.connect_timeout_seconds);
+        let mut refused = Vec::new();
+        let mut connection = loop {
             match listener.accept() {
-                Ok((stream, _)) => break stream,
+                Ok((stream, peer)) => match greeted(stream, token) {
+                    Ok(c) => break c,
+                    Err(why) => {
+                        crate::profile::note(|| format!("a connection from {peer} was dropped: {why}"));
+                        refused.push(format!("{peer}: {why}"));
+                    }
+                },
                 Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
                 Err(e) => return Err(io_error("accepting the driver's connection")(e)),
             }
-            if let Ok(Some(status)) = child.try_wait() {
-                return Err(BuildError::Backend(format!(
-                    "the driver ended ({status}) before it connected; `{launched}` reported:\n{}",
-                    tail(&stderr_path, 12)
-                )));
-            }
+            watch.check("the driver to connect")?;
             if Instant::now() > deadline {
-                child.kill().ok();
-                child.wait().ok();
+                let dropped = if refused.is_empty() {
+                    String::new()
+                } else {
+                    format!(" ({} other connections dropped: {})", refused.len(), refused.join("; "))
+                };
                 return Err(BuildError::Backend(format!(
-                    "the driver did not connect to {}:{port} within {} s (reduction.backend.host must be an address the \
-                     ranks reach the builder at); `{launched}` reported:\n{}",
+                    "the driver did not connect to {}:{port} within {} s{dropped} (reduction.backend.host must be an \
+                     address the ranks reach the builder at; --connect-timeout or reduction.backend.connect_timeout \
+                     sets the wait); `{}` reported:\n{}",
                     backend.host,
                     backend.connect_timeout_seconds,
-                    tail(&stderr_path, 12)
+                    watch.launched,
+                    tail(&watch.stderr, 12)
                 )));
             }
+            crate::progress::step(|| {
+                format!(
+                    "waiting for the PETSc driver to connect: {:.0} s of {:.0}",
+                    began.elapsed().as_secs_f64(),
+                    backend.connect_timeout_seconds
+                )
+            });
             std::thread::sleep(Duration::from_millis(20));
         };
-        stream.set_nonblocking(false).map_err(io_error("the connection"))?;
-        stream.set_nodelay(true).ok();
-        let reader = BufReader::with_capacity(1 << 20, stream.try_clone().map_err(io_error("the connection"))?);
-        let writer = std::io::BufWriter::with_capacity(1 << 20, stream);
-        let mut connection = Connection { reader, writer };
-        let hello = read_line(&mut connection, &stderr_path)?;
-        if hello["hello"].as_str() != Some(token.as_str()) || hello["protocol"].as_u64() != Some(PROTOCOL) {
-            return Err(BuildError::Backend(format!("an unexpected greeting {hello}")));
-        }
-        let answer =
-            crate::profile::phase("driver: load, partition and factor", || read_line(&mut connection, &stderr_path))?;
+        let answer = crate::profile::phase("driver: load, partition and factor", || {
+            read_line(&mut connection, watch, "the driver's factor")
+        })?;
         if answer["ok"] != json!(true) {
-            child.wait().ok();
             let message = answer["error"].as_str().unwrap_or("no reason given").to_string();
             return Err(BuildError::Numerical(format!("{what} could not be factored by MUMPS: {message}")));
         }
@@ -190,16 +297,7 @@ impl Session {
                 s.ranks, s.rows_per_rank, s.factor_entries, s.load_seconds, s.partition_seconds, s.factor_seconds
             )
         });
-        Ok(Self {
-            connection: Mutex::new(connection),
-            child: Mutex::new(child),
-            folder: folder.to_path_buf(),
-            keep_folder: backend.keep_job_folder,
-            rows: k.nrows(),
-            loaded: Mutex::new(Vec::new()),
-            failure: Mutex::new(None),
-            started,
-        })
+        Ok((connection, started))
     }
 
     /// Rows of the factored matrix.
@@ -228,10 +326,15 @@ impl Session {
             c.writer.flush()
         };
         send(&mut c).map_err(|e| self.lost(&what, e))?;
-        let answer = read_line(&mut c, &self.folder.join("driver.err"))?;
+        let watch = Watch {
+            child: &self.child,
+            group: self.group,
+            stderr: self.folder.join("driver.err"),
+            launched: self.launched.clone(),
+        };
+        let answer = read_line(&mut c, &watch, &format!("the answer to {what}"))?;
         let count = answer["doubles"].as_u64().unwrap_or(0) as usize;
-        let mut bytes = vec![0u8; 8 * count];
-        c.reader.read_exact(&mut bytes).map_err(|e| self.lost(&what, e))?;
+        let bytes = read_payload(&mut c, 8 * count, &watch, &what)?;
         if answer["ok"] != json!(true) {
             return Err(BuildError::Numerical(format!(
                 "the PETSc back-end failed {what}: {}",
@@ -385,16 +488,85 @@ impl Session {
     }
 }
 
-fn read_line(c: &mut Connection, stderr: &Path) -> Result<Value> {
-    let mut line = String::new();
-    let read = c.reader.read_line(&mut line);
+/// The connection of a peer that greets with `token` and the protocol within GREETING_SECONDS;
+/// else why it was dropped.
+fn greeted(stream: TcpStream, token: &str) -> std::result::Result<Connection, String> {
+    stream.set_nonblocking(false).map_err(|e| e.to_string())?;
+    stream.set_nodelay(true).ok();
+    stream.set_read_timeout(Some(Duration::from_secs(GREETING_SECONDS))).map_err(|e| e.to_string())?;
+    let reader = BufReader::with_capacity(1 << 20, stream.try_clone().map_err(|e| e.to_string())?);
+    let writer = std::io::BufWriter::with_capacity(1 << 20, stream);
+    let mut connection = Connection { reader, writer };
+    let mut line = Vec::new();
+    let read = (&mut connection.reader).take(GREETING_BYTES).read_until(b'\n', &mut line);
     match read {
-        Ok(0) | Err(_) => {
-            Err(BuildError::Backend(format!("the driver closed its connection; it reported:\n{}", tail(stderr, 12))))
+        Ok(0) => return Err("it closed without a greeting".into()),
+        Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {
+            return Err(format!("no greeting within {GREETING_SECONDS} s"));
         }
-        Ok(_) => serde_json::from_str(&line)
-            .map_err(|e| BuildError::Backend(format!("an answer that is not JSON ({e}): {line}"))),
+        Err(e) => return Err(e.to_string()),
+        Ok(_) => {}
     }
+    let hello: Value = serde_json::from_slice(&line).map_err(|_| "a greeting that is not the driver's".to_string())?;
+    if hello["hello"].as_str() != Some(token) {
+        return Err("a wrong token".into());
+    }
+    if hello["protocol"].as_u64() != Some(PROTOCOL) {
+        return Err(format!("protocol {} where the builder speaks {PROTOCOL}", hello["protocol"]));
+    }
+    // from here on a read waits in WATCH_INTERVAL slices, looking at the ranks between them
+    connection.reader.get_ref().set_read_timeout(Some(WATCH_INTERVAL)).map_err(|e| e.to_string())?;
+    Ok(connection)
+}
+
+fn timed_out(e: &std::io::Error) -> bool {
+    matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut)
+}
+
+/// The next JSON line from the driver, however long it computes, as long as the launcher runs
+/// and no rank is stopped.
+fn read_line(c: &mut Connection, watch: &Watch<'_>, waiting_for: &str) -> Result<Value> {
+    let mut line = Vec::new();
+    loop {
+        // read_until keeps what it read before a timeout in `line`: the next call goes on
+        match c.reader.read_until(b'\n', &mut line) {
+            Ok(0) => {
+                return Err(BuildError::Backend(format!(
+                    "the driver closed its connection while the builder waited for {waiting_for}; `{}` reported:\n{}",
+                    watch.launched,
+                    tail(&watch.stderr, 12)
+                )));
+            }
+            Ok(_) if line.ends_with(b"\n") => break,
+            Ok(_) => {}
+            Err(e) if timed_out(&e) => watch.check(waiting_for)?,
+            Err(e) => return Err(io_error("reading the driver's answer")(e)),
+        }
+    }
+    serde_json::from_slice(&line).map_err(|e| {
+        BuildError::Backend(format!("an answer that is not JSON ({e}): {}", String::from_utf8_lossy(&line)))
+    })
+}
+
+/// `count` bytes of an answer's payload, read as `read_line` reads.
+fn read_payload(c: &mut Connection, count: usize, watch: &Watch<'_>, what: &str) -> Result<Vec<u8>> {
+    let mut bytes = vec![0u8; count];
+    let mut got = 0;
+    while got < count {
+        match c.reader.read(&mut bytes[got..]) {
+            Ok(0) => {
+                return Err(BuildError::Backend(format!(
+                    "the driver closed its connection mid-answer to {what}; `{}` reported:\n{}",
+                    watch.launched,
+                    tail(&watch.stderr, 12)
+                )));
+            }
+            Ok(k) => got += k,
+            Err(e) if timed_out(&e) => watch.check(&format!("the answer to {what}"))?,
+            Err(e) => return Err(io_error("reading the driver's answer")(e)),
+        }
+    }
+    Ok(bytes)
 }
 
 impl Drop for Session {
@@ -411,11 +583,13 @@ impl Drop for Session {
             while matches!(child.try_wait(), Ok(None)) && Instant::now() < deadline {
                 std::thread::sleep(Duration::from_millis(20));
             }
-            if matches!(child.try_wait(), Ok(None)) {
-                child.kill().ok();
-            }
+        }
+        // whatever of the job is left (a rank that did not follow the launcher out)
+        process_group::kill_group(self.group);
+        if let Ok(mut child) = self.child.lock() {
             child.wait().ok();
         }
+        process_group::unregister(self.group);
         if !self.keep_folder {
             std::fs::remove_dir_all(&self.folder).ok();
         }

@@ -1,0 +1,157 @@
+//! The launcher and everything it starts, as one process group the builder owns: killed as a
+//! group on every error, timeout, interruption (SIGINT, SIGTERM, SIGHUP: a handler) and at the
+//! end, so no rank outlives the build; and watched while the builder waits for an answer, so a
+//! stopped rank (SIGSTOP, a debugger) is named instead of waited for.
+//!
+//! mpirun forks the local ranks into its own process group; the launcher is started as the
+//! leader of a new group (`process_group(0)`), so `killpg` reaches the ranks, and a Ctrl-C in
+//! the terminal reaches the builder only, which then ends the group and removes the job folder.
+
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, OnceLock};
+use std::time::{Duration, Instant};
+
+/// Seconds a group gets between SIGTERM and SIGKILL: MPI's own shutdown (mpirun forwards the
+/// signal to the ranks and reports) takes a fraction of that.
+const GRACE: Duration = Duration::from_secs(3);
+
+/// Groups and job folders to clean up if the builder is interrupted.
+struct Job {
+    group: i32,
+    folder: PathBuf,
+    keep_folder: bool,
+}
+
+static JOBS: Mutex<Vec<Job>> = Mutex::new(Vec::new());
+static HANDLER: OnceLock<()> = OnceLock::new();
+
+/// Ends the process group `group`: SIGTERM, then SIGKILL after the grace time for what is left.
+pub fn kill_group(group: i32) {
+    if group <= 1 {
+        return;
+    }
+    // SAFETY: killpg with a group id we started; errors (already gone) are ignored
+    unsafe {
+        libc::killpg(group, libc::SIGTERM);
+    }
+    let deadline = Instant::now() + GRACE;
+    while Instant::now() < deadline && group_alive(group) {
+        // the leader is the builder's child: reaped here, else as a zombie it keeps the group
+        // "alive" (callers' later wait() then finds it gone, which they ignore)
+        // SAFETY: waitpid on our own child's pid, without blocking
+        unsafe {
+            libc::waitpid(group, std::ptr::null_mut(), libc::WNOHANG);
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // SAFETY: as above
+    unsafe {
+        libc::killpg(group, libc::SIGKILL);
+    }
+}
+
+/// Whether any process of the group still exists (signal 0 probes without sending).
+pub fn group_alive(group: i32) -> bool {
+    // SAFETY: killpg with signal 0 only checks for the group's existence
+    unsafe { libc::killpg(group, 0) == 0 }
+}
+
+/// Registers a running job for the interruption handler (installed on first use).
+pub fn register(group: i32, folder: &Path, keep_folder: bool) {
+    HANDLER.get_or_init(install_handler);
+    if let Ok(mut jobs) = JOBS.lock() {
+        jobs.push(Job { group, folder: folder.to_path_buf(), keep_folder });
+    }
+}
+
+/// Removes a job that ended normally.
+pub fn unregister(group: i32) {
+    if let Ok(mut jobs) = JOBS.lock() {
+        jobs.retain(|j| j.group != group);
+    }
+}
+
+/// A thread that waits for SIGINT, SIGTERM or SIGHUP, ends every registered job's group,
+/// removes its folder, then ends the builder as the signal would have.
+fn install_handler() {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            let jobs = JOBS.lock().map(|mut j| std::mem::take(&mut *j)).unwrap_or_default();
+            for job in &jobs {
+                kill_group(job.group);
+                if !job.keep_folder {
+                    std::fs::remove_dir_all(&job.folder).ok();
+                }
+            }
+            eprintln!("\nerror: interrupted (signal {signal}); the PETSc back-end's ranks were ended");
+            let _ = signal_hook::low_level::emulate_default_handler(signal);
+            std::process::exit(128 + signal);
+        }
+    });
+}
+
+/// The first process of `group` that is stopped (state T: SIGSTOP, a debugger), with its MPI
+/// rank where its environment says it: (pid, rank, command line).
+pub fn stopped_member(group: i32) -> Option<(i32, Option<String>, String)> {
+    let entries = std::fs::read_dir("/proc").ok()?;
+    for entry in entries.flatten() {
+        let Some(pid) = entry.file_name().to_str().and_then(|s| s.parse::<i32>().ok()) else { continue };
+        let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else { continue };
+        // pid (comm) state ppid pgrp ...: comm may hold spaces, so split after its ')'
+        let Some(after) = stat.rfind(')').map(|i| &stat[i + 1..]) else { continue };
+        let fields: Vec<&str> = after.split_whitespace().collect();
+        let (Some(&state), Some(pgrp)) = (fields.first(), fields.get(2).and_then(|g| g.parse::<i32>().ok())) else {
+            continue;
+        };
+        if pgrp != group || !(state == "T" || state == "t") {
+            continue;
+        }
+        let environ = std::fs::read(format!("/proc/{pid}/environ")).unwrap_or_default();
+        let rank = environ.split(|&b| b == 0).find_map(|v| {
+            let v = String::from_utf8_lossy(v);
+            ["OMPI_COMM_WORLD_RANK=", "PMI_RANK=", "PMIX_RANK=", "SLURM_PROCID="]
+                .iter()
+                .find_map(|k| v.strip_prefix(k).map(str::to_string))
+        });
+        let cmdline = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
+        let cmdline = String::from_utf8_lossy(&cmdline).replace('\0', " ").trim().to_string();
+        return Some((pid, rank, cmdline));
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::os::unix::process::CommandExt;
+
+    #[test]
+    fn a_stopped_member_is_found_and_the_whole_group_is_ended() {
+        // a shell leading its own group, with a child that sleeps: the launcher and a rank
+        let mut leader = std::process::Command::new("sh")
+            .args(["-c", "sleep 30 & wait"])
+            .process_group(0)
+            .spawn()
+            .unwrap();
+        let group = leader.id() as i32;
+        std::thread::sleep(Duration::from_millis(200));
+        assert!(group_alive(group));
+        assert!(stopped_member(group).is_none());
+        // SAFETY: stopping our own child
+        unsafe {
+            libc::kill(group, libc::SIGSTOP);
+        }
+        std::thread::sleep(Duration::from_millis(100));
+        let (pid, _, cmdline) = stopped_member(group).expect("the stopped leader");
+        assert_eq!(pid, group);
+        assert!(cmdline.starts_with("sh -c"), "{cmdline}");
+        kill_group(group);
+        let _ = leader.wait();
+        std::thread::sleep(Duration::from_millis(100));
+        assert!(!group_alive(group), "the sleeping child outlived its group's end");
+    }
+}
