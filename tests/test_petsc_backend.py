@@ -221,15 +221,27 @@ def test_command_line_refusals_name_the_option(tmp_path):
 
 
 def test_a_launcher_that_fails_is_reported(tmp_path):
-    """A missing launcher, or a driver that cannot start (no petsc4py for that Python), is an
-    error saying which and what the launcher printed, not a hang."""
+    """A missing launcher, or a Python without petsc4py, is found before any FE work (assembly
+    of a 1e5-DoF part took 1.8 s before the launcher was tried) and named with what to do; a
+    driver that cannot start under the launcher is an error with what the launcher printed, not
+    a hang."""
     out = tmp_path / "x.fmu"
     err = refused([EXAMPLES / "beam.json", "-o", out, "--backend", "petsc", "--launcher", "/nonexistent/mpirun"])
-    assert "could not start `/nonexistent/mpirun`" in err and "launcher" in err, err
+    assert "the launcher `/nonexistent/mpirun` is not found" in err and "--launcher" in err, err
+    assert "assembly" not in err, err
     if shutil.which("mpirun"):
         err = refused([EXAMPLES / "beam.json", "-o", out, "--backend", "petsc", "--launcher", LAUNCHER,
                        "--python", "/nonexistent/python3"])
-        assert "the launcher ended" in err and "while the builder waited for the driver to connect" in err, err
+        assert "no Python that imports petsc4py, slepc4py and mpi4py (/nonexistent/python3: cannot be started" \
+            in err and "assembly" not in err, err
+        # a launcher that starts but whose driver never connects: the launcher's exit is reported
+        fake = tmp_path / "fake-mpirun"
+        fake.write_text("#!/bin/sh\necho 'fake launcher: no ranks today' >&2\nexit 3\n")
+        fake.chmod(0o755)
+        err = refused([EXAMPLES / "beam.json", "-o", out, "--backend", "petsc", "--launcher", fake,
+                       "--python", PYTHON])
+        assert "the launcher ended (exit status: 3) while the builder waited for the driver to connect" in err, err
+        assert "fake launcher: no ranks today" in err, err
     assert not out.exists()
 
 

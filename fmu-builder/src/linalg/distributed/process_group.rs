@@ -3,9 +3,11 @@
 //! end, so no rank outlives the build; and watched while the builder waits for an answer, so a
 //! stopped rank (SIGSTOP, a debugger) is named instead of waited for.
 //!
-//! mpirun forks the local ranks into its own process group; the launcher is started as the
-//! leader of a new group (`process_group(0)`), so `killpg` reaches the ranks, and a Ctrl-C in
-//! the terminal reaches the builder only, which then ends the group and removes the job folder.
+//! The launcher is started as the leader of a new group (`process_group(0)`), so a Ctrl-C in
+//! the terminal reaches the builder only, which then ends the job and removes the job folder.
+//! OpenMPI's mpirun puts each local rank in a process group of its own, so the job is the
+//! launcher's group and every descendant of the launcher, found through /proc before anything
+//! is signalled (a rank whose launcher is gone is re-parented and could not be found after).
 
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, OnceLock};
@@ -24,18 +26,38 @@ struct Job {
 
 static JOBS: Mutex<Vec<Job>> = Mutex::new(Vec::new());
 static HANDLER: OnceLock<()> = OnceLock::new();
+static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
-/// Ends the process group `group`: SIGTERM, then SIGKILL after the grace time for what is left.
+/// Called where the job's end shows as an error (a closed connection, an ended launcher): after
+/// an interruption that end is the handler's doing, and the handler ends the builder with the
+/// signal's status; the error must not race it to the exit with its own message.
+pub fn park_if_interrupted() {
+    while INTERRUPTED.load(std::sync::atomic::Ordering::SeqCst) {
+        std::thread::sleep(Duration::from_secs(1));
+    }
+}
+
+/// Ends the job led by `group` (the launcher's pid and group id): its group and all its
+/// descendants get SIGTERM, then SIGKILL after the grace time for what is left.
 pub fn kill_group(group: i32) {
     if group <= 1 {
         return;
     }
-    // SAFETY: killpg with a group id we started; errors (already gone) are ignored
-    unsafe {
-        libc::killpg(group, libc::SIGTERM);
-    }
+    let members = descendants(group);
+    let signal_all = |signal: i32| {
+        // SAFETY: signals to the group we started and to processes found as its descendants;
+        // errors (already gone) are ignored
+        unsafe {
+            libc::killpg(group, signal);
+            for &pid in &members {
+                libc::kill(pid, signal);
+            }
+        }
+    };
+    signal_all(libc::SIGTERM);
+    let alive = || group_alive(group) || members.iter().any(|&p| process_alive(p));
     let deadline = Instant::now() + GRACE;
-    while Instant::now() < deadline && group_alive(group) {
+    while Instant::now() < deadline && alive() {
         // the leader is the builder's child: reaped here, else as a zombie it keeps the group
         // "alive" (callers' later wait() then finds it gone, which they ignore)
         // SAFETY: waitpid on our own child's pid, without blocking
@@ -44,10 +66,40 @@ pub fn kill_group(group: i32) {
         }
         std::thread::sleep(Duration::from_millis(20));
     }
-    // SAFETY: as above
-    unsafe {
-        libc::killpg(group, libc::SIGKILL);
+    signal_all(libc::SIGKILL);
+}
+
+/// Whether `pid` exists and is not a zombie.
+fn process_alive(pid: i32) -> bool {
+    stat_of(pid).is_some_and(|(state, _, _)| state != "Z")
+}
+
+/// State, parent and process group of `pid` from /proc/<pid>/stat.
+fn stat_of(pid: i32) -> Option<(String, i32, i32)> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // pid (comm) state ppid pgrp ...: comm may hold spaces, so split after its ')'
+    let after = &stat[stat.rfind(')')? + 1..];
+    let fields: Vec<&str> = after.split_whitespace().collect();
+    Some((fields.first()?.to_string(), fields.get(1)?.parse().ok()?, fields.get(2)?.parse().ok()?))
+}
+
+/// Every process below `root` in the parent tree.
+fn descendants(root: i32) -> Vec<i32> {
+    let Ok(entries) = std::fs::read_dir("/proc") else { return Vec::new() };
+    let parents: Vec<(i32, i32)> = entries
+        .flatten()
+        .filter_map(|e| e.file_name().to_str()?.parse::<i32>().ok())
+        .filter_map(|pid| Some((pid, stat_of(pid)?.1)))
+        .collect();
+    let mut found = vec![root];
+    let mut i = 0;
+    while i < found.len() {
+        let parent = found[i];
+        found.extend(parents.iter().filter(|&&(_, pp)| pp == parent).map(|&(pid, _)| pid));
+        i += 1;
     }
+    found.remove(0);
+    found
 }
 
 /// Whether any process of the group still exists (signal 0 probes without sending).
@@ -80,6 +132,7 @@ fn install_handler() {
     };
     std::thread::spawn(move || {
         if let Some(signal) = signals.forever().next() {
+            INTERRUPTED.store(true, std::sync::atomic::Ordering::SeqCst);
             let jobs = JOBS.lock().map(|mut j| std::mem::take(&mut *j)).unwrap_or_default();
             for job in &jobs {
                 kill_group(job.group);
@@ -94,20 +147,12 @@ fn install_handler() {
     });
 }
 
-/// The first process of `group` that is stopped (state T: SIGSTOP, a debugger), with its MPI
+/// The first process of the job led by `group` that is stopped (state T: SIGSTOP, a debugger), with its MPI
 /// rank where its environment says it: (pid, rank, command line).
 pub fn stopped_member(group: i32) -> Option<(i32, Option<String>, String)> {
-    let entries = std::fs::read_dir("/proc").ok()?;
-    for entry in entries.flatten() {
-        let Some(pid) = entry.file_name().to_str().and_then(|s| s.parse::<i32>().ok()) else { continue };
-        let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else { continue };
-        // pid (comm) state ppid pgrp ...: comm may hold spaces, so split after its ')'
-        let Some(after) = stat.rfind(')').map(|i| &stat[i + 1..]) else { continue };
-        let fields: Vec<&str> = after.split_whitespace().collect();
-        let (Some(&state), Some(pgrp)) = (fields.first(), fields.get(2).and_then(|g| g.parse::<i32>().ok())) else {
-            continue;
-        };
-        if pgrp != group || !(state == "T" || state == "t") {
+    for pid in std::iter::once(group).chain(descendants(group)) {
+        let Some((state, _, _)) = stat_of(pid) else { continue };
+        if !(state == "T" || state == "t") {
             continue;
         }
         let environ = std::fs::read(format!("/proc/{pid}/environ")).unwrap_or_default();

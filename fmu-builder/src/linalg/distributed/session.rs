@@ -99,6 +99,7 @@ struct Watch<'a> {
 impl Watch<'_> {
     /// Err when the launcher has ended or a rank is stopped, naming which.
     fn check(&self, waiting_for: &str) -> Result<()> {
+        process_group::park_if_interrupted();
         let ended = self.child.lock().ok().and_then(|mut c| c.try_wait().ok().flatten());
         if let Some(status) = ended {
             return Err(BuildError::Backend(format!(
@@ -346,6 +347,7 @@ impl Session {
     }
 
     fn lost(&self, what: &str, e: std::io::Error) -> BuildError {
+        process_group::park_if_interrupted();
         BuildError::Backend(format!(
             "the connection broke during {what} ({e}); the driver reported:\n{}",
             tail(&self.folder.join("driver.err"), 12)
@@ -531,6 +533,7 @@ fn read_line(c: &mut Connection, watch: &Watch<'_>, waiting_for: &str) -> Result
         // read_until keeps what it read before a timeout in `line`: the next call goes on
         match c.reader.read_until(b'\n', &mut line) {
             Ok(0) => {
+                process_group::park_if_interrupted();
                 return Err(BuildError::Backend(format!(
                     "the driver closed its connection while the builder waited for {waiting_for}; `{}` reported:\n{}",
                     watch.launched,
@@ -540,7 +543,10 @@ fn read_line(c: &mut Connection, watch: &Watch<'_>, waiting_for: &str) -> Result
             Ok(_) if line.ends_with(b"\n") => break,
             Ok(_) => {}
             Err(e) if timed_out(&e) => watch.check(waiting_for)?,
-            Err(e) => return Err(io_error("reading the driver's answer")(e)),
+            Err(e) => {
+                process_group::park_if_interrupted();
+                return Err(io_error("reading the driver's answer")(e));
+            }
         }
     }
     serde_json::from_slice(&line).map_err(|e| {
@@ -555,6 +561,7 @@ fn read_payload(c: &mut Connection, count: usize, watch: &Watch<'_>, what: &str)
     while got < count {
         match c.reader.read(&mut bytes[got..]) {
             Ok(0) => {
+                process_group::park_if_interrupted();
                 return Err(BuildError::Backend(format!(
                     "the driver closed its connection mid-answer to {what}; `{}` reported:\n{}",
                     watch.launched,
@@ -563,7 +570,10 @@ fn read_payload(c: &mut Connection, count: usize, watch: &Watch<'_>, what: &str)
             }
             Ok(k) => got += k,
             Err(e) if timed_out(&e) => watch.check(&format!("the answer to {what}"))?,
-            Err(e) => return Err(io_error("reading the driver's answer")(e)),
+            Err(e) => {
+                process_group::park_if_interrupted();
+                return Err(io_error("reading the driver's answer")(e));
+            }
         }
     }
     Ok(bytes)

@@ -1,0 +1,186 @@
+"""The PETSc back-end under faults and a hostile local process: impostors that connect to the
+builder's port (junk, silence, a token of another job) never become the driver and the build
+still finishes; SIGINT and SIGTERM leave no process of the job and no job folder; a launcher that
+hangs, a rank stopped or killed end in an error naming it, with nothing left running; the job
+folder and its files are the user's alone; an unwritable job folder is named."""
+
+import json
+import os
+import signal
+import socket
+import stat
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+from conftest import BUILDER, EXAMPLES
+from test_petsc_backend import LAUNCHER, PYTHON, needs_petsc
+
+pytestmark = needs_petsc
+
+
+def spec_file(tmp_path, job_folder, elements=(40, 3, 3)):
+    spec = json.loads((EXAMPLES / "beam.json").read_text())
+    spec.pop("$schema")
+    spec["geometry"]["boxes"][0]["elements"] = list(elements)
+    spec["reduction"]["backend"] = {"kind": "petsc", "ranks": 2, "launcher": LAUNCHER, "python": PYTHON,
+                                    "job_folder": str(job_folder)}
+    path = tmp_path / "beam.json"
+    path.write_text(json.dumps(spec))
+    return path
+
+
+def start(args, **kw):
+    return subprocess.Popen([str(BUILDER), *map(str, args)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, start_new_session=True, **kw)
+
+
+def processes_mentioning(text):
+    """PIDs whose command line holds `text` (the job folder's path: the launcher and the ranks)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                cmdline = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+            except OSError:
+                continue
+            if text in cmdline and entry.name != str(os.getpid()):
+                found.append(int(entry.name))
+    return found
+
+
+def wait_for(predicate, seconds, what):
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        value = predicate()
+        if value:
+            return value
+        time.sleep(0.05)
+    raise AssertionError(f"no {what} within {seconds} s")
+
+
+def job_of(jobs):
+    folders = [p for p in jobs.iterdir() if p.name.startswith("fmu-builder-petsc-")] if jobs.exists() else []
+    return folders[0] if folders and (folders[0] / "job.json").exists() else None
+
+
+def rank_pids(folder):
+    """The driver's rank processes (python ... driver.py), by rank."""
+    ranks = {}
+    for pid in processes_mentioning(str(folder / "driver.py")):
+        try:
+            environ = Path(f"/proc/{pid}/environ").read_bytes().split(b"\0")
+        except OSError:
+            continue
+        for v in environ:
+            if v.startswith(b"OMPI_COMM_WORLD_RANK="):
+                ranks[int(v.split(b"=")[1])] = pid
+    return ranks
+
+
+def assert_nothing_left(folder, within=10.0):
+    wait_for(lambda: not processes_mentioning(str(folder)), within, "end of the job's processes")
+    assert not folder.exists(), list(folder.iterdir())
+
+
+def test_impostors_never_become_the_driver_and_the_build_finishes(tmp_path):
+    jobs = tmp_path / "jobs"
+    jobs.mkdir()
+    proc = start([spec_file(tmp_path, jobs, (10, 1, 1)), "-o", tmp_path / "B.fmu", "-q", "--timings"])
+    folder = wait_for(lambda: job_of(jobs), 30, "job folder")
+    port = json.loads((folder / "job.json").read_text())["port"]
+    impostors = []
+    for greeting in [b"junk that is no JSON\n", None, json.dumps({"hello": "0" * 64, "protocol": 1}).encode() + b"\n"]:
+        s = socket.create_connection(("127.0.0.1", port))
+        if greeting:
+            s.sendall(greeting)
+        impostors.append(s)
+    out, err = proc.communicate(timeout=300)
+    assert proc.returncode == 0, err
+    assert (tmp_path / "B.fmu").is_file()
+    # each was dropped with its reason (the silent one after its greeting time)
+    for why in ["a greeting that is not the driver's", "no greeting within 10 s", "a wrong token"]:
+        assert why in out, out
+    for s in impostors:
+        s.close()
+    assert_nothing_left(folder)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_an_interrupted_build_leaves_no_process_and_no_job_folder(tmp_path, sig):
+    jobs = tmp_path / "jobs"
+    jobs.mkdir()
+    proc = start([spec_file(tmp_path, jobs), "-o", tmp_path / "B.fmu", "-q"])
+    folder = wait_for(lambda: job_of(jobs), 30, "job folder")
+    wait_for(lambda: len(rank_pids(folder)) == 2, 30, "two ranks")
+    proc.send_signal(sig)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == -sig, (proc.returncode, err)
+    assert "interrupted" in err and "ranks were ended" in err, err
+    assert_nothing_left(folder)
+    assert not (tmp_path / "B.fmu").exists()
+
+
+def test_a_launcher_that_hangs_is_ended_with_everything_it_started(tmp_path):
+    marker = f"fmu-builder-hanging-launcher-{os.getpid()}"
+    launcher = tmp_path / "hanging-mpirun"
+    launcher.write_text(f"#!/bin/sh\nsh -c 'sleep 300; echo {marker}' &\nwait\n")
+    launcher.chmod(0o755)
+    jobs = tmp_path / "jobs"
+    jobs.mkdir()
+    began = time.monotonic()
+    proc = subprocess.run([str(BUILDER), spec_file(tmp_path, jobs, (10, 1, 1)), "-o", tmp_path / "B.fmu", "-q",
+                           "--launcher", launcher, "--connect-timeout", "2"], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 1, proc.stderr
+    assert "the driver did not connect to 127.0.0.1:" in proc.stderr and "within 2 s" in proc.stderr, proc.stderr
+    # 2 s, then the group's end (SIGTERM, SIGKILL after 3 s): measured 2.6 s
+    assert time.monotonic() - began < 20
+    assert not processes_mentioning(marker), "the launcher's child outlived the build"
+    assert not list(jobs.iterdir())
+
+
+@pytest.mark.parametrize("fault", ["stop", "kill"])
+def test_a_stopped_or_killed_rank_is_named_and_nothing_is_left(tmp_path, fault):
+    jobs = tmp_path / "jobs"
+    jobs.mkdir()
+    proc = start([spec_file(tmp_path, jobs), "-o", tmp_path / "B.fmu", "-q"])
+    folder = wait_for(lambda: job_of(jobs), 30, "job folder")
+    ranks = wait_for(lambda: (r := rank_pids(folder)) and len(r) == 2 and r, 30, "two ranks")
+    os.kill(ranks[1], signal.SIGSTOP if fault == "stop" else signal.SIGKILL)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 1, err
+    if fault == "stop":
+        assert f"rank 1 (process {ranks[1]}: " in err and "is stopped (SIGSTOP, a debugger)" in err, err
+    else:
+        # mpirun's own report names the rank that died
+        assert "the launcher ended" in err and "rank 1" in err, err
+    assert_nothing_left(folder)
+
+
+def test_the_job_folder_and_its_files_are_private(tmp_path):
+    jobs = tmp_path / "jobs"
+    jobs.mkdir()
+    env = dict(os.environ, FMU_BUILDER_KEEP_PETSC_JOB="1")
+    proc = subprocess.run([str(BUILDER), spec_file(tmp_path, jobs, (10, 1, 1)), "-o", tmp_path / "B.fmu", "-q"],
+                          capture_output=True, text=True, timeout=300, env=env)
+    assert proc.returncode == 0, proc.stderr
+    (folder,) = list(jobs.iterdir())
+    assert stat.S_IMODE(folder.stat().st_mode) == 0o700
+    files = list(folder.iterdir())
+    assert {"driver.py", "job.json", "stiffness.bin", "driver.err", "driver.out"} <= {f.name for f in files}
+    for f in files:
+        assert stat.S_IMODE(f.stat().st_mode) == 0o600, f
+    token = json.loads((folder / "job.json").read_text())["token"]
+    # 32 bytes of /dev/urandom, not the clock and the PID
+    assert len(token) == 64 and int(token, 16) and str(proc.args) not in token
+
+
+def test_an_unwritable_job_folder_is_named(tmp_path):
+    missing = tmp_path / "no" / "such"
+    proc = subprocess.run([str(BUILDER), spec_file(tmp_path, missing, (10, 1, 1)), "-o", tmp_path / "B.fmu", "-q"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 1
+    assert f"cannot create the job folder {missing}/fmu-builder-petsc-" in proc.stderr, proc.stderr
