@@ -97,6 +97,21 @@ struct Watch<'a> {
 }
 
 impl Watch<'_> {
+    /// What the launcher says once the job has ended: its status and report, waited for a few
+    /// seconds (mpirun names the rank that died only as it ends).
+    fn closing_report(&self) -> String {
+        let deadline = Instant::now() + Duration::from_secs(10);
+        let mut status = None;
+        while status.is_none() && Instant::now() < deadline {
+            status = self.child.lock().ok().and_then(|mut c| c.try_wait().ok().flatten());
+            if status.is_none() {
+                std::thread::sleep(Duration::from_millis(50));
+            }
+        }
+        let ended = status.map_or_else(|| "the launcher still runs".to_string(), |s| format!("the launcher ended ({s})"));
+        format!("{ended}; `{}` reported:\n{}", self.launched, tail(&self.stderr, 12))
+    }
+
     /// Err when the launcher has ended or a rank is stopped, naming which.
     fn check(&self, waiting_for: &str) -> Result<()> {
         process_group::park_if_interrupted();
@@ -535,9 +550,8 @@ fn read_line(c: &mut Connection, watch: &Watch<'_>, waiting_for: &str) -> Result
             Ok(0) => {
                 process_group::park_if_interrupted();
                 return Err(BuildError::Backend(format!(
-                    "the driver closed its connection while the builder waited for {waiting_for}; `{}` reported:\n{}",
-                    watch.launched,
-                    tail(&watch.stderr, 12)
+                    "the driver closed its connection while the builder waited for {waiting_for}; {}",
+                    watch.closing_report()
                 )));
             }
             Ok(_) if line.ends_with(b"\n") => break,
@@ -563,9 +577,8 @@ fn read_payload(c: &mut Connection, count: usize, watch: &Watch<'_>, what: &str)
             Ok(0) => {
                 process_group::park_if_interrupted();
                 return Err(BuildError::Backend(format!(
-                    "the driver closed its connection mid-answer to {what}; `{}` reported:\n{}",
-                    watch.launched,
-                    tail(&watch.stderr, 12)
+                    "the driver closed its connection mid-answer to {what}; {}",
+                    watch.closing_report()
                 )));
             }
             Ok(k) => got += k,
