@@ -356,7 +356,8 @@ fn write_exports(args: &Args, b: &fmu_builder::build::Built) -> Result<(), Strin
         std::fs::write(path, json).map_err(|e| named("--report", &format!("{}: {e}", path.display())))?;
     }
     if let Some(path) = &args.export_inp {
-        fmu_builder::model::export::write_abaqus_deck(path, &b.part, &b.flanges).map_err(|e| named("--export-inp", &e))?;
+        fmu_builder::model::export::write_abaqus_deck(path, &b.part, &b.flanges)
+            .map_err(|e| named("--export-inp", &e))?;
     }
     if let Some(path) = &args.export_vtk {
         let shapes = fmu_builder::ffrf::inertia::expand(&b.model, &b.part.mesh.nodes, &b.flanges, b.basis.phi.as_ref());
@@ -371,7 +372,8 @@ fn write_exports(args: &Args, b: &fmu_builder::build::Built) -> Result<(), Strin
             .map_err(|e| named("--export-vtk", &e))?;
     }
     if let Some(dir) = &args.export_free_free {
-        fmu_builder::model::export::write_free_free_matrices(dir, &b.part).map_err(|e| named("--export-free-free", &e))?;
+        fmu_builder::model::export::write_free_free_matrices(dir, &b.part)
+            .map_err(|e| named("--export-free-free", &e))?;
     }
     if let Some(dir) = &args.export_matrices {
         fmu_builder::model::export::write_matrix_market(dir, &b.model).map_err(|e| named("--export-matrices", &e))?;

@@ -296,7 +296,8 @@ fn every_bound_of_the_schema_is_the_builders() {
                 match (inside, by_schema, &by_builder) {
                     (true, true, Ok(())) => {}
                     // the schema's bound is an outer one; the builder's is the input's own count
-                    (true, true, Err(m)) if BOUND_BY_THE_INPUT.contains(&at.field.as_str()) && m.contains(&at.field) => {}
+                    (true, true, Err(m))
+                        if BOUND_BY_THE_INPUT.contains(&at.field.as_str()) && m.contains(&at.field) => {}
                     // refused by both, and the builder says which field
                     (false, false, Err(m)) if m.contains(&at.field) => {}
                     _ => disagreements.push(format!(

@@ -869,11 +869,7 @@ impl Spec {
             Ok(m) if m.is_dir() => "is a folder, not a file".to_string(),
             Ok(_) => match file_read::check(&resolved, kind, crate::input::size::Memory::of_this_machine().bytes) {
                 // opened non-blocking: a FIFO that slipped past the check must not block here
-                Ok(_) => match std::fs::OpenOptions::new()
-                    .read(true)
-                    .custom_flags(libc::O_NONBLOCK)
-                    .open(&resolved)
-                {
+                Ok(_) => match std::fs::OpenOptions::new().read(true).custom_flags(libc::O_NONBLOCK).open(&resolved) {
                     Ok(_) => return Ok(resolved),
                     Err(e) => format!("cannot be read: {e}"),
                 },

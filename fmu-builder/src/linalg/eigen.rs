@@ -997,7 +997,8 @@ fn dense_search(
                 below.max(min_count).min(available).min(MAX_MODES)
             }
         };
-        let pairs = Eigenpairs { values: all.values[..keep].to_vec(), vectors: all.vectors.subcols(0, keep).to_owned() };
+        let pairs =
+            Eigenpairs { values: all.values[..keep].to_vec(), vectors: all.vectors.subcols(0, keep).to_owned() };
         let (pairs, residuals) = checked(k, m, pairs, shift, true);
         let (worst, at) = residuals.iter().enumerate().fold((0.0f64, 0), worst_of);
         crate::profile::note(|| format!("{keep} of {available} modes, {n} DoFs"));

@@ -188,7 +188,10 @@ mod tests {
     fn two_outputs_naming_one_file_are_refused_whether_or_not_it_exists() {
         let dir = scratch("twice");
         let fmu = dir.join("B.fmu");
-        let both = [Destination::file("-o", &fmu), Destination::file("--report", &dir.join("..").join(dir.file_name().unwrap()).join("B.fmu"))];
+        let both = [
+            Destination::file("-o", &fmu),
+            Destination::file("--report", &dir.join("..").join(dir.file_name().unwrap()).join("B.fmu")),
+        ];
         let e = check(&both, &[], false).unwrap_err();
         assert!(e.starts_with("--report ") && e.contains("is also written by -o"), "{e}");
         std::fs::write(&fmu, "x").unwrap();
@@ -210,14 +213,19 @@ mod tests {
         assert!(e.contains("exists; pass --force"), "{e}");
         assert!(check(&[Destination::file("--report", &existing)], &[], true).is_ok());
         // a folder export onto a file, and onto a folder holding the input's matrices
-        let e = check(&[Destination::folder("--export-free-free", &existing, FREE_FREE_FILES)], &[], false).unwrap_err();
+        let e =
+            check(&[Destination::folder("--export-free-free", &existing, FREE_FREE_FILES)], &[], false).unwrap_err();
         assert!(e.contains("is a file; this option writes several files into a folder"), "{e}");
         let k = dir.join("K.mtx");
         std::fs::write(&k, "%%MatrixMarket").unwrap();
-        let e = check(&[Destination::folder("--export-free-free", &dir, FREE_FREE_FILES)], std::slice::from_ref(&k), true)
-            .unwrap_err();
+        let e =
+            check(&[Destination::folder("--export-free-free", &dir, FREE_FREE_FILES)], std::slice::from_ref(&k), true)
+                .unwrap_err();
         assert!(e.contains("K.mtx is the input"), "{e}");
-        assert!(check(&[Destination::folder("--export-matrices", &dir.join("new"), MOUNTED_MATRIX_FILES)], &[], false).is_ok());
+        assert!(
+            check(&[Destination::folder("--export-matrices", &dir.join("new"), MOUNTED_MATRIX_FILES)], &[], false)
+                .is_ok()
+        );
         let e = check(&[Destination::file("--export-inp", Path::new("/dev/null"))], &[], true).unwrap_err();
         assert!(e.contains("/dev/null is a character device, not a regular file"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();

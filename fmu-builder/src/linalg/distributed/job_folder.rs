@@ -16,9 +16,9 @@ use std::path::{Path, PathBuf};
 /// `bytes` bytes of the system's random source, in hex.
 pub fn random_hex(bytes: usize) -> Result<String> {
     let mut buffer = vec![0u8; bytes];
-    std::fs::File::open("/dev/urandom")
-        .and_then(|mut f| f.read_exact(&mut buffer))
-        .map_err(|e| BuildError::Backend(format!("reading the random source /dev/urandom for the driver's token: {e}")))?;
+    std::fs::File::open("/dev/urandom").and_then(|mut f| f.read_exact(&mut buffer)).map_err(|e| {
+        BuildError::Backend(format!("reading the random source /dev/urandom for the driver's token: {e}"))
+    })?;
     Ok(buffer.iter().map(|b| format!("{b:02x}")).collect())
 }
 

@@ -177,11 +177,8 @@ mod tests {
     #[test]
     fn a_stopped_member_is_found_and_the_whole_group_is_ended() {
         // a shell leading its own group, with a child that sleeps: the launcher and a rank
-        let mut leader = std::process::Command::new("sh")
-            .args(["-c", "sleep 30 & wait"])
-            .process_group(0)
-            .spawn()
-            .unwrap();
+        let mut leader =
+            std::process::Command::new("sh").args(["-c", "sleep 30 & wait"]).process_group(0).spawn().unwrap();
         let group = leader.id() as i32;
         std::thread::sleep(Duration::from_millis(200));
         assert!(group_alive(group));

@@ -3,8 +3,8 @@
 //! connection rank 0 opens back to the builder. Requests go one at a time (a JSON line, then
 //! little-endian doubles); a failed request is an error naming what the driver reported.
 
-use super::{job_folder, petsc_binary, process_group};
 use super::{EigenRequest, PetscBackend};
+use super::{job_folder, petsc_binary, process_group};
 use crate::error::{BuildError, Result};
 use faer::sparse::SparseColMat;
 use faer::{Mat, MatMut, MatRef};
@@ -108,7 +108,8 @@ impl Watch<'_> {
                 std::thread::sleep(Duration::from_millis(50));
             }
         }
-        let ended = status.map_or_else(|| "the launcher still runs".to_string(), |s| format!("the launcher ended ({s})"));
+        let ended =
+            status.map_or_else(|| "the launcher still runs".to_string(), |s| format!("the launcher ended ({s})"));
         format!("{ended}; `{}` reported:\n{}", self.launched, tail(&self.stderr, 12))
     }
 
