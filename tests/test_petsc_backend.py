@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 
-from conftest import EXAMPLES, ROOT, run_builder
+from conftest import BUILDER, EXAMPLES, ROOT, run_builder
 
 PYTHON = "/usr/bin/python3"
 DRIVER = ROOT / "fmu-builder" / "src" / "linalg" / "distributed" / "driver.py"
@@ -59,8 +59,18 @@ needs_petsc = pytest.mark.skipif(not petsc_available() and not os.environ.get("C
 
 
 def build(spec_path, out, *extra):
-    run_builder([spec_path, "-o", out, "-q", *extra])
-    return json.loads(zipfile.ZipFile(out).read("documentation/report.json"))
+    """The FMU and its full report (--report: the back-end's rows, times and memory, which the
+    FMU's own copy leaves out so that its bytes do not vary from run to run)."""
+    report = out.with_suffix(".report.json")
+    run_builder([spec_path, "-o", out, "-q", "--report", report, "--force", *extra])
+    packaged = json.loads(zipfile.ZipFile(out).read("documentation/report.json"))
+    full = json.loads(report.read_text())
+    # the FMU's copy: the kind and the ranks, nothing that varies from run to run
+    assert packaged["backend"] == {"kind": full["backend"]["kind"], "ranks": full["backend"]["ranks"],
+                                   "rows_per_rank": [], "factor_entries": 0.0, "load_seconds": None,
+                                   "partition_seconds": None, "factor_seconds": None,
+                                   "peak_mib_per_rank": []}, packaged["backend"]
+    return full
 
 
 def petsc_args(ranks):
@@ -377,3 +387,30 @@ def test_driver_refuses_a_matrix_that_is_not_positive_definite(tmp_path):
         assert "not positive definite" in driver.started["error"] and "1 negative" in driver.started["error"]
     finally:
         driver.process.wait(timeout=60)
+
+
+@needs_petsc
+def test_one_rank_builds_are_byte_identical_and_two_ranks_agree_to_round_off(tmp_path):
+    """What stays identical from run to run: on one rank the FMU's bytes (MUMPS and SLEPc are
+    deterministic there, and the FMU carries no run's times, memory or factor size); on two ranks
+    the partition moves the factor's and the modes' round-off, so the reduced model (and the
+    GUID computed from it) differs in its last digits: the frequencies agree to 1e-9."""
+    env = dict(os.environ, SOURCE_DATE_EPOCH="1700000000")
+    spec = CASES[list(CASES)[0]](tmp_path)
+
+    def built(name, ranks):
+        out = tmp_path / f"{name}.fmu"
+        report = tmp_path / f"{name}.json"
+        proc = subprocess.run([str(BUILDER), spec, "-o", out, "-q", "--report", report, *petsc_args(ranks)],
+                              capture_output=True, text=True, env=env, timeout=600)
+        assert proc.returncode == 0, proc.stderr
+        return out.read_bytes(), json.loads(report.read_text())
+
+    a, _ = built("a", 1)
+    b, _ = built("b", 1)
+    assert a == b
+    (_, r2a), (_, r2b) = built("c", 2), built("d", 2)
+    fa, fb = np.array(r2a["accuracy"]["reduced_hz"]), np.array(r2b["accuracy"]["reduced_hz"])
+    assert len(fa) == len(fb)
+    # measured up to 1e-12 (the static shapes' round-off); the issue's 1e-9
+    assert np.max(np.abs(fa / fb - 1)) < 1e-9

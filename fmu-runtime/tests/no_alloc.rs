@@ -17,6 +17,8 @@ use fmu_runtime::reduced::{FlangeShapes, ReducedBody, RotationTerms, Stiffening,
 use std::ffi::{CString, c_char, c_void};
 use std::sync::Arc;
 
+#[path = "support/c_logger.rs"]
+mod c_logger;
 #[path = "support/counting_alloc.rs"]
 mod counting_alloc;
 use counting_alloc::assert_no_allocation;
@@ -309,18 +311,7 @@ unsafe extern "C" fn quiet_logger(
 }
 
 fn callbacks() -> fmi2CallbackFunctions {
-    type Fixed =
-        unsafe extern "C" fn(*mut c_void, *const c_char, fmi2Status, *const c_char, *const c_char, *const c_char);
-    // Stable Rust cannot define a C-variadic function; on x86-64 SysV the fixed and variadic
-    // pointer arguments travel alike (as in the FMI layer's own tests).
-    let logger: fmi2CallbackLogger = unsafe { std::mem::transmute(quiet_logger as Fixed) };
-    fmi2CallbackFunctions {
-        logger: Some(logger),
-        allocateMemory: None,
-        freeMemory: None,
-        stepFinished: None,
-        componentEnvironment: std::ptr::null_mut(),
-    }
+    c_logger::callbacks_with(quiet_logger, std::ptr::null_mut())
 }
 
 struct Resources(std::path::PathBuf);

@@ -4,6 +4,9 @@
 //! cannot be evaluated in Model Exchange (fmi2Discard, then recovery), a mount orientation that
 //! is no rotation, and a free body's step whose substeps would take seconds.
 
+#[path = "support/c_logger.rs"]
+mod c_logger;
+
 use fmi2::types::*;
 use fmu_runtime::interface::VariableTable;
 use fmu_runtime::reduced::{ReducedBody, free_two_mode_body, rotating_two_mode_body, two_mode_body};
@@ -41,18 +44,7 @@ unsafe extern "C" fn record(
 }
 
 fn callbacks(log: &Log) -> fmi2CallbackFunctions {
-    type Fixed =
-        unsafe extern "C" fn(*mut c_void, *const c_char, fmi2Status, *const c_char, *const c_char, *const c_char);
-    // Stable Rust cannot define a C-variadic function; on x86-64 SysV the fixed and variadic
-    // pointer arguments travel alike (as in the FMI layer's own tests).
-    let logger: fmi2CallbackLogger = unsafe { std::mem::transmute(record as Fixed) };
-    fmi2CallbackFunctions {
-        logger: Some(logger),
-        allocateMemory: None,
-        freeMemory: None,
-        stepFinished: None,
-        componentEnvironment: log as *const Log as *mut c_void,
-    }
+    c_logger::callbacks_with(record, log as *const Log as *mut c_void)
 }
 
 /// An instance of `reduced` through fmi2Instantiate, its resources in a folder of its own.

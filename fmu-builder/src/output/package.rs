@@ -84,8 +84,8 @@ pub fn write_fmu(
     })?;
     let input =
         documentation::input_listing(spec).map_err(|e| BuildError::Numerical(format!("serialising the input: {e}")))?;
-    let report_json =
-        serde_json::to_vec_pretty(report).map_err(|e| BuildError::Numerical(format!("serialising the report: {e}")))?;
+    let report_json = serde_json::to_vec_pretty(&report.as_packaged())
+        .map_err(|e| BuildError::Numerical(format!("serialising the report: {e}")))?;
     let required = fmi2_functions::required(&xml);
     for binary in others {
         binary.check(&required)?;

@@ -73,6 +73,16 @@ pub struct BackendReport {
     pub peak_mib_per_rank: Vec<f64>,
 }
 
+impl BackendReport {
+    /// What of it goes into the FMU: the kind and the ranks. The times, the memory and the
+    /// factor's size differ from run to run (MUMPS's factor with the partition: 4.83e7 to
+    /// 5.04e7 entries in five 2-rank builds), and the FMU's bytes must not; `--report` and
+    /// `--timings` keep them.
+    pub fn packaged(&self) -> BackendReport {
+        BackendReport { kind: self.kind.clone(), ranks: self.ranks, ..Default::default() }
+    }
+}
+
 /// The report of `solver`'s back-end.
 pub fn backend_of(solver: &SpdSolver) -> Result<BackendReport> {
     Ok(match solver.session() {
@@ -164,6 +174,14 @@ pub struct Report {
     pub accuracy: Accuracy,
     /// How far the FMU can be trusted: the valid range and the errors within it.
     pub verdict: Verdict,
+}
+
+impl Report {
+    /// The report as the FMU carries it: without what varies from run to run on the same input
+    /// (the back-end's times, memory and factor size).
+    pub fn as_packaged(&self) -> Report {
+        Report { backend: self.backend.packaged(), ..self.clone() }
+    }
 }
 
 /// Components below 1e-12 of the vector's size are round-off of a symmetric part's zeros:

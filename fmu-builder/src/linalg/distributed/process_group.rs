@@ -102,10 +102,15 @@ fn descendants(root: i32) -> Vec<i32> {
     found
 }
 
-/// Whether any process of the group still exists (signal 0 probes without sending).
+/// Whether any process of the group still runs. Zombies do not count: an orphaned rank's
+/// zombie waits for PID 1 to reap it, which in a container may never happen.
 pub fn group_alive(group: i32) -> bool {
-    // SAFETY: killpg with signal 0 only checks for the group's existence
-    unsafe { libc::killpg(group, 0) == 0 }
+    let Ok(entries) = std::fs::read_dir("/proc") else { return false };
+    entries
+        .flatten()
+        .filter_map(|e| e.file_name().to_str()?.parse::<i32>().ok())
+        .filter_map(stat_of)
+        .any(|(state, _, pgrp)| pgrp == group && state != "Z")
 }
 
 /// Registers a running job for the interruption handler (installed on first use).
