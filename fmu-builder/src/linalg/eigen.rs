@@ -986,8 +986,13 @@ fn dense_search(
         } else {
             m
         };
-        let Some(all) = crate::linalg::dense_eigen::all_pairs(k, m, shift, deflate)? else {
-            return Ok(None);
+        use crate::linalg::dense_eigen::{complement_basis, mass_definite};
+        let basis = complement_basis(n, deflate.map(|d| d.m_vectors.as_ref()))?;
+        let all = match shift_invert_ritz(k, m, basis, shift) {
+            Ok(all) => all,
+            // the Ritz step's mass Gram matrix is not definite: M singular (Lanczos handles it)
+            Err(_) if !mass_definite(m, n) => return Ok(None),
+            Err(e) => return Err(e),
         };
         let available = all.values.len();
         let keep = match want {
