@@ -127,8 +127,11 @@ CASES = [
      ["outputs.stress.hot_spots", "minimum of 1"]),
     ("negative hot spots", lambda s: s.update(outputs={"stress": {"hot_spots": -3}}),
      ["outputs.stress.hot_spots", "minimum of 1"]),
-    ("too many stress points", lambda s: s.update(outputs={"stress": {"hot_spots": 5000}}),
-     ["outputs.stress", "5000 recovery points", "at most 1000"]),
+    ("too many stress points",
+     lambda s: s.update(outputs={"stress": {"points": [[0.5, 0.0, 0.0]], "hot_spots": 1000}}),
+     ["outputs.stress", "1001 recovery points", "at most 1000"]),
+    ("too many hot spots", lambda s: s.update(outputs={"stress": {"hot_spots": 5000}}),
+     ["outputs.stress.hot_spots", "1000"]),
     ("stress point not a point", lambda s: s.update(outputs={"stress": {"points": [[0.5, 0.0]]}}),
      ["outputs.stress.points[0]"]),
     # the PETSc back-end: what it does not run, and its settings without choosing it
