@@ -123,7 +123,8 @@ def test_a_folder_export_never_overwrites_the_matrices_it_reads(tmp_path):
             f"error: --export-matrices {matrices}: {matrices / 'K.mtx'} is the input {tmp_path / 'm/K.mtx'}")
     # a part given by matrices has no elements: refused before the build, not after it
     refused(builder(by_matrices, "-o", tmp_path / "B.fmu", "--export-inp", tmp_path / "d.inp", "-q"),
-            "--export-inp", "the part is given by its matrices (geometry.matrices)")
+            "--export-inp", "the part is given by its matrices (geometry.matrices), so it has no elements to "
+            "export; export from the mesh")
     assert (matrices / "K.mtx").read_bytes() == stiffness and not (tmp_path / "B.fmu").exists()
 
 

@@ -222,7 +222,8 @@ fn check_destinations(args: &Args, input: &Input, output: Option<&Path>) -> Resu
         for (option, path) in [("--export-inp", &args.export_inp), ("--export-free-free", &args.export_free_free)] {
             if by_matrices && let Some(p) = path {
                 return Err(format!(
-                    "{option} {}: the part is given by its matrices (geometry.matrices), so it has no elements to                      export; export from the mesh the matrices came from",
+                    "{option} {}: the part is given by its matrices (geometry.matrices), so it has no elements to \
+                     export; export from the mesh the matrices came from",
                     p.display()
                 ));
             }

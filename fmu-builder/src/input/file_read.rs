@@ -106,11 +106,10 @@ fn check_metadata(meta: &std::fs::Metadata, kind: FileKind, memory_bytes: f64) -
     Ok(size)
 }
 
-/// The whole file, checked as `check` does, then read with the bound: a file that grows while
-/// it is read (or a device that lied about its size) stops at the limit with a refusal. The
-/// file is opened non-blocking, so a FIFO swapped in after the check does not block either.
+/// The whole file, checked as `check` does on the opened file itself, then read with the bound:
+/// a file that grows while it is read (or a device that lied about its size) stops at the limit
+/// with a refusal. The file is opened non-blocking, so a FIFO is refused, not waited on.
 pub fn read(path: &Path, kind: FileKind, memory_bytes: f64) -> Result<Vec<u8>, Refusal> {
-    check(path, kind, memory_bytes)?;
     use std::os::unix::fs::OpenOptionsExt;
     let file = std::fs::OpenOptions::new()
         .read(true)
