@@ -1,23 +1,25 @@
 """The distributed back-end (reduction.backend petsc, --backend petsc): PETSc partitions the
-stiffness, MUMPS factors it across MPI ranks, SLEPc solves the eigenproblems, the invariants'
-mass products run there. Its FMUs must equal the in-process back-end's: the same reduced
+stiffness, MUMPS factors it across MPI ranks and answers blocks of solves, which the builder's
+own block Lanczos eigen-solver drives. Its FMUs must equal the in-process back-end's: the same reduced
 frequencies (1e-9), flange statics (1e-9) and co-simulated step response (1e-8), on 1 and 2
 ranks, for the beam and the bracket (mounted) and a free-floating beam. The in-process build is
 the comparison here, a consistency check of two implementations of the same reduction; the
 physics of both is checked against CalculiX and beam theory elsewhere. The driver's own answers
 are checked against LAPACK (numpy) on a small matrix.
 
-The test set-up (tests/run.sh) installs Debian's python3-petsc4py-real, python3-slepc4py-real,
-python3-mpi4py and openmpi-bin; the driver runs under Debian's /usr/bin/python3.
+The test set-up (tests/run.sh) installs Debian's python3-petsc4py-real, python3-mpi4py and
+openmpi-bin; the driver runs under Debian's /usr/bin/python3.
 """
 
 import json
 import os
+import re
 import shutil
 import socket
 import struct
 import subprocess
 import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -45,17 +47,17 @@ def petsc_available():
 
 
 def test_petsc_is_installed():
-    """The back-end's tests need PETSc, SLEPc and OpenMPI (tests/run.sh installs them); missing,
-    this fails with the reason instead of the tests below skipping silently in CI."""
+    """The back-end's tests need PETSc (with MUMPS) and OpenMPI (tests/run.sh installs them);
+    missing, this fails with the reason instead of the tests below skipping silently in CI."""
     if not petsc_available():
-        message = "Debian's python3-petsc4py-real, python3-slepc4py-real, python3-mpi4py and openmpi-bin are needed"
+        message = "Debian's python3-petsc4py-real, python3-mpi4py and openmpi-bin are needed"
         if os.environ.get("CI"):
             pytest.fail(message)
         pytest.skip(message)
 
 
 needs_petsc = pytest.mark.skipif(not petsc_available() and not os.environ.get("CI"),
-                                 reason="PETSc/SLEPc/OpenMPI not installed (tests/run.sh installs them)")
+                                 reason="PETSc/OpenMPI not installed (tests/run.sh installs them)")
 
 
 def build(spec_path, out, *extra):
@@ -65,11 +67,11 @@ def build(spec_path, out, *extra):
     run_builder([spec_path, "-o", out, "-q", "--report", report, "--force", *extra])
     packaged = json.loads(zipfile.ZipFile(out).read("documentation/report.json"))
     full = json.loads(report.read_text())
-    # the FMU's copy: the kind and the ranks, nothing that varies from run to run
-    assert packaged["backend"] == {"kind": full["backend"]["kind"], "ranks": full["backend"]["ranks"],
-                                   "rows_per_rank": [], "factor_entries": 0.0, "load_seconds": None,
-                                   "partition_seconds": None, "factor_seconds": None,
-                                   "peak_mib_per_rank": []}, packaged["backend"]
+    # the FMU's copy: the kind, nothing of the machine, the rank count or the run
+    assert packaged["backend"] == {"kind": full["backend"]["kind"]}, packaged["backend"]
+    listed = json.loads(zipfile.ZipFile(out).read("documentation/input.json"))
+    backend = listed.get("reduction", {}).get("backend")
+    assert not backend or set(backend) == {"kind"}, backend
     return full
 
 
@@ -190,24 +192,27 @@ def test_distributed_fmu_equals_in_process(tmp_path, in_process, case, ranks):
           f"full {full:.1e}, "
           f"flange statics {statics:.1e}, step response {step:.1e}; rows {backend['rows_per_rank']}, "
           f"peak MiB per rank {[round(p) for p in backend['peak_mib_per_rank']]}")
-    # the issue's tolerances; measured over the cases and rank counts: frequencies to 2.7e-10
-    # (1e-13 for the modal beam's modes), highest 1.3e-9, full model 9e-14, statics 2.4e-13,
-    # step response 4.1e-10
+    # the issue's tolerances; measured over the cases and rank counts (the eigen-solves the
+    # builder's own, over the distributed solves): frequencies to 2.2e-11, highest 4.5e-9 (the
+    # modal beam's residual-flexibility shapes; 7.4e-12 for the others), full model 2.1e-11,
+    # statics 2.4e-13, step response 1.3e-10
     assert freq <= 1e-9 and full <= 1e-9
-    assert top <= 1e-8
+    # ten times the modal beam's 4.5e-9
+    assert top <= 5e-8
     assert statics <= 1e-9
     assert step <= 1e-8
 
 
 @needs_petsc
 def test_distributed_build_names_its_back_end_and_ranks(tmp_path):
-    """The summary and --timings say where the work ran: the launch, the ranks' rows, the SLEPc
-    solves, and (summary) each rank's peak memory."""
+    """The summary and --timings say where the work ran: the launch, the ranks' rows, the
+    eigen-solve (the builder's block Lanczos over the distributed solves), and (summary) each
+    rank's peak memory."""
     proc = run_builder([EXAMPLES / "beam.json", "-o", tmp_path / "b.fmu", "--timings", *petsc_args(2)])
     text = proc.stdout + proc.stderr
     for expected in ["launched: mpirun --oversubscribe -n 2", "driver: load, partition and factor",
-                     "eigen-solve (SLEPc Krylov-Schur", "2 ranks, rows per rank",
-                     "back-end: PETSc/MUMPS/SLEPc on 2 MPI ranks"]:
+                     "eigen-solve (block shift-invert Lanczos)", "2 ranks, rows per rank",
+                     "back-end: PETSc/MUMPS on 2 MPI ranks"]:
         assert expected in text, expected
 
 
@@ -242,7 +247,7 @@ def test_a_launcher_that_fails_is_reported(tmp_path):
     if shutil.which("mpirun"):
         err = refused([EXAMPLES / "beam.json", "-o", out, "--backend", "petsc", "--launcher", LAUNCHER,
                        "--python", "/nonexistent/python3"])
-        assert "no Python that imports petsc4py, slepc4py and mpi4py (/nonexistent/python3: cannot be started" \
+        assert "no Python that imports petsc4py and mpi4py (/nonexistent/python3: cannot be started" \
             in err and "assembly" not in err, err
         # a launcher that starts but whose driver never connects: the launcher's exit is reported
         fake = tmp_path / "fake-mpirun"
@@ -311,18 +316,12 @@ def write_petsc(path, a):
             f.write(struct.pack(">%dd" % len(r), *a[i, r]))
 
 
-def generalized_eigenvalues(k, m):
-    lower = np.linalg.cholesky(m)
-    inverse = np.linalg.inv(lower)
-    return np.linalg.eigvalsh(inverse @ k @ inverse.T)
-
-
 @needs_petsc
 @pytest.mark.parametrize("ranks", [1, 2])
-def test_driver_answers_equal_lapack(tmp_path, ranks):
-    """Each request of the driver on a small sparse SPD matrix against numpy (LAPACK): solves,
-    the mass products, the lowest eigenpairs, those below a bound, with deflation, and with the
-    trailing rows held (through the whole factor and G = K^-1 E)."""
+def test_driver_solves_equal_lapack(tmp_path, ranks):
+    """The driver's one request, blocks of solves, on a small sparse SPD matrix against numpy
+    (LAPACK): one column, a block, a block again (the factor is kept), and a request the driver
+    does not know, refused with its name."""
     n = 90
     rng = np.random.default_rng(7)
     k = np.zeros((n, n))
@@ -330,46 +329,18 @@ def test_driver_answers_equal_lapack(tmp_path, ranks):
         for j in range(max(0, i - 3), i):
             k[i, j] = k[j, i] = -rng.uniform(0.5, 1.5)
     k += np.diag(-k.sum(axis=1) + rng.uniform(0.1, 0.2, n))
-    m = np.diag(rng.uniform(1.0, 2.0, n))
     driver = Driver(tmp_path / "job", k, ranks)
     try:
         assert len(driver.started["rows_per_rank"]) == ranks and sum(driver.started["rows_per_rank"]) == n
-        b = rng.standard_normal((n, 3))
-        header, x = driver.request({"op": "solve", "columns": 3}, b)
-        assert header["ok"] and x.size == 3 * n
-        # LAPACK's solve and MUMPS's of a matrix of condition ~1e3: round-off, 1e-14 measured
-        assert np.max(np.abs(x.reshape(3, n).T - np.linalg.solve(k, b))) <= 1e-12 * np.max(np.abs(np.linalg.solve(k, b)))
-        assert driver.request({"op": "load", "id": 0, "file": "mass.bin"})[0]["ok"] is False  # not written yet
-        write_petsc(tmp_path / "job" / "mass.bin", m)
-        assert driver.request({"op": "load", "id": 0, "file": "mass.bin"})[0]["ok"]
-        header, p = driver.request({"op": "inner", "id": 0, "a": 2, "b": 3}, b[:, :2], b)
-        assert p.size == 6
-        assert np.allclose(p.reshape(3, 2).T, b[:, :2].T @ m @ b, rtol=1e-13, atol=0)
-
-        lam = generalized_eigenvalues(k, m)
-        header, v = driver.request({"op": "eigen", "mass": 0, "count": 6, "tol": 1e-12})
-        assert header["ok"] and len(header["values"]) == 6 and v.size == 6 * n
-        # well separated eigenvalues of a small problem: both solvers to round-off (1e-14 measured)
-        assert np.allclose(header["values"], lam[:6], rtol=1e-10, atol=0)
-        vectors = v.reshape(6, n).T
-        residual = k @ vectors - m @ vectors * np.array(header["values"])
-        assert np.max(np.abs(residual)) <= 1e-8 * np.max(np.abs(k @ vectors))
-
-        header, _ = driver.request({"op": "eigen", "mass": 0, "below": lam[8] * 1.000001, "min_count": 1, "tol": 1e-12})
-        assert len(header["values"]) == 9, header["values"]
-
-        # deflation of the two lowest modes: the next four come back
-        header, _ = driver.request({"op": "eigen", "mass": 0, "count": 4, "tol": 1e-12, "deflate": 2}, vectors[:, :2])
-        assert np.allclose(header["values"], lam[2:6], rtol=1e-10, atol=0), header["values"]
-
-        held = 6
-        first = n - held
-        g = np.linalg.solve(k, np.eye(n)[:, first:])
-        lam_held = generalized_eigenvalues(k[:first, :first], m[:first, :first])
-        header, v = driver.request({"op": "eigen", "mass": 0, "count": 5, "tol": 1e-12, "held": held}, g)
-        assert header["ok"], header
-        assert np.allclose(header["values"], lam_held[:5], rtol=1e-10, atol=0)
-        assert np.max(np.abs(v.reshape(5, n).T[first:])) == 0.0  # held rows stay zero
+        for columns in [1, 3, 7]:
+            b = rng.standard_normal((n, columns))
+            header, x = driver.request({"op": "solve", "columns": columns}, b)
+            assert header["ok"] and header["columns"] == columns and x.size == columns * n
+            expected = np.linalg.solve(k, b)
+            # LAPACK's solve and MUMPS's of a matrix of condition ~1e3: round-off, 1e-14 measured
+            assert np.max(np.abs(x.reshape(columns, n).T - expected)) <= 1e-12 * np.max(np.abs(expected))
+        header, _ = driver.request({"op": "eigen", "count": 3})
+        assert header["ok"] is False and header["error"] == "the driver has no request 'eigen'", header
     finally:
         driver.close()
 
@@ -389,28 +360,179 @@ def test_driver_refuses_a_matrix_that_is_not_positive_definite(tmp_path):
         driver.process.wait(timeout=60)
 
 
-@needs_petsc
-def test_one_rank_builds_are_byte_identical_and_two_ranks_agree_to_round_off(tmp_path):
-    """What stays identical from run to run: on one rank the FMU's bytes (MUMPS and SLEPc are
-    deterministic there, and the FMU carries no run's times, memory or factor size); on two ranks
-    the partition moves the factor's and the modes' round-off, so the reduced model (and the
-    GUID computed from it) differs in its last digits: the frequencies agree to 1e-9."""
-    env = dict(os.environ, SOURCE_DATE_EPOCH="1700000000")
-    spec = CASES[list(CASES)[0]](tmp_path)
+NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
+SVG_PATH = re.compile(r'd="[^"]*"')
+GUID = re.compile(r"\{[0-9a-f]{8}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{12}\}")
 
-    def built(name, ranks):
+
+def last_digit(token):
+    """One unit of the last digit `token` was printed with."""
+    mantissa, _, exponent = token.lower().partition("e")
+    decimals = len(mantissa.partition(".")[2])
+    return 10.0 ** (int(exponent or 0) - decimals)
+
+
+# a number this small in a report is a round-off figure (a relative error of 8e-14, a zero
+# component): its own digits are noise; the report's physical scalars (masses, lengths,
+# frequencies, compliances) lie far above it
+ROUND_OFF_FIGURE = 1e-12
+
+
+def close(u, v, rtol, scale=0.0, digit=0.0):
+    """u and v within rtol of the larger (or of `scale`, an array's largest entry), within one
+    unit of their last printed digit, or both round-off figures: the relative difference."""
+    difference = abs(u - v)
+    size = max(abs(u), abs(v), scale)
+    if max(abs(u), abs(v)) <= ROUND_OFF_FIGURE:
+        return 0.0
+    assert difference <= max(rtol * size, digit * 1.000001), (u, v)
+    return difference / size if size else 0.0
+
+
+def same_but_round_off(a, b, rtol):
+    """Two texts equal but for GUIDs and numbers, the numbers within `rtol` relative (or one unit
+    of their last printed digit, which round-off can flip): the worst relative difference."""
+    a, b = GUID.sub("{guid}", a), GUID.sub("{guid}", b)
+    assert NUMBER.split(a) == NUMBER.split(b), "the texts differ beyond their numbers"
+    x, y = NUMBER.findall(a), NUMBER.findall(b)
+    assert len(x) == len(y)
+    return max([close(float(u), float(v), rtol, digit=last_digit(u)) for u, v in zip(x, y) if u != v], default=0.0)
+
+
+def numbers(a):
+    """The numbers of nested lists of numbers, flattened; None for anything else."""
+    if isinstance(a, list):
+        flat = []
+        for x in a:
+            inner = numbers(x)
+            if inner is None:
+                return None
+            flat += inner
+        return flat
+    return [float(a)] if isinstance(a, (int, float)) and not isinstance(a, bool) else None
+
+
+def same_report(a, b, rtol, error_atol, error=False):
+    """Two reports equal but for the GUID and their numbers: scalars within `rtol`, each array's
+    entries within `rtol` of its largest (a response's near-zero entries carry its round-off).
+    An error figure (a key naming an error: the reduction's relative error against the full
+    model) within `error_atol` absolute: a difference of two close responses, its own last
+    digits are the responses' round-off (a 1.6e-5 frequency error moves by 1.4e-8 of itself),
+    magnified near a resonance (the bracket's response error there by 6.2e-10)."""
+    if error:
+        rtol = error_atol
+    if isinstance(a, dict):
+        assert sorted(a) == sorted(b)
+        return max([0.0] + [same_report(a[k], b[k], rtol, error_atol, error or "error" in k)
+                            for k in a if k != "guid"])
+    if isinstance(a, list):
+        assert len(a) == len(b)
+        x, y = numbers(a), numbers(b)
+        if x is not None and y is not None and x:
+            # a vector or matrix (nested lists of numbers): against its largest entry
+            assert len(x) == len(y)
+            scale = 1.0 if error else max(abs(v) for v in x + y)
+            return max(close(u, v, rtol, scale) for u, v in zip(x, y))
+        return max([0.0] + [same_report(u, v, rtol, error_atol, error) for u, v in zip(a, b)])
+    if isinstance(a, float) or isinstance(b, float):
+        return close(float(a), float(b), rtol, 1.0 if error else 0.0)
+    assert a == b, (a, b)
+    return 0.0
+
+
+def reduced_model(data):
+    """The FMU's reduced-model file read from its documented layout (fmu-runtime/src/format.rs):
+    magic, version, payload length, entries (name, kind, array dimensions and values, or text),
+    CRC-32; name -> list of values, or text."""
+    assert data[:8] == b"FLEXBODY"
+    version, length = struct.unpack_from("<IQ", data, 8)
+    assert version == 1
+    end = 20 + length
+    assert struct.unpack_from("<I", data, end)[0] == zlib.crc32(data[:end])
+    count, = struct.unpack_from("<I", data, 20)
+    pos, entries = 24, {}
+    for _ in range(count):
+        size, = struct.unpack_from("<H", data, pos)
+        name = data[pos + 2:pos + 2 + size].decode()
+        kind = data[pos + 2 + size]
+        pos += 3 + size
+        if kind == 0:
+            rank = data[pos]
+            dims = struct.unpack_from("<%dQ" % rank, data, pos + 1)
+            values = int(np.prod(dims))
+            entries[name] = np.frombuffer(data, "<f8", values, pos + 1 + 8 * rank)
+            pos += 1 + 8 * rank + 8 * values
+        else:
+            size, = struct.unpack_from("<Q", data, pos)
+            entries[name] = data[pos + 8:pos + 8 + size].decode()
+            pos += 8 + size
+    assert pos == end
+    return entries
+
+
+@needs_petsc
+def test_fmus_at_any_rank_count_are_the_same_model(tmp_path):
+    """What stays identical, at any rank count and from run to run (docs/DISTRIBUTED.md): on one
+    rank the FMU's bytes; across rank counts and runs (MUMPS's parallel factorisation sums in the
+    order its ranks' messages arrive) the same files, the same binaries and input, the same
+    model description and documentation but for their numbers, their plots' round-off and the
+    GUID, the reduced model's
+    arrays within 1e-9 of each array's largest entry, as the in-process FMU's. The GUID
+    fingerprints the exact reduced model, so it follows its round-off."""
+    env = dict(os.environ, SOURCE_DATE_EPOCH="1700000000")
+    # the bracket: its modes are unique. In an eigenspace of a repeated frequency (the beam's two
+    # bending planes) any orthonormal basis is the same model, and two builds may pick different
+    # ones (the beam's arrays then differ wholesale while its frequencies, statics and step
+    # response agree to 1e-9: test_distributed_fmu_equals_in_process)
+    spec = EXAMPLES / "bracket" / "bracket.json"
+
+    def built(name, *extra):
         out = tmp_path / f"{name}.fmu"
-        report = tmp_path / f"{name}.json"
-        proc = subprocess.run([str(BUILDER), spec, "-o", out, "-q", "--report", report, *petsc_args(ranks)],
+        proc = subprocess.run([str(BUILDER), spec, "-o", out, "-q", *extra],
                               capture_output=True, text=True, env=env, timeout=600)
         assert proc.returncode == 0, proc.stderr
-        return out.read_bytes(), json.loads(report.read_text())
+        return zipfile.ZipFile(out), out.read_bytes()
 
-    a, _ = built("a", 1)
-    b, _ = built("b", 1)
-    assert a == b
-    (_, r2a), (_, r2b) = built("c", 2), built("d", 2)
-    fa, fb = np.array(r2a["accuracy"]["reduced_hz"]), np.array(r2b["accuracy"]["reduced_hz"])
-    assert len(fa) == len(fb)
-    # measured up to 1e-12 (the static shapes' round-off); the issue's 1e-9
-    assert np.max(np.abs(fa / fb - 1)) < 1e-9
+    (one, one_bytes), (_, again_bytes) = built("one", *petsc_args(1)), built("again", *petsc_args(1))
+    # one rank: MUMPS's factorisation and solves are deterministic
+    assert one_bytes == again_bytes
+    others = [built("two", *petsc_args(2))[0], built("two-again", *petsc_args(2))[0], built("in-process")[0]]
+    names = sorted(one.namelist())
+    worst_text = worst_array = 0.0
+    for other in others:
+        assert sorted(other.namelist()) == names
+        # the in-process FMU says where it was built (input and report name the back-end's kind):
+        # its reduced model is compared
+        in_process = other is others[-1]
+        for name in names:
+            a, b = one.read(name), other.read(name)
+            if in_process and not name.endswith(".bin"):
+                continue
+            if name.startswith("binaries/") or name == "documentation/input.json":
+                assert a == b, name
+            elif name.endswith(".bin"):
+                ra, rb = reduced_model(a), reduced_model(b)
+                assert sorted(ra) == sorted(rb)
+                for entry, values in ra.items():
+                    if isinstance(values, str):
+                        assert entry == "guid" or values == rb[entry], entry
+                        continue
+                    assert len(values) == len(rb[entry])
+                    scale = float(np.max(np.abs(values))) if len(values) else 0.0
+                    if scale > 0:
+                        worst_array = max(worst_array, float(np.max(np.abs(values - rb[entry]))) / scale)
+                    else:
+                        assert not np.any(rb[entry]), entry
+            elif name.endswith(".json"):
+                # the model's quantities to the issue's 1e-9; error figures to 1e-8 absolute, ten
+                # times the 6.2e-10 measured near the bracket's resonance
+                worst_text = max(worst_text, same_report(json.loads(a), json.loads(b), 1e-9, 1e-8))
+            else:
+                # the page's plots draw the reduction's error on a log scale, round-off where the
+                # reduction is exact: those points move with it (by pixels), the text may not
+                plotted = lambda text: SVG_PATH.sub('d=""', text)  # noqa: E731
+                worst_text = max(worst_text, same_but_round_off(plotted(a.decode()), plotted(b.decode()), 1e-9))
+    print(f"\nreduced-model arrays differ by at most {worst_array:.1e} of their largest entry, "
+          f"the documents' numbers by {worst_text:.1e}")
+    # measured 1.6e-10 (the 1e5-DoF bracket's rotation terms) and below on the beam; the issue's 1e-9
+    assert worst_array <= 1e-9

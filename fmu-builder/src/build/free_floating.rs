@@ -96,9 +96,7 @@ pub fn reduce(
     let rigid = rigid_deflation(&model, &mesh.nodes, &flanges, origin)?;
     let basis = profile::phase("reduction basis", || basis::free_free(&model, &solver, shift, &rigid, modes))?;
     solver.health()?;
-    let on = solver.session();
-    let inv =
-        profile::phase("invariants", || invariants::invariants(&model, &mesh.nodes, &flanges, origin, &basis, on))?;
+    let inv = profile::phase("invariants", || invariants::invariants(&model, &mesh.nodes, &flanges, origin, &basis));
     // mean axes: the elastic shapes carry no momentum
     let scale = props.mass.sqrt() * (1.0 + props.inertia[0].abs().sqrt());
     let drift = inv.c_t.iter().chain(&inv.c_r).fold(0.0f64, |m, v| m.max(v.abs()));
@@ -109,8 +107,8 @@ pub fn reduce(
     }
     let phi_mesh = inertia::expand(&model, &mesh.nodes, &flanges, basis.phi.as_ref());
     let rot = profile::phase("rotation invariants", || {
-        inertia::rotation_invariants(&model, &mesh.nodes, origin, phi_mesh.as_ref(), on)
-    })?;
+        inertia::rotation_invariants(&model, &mesh.nodes, origin, phi_mesh.as_ref())
+    });
     let recovered = match recovery {
         Some(recovery) => {
             // unit flange loads with inertia relief: what deforms a free body

@@ -345,15 +345,13 @@ pub fn reduce(
         _ => basis,
     };
     solver.health()?;
-    let on = solver.session();
-    let inv =
-        profile::phase("invariants", || invariants::invariants(&model, &mesh.nodes, &flanges, origin, &basis, on))?;
+    let inv = profile::phase("invariants", || invariants::invariants(&model, &mesh.nodes, &flanges, origin, &basis));
     let phi_mesh = inertia::expand(&model, &mesh.nodes, &flanges, basis.phi.as_ref());
     let rotation = match spec.rotates() {
-        true => Some(profile::phase("rotation invariants", || -> Result<_> {
-            let r = inertia::rotation_invariants(&model, &mesh.nodes, origin, phi_mesh.as_ref(), on)?;
-            Ok(RotationTerms { g: r.g, o_mat: r.o_mat, o_vec: r.o_vec })
-        })?),
+        true => Some(profile::phase("rotation invariants", || {
+            let r = inertia::rotation_invariants(&model, &mesh.nodes, origin, phi_mesh.as_ref());
+            RotationTerms { g: r.g, o_mat: r.o_mat, o_vec: r.o_vec }
+        })),
         false => None,
     };
     let stiffening = if spec.stiffening() {

@@ -8,9 +8,7 @@
 //! products are then read off nine mass-weighted component products (`ComponentProducts`), so the
 //! cost is one pass over M_s and one reduction over the nodes, not one per invariant.
 
-use crate::error::Result;
 use crate::ffrf::rows::{Layout, Rows};
-use crate::linalg::distributed::Session;
 use crate::model::flange::Flange;
 use crate::model::rigid_coupling::{Assembled, DofOf, NodeDofs};
 use faer::{Mat, MatRef};
@@ -228,28 +226,6 @@ impl ComponentProducts {
         let t = m_phi.inner(&positions(&layout, nodes, origin));
         Self { r: phi.ncols(), s, t }
     }
-    /// The same products on the distributed back-end: the basis's node components (N x 3r,
-    /// column c r + i component c of phi_i) against themselves and the positions, one request.
-    fn distributed(
-        session: &Session,
-        model: &Assembled,
-        nodes: &[[f64; 3]],
-        origin: [f64; 3],
-        phi: MatRef<'_, f64>,
-    ) -> Result<Self> {
-        let (n, r) = (nodes.len(), phi.ncols());
-        let mut fields = Mat::<f64>::zeros(n, 3 * r + 3);
-        for node in 0..n {
-            for c in 0..3 {
-                for i in 0..r {
-                    fields[(node, c * r + i)] = phi[(3 * node + c, i)];
-                }
-                fields[(node, 3 * r + c)] = nodes[node][c] - origin[c];
-            }
-        }
-        let p = session.inner(&model.nodal_mass, fields.subcols(0, 3 * r), fields.as_ref())?;
-        Ok(Self { r, s: p.subcols(0, 3 * r).to_owned(), t: p.subcols(3 * r, 3).to_owned() })
-    }
     fn s(&self, c: usize, d: usize, i: usize, j: usize) -> f64 {
         self.s[(c * self.r + i, d * self.r + j)]
     }
@@ -277,20 +253,16 @@ fn double_cross(a: usize, b: usize, p: impl Fn(usize, usize) -> f64) -> f64 {
     }
 }
 
-/// The rotation invariants of the mesh-level basis `phi`; the mass products on the distributed
-/// back-end where `on` is its session.
+/// The rotation invariants of the mesh-level basis `phi` (the mass products here on every
+/// back-end, as `invariants::invariants`'s).
 pub fn rotation_invariants(
     model: &Assembled,
     nodes: &[[f64; 3]],
     origin: [f64; 3],
     phi: MatRef<'_, f64>,
-    on: Option<&Session>,
-) -> Result<RotationInvariants> {
+) -> RotationInvariants {
     let r = phi.ncols();
-    let p = match on {
-        None => ComponentProducts::new(model, nodes, origin, phi),
-        Some(session) => ComponentProducts::distributed(session, model, nodes, origin, phi)?,
-    };
+    let p = ComponentProducts::new(model, nodes, origin, phi);
     let mut g = vec![0.0; 3 * r * r];
     let mut o_mat = vec![0.0; 9 * r * r];
     let mut o_vec = vec![0.0; 9 * r];
@@ -311,7 +283,7 @@ pub fn rotation_invariants(
             }
         }
     }
-    Ok(RotationInvariants { g, o_mat, o_vec })
+    RotationInvariants { g, o_mat, o_vec }
 }
 
 #[cfg(test)]
@@ -475,7 +447,7 @@ pub(crate) mod tests {
     fn rotation_invariants_equal_the_reference_formulation() {
         let Bar { nodes, flanges, model, origin, phi: phi_c } = bar(4);
         let phi = expand(&model, &nodes, &flanges, phi_c.as_ref());
-        let fast = rotation_invariants(&model, &nodes, origin, phi.as_ref(), None).unwrap();
+        let fast = rotation_invariants(&model, &nodes, origin, phi.as_ref());
         let slow = reference::rotation_invariants(&model, &nodes, origin, phi.as_ref());
         assert_eq!((fast.g.len(), fast.o_mat.len(), fast.o_vec.len()), (3 * 16, 9 * 16, 9 * 4));
         assert_close(&fast.g, &slow.g, 1e-12, "G_a");

@@ -2,9 +2,7 @@
 //! needs to couple the elastic coordinates to the body frame's rigid motion. All are projections
 //! of the consistent mass onto rigid-body fields and the basis, computed once here.
 
-use crate::error::Result;
 use crate::ffrf::rows::{Layout, Rows, transpose_times};
-use crate::linalg::distributed::Session;
 use crate::model::flange::Flange;
 use crate::model::rigid_coupling::{Assembled, DofOf, NodeDofs};
 use crate::reduce::basis::Basis;
@@ -73,44 +71,19 @@ fn rigid_rows<'a>(
     r
 }
 
-/// The invariants of `basis`; the mass products on the distributed back-end where `on` is its
-/// session (the builder's copy of the mass then only names the matrix).
+/// The invariants of `basis`. The mass products run here on every back-end: the builder holds
+/// the mass, they cost a few sparse products, and the same order of operations makes the
+/// invariants of equal bases equal to the bit.
 pub fn invariants(
     model: &Assembled,
     nodes: &[[f64; 3]],
     flanges: &[Flange],
     origin: [f64; 3],
     basis: &Basis,
-    on: Option<&Session>,
-) -> Result<Invariants> {
-    let (c_t, c_r, rigid_mass) = match on {
-        None => rigid_projections(model, nodes, flanges, origin, basis.phi.as_ref()),
-        Some(session) => distributed_rigid_projections(session, model, nodes, flanges, origin, basis.phi.as_ref())?,
-    };
+) -> Invariants {
+    let (c_t, c_r, rigid_mass) = rigid_projections(model, nodes, flanges, origin, basis.phi.as_ref());
     let flange_shapes = flange_shapes(model, flanges, basis.phi.as_ref());
-    Ok(Invariants { c_t, c_r, flange_shapes, rigid_mass })
-}
-
-/// `rigid_projections` with the products R^T M [Phi R] distributed: one request, 6 x (r + 6).
-fn distributed_rigid_projections(
-    session: &Session,
-    model: &Assembled,
-    nodes: &[[f64; 3]],
-    flanges: &[Flange],
-    origin: [f64; 3],
-    phi: MatRef<'_, f64>,
-) -> Result<(Vec<f64>, Vec<f64>, [f64; 3])> {
-    let d = &model.dofs;
-    let rb = phi.ncols();
-    let rigid = rigid_fields(model, nodes, flanges, origin);
-    // Phi vanishes on the mount's DoFs (the trailing ones)
-    let mut fields = Mat::<f64>::zeros(d.n_dofs, rb + 6);
-    fields.as_mut().submatrix_mut(0, 0, d.n_clamped(), rb).copy_from(phi);
-    fields.as_mut().subcols_mut(rb, 6).copy_from(&rigid);
-    let p = session.inner(&model.mass, rigid.as_ref(), fields.as_ref())?;
-    let c_t = (0..3).flat_map(|a| (0..rb).map(move |j| (a, j))).map(|(a, j)| p[(a, j)]).collect();
-    let c_r = (0..3).flat_map(|a| (0..rb).map(move |j| (a, j))).map(|(a, j)| p[(3 + a, j)]).collect();
-    Ok((c_t, c_r, std::array::from_fn(|a| p[(a, rb + a)])))
+    Invariants { c_t, c_r, flange_shapes, rigid_mass }
 }
 
 /// C_t and C_r (3 x r row-major each) and the rigid translation masses. The coupled mass is

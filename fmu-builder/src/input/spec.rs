@@ -446,6 +446,13 @@ pub struct BackendSpec {
 }
 
 impl BackendSpec {
+    /// What of it the FMU's copy of the input keeps: the kind. The ranks, the launcher, the
+    /// Python, the host and the folders are the building machine's, not the model's: FMUs of one
+    /// input built on two machines or rank counts must not differ by them.
+    pub fn packaged(&self) -> BackendSpec {
+        BackendSpec { kind: self.kind, ..Default::default() }
+    }
+
     /// These fields where `over` leaves them unset, `over`'s where it sets them.
     pub fn merged(&self, over: &BackendSpec) -> BackendSpec {
         BackendSpec {

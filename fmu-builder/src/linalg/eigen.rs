@@ -10,9 +10,8 @@
 //! with the residual found.
 
 use crate::error::{BuildError, Result};
-use crate::linalg::distributed::EigenRequest;
 use crate::linalg::held::{HeldSolver, WholeAndHeld};
-use crate::linalg::sparse::{Distributed, Sparse, SpdSolve};
+use crate::linalg::sparse::{Sparse, SpdSolve};
 use crate::linalg::symmetric_eigen::symmetric_eigen;
 use crate::linalg::symmetric_product::mul_new;
 use faer::Mat;
@@ -103,10 +102,6 @@ pub fn lowest_and_held(
     let wanted = count.max(count_held);
     let separate =
         || -> Result<(Eigenpairs, Eigenpairs)> { Ok((lowest(k, m, count, tol)?, lowest(held, m, count_held, tol)?)) };
-    if k.distributed().is_some() {
-        // SLEPc solves each problem on its own, the held one through the whole factor
-        return separate();
-    }
     if count == 0 || count_held == 0 || h == 0 || 4 * (wanted + h) > n || wanted > SHARED_MAX_MODES {
         // nothing to share, a problem too small for it, or too many modes: each on its own
         return separate();
@@ -228,8 +223,9 @@ pub fn lowest_and_held(
             }
             return Ok(Some((whole, free_rows(held_pairs, first))));
         }
-    })?;
-    match shared {
+    });
+    distributed_health(k)?;
+    match shared? {
         Some(pairs) => Ok(pairs),
         None => separate(),
     }
@@ -296,9 +292,26 @@ fn search(
     shift: f64,
     deflate: Option<&Deflation>,
 ) -> Result<Eigenpairs> {
-    if let Some(on) = k.distributed() {
-        return distributed_search(k, on, m, want, tol, shift, deflate);
-    }
+    let found = lanczos_search(k, m, want, tol, shift, deflate);
+    // a distributed solve that failed filled its columns with NaN: its reason, not what the
+    // search made of the NaN
+    distributed_health(k)?;
+    found
+}
+
+/// The failure of a solve on the distributed back-end behind `k`, if one failed.
+fn distributed_health(k: &dyn SpdSolve) -> Result<()> {
+    k.distributed_session().map_or(Ok(()), |s| s.health())
+}
+
+fn lanczos_search(
+    k: &dyn SpdSolve,
+    m: &Sparse,
+    want: Want,
+    tol: f64,
+    shift: f64,
+    deflate: Option<&Deflation>,
+) -> Result<Eigenpairs> {
     if k.n() <= crate::linalg::dense_eigen::DENSE_MAX_DOFS
         && let Some(pairs) = dense_search(k, m, want, shift, deflate)?
     {
@@ -873,99 +886,6 @@ fn checked(k: &dyn SpdSolve, m: &Sparse, pairs: Eigenpairs, shift: f64, refine: 
         .map(|c| if x2[c] > 0.0 && xmy[c] > 0.0 { (r2[c].max(0.0) / x2[c]).sqrt() } else { f64::INFINITY })
         .collect();
     (Eigenpairs { values, vectors: pairs.vectors }, residuals)
-}
-
-/// `search` on the distributed back-end: SLEPc's Krylov-Schur in shift-invert about 0 with the
-/// factor MUMPS holds (for a held problem, through it and G, as `HeldSolver` does here), then
-/// every pair checked here as a search of our own is (`checked`: Rayleigh quotient and residual
-/// from a fresh refined solve), so both back-ends accept the same modes.
-fn distributed_search(
-    k: &dyn SpdSolve,
-    on: Distributed<'_>,
-    m: &Sparse,
-    want: Want,
-    tol: f64,
-    shift: f64,
-    deflate: Option<&Deflation>,
-) -> Result<Eigenpairs> {
-    if matches!(want, Want::Lowest(0)) {
-        return Ok(Eigenpairs { values: Vec::new(), vectors: Mat::zeros(k.n(), 0) });
-    }
-    crate::profile::phase("eigen-solve (SLEPc Krylov-Schur, shift-invert, distributed)", || {
-        let n = k.n();
-        let rows = on.session.rows();
-        let leading;
-        let mass = if m.nrows() > rows {
-            leading = crate::linalg::sparse::block(m, 0..rows, 0..rows)?;
-            &leading
-        } else {
-            m
-        };
-        // eigenvalues of the factored matrix's problem: lambda + shift. SLEPc's test is relative
-        // to the transformed eigenvalue 1/lambda; the check below measures the residual itself
-        // (the beam's 18th mode: 5.4e-7 at SLEPc's 1e-8, above RESIDUAL_TOL): four decades
-        // tighter there, a few more restarts
-        let tol = tol * 1e-4;
-        let request = match want {
-            Want::Lowest(count) => EigenRequest { count, below: None, tol },
-            Want::Below { omega_max, min_count } => {
-                EigenRequest { count: min_count, below: Some(omega_max * omega_max + shift), tol }
-            }
-        };
-        let guard = (request.count / 4).max(4);
-        let began = std::time::Instant::now();
-        let (_, vectors) = on.session.eigen(mass, request, guard, deflate.map(|d| d.vectors.as_ref()), on.held)?;
-        let slepc = began.elapsed().as_secs_f64();
-        // SLEPc's operator is the factor's plain solve, whose round-off the held problem's
-        // correction amplifies (the beam's held modes: residuals to 3e-9, the reduced body's top
-        // frequency 8e-9 off): one inverse iteration with refined solves, then Rayleigh-Ritz
-        // over the wanted pairs and the guard pairs above them, which takes out what the
-        // iteration leaves of the nearest modes. A held problem's vectors come back with its held
-        // (trailing) rows, zero.
-        let mut x = mul_new(m, vectors.subrows(0, n));
-        drop(vectors);
-        k.solve_refined(x.as_mut());
-        if let Some(rigid) = deflate {
-            // the iteration amplifies what round-off leaves of the deflated (rigid) fields most
-            rigid.project(&mut x);
-        }
-        let pairs = shift_invert_ritz(k, m, x, shift)?;
-        let keep = match want {
-            Want::Lowest(count) => count.min(pairs.values.len()),
-            Want::Below { omega_max, min_count } => pairs
-                .values
-                .iter()
-                .filter(|&&l| l <= omega_max * omega_max)
-                .count()
-                .max(min_count)
-                .min(pairs.values.len()),
-        };
-        let pairs =
-            Eigenpairs { values: pairs.values[..keep].to_vec(), vectors: pairs.vectors.subcols(0, keep).to_owned() };
-        let (pairs, residuals) = checked(k, m, pairs, shift, true);
-        on.session.health()?;
-        let (worst, at) = residuals.iter().enumerate().fold((0.0f64, 0), worst_of);
-        crate::profile::note(|| {
-            format!(
-                "SLEPc {slepc:.1} s ({} pairs and {guard} guard pairs), refinement and checks {:.1} s, worst residual {worst:.1e}",
-                keep,
-                began.elapsed().as_secs_f64() - slepc
-            )
-        });
-        if let Want::Lowest(count) = want
-            && keep < count
-        {
-            return Err(BuildError::Numerical(format!("eigensolver: SLEPc returned {keep} of {count} modes")));
-        }
-        if worst > RESIDUAL_TOL {
-            return Err(BuildError::Numerical(format!(
-                "eigensolver: SLEPc's mode {} has the residual {worst:.1e} (accepted {RESIDUAL_TOL:.0e}); request fewer \
-                 modes (reduction.modes) or check the mesh for extreme element proportions",
-                at + 1
-            )));
-        }
-        Ok(pairs)
-    })
 }
 
 /// `search` for a small model: every pair at once (`dense_eigen`), the wanted ones kept and

@@ -8,7 +8,8 @@
 //! factorisations of 10-13 s and 1.3 GB each.
 
 use crate::error::{BuildError, Result};
-use crate::linalg::sparse::{Distributed, SpdSolve, SpdSolver};
+use crate::linalg::distributed::Session;
+use crate::linalg::sparse::{SpdSolve, SpdSolver};
 use crate::linalg::symmetric_product::subtract_compensated;
 use faer::linalg::solvers::Solve;
 use faer::reborrow::{Reborrow, ReborrowMut};
@@ -111,8 +112,8 @@ impl SpdSolve for HeldSolver<'_> {
         subtract_compensated(b, self.whole.matrix(), x);
     }
 
-    fn distributed(&self) -> Option<Distributed<'_>> {
-        self.whole.session().map(|session| Distributed { session, held: Some(self.g.as_ref()) })
+    fn distributed_session(&self) -> Option<&Session> {
+        self.whole.session()
     }
 }
 
@@ -140,6 +141,10 @@ impl SpdSolve for WholeAndHeld<'_> {
         let f = held.compliance.solve(z.rb().subrows(n, total - n));
         faer::linalg::matmul::matmul(z.rb_mut(), faer::Accum::Add, held.g.as_ref(), f.as_ref(), -1.0, faer::Par::Seq);
         z.subrows_mut(n, total - n).fill(0.0);
+    }
+
+    fn distributed_session(&self) -> Option<&Session> {
+        self.held.whole.session()
     }
 
     fn residual(&self, mut b: MatMut<'_, f64>, x: MatRef<'_, f64>) {

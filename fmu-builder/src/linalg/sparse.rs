@@ -489,19 +489,11 @@ pub trait SpdSolve {
         self.solve_refined_steps(rhs, 2);
     }
 
-    /// The distributed back-end behind these solves, if they run there: its eigen-solves are
-    /// then SLEPc's.
-    fn distributed(&self) -> Option<Distributed<'_>> {
+    /// The distributed back-end's session behind these solves, if they run there: a solve
+    /// that fails there leaves NaN and its reason with the session (`Session::health`).
+    fn distributed_session(&self) -> Option<&Session> {
         None
     }
-}
-
-/// A solver on the distributed back-end: the session holding the factor of K and, for a held
-/// problem (`held::HeldSolver`), the unit-load responses G = K^-1 E of its trailing held rows.
-#[derive(Clone, Copy)]
-pub struct Distributed<'a> {
-    pub session: &'a Session,
-    pub held: Option<MatRef<'a, f64>>,
 }
 
 impl SpdSolve for SpdSolver<'_> {
@@ -517,8 +509,8 @@ impl SpdSolve for SpdSolver<'_> {
         symmetric_product::subtract_compensated(b, &self.matrix, x);
     }
 
-    fn distributed(&self) -> Option<Distributed<'_>> {
-        self.session().map(|session| Distributed { session, held: None })
+    fn distributed_session(&self) -> Option<&Session> {
+        self.session()
     }
 }
 

@@ -64,22 +64,37 @@ pub struct UnitCaseStress {
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct BackendReport {
     pub kind: String,
+    #[serde(skip_serializing_if = "is_zero")]
     pub ranks: usize,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub rows_per_rank: Vec<usize>,
+    #[serde(skip_serializing_if = "is_zero_f64")]
     pub factor_entries: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub load_seconds: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub partition_seconds: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub factor_seconds: Option<f64>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub peak_mib_per_rank: Vec<f64>,
 }
 
+fn is_zero(n: &usize) -> bool {
+    *n == 0
+}
+
+fn is_zero_f64(x: &f64) -> bool {
+    *x == 0.0
+}
+
 impl BackendReport {
-    /// What of it goes into the FMU: the kind and the ranks. The times, the memory and the
-    /// factor's size differ from run to run (MUMPS's factor with the partition: 4.83e7 to
-    /// 5.04e7 entries in five 2-rank builds), and the FMU's bytes must not; `--report` and
-    /// `--timings` keep them.
+    /// What of it goes into the FMU: the kind alone. The rank count, the times, the memory and
+    /// the factor's size say where and how the build ran, not what it made (MUMPS's factor
+    /// changes with the partition: 4.83e7 to 5.04e7 entries in five 2-rank builds), and FMUs of
+    /// one input must not differ by them; `--report` and `--timings` keep them.
     pub fn packaged(&self) -> BackendReport {
-        BackendReport { kind: self.kind.clone(), ranks: self.ranks, ..Default::default() }
+        BackendReport { kind: self.kind.clone(), ..Default::default() }
     }
 }
 

@@ -46,7 +46,7 @@ pub fn text(r: &Report) -> String {
         let peaks: Vec<String> = b.peak_mib_per_rank.iter().map(|p| format!("{p:.0}")).collect();
         let _ = writeln!(
             s,
-            "  back-end: PETSc/MUMPS/SLEPc on {} MPI ranks, rows {}, factor {:.3e} entries in all, peak {} MiB per rank",
+            "  back-end: PETSc/MUMPS on {} MPI ranks, rows {}, factor {:.3e} entries in all, peak {} MiB per rank",
             b.ranks,
             rows.join(" / "),
             b.factor_entries,

@@ -1,16 +1,16 @@
 """The distributed back-end's driver: runs under MPI (mpirun -n N python3 driver.py JOB.json),
 holds the mounted or shifted stiffness factored by MUMPS across the ranks, and serves the
-builder's requests over one TCP connection from rank 0: solves, SLEPc eigen-solves, and
-products with the mass matrices. The builder keeps the FE model and everything reduced; only
-the sparse matrices (PETSc binary files in the job folder, read by rank 0 and distributed by
-PETSc) and dense blocks of vectors cross to it.
+builder's requests over one TCP connection from rank 0: blocks of solves, MUMPS's multiple
+right-hand sides in one pass through the factor. Everything else stays in the builder: the FE
+model, the mass products, and the eigen-solves, whose block Lanczos drives these block solves
+(the same method, the same Krylov space shared by the whole and the held problem, and the same
+order of operations as in process). Only the stiffness (a PETSc binary file in the job folder,
+read by rank 0 and distributed by PETSc) and dense blocks of vectors cross to the ranks.
 
 Rows are distributed by PETSc's MatPartitioning (PT-Scotch where PETSc has it) of the
-stiffness's graph, and every square matrix of the stiffness's size follows the same
-distribution. Each request is a JSON line, then the little-endian doubles it announces; each
-answer too. The builder writes this file into the job folder from its own copy, so driver and
-builder always match.
-"""
+stiffness's graph. Each request is a JSON line, then the little-endian doubles it announces;
+each answer too. The builder writes this file into the job folder from its own copy, so driver
+and builder always match."""
 
 import json
 import os
@@ -23,13 +23,12 @@ import traceback
 
 
 def debian_paths():
-    """Debian's petsc4py and slepc4py find themselves through /usr/lib/petsc and /usr/lib/slepc,
-    links only the -dev packages make: without them, PETSC_DIR and SLEPC_DIR name the install."""
+    """Debian's petsc4py finds itself through /usr/lib/petsc, a link only the -dev package
+    makes: without it, PETSC_DIR names the install."""
     import glob
 
     for variable, link, pattern in [
         ("PETSC_DIR", "/usr/lib/petsc", "/usr/lib/petscdir/petsc*/*-linux-gnu-real"),
-        ("SLEPC_DIR", "/usr/lib/slepc", "/usr/lib/slepcdir/slepc*/*-linux-gnu-real"),
     ]:
         if os.environ.get(variable) or os.path.isdir(link):
             continue
@@ -45,14 +44,11 @@ debian_paths()
 import petsc4py  # noqa: E402
 
 petsc4py.init(sys.argv[:1])
-import slepc4py  # noqa: E402
-
-slepc4py.init(sys.argv[:1])
 from mpi4py import MPI  # noqa: E402
 from petsc4py import PETSc  # noqa: E402
-from slepc4py import SLEPc  # noqa: E402
+import numpy  # noqa: E402 -- petsc4py's own dependency
 
-PROTOCOL = 1
+PROTOCOL = 2
 comm = MPI.COMM_WORLD
 rank = comm.Get_rank()
 size = comm.Get_size()
@@ -238,85 +234,11 @@ class Factor:
         return x
 
 
-class WholeSolve:
-    """PC applying K^-1 through the factor: SLEPc gets a KSP of its own (it resets the KSP it is
-    given when done), the factor stays the session's."""
-
-    def __init__(self, factor):
-        self.factor = factor
-
-    def apply(self, pc, b, x):
-        self.factor.ksp.solve(b, x)
-
-
-class HeldSolve:
-    """PC of the held problem K_ii x = b (the trailing rows held) through the whole factor:
-    z = K^-1 [b; 0], x = (z - G S^-1 z_b)_i with G = K^-1 E and S = E^T G, as the builder's
-    in-process held solver does (no second factorisation)."""
-
-    def __init__(self, factor, g, held_rows, keep):
-        self.factor = factor
-        self.g = g
-        self.keep = keep
-        h = len(g)
-        # z_b gathered to every rank: h values
-        held_is = PETSc.IS().createGeneral(held_rows if rank == 0 else [], comm=PETSc.COMM_SELF)
-        self.held_values = PETSc.Vec().createSeq(h if rank == 0 else 0)
-        # one scatter for every application: all vectors share the factor's layout
-        self.held_scatter = PETSc.Scatter().create(factor.layout.template, held_is, self.held_values, None)
-        s = [[0.0] * h for _ in range(h)]
-        for j in range(h):
-            values = self._held_of(g[j])
-            for i in range(h):
-                s[i][j] = values[i]
-        s = [[0.5 * (s[i][j] + s[j][i]) for j in range(h)] for i in range(h)]
-        self.s_inverse = invert(s)
-
-    def _held_of(self, v):
-        self.held_scatter.scatter(v, self.held_values, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        values = self.held_values.getArray().tolist() if rank == 0 else None
-        return comm.bcast(values, root=0)
-
-    def apply(self, pc, b, x):
-        whole = self.factor.layout.vector()
-        whole.set(0.0)
-        sub = whole.getSubVector(self.keep)
-        b.copy(sub)
-        whole.restoreSubVector(self.keep, sub)
-        z = self.factor.solve(whole)
-        zb = self._held_of(z)
-        h = len(self.g)
-        z.maxpy([-sum(self.s_inverse[j][i] * zb[i] for i in range(h)) for j in range(h)], self.g)
-        sub = z.getSubVector(self.keep)
-        sub.copy(x)
-        z.restoreSubVector(self.keep, sub)
-
-
-def invert(s):
-    """Inverse of a small SPD matrix by Gauss-Jordan (the held DoFs' compliance, 6 per flange)."""
-    n = len(s)
-    a = [row[:] + [1.0 if i == j else 0.0 for j in range(n)] for i, row in enumerate(s)]
-    for c in range(n):
-        p = max(range(c, n), key=lambda r: abs(a[r][c]))
-        a[c], a[p] = a[p], a[c]
-        if a[c][c] == 0.0:
-            raise Failure("the held DoFs' compliance is singular")
-        inv = 1.0 / a[c][c]
-        a[c] = [v * inv for v in a[c]]
-        for r in range(n):
-            if r != c and a[r][c] != 0.0:
-                f = a[r][c]
-                a[r] = [vr - f * vc for vr, vc in zip(a[r], a[c])]
-    return [row[n:] for row in a]
-
-
 class Driver:
     def __init__(self, job):
         self.job = job
         self.folder = os.path.dirname(os.path.abspath(job["path"]))
         self.factor = Factor(os.path.join(self.folder, job["stiffness"]), job.get("partitioner", "ptscotch"))
-        # matrices loaded on request: id -> (matrix, layout)
-        self.matrices = {}
 
     def started(self):
         f = self.factor
@@ -337,7 +259,10 @@ class Driver:
                 channel.answer({"ok": True, "peak_mib": comm.gather(peak_mib(), root=0)})
                 return
             try:
-                answer, doubles = getattr(self, "op_" + op)(header, payload)
+                serve = getattr(self, "op_" + str(op), None)
+                if serve is None:
+                    raise Failure("the driver has no request %r" % op)
+                answer, doubles = serve(header, payload)
                 answer["ok"] = True
             except Exception as e:  # noqa: BLE001 -- every failure goes back to the builder as its message
                 traceback.print_exc()
@@ -347,17 +272,6 @@ class Driver:
     def op_stats(self, header, payload):
         return {"peak_mib": comm.gather(peak_mib(), root=0)}, None
 
-    def op_load(self, header, payload):
-        a = load(os.path.join(self.folder, header["file"]))
-        n = a.getSize()[0]
-        if n == self.factor.layout.n:
-            b = a.createSubMatrix(self.factor.layout.rows, self.factor.layout.rows) if size > 1 else a
-            layout = self.factor.layout
-        else:
-            b, layout = a, natural_layout(a)
-        self.matrices[header["id"]] = (b, layout)
-        return {}, None
-
     def op_solve(self, header, payload):
         """K^-1 B for a block of columns: MUMPS's multiple right-hand sides (MatMatSolve), one
         pass through the factor for the block instead of one per column."""
@@ -366,124 +280,26 @@ class Driver:
         b = PETSc.Mat().createDense(((layout.local, n), (PETSc.DECIDE, count)), comm=PETSc.COMM_WORLD)
         b.setUp()
         block = b.getDenseArray()
-        for j, column in enumerate(columns_of(payload, n, count)):
-            block[:, j] = layout.spread(column).getArray()
+        if size == 1:
+            # one rank holds the rows in the builder's order: the block as it came
+            block[:, :] = numpy.frombuffer(payload, dtype=float).reshape(count, n).T
+        else:
+            for j, column in enumerate(columns_of(payload, n, count)):
+                block[:, j] = layout.spread(column).getArray()
         b.assemble()
         x = b.duplicate()
         self.factor.ksp.getPC().getFactorMatrix().matSolve(b, x)
-        out = bytearray() if rank == 0 else None
-        for j in range(count):
-            result = layout.gather(x.getColumnVector(j))
-            if rank == 0:
-                out += result.tobytes()
+        if size == 1:
+            out = x.getDenseArray().T.tobytes()
+        else:
+            out = bytearray() if rank == 0 else None
+            for j in range(count):
+                result = layout.gather(x.getColumnVector(j))
+                if rank == 0:
+                    out += result.tobytes()
         b.destroy()
         x.destroy()
         return {"columns": count}, out
-
-    def op_inner(self, header, payload):
-        """A^T M B for the matrix `id` (A: a columns, B: b columns, column-major)."""
-        m, layout = self.matrices[header["id"]]
-        n, a_count, b_count = layout.n, header["a"], header["b"]
-        a_columns = [layout.spread(c) for c in columns_of(payload, n, a_count)]
-        rest = payload[n * a_count:] if rank == 0 else None
-        result = [[0.0] * b_count for _ in range(a_count)]
-        y = layout.vector()
-        for j, column in enumerate(columns_of(rest, n, b_count)):
-            m.mult(layout.spread(column), y)
-            for i in range(a_count):
-                result[i][j] = a_columns[i].dot(y)
-        flat = [result[i][j] for j in range(b_count) for i in range(a_count)]
-        return {"rows": a_count, "columns": b_count}, flat
-
-    def op_eigen(self, header, payload):
-        """Lowest eigenpairs of K x = lambda M x by SLEPc's Krylov-Schur in shift-invert about 0
-        (K is the factored matrix, possibly K + shift M), optionally with trailing rows held and
-        vectors deflated; `count` pairs, or all below `below` (lambda), at least `min_count`."""
-        f = self.factor
-        m, layout = self.matrices[header["mass"]]
-        n = layout.n
-        deflate_count = header.get("deflate", 0)
-        held_count = header.get("held", 0)
-        deflate = [layout.spread(c) for c in columns_of(payload, n, deflate_count)]
-        rest = payload[n * deflate_count:] if rank == 0 else None
-        g = [layout.spread(c) for c in columns_of(rest, n, held_count)]
-        a, b = f.k, m
-        ksp = PETSc.KSP().create(comm=PETSc.COMM_WORLD)
-        ksp.setType("preonly")
-        pc = ksp.getPC()
-        pc.setType("python")
-        pc.setPythonContext(WholeSolve(f))
-        keep = None
-        if held_count:
-            first = n - held_count
-            # this rank's rows (new numbering) whose original row is kept free
-            start, _ = layout.template.getOwnershipRange()
-            original = layout.rows.getIndices()
-            kept = [start + i for i, r in enumerate(original) if r < first]
-            held_new = comm.gather([start + i for i, r in enumerate(original) if r >= first], root=0)
-            held_original = comm.gather([int(r) for r in original if r >= first], root=0)
-            if rank == 0:
-                pairs = sorted(zip(sum(held_original, []), sum(held_new, [])))
-                held_rows = [new for _, new in pairs]
-            else:
-                held_rows = []
-            keep = PETSc.IS().createGeneral(kept, comm=PETSc.COMM_WORLD)
-            a = f.k.createSubMatrix(keep, keep)
-            b = m.createSubMatrix(keep, keep)
-            pc.setPythonContext(HeldSolve(f, g, held_rows, keep))
-        eps = SLEPc.EPS().create(comm=PETSc.COMM_WORLD)
-        eps.setOperators(a, b)
-        eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)
-        eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
-        eps.setTarget(0.0)
-        st = eps.getST()
-        st.setType("sinvert")
-        st.setShift(0.0)
-        st.setKSP(ksp)
-        eps.setTolerances(header.get("tol", 1e-12), 10000)
-        if deflate:
-            eps.setDeflationSpace(deflate)
-        below = header.get("below")
-        # guard pairs beyond those wanted: the builder's Rayleigh-Ritz step resolves the wanted
-        # ones against them
-        guard = header.get("guard", 0)
-        limit = n - held_count - deflate_count
-        wanted = min(max(header.get("count", 0), header.get("min_count", 0), 1 if below is None else 10), limit)
-        while True:
-            nev = min(wanted + guard, limit)
-            eps.setDimensions(nev=nev, ncv=min(max(2 * nev, nev + 16), limit))
-            eps.solve()
-            found = eps.getConverged()
-            if found < nev:
-                raise Failure("SLEPc found %d of %d eigenpairs" % (found, nev))
-            values = sorted(eps.getEigenvalue(i).real for i in range(found))
-            if below is None or nev >= limit or values[max(nev - guard - 1, 0)] > below:
-                break
-            wanted = min(2 * wanted, limit)
-        order = sorted(range(found), key=lambda i: eps.getEigenvalue(i).real)
-        if below is not None:
-            inside = sum(1 for i in order if eps.getEigenvalue(i).real <= below)
-            wanted = max(inside, header.get("min_count", 0))
-        order = order[: min(wanted + guard, found)]
-        x = a.createVecRight()
-        values = []
-        out = bytearray() if rank == 0 else None
-        whole = layout.vector()
-        for i in order:
-            values.append(eps.getEigenpair(i, x).real)
-            if keep is not None:
-                whole.set(0.0)
-                sub = whole.getSubVector(keep)
-                x.copy(sub)
-                whole.restoreSubVector(keep, sub)
-                v = layout.gather(whole)
-            else:
-                v = layout.gather(x)
-            if rank == 0:
-                out += v.tobytes()
-        iterations = eps.getIterationNumber()
-        eps.destroy()
-        return {"values": values, "iterations": iterations, "rows": n}, out
 
 
 def reason(e):
@@ -495,7 +311,7 @@ def reason(e):
 def main():
     if sys.argv[1:] == ["--probe"]:
         # the builder's check before any work: this Python imports all the driver needs
-        print(json.dumps({"petsc": PETSc.Sys.getVersion(), "slepc": SLEPc.Sys.getVersion(), "python": sys.executable}))
+        print(json.dumps({"petsc": PETSc.Sys.getVersion(), "python": sys.executable}))
         return 0
     job_path = sys.argv[1]
     with open(job_path) as f:

@@ -1,8 +1,9 @@
 //! The distributed back-end: the heavy linear algebra of a reduction (the factorisation of the
 //! stiffness, every solve with it, the shift-invert eigen-solves, the mass products of the
-//! floating-frame invariants) run by PETSc, MUMPS and SLEPc across MPI ranks, for parts whose
-//! factor no single machine holds. The builder keeps the FE model and does everything else; a
-//! small driver (`driver.py`, petsc4py and slepc4py) started under the MPI launcher holds the
+//! floating-frame invariants) run by PETSc and MUMPS across MPI ranks, for parts whose
+//! factor no single machine holds. The builder keeps the FE model and does everything else (its
+//! block Lanczos eigen-solver drives the distributed block solves); a
+//! small driver (`driver.py`, petsc4py) started under the MPI launcher holds the
 //! distributed matrices and the factor, and answers requests over one TCP connection.
 
 pub mod job_folder;
@@ -19,7 +20,7 @@ pub enum Backend {
     /// In the builder's process (faer's sparse Cholesky, the block Lanczos eigen-solver).
     #[default]
     InProcess,
-    /// On PETSc/SLEPc across MPI ranks.
+    /// On PETSc and MUMPS across MPI ranks.
     Petsc(PetscBackend),
 }
 
@@ -31,7 +32,7 @@ pub struct PetscBackend {
     /// The launcher and its own options (`mpirun --hostfile hosts`, `srun`), words split at
     /// white space; `-n <ranks>`, then the Python and the driver follow.
     pub launcher: Vec<String>,
-    /// The Python with petsc4py, slepc4py and mpi4py on every rank.
+    /// The Python with petsc4py and mpi4py on every rank.
     pub python: String,
     /// The address rank 0 reaches the builder at (this machine's own for a local run).
     pub host: String,
@@ -67,10 +68,10 @@ impl PetscBackend {
     }
 
     /// Checks, before any FE work, that the launcher can be started and finds the Python whose
-    /// imports the driver needs (petsc4py, slepc4py, mpi4py): `python` alone when the user named
+    /// imports the driver needs (petsc4py, mpi4py): `python` alone when the user named
     /// one, else Debian's /usr/bin/python3 first, then `python3` in PATH (another Python first in
     /// PATH, a virtual environment's, has none of Debian's packages). Returns that Python and
-    /// what it reported (PETSc's and SLEPc's versions).
+    /// what it reported (PETSc's version).
     pub fn preflight(&self, python_named: bool) -> crate::error::Result<(String, String)> {
         use crate::error::BuildError;
         let launcher = self.launcher.first().map_or("mpirun", String::as_str);
@@ -96,8 +97,8 @@ impl PetscBackend {
             }
         }
         Err(BuildError::Backend(format!(
-            "no Python that imports petsc4py, slepc4py and mpi4py ({}); install Debian's python3-petsc4py-real, \
-             python3-slepc4py-real and python3-mpi4py, or name the Python that has them (--python, \
+            "no Python that imports petsc4py and mpi4py ({}); install Debian's python3-petsc4py-real \
+             and python3-mpi4py, or name the Python that has them (--python, \
              reduction.backend.python)",
             tried.join("; ")
         )))
@@ -147,13 +148,4 @@ fn probe_python(python: &str) -> Result<String, String> {
     }
     let stderr = String::from_utf8_lossy(&output.stderr);
     Err(stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("failed without a message").trim().to_string())
-}
-
-/// An eigen-solve for SLEPc: `count` lowest pairs, or (with `below`) every pair with lambda
-/// below it and at least `count`.
-#[derive(Clone, Copy, Debug)]
-pub struct EigenRequest {
-    pub count: usize,
-    pub below: Option<f64>,
-    pub tol: f64,
 }

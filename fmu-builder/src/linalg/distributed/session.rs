@@ -3,11 +3,11 @@
 //! connection rank 0 opens back to the builder. Requests go one at a time (a JSON line, then
 //! little-endian doubles); a failed request is an error naming what the driver reported.
 
-use super::{EigenRequest, PetscBackend};
+use super::PetscBackend;
 use super::{job_folder, petsc_binary, process_group};
 use crate::error::{BuildError, Result};
 use faer::sparse::SparseColMat;
-use faer::{Mat, MatMut, MatRef};
+use faer::{MatMut, MatRef};
 use serde_json::{Value, json};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{TcpListener, TcpStream};
@@ -19,13 +19,10 @@ use std::time::{Duration, Instant};
 /// The driver, shipped inside the builder and written into each job folder: builder and driver
 /// always speak the same protocol.
 pub(super) const DRIVER: &str = include_str!("driver.py");
-const PROTOCOL: u64 = 1;
+const PROTOCOL: u64 = 2;
 
 /// The builder's sparse matrices (`linalg::sparse::Sparse`, which builds on this module).
 type Sparse = SparseColMat<usize, f64>;
-
-/// A matrix told apart by its rows, entries and two weighted sums of its entries.
-type MatrixKey = (usize, usize, u64, u64);
 
 struct Connection {
     reader: BufReader<TcpStream>,
@@ -52,8 +49,6 @@ pub struct Session {
     folder: PathBuf,
     keep_folder: bool,
     rows: usize,
-    /// Matrices the driver holds: (rows, entries, two sums) of ours -> its id.
-    loaded: Mutex<Vec<(MatrixKey, usize)>>,
     /// The first failure of a request that could not return an error (a solve inside the
     /// `SpdSolve` trait): reported by `health`.
     failure: Mutex<Option<String>>,
@@ -229,7 +224,6 @@ impl Session {
             folder: folder.to_path_buf(),
             keep_folder: backend.keep_job_folder,
             rows: k.nrows(),
-            loaded: Mutex::new(Vec::new()),
             failure: Mutex::new(None),
             started,
         })
@@ -409,94 +403,6 @@ impl Session {
             Some(message) => Err(BuildError::Numerical(message)),
             None => Ok(()),
         }
-    }
-
-    /// The driver's id of `m`, sending it the first time. Matrices are told apart by their
-    /// size and two weighted sums of their entries: the builder passes leading blocks it makes
-    /// anew for each request, which an address would not recognise.
-    fn matrix_id(&self, m: &Sparse) -> Result<usize> {
-        let lock = || BuildError::Numerical("the PETSc back-end: a lost lock".into());
-        let mut sums = [0.0f64; 2];
-        for j in 0..m.ncols() {
-            for (&i, &v) in m.row_idx_of_col_raw(j).iter().zip(m.val_of_col(j)) {
-                sums[0] += v;
-                sums[1] += v * ((i * 31 + j * 17) % 101) as f64;
-            }
-        }
-        let key = (m.nrows(), m.compute_nnz(), sums[0].to_bits(), sums[1].to_bits());
-        let loaded = self.loaded.lock().map_err(|_| lock())?;
-        if let Some(&(_, id)) = loaded.iter().find(|(k, _)| *k == key) {
-            return Ok(id);
-        }
-        let id = loaded.len();
-        drop(loaded);
-        let file = format!("matrix{id}.bin");
-        petsc_binary::write_symmetric(&self.folder.join(&file), m)?;
-        self.request(json!({"op": "load", "id": id, "file": file}), &[])?;
-        self.loaded.lock().map_err(|_| lock())?.push((key, id));
-        Ok(id)
-    }
-
-    /// A^T M B (M symmetric, rows as A and B), the products distributed.
-    pub fn inner(&self, m: &Sparse, a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Result<Mat<f64>> {
-        let id = self.matrix_id(m)?;
-        let (_, v) = self.request(json!({"op": "inner", "id": id, "a": a.ncols(), "b": b.ncols()}), &[a, b])?;
-        if v.len() != a.ncols() * b.ncols() {
-            return Err(BuildError::Numerical("the PETSc back-end returned a product of another size".into()));
-        }
-        Ok(Mat::from_fn(a.ncols(), b.ncols(), |i, j| v[j * a.ncols() + i]))
-    }
-
-    /// SLEPc's eigenpairs of the factored K with the mass `m` (as many rows): values
-    /// (of the factored matrix's problem) and vectors, all rows (zero at held rows); `guard`
-    /// pairs more than `request` asks for.
-    pub fn eigen(
-        &self,
-        m: &Sparse,
-        request: EigenRequest,
-        guard: usize,
-        deflate: Option<MatRef<'_, f64>>,
-        held: Option<MatRef<'_, f64>>,
-    ) -> Result<(Vec<f64>, Mat<f64>)> {
-        if m.nrows() != self.rows {
-            return Err(BuildError::Numerical(format!(
-                "the PETSc back-end: a mass of {} rows for a stiffness of {}",
-                m.nrows(),
-                self.rows
-            )));
-        }
-        let id = self.matrix_id(m)?;
-        let mut header = json!({
-            "op": "eigen",
-            "mass": id,
-            "deflate": deflate.map_or(0, |d| d.ncols()),
-            "held": held.map_or(0, |g| g.ncols()),
-            "tol": request.tol,
-            "guard": guard,
-        });
-        match request.below {
-            Some(lambda) => {
-                header["below"] = json!(lambda);
-                header["min_count"] = json!(request.count);
-            }
-            None => header["count"] = json!(request.count),
-        }
-        let blocks: Vec<MatRef<'_, f64>> = deflate.into_iter().chain(held).collect();
-        let (answer, v) = self.request(header, &blocks)?;
-        let values: Vec<f64> =
-            answer["values"].as_array().map(|a| a.iter().filter_map(Value::as_f64).collect()).unwrap_or_default();
-        let n = self.rows;
-        if v.len() != n * values.len() {
-            return Err(BuildError::Numerical("the PETSc back-end returned eigenvectors of another size".into()));
-        }
-        crate::profile::note(|| {
-            format!(
-                "SLEPc Krylov-Schur: {} pairs in {} restarts",
-                values.len(),
-                answer["iterations"].as_u64().unwrap_or(0)
-            )
-        });
-        Ok((values.clone(), Mat::from_fn(n, values.len(), |i, j| v[j * n + i])))
     }
 
     /// Peak resident memory of each rank so far, MiB.
