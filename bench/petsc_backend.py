@@ -1,4 +1,4 @@
-"""The distributed back-end (PETSc, MUMPS, SLEPc under MPI) against the in-process one, side by
+"""The distributed back-end (PETSc and MUMPS under MPI) against the in-process one, side by
 side in one run, on the benchmark bracket of builder_vs_calculix.py (the same Gmsh meshes, cached
 in target/builder-bench; Craig-Bampton with 20 fixed-interface modes).
 
@@ -18,19 +18,20 @@ Targets (exit 1 on a miss):
 - at every size, 1 and 2 ranks: the reduced frequencies equal the in-process FMU's within 1e-9;
 - at the largest size: with 2 ranks the larger rank's peak memory is at most 0.75 of the
   1-rank peak (the factor really is spread: measured about 0.6);
-- at the largest size: 2 ranks take no longer than 1 rank (both cores work: measured about
-  0.8 of it).
+- at every size from 1e5 DoF: 1 rank takes at most 1.5 times the in-process build, and 2 ranks
+  no longer than 1 rank (both cores work).
 
-The in-process back-end is faster on one machine (its eigen-solver shares a Krylov space
-between the whole and the held problem and solves in blocks; SLEPc's Krylov-Schur applies the
-operator one vector at a time through a Python preconditioner): the distributed back-end is
-for parts whose factor one machine cannot hold, and its figures here are what it costs where
-one could.
+Both back-ends run the same block shift-invert Lanczos (the builder's, one Krylov space for the
+whole and the held problem); on PETSc its block solves are MUMPS's, one request per block. What
+remains of the difference on one machine: launching the ranks and importing petsc4py (about a
+second), MUMPS's analysis and factorisation and its solves on one core per rank where faer's use
+both cores. The distributed back-end is for parts whose factor one machine cannot hold, and its
+figures here are what it costs where one could.
 
     tests/.venv/bin/python bench/petsc_backend.py                   # 2e4, 1e5, 2.4e5 DoF
     tests/.venv/bin/python bench/petsc_backend.py --sizes 2e4       # quick look
 
-Needs Debian's python3-petsc4py-real, python3-slepc4py-real, python3-mpi4py, openmpi-bin (and
+Needs Debian's python3-petsc4py-real, python3-mpi4py, openmpi-bin (and
 libopenblas0-serial: MUMPS on the reference BLAS factors 4 times slower), as tests/run.sh
 installs them.
 """
@@ -54,7 +55,9 @@ PROJECT_TO = 1e7
 RANK_MEMORY_GIB = 20.0
 EQUAL_FREQUENCIES = 1e-9
 SPREAD_TARGET = 0.75
+ONE_RANK_TIME_TARGET = 1.5
 TWO_RANKS_TIME_TARGET = 1.0
+TIME_TARGETS_FROM = 1e5
 
 
 def launcher_env() -> dict:
@@ -84,8 +87,8 @@ def build(builder: Path, spec: Path, mesh_dir: Path, name: str, extra: list) -> 
         # the builder's own peak as it prints it: wait4's ru_maxrss would count the MPI ranks,
         # its waited-for descendants, too
         "builder_peak_mib": max(printed) if printed else run.maxrss_mib,
-        "rank_peaks_mib": backend["peak_mib_per_rank"],
-        "rows_per_rank": backend["rows_per_rank"],
+        "rank_peaks_mib": backend.get("peak_mib_per_rank", []),
+        "rows_per_rank": backend.get("rows_per_rank", []),
         "factor_entries": backend["factor_entries"],
         "factor_s": backend.get("factor_seconds"),
         "partition_s": backend.get("partition_seconds"),
@@ -192,12 +195,24 @@ def main(argv=None) -> int:
           f"{spread:.2f} <= {SPREAD_TARGET}")
     if not ok:
         misses.append("spread")
-    ratio = two_ranks["wall_s"] / one["wall_s"]
-    ok = ratio <= TWO_RANKS_TIME_TARGET
-    print(f"  {'PASS' if ok else 'MISS'} {bvc.label(nominal)}: wall time 2 ranks / 1 rank {ratio:.2f} <= "
-          f"{TWO_RANKS_TIME_TARGET}")
-    if not ok:
-        misses.append("time")
+    # the speed targets at every size of 1e5 DoF and more (below it the launch's fixed second
+    # or two dominates)
+    for nominal, runs in rows:
+        if nominal < TIME_TARGETS_FROM:
+            continue
+        in_process, one, two_ranks = runs
+        ratio = one["wall_s"] / in_process["wall_s"]
+        ok = ratio <= ONE_RANK_TIME_TARGET
+        print(f"  {'PASS' if ok else 'MISS'} {bvc.label(nominal)}: wall time 1 rank / in process {ratio:.2f} <= "
+              f"{ONE_RANK_TIME_TARGET}")
+        if not ok:
+            misses.append(f"1 rank at {bvc.label(nominal)}")
+        ratio = two_ranks["wall_s"] / one["wall_s"]
+        ok = ratio <= TWO_RANKS_TIME_TARGET
+        print(f"  {'PASS' if ok else 'MISS'} {bvc.label(nominal)}: wall time 2 ranks / 1 rank {ratio:.2f} <= "
+              f"{TWO_RANKS_TIME_TARGET}")
+        if not ok:
+            misses.append(f"2 ranks at {bvc.label(nominal)}")
     return 1 if misses else 0
 
 

@@ -37,10 +37,10 @@ fi
 if [ -n "${CI:-}" ]; then
     export FMU_RUNTIME_PORTABLE=require
 fi
-# the distributed back-end's tests: PETSc, SLEPc (with MUMPS) and OpenMPI from Debian, for
+# the distributed back-end's tests: PETSc (with MUMPS) and OpenMPI from Debian, for
 # Debian's own Python (/usr/bin/python3), which the driver runs under mpirun
 # (OpenBLAS: MUMPS on Debian's reference BLAS factors about four times slower)
-petsc_packages="python3-petsc4py-real python3-slepc4py-real python3-mpi4py openmpi-bin libopenblas0-serial"
+petsc_packages="python3-petsc4py-real python3-mpi4py openmpi-bin libopenblas0-serial"
 petsc_skipped="the PETSc back-end's tests (tests/test_petsc_backend.py) will be skipped; to run them, install
 Debian's packages and run this script again:
     sudo apt-get install -y $petsc_packages"

@@ -264,7 +264,7 @@ class Driver:
     """The driver run directly on a matrix of the test's, as the builder runs it: the job file,
     the PETSc binary matrices, one TCP connection."""
 
-    def __init__(self, folder, k, ranks):
+    def __init__(self, folder, k, ranks, partitioner="current"):
         self.n = k.shape[0]
         folder.mkdir(parents=True, exist_ok=True)
         shutil.copy(DRIVER, folder / "driver.py")
@@ -276,7 +276,7 @@ class Driver:
         server.settimeout(120)
         (folder / "job.json").write_text(json.dumps({"host": "127.0.0.1", "port": server.getsockname()[1],
                                                      "token": "t", "stiffness": "stiffness.bin",
-                                                     "partitioner": "ptscotch"}))
+                                                     "partitioner": partitioner}))
         self.process = subprocess.Popen(["mpirun", "--oversubscribe", "-n", str(ranks), PYTHON,
                                          str(folder / "driver.py"), str(folder / "job.json")],
                                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
@@ -317,11 +317,12 @@ def write_petsc(path, a):
 
 
 @needs_petsc
-@pytest.mark.parametrize("ranks", [1, 2])
-def test_driver_solves_equal_lapack(tmp_path, ranks):
+@pytest.mark.parametrize("ranks,partitioner", [(1, "current"), (2, "current"), (2, "ptscotch")])
+def test_driver_solves_equal_lapack(tmp_path, ranks, partitioner):
     """The driver's one request, blocks of solves, on a small sparse SPD matrix against numpy
-    (LAPACK): one column, a block, a block again (the factor is kept), and a request the driver
-    does not know, refused with its name."""
+    (LAPACK): one column, a block, a block again (the factor is kept), with PETSc's contiguous
+    rows and with rows a graph partition scattered over the ranks; and a request the driver does
+    not know, refused with its name."""
     n = 90
     rng = np.random.default_rng(7)
     k = np.zeros((n, n))
@@ -329,7 +330,7 @@ def test_driver_solves_equal_lapack(tmp_path, ranks):
         for j in range(max(0, i - 3), i):
             k[i, j] = k[j, i] = -rng.uniform(0.5, 1.5)
     k += np.diag(-k.sum(axis=1) + rng.uniform(0.1, 0.2, n))
-    driver = Driver(tmp_path / "job", k, ranks)
+    driver = Driver(tmp_path / "job", k, ranks, partitioner)
     try:
         assert len(driver.started["rows_per_rank"]) == ranks and sum(driver.started["rows_per_rank"]) == n
         for columns in [1, 3, 7]:

@@ -160,6 +160,48 @@ def test_a_stopped_or_killed_rank_is_named_and_nothing_is_left(tmp_path, fault):
     assert_nothing_left(folder)
 
 
+def test_a_stopped_rank_the_launcher_does_not_hold_is_named_by_its_heartbeat(tmp_path):
+    """Ranks on other nodes are neither the launcher's processes nor below it: a launcher here
+    starts mpirun detached (a new session, re-parented to init), so only the ranks' heartbeat
+    files in the job folder can tell the builder that rank 1 was stopped. It is named, with its
+    process and host, within seconds, and the job is ended."""
+    launcher = tmp_path / "detached-mpirun"
+    launcher.write_text(f"""#!/bin/bash
+pidfile=$(mktemp)
+( setsid {LAUNCHER} "$@" </dev/null & echo $! > "$pidfile" )
+pid=$(cat "$pidfile")
+rm -f "$pidfile"
+trap 'kill -TERM "$pid" 2>/dev/null; exit 143' TERM INT
+while kill -0 "$pid" 2>/dev/null; do sleep 0.2; done
+""")
+    launcher.chmod(0o755)
+    jobs = tmp_path / "jobs"
+    jobs.mkdir()
+    spec = json.loads(spec_file(tmp_path, jobs).read_text())
+    spec["reduction"]["backend"]["launcher"] = str(launcher)
+    path = tmp_path / "detached.json"
+    path.write_text(json.dumps(spec))
+    proc = start([path, "-o", tmp_path / "B.fmu", "-q"])
+    folder = wait_for(lambda: job_of(jobs), 30, "job folder")
+    # stopped while it works: once both beat (a rank stopped before its first beat is the
+    # connect timeout's to find, as one that never starts); the ranks found after that, when
+    # their watchers no longer pass for them
+    wait_for(lambda: len([f for f in folder.glob("heartbeat-*") if not f.suffix]) == 2, 30, "both ranks' heartbeats")
+    ranks = wait_for(lambda: (r := rank_pids(folder)) and len(r) == 2 and r, 30, "two ranks")
+    began = time.monotonic()
+    os.kill(ranks[1], signal.SIGSTOP)
+    try:
+        out, err = proc.communicate(timeout=120)
+    finally:
+        os.kill(ranks[1], signal.SIGCONT)
+    assert proc.returncode == 1, err
+    assert f"rank 1 (process {ranks[1]} on {socket.gethostname()}) is stopped (SIGSTOP, a debugger), as its " \
+        "heartbeat reports" in err, err
+    # a beat a second, looked at every second
+    assert time.monotonic() - began < 20
+    assert_nothing_left(folder, within=20.0)
+
+
 def test_the_job_folder_and_its_files_are_private(tmp_path):
     jobs = tmp_path / "jobs"
     jobs.mkdir()

@@ -61,9 +61,9 @@ struct Args {
     /// this folder: the input of `geometry.matrices`
     #[arg(long)]
     export_free_free: Option<PathBuf>,
-    /// Where the reduction's linear algebra runs: in-process (default) or petsc (PETSc, MUMPS
-    /// and SLEPc across MPI ranks, through a driver started by the MPI launcher; needs petsc4py,
-    /// slepc4py and mpi4py on every rank). Overrides the input's reduction.backend.kind
+    /// Where the reduction's linear algebra runs: in-process (default) or petsc (the factor and
+    /// its solves on PETSc and MUMPS across MPI ranks, through a driver started by the MPI
+    /// launcher; needs petsc4py and mpi4py on every rank). Overrides the input's reduction.backend.kind
     #[arg(long, value_parser = ["in-process", "petsc"], conflicts_with = "sweep")]
     backend: Option<String>,
     /// petsc back-end: MPI ranks [default 2]
@@ -73,7 +73,7 @@ struct Args {
     /// "srun" ["-n <ranks> <python> driver.py job.json" follow; default "mpirun"]
     #[arg(long, conflicts_with = "sweep")]
     launcher: Option<String>,
-    /// petsc back-end: the Python with petsc4py, slepc4py and mpi4py on every rank [default: the
+    /// petsc back-end: the Python with petsc4py and mpi4py on every rank [default: the
     /// first of /usr/bin/python3 and python3 in PATH that imports them]
     #[arg(long, conflicts_with = "sweep")]
     python: Option<String>,

@@ -142,6 +142,10 @@ pub fn lowest_and_held(
             let mut next_check = first_check;
             let (both, count_whole, estimated, at_limit, refine, solves, dim) = loop {
                 let exhausted = !lanczos.extend(k)?;
+            // a block the distributed back-end failed to solve ends the search at once
+            distributed_health(k)?;
+                // a block the distributed back-end failed to solve ends the search at once
+                distributed_health(k)?;
                 let dim = lanczos.dim();
                 if dim < next_check && !exhausted && dim < max_dim {
                     continue;
@@ -350,6 +354,8 @@ fn lanczos_search(
         loop {
             let max_dim = max_dim(count);
             let exhausted = !lanczos.extend(k)?;
+            // a block the distributed back-end failed to solve ends the search at once
+            distributed_health(k)?;
             let dim = lanczos.dim();
             if (dim < (count + p).min(n_free) || dim < next_check) && !exhausted && dim < max_dim {
                 continue;
@@ -941,12 +947,12 @@ fn dense_search(
 /// Rayleigh-Ritz of the shift-invert operator on span(X): S = X^T M K^-1 M X (a refined solve)
 /// against H = X^T M X, X Z with S z = theta H z, eigenvalues 1/theta - shift ascending.
 ///
-/// Why: SLEPc's vectors are accurate in the residual K x - lambda M x (2.5e-11 for the beam's
-/// 18th mode), but a contamination by a low mode that small is amplified by lambda/lambda_1 in
-/// the shift-invert residual `checked` measures (1.2e-6 there, 5e4 times). The products of this
-/// step resolve the low modes with the accuracy of the operator itself, as the in-process
-/// Lanczos does: the same vectors then measure 1e-11.
-pub(crate) fn shift_invert_ritz(k: &dyn SpdSolve, m: &Sparse, x: Mat<f64>, shift: f64) -> Result<Eigenpairs> {
+/// Why: vectors accurate in the residual K x - lambda M x (a dense solver's, 2.5e-11 for a
+/// beam's 18th mode) can hold a contamination by a low mode that the shift-invert residual
+/// `checked` measures amplified by lambda/lambda_1 (1.2e-6 there, 5e4 times). The products of
+/// this step resolve the low modes with the accuracy of the operator itself, as Lanczos does:
+/// the same vectors then measure 1e-11.
+fn shift_invert_ritz(k: &dyn SpdSolve, m: &Sparse, x: Mat<f64>, shift: f64) -> Result<Eigenpairs> {
     let count = x.ncols();
     if count == 0 {
         return Ok(Eigenpairs { values: Vec::new(), vectors: x });
@@ -960,7 +966,7 @@ pub(crate) fn shift_invert_ritz(k: &dyn SpdSolve, m: &Sparse, x: Mat<f64>, shift
     drop(y);
     let sym = |a: &Mat<f64>| Mat::<f64>::from_fn(count, count, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
     let l = sym(&h).llt(faer::Side::Lower).map_err(|_| {
-        BuildError::Numerical("eigensolver: SLEPc's eigenvectors are not independent in the mass inner product".into())
+        BuildError::Numerical("eigensolver: the Ritz vectors are not independent in the mass inner product".into())
     })?;
     let l = l.L().to_owned();
     // C = L^-1 S L^-T
@@ -968,7 +974,7 @@ pub(crate) fn shift_invert_ritz(k: &dyn SpdSolve, m: &Sparse, x: Mat<f64>, shift
     faer::linalg::triangular_solve::solve_lower_triangular_in_place(l.as_ref(), c.as_mut(), faer::Par::Seq);
     let mut ct = c.transpose().to_owned();
     faer::linalg::triangular_solve::solve_lower_triangular_in_place(l.as_ref(), ct.as_mut(), faer::Par::Seq);
-    let eig = symmetric_eigen(&sym(&ct), "the SLEPc modes' Rayleigh-Ritz step")?;
+    let eig = symmetric_eigen(&sym(&ct), "the shift-invert Rayleigh-Ritz step")?;
     // Z = L^-T W, theta descending = lambda ascending
     let mut w = eig.vectors.clone();
     faer::linalg::triangular_solve::solve_upper_triangular_in_place(l.transpose(), w.as_mut(), faer::Par::Seq);

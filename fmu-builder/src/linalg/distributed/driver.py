@@ -7,8 +7,9 @@ model, the mass products, and the eigen-solves, whose block Lanczos drives these
 order of operations as in process). Only the stiffness (a PETSc binary file in the job folder,
 read by rank 0 and distributed by PETSc) and dense blocks of vectors cross to the ranks.
 
-Rows are distributed by PETSc's MatPartitioning (PT-Scotch where PETSc has it) of the
-stiffness's graph. Each request is a JSON line, then the little-endian doubles it announces;
+Rows keep PETSc's contiguous distribution unless `partitioner` names a MatPartitioning
+(ptscotch, parmetis) of the stiffness's graph: MUMPS orders and maps the factor itself, and
+only the blocks' scatters follow the rows. Each request is a JSON line, then the little-endian doubles it announces;
 each answer too. The builder writes this file into the job folder from its own copy, so driver
 and builder always match."""
 
@@ -20,6 +21,54 @@ import struct
 import sys
 import time
 import traceback
+
+
+# The heartbeat watcher (heartbeat.rs in the builder reads its files): run as its own Python,
+# exec'd from a fork of each rank before MPI starts, so that it is no MPI process and its
+# command line does not pass for a rank's. Every second it rewrites heartbeat-<host>-<pid>:
+# rank, host, PID, the rank's state (stopped: /proc's T or t), a counter; it ends with the rank.
+WATCHER = r"""
+import os, sys, time
+folder, parent, rank, host = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4]
+path = os.path.join(folder, "heartbeat-%s-%d" % (host, parent))
+count = 0
+while os.getppid() == parent:
+    try:
+        with open("/proc/%d/stat" % parent) as f:
+            state = f.read().rpartition(")")[2].split()[0]
+    except OSError:
+        break
+    count += 1
+    line = "%s %s %d %s %d\n" % (rank, host, parent, "stopped" if state in "Tt" else "running", count)
+    try:
+        fd = os.open(path + ".tmp", os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+        os.write(fd, line.encode())
+        os.close(fd)
+        os.replace(path + ".tmp", path)
+    except OSError:
+        break
+    time.sleep(1.0)
+"""
+
+
+def start_heartbeat(folder):
+    rank_name = next((os.environ[v] for v in ("OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK", "SLURM_PROCID")
+                      if v in os.environ), "?")
+    parent = os.getpid()
+    if os.fork() != 0:
+        return
+    try:
+        null = os.open(os.devnull, os.O_RDWR)
+        for fd in (0, 1, 2):
+            os.dup2(null, fd)
+        os.execv(sys.executable, [sys.executable, "-c", WATCHER, folder, str(parent), rank_name,
+                                  socket.gethostname()])
+    finally:
+        os._exit(0)
+
+
+if __name__ == "__main__" and len(sys.argv) == 2 and sys.argv[1] != "--probe":
+    start_heartbeat(os.path.dirname(os.path.abspath(sys.argv[1])))
 
 
 def debian_paths():
@@ -117,35 +166,64 @@ def load(path):
 
 
 class Layout:
-    """Where each row of a matrix lives: `rows` the original rows this rank owns, in the order of
-    its part of the distributed vectors; scatters move an n-vector held by rank 0 (in the
-    builder's order) to and from that distribution."""
+    """Where each row lives: `rows` the original rows (the builder's numbering) this rank owns,
+    in the order of its part of the distributed vectors and dense blocks. Rank 0 knows every
+    rank's rows, and moves whole blocks of columns to and from the ranks with one MPI
+    Scatterv/Gatherv each (not a scatter per column)."""
 
     def __init__(self, n, rows):
         self.n = n
         self.rows = rows
         self.local = rows.getLocalSize()
-        self.whole = PETSc.Vec().createMPI((n if rank == 0 else 0, n), comm=PETSc.COMM_WORLD)
-        self.template = PETSc.Vec().createMPI((self.local, n), comm=PETSc.COMM_WORLD)
-        start, _ = self.template.getOwnershipRange()
-        owned = PETSc.IS().createStride(self.local, first=start, step=1, comm=PETSc.COMM_WORLD)
-        self.scatter = PETSc.Scatter().create(self.whole, rows, self.template, owned)
-
-    def vector(self):
-        return self.template.duplicate()
-
-    def spread(self, column):
-        """An n-vector from rank 0 (None elsewhere) to the distribution."""
+        everyone = comm.gather(numpy.asarray(rows.getIndices(), dtype=numpy.int64), root=0)
         if rank == 0:
-            self.whole.getArray()[:] = column
-        v = self.vector()
-        self.scatter.scatter(self.whole, v, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        return v
+            self.parts = everyone
+            self.counts = [len(r) for r in everyone]
+            # contiguous rows in order (no repartitioning): slices instead of index lists
+            offsets = numpy.cumsum([0] + self.counts)
+            self.contiguous = all(numpy.array_equal(r, numpy.arange(offsets[i], offsets[i + 1]))
+                                  for i, r in enumerate(everyone))
 
-    def gather(self, v):
-        """The distributed vector `v` on rank 0, in the builder's order (None elsewhere)."""
-        self.scatter.scatter(v, self.whole, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.REVERSE)
-        return self.whole.getArray().copy() if rank == 0 else None
+    def spread_block(self, payload, count):
+        """A column-major n x count block from rank 0 (None elsewhere): this rank's rows, as a
+        local x count array."""
+        received = numpy.empty((count, self.local))
+        send = None
+        if rank == 0:
+            block = numpy.frombuffer(payload, dtype=float).reshape(count, self.n)
+            if self.contiguous:
+                ordered = block
+            else:
+                ordered = numpy.concatenate([block[:, r] for r in self.parts], axis=1)
+            # each rank's part: its rows of every column, column after column
+            send = numpy.concatenate([numpy.ascontiguousarray(part).ravel()
+                                      for part in numpy.split(ordered, numpy.cumsum(self.counts)[:-1], axis=1)])
+            counts = [c * count for c in self.counts]
+            comm.Scatterv([send, counts, MPI.DOUBLE], received, root=0)
+        else:
+            comm.Scatterv(None, received, root=0)
+        return received.T
+
+    def gather_block(self, local):
+        """This rank's local x count array: on rank 0 the n x count block column-major as bytes
+        (None elsewhere)."""
+        count = local.shape[1]
+        mine = numpy.ascontiguousarray(local.T)
+        if rank != 0:
+            comm.Gatherv(mine, None, root=0)
+            return None
+        received = numpy.empty(self.n * count)
+        comm.Gatherv(mine, [received, [c * count for c in self.counts], MPI.DOUBLE], root=0)
+        parts = numpy.split(received, numpy.cumsum([c * count for c in self.counts])[:-1])
+        ordered = numpy.concatenate([part.reshape(count, c) for part, c in zip(parts, self.counts)], axis=1)
+        if self.contiguous:
+            return ordered.tobytes()
+        block = numpy.empty((count, self.n))
+        start = 0
+        for r, c in zip(self.parts, self.counts):
+            block[:, r] = ordered[:, start:start + c]
+            start += c
+        return block.tobytes()
 
 
 def natural_layout(a):
@@ -158,7 +236,7 @@ def partitioned(a, partitioner):
     """`a` redistributed by PETSc's partitioning of its graph: the matrix in the new
     distribution and its layout."""
     n = a.getSize()[0]
-    if size == 1:
+    if size == 1 or partitioner == "current":
         return a, natural_layout(a)
     part = PETSc.MatPartitioning().create(comm=PETSc.COMM_WORLD)
     part.setAdjacency(a)
@@ -171,12 +249,6 @@ def partitioned(a, partitioner):
     part.destroy()
     b = a.createSubMatrix(rows, rows)
     return b, Layout(n, rows)
-
-
-def columns_of(payload, n, count):
-    """Column j of an n x count column-major block (rank 0), None elsewhere."""
-    for j in range(count):
-        yield payload[j * n:(j + 1) * n] if rank == 0 else None
 
 
 class Factor:
@@ -238,7 +310,7 @@ class Driver:
     def __init__(self, job):
         self.job = job
         self.folder = os.path.dirname(os.path.abspath(job["path"]))
-        self.factor = Factor(os.path.join(self.folder, job["stiffness"]), job.get("partitioner", "ptscotch"))
+        self.factor = Factor(os.path.join(self.folder, job["stiffness"]), job.get("partitioner", "current"))
 
     def started(self):
         f = self.factor
@@ -279,24 +351,11 @@ class Driver:
         n, count = layout.n, header["columns"]
         b = PETSc.Mat().createDense(((layout.local, n), (PETSc.DECIDE, count)), comm=PETSc.COMM_WORLD)
         b.setUp()
-        block = b.getDenseArray()
-        if size == 1:
-            # one rank holds the rows in the builder's order: the block as it came
-            block[:, :] = numpy.frombuffer(payload, dtype=float).reshape(count, n).T
-        else:
-            for j, column in enumerate(columns_of(payload, n, count)):
-                block[:, j] = layout.spread(column).getArray()
+        b.getDenseArray()[:, :] = layout.spread_block(payload, count)
         b.assemble()
         x = b.duplicate()
         self.factor.ksp.getPC().getFactorMatrix().matSolve(b, x)
-        if size == 1:
-            out = x.getDenseArray().T.tobytes()
-        else:
-            out = bytearray() if rank == 0 else None
-            for j in range(count):
-                result = layout.gather(x.getColumnVector(j))
-                if rank == 0:
-                    out += result.tobytes()
+        out = layout.gather_block(x.getDenseArray())
         b.destroy()
         x.destroy()
         return {"columns": count}, out

@@ -4,6 +4,7 @@
 //! little-endian doubles); a failed request is an error naming what the driver reported.
 
 use super::PetscBackend;
+use super::heartbeat::{self, Heartbeats};
 use super::{job_folder, petsc_binary, process_group};
 use crate::error::{BuildError, Result};
 use faer::sparse::SparseColMat;
@@ -49,10 +50,19 @@ pub struct Session {
     folder: PathBuf,
     keep_folder: bool,
     rows: usize,
+    /// The ranks' heartbeat files in the job folder.
+    heartbeats: Heartbeats,
     /// The first failure of a request that could not return an error (a solve inside the
     /// `SpdSolve` trait): reported by `health`.
-    failure: Mutex<Option<String>>,
+    failure: Mutex<Option<Failure>>,
     pub started: Started,
+}
+
+/// A failed request's error, kept for `Session::health`.
+#[derive(Clone)]
+enum Failure {
+    Backend(String),
+    Numerical(String),
 }
 
 fn io_error(what: &str) -> impl Fn(std::io::Error) -> BuildError + '_ {
@@ -87,6 +97,7 @@ fn tail(path: &Path, lines: usize) -> String {
 struct Watch<'a> {
     child: &'a Mutex<Child>,
     group: i32,
+    heartbeats: &'a Heartbeats,
     stderr: PathBuf,
     launched: String,
 }
@@ -124,6 +135,12 @@ impl Watch<'_> {
             return Err(BuildError::Backend(format!(
                 "{who} (process {pid}: {cmdline}) is stopped (SIGSTOP, a debugger) while the builder waited for \
                  {waiting_for}; the job was ended"
+            )));
+        }
+        // ranks on other nodes, which neither the launcher's exit nor the local processes show
+        if let Some(why) = self.heartbeats.check() {
+            return Err(BuildError::Backend(format!(
+                "{why} while the builder waited for {waiting_for}; the job was ended"
             )));
         }
         Ok(())
@@ -202,7 +219,14 @@ impl Session {
         let group = child.id() as i32;
         process_group::register(group, folder, backend.keep_job_folder);
         let child = Mutex::new(child);
-        let watch = Watch { child: &child, group, stderr: stderr_path.clone(), launched: launched.clone() };
+        let heartbeats = Heartbeats::new(folder, heartbeat::SILENCE);
+        let watch = Watch {
+            child: &child,
+            group,
+            heartbeats: &heartbeats,
+            stderr: stderr_path.clone(),
+            launched: launched.clone(),
+        };
         let connected = Self::connect(backend, &listener, port, &token, &watch, what);
         drop(watch);
         let (connection, started) = match connected {
@@ -224,6 +248,7 @@ impl Session {
             folder: folder.to_path_buf(),
             keep_folder: backend.keep_job_folder,
             rows: k.nrows(),
+            heartbeats,
             failure: Mutex::new(None),
             started,
         })
@@ -340,6 +365,7 @@ impl Session {
         let watch = Watch {
             child: &self.child,
             group: self.group,
+            heartbeats: &self.heartbeats,
             stderr: self.folder.join("driver.err"),
             launched: self.launched.clone(),
         };
@@ -387,20 +413,30 @@ impl Session {
     }
 
     /// As `solve`, for callers that cannot return an error: a failure fills the columns with NaN
-    /// and is kept for `health`.
+    /// and is kept for `health`, and every solve after it is NaN at once.
     pub fn solve_or_nan(&self, mut rhs: MatMut<'_, f64>) {
+        // after a failure the job is gone or ending: no further request waits for it
+        if self.failure.lock().map_or(true, |f| f.is_some()) {
+            rhs.fill(f64::NAN);
+            return;
+        }
         if let Err(e) = self.solve(rhs.as_mut()) {
             rhs.fill(f64::NAN);
             if let Ok(mut failure) = self.failure.lock() {
-                failure.get_or_insert_with(|| e.to_string());
+                failure.get_or_insert_with(|| match e {
+                    BuildError::Backend(m) => Failure::Backend(m),
+                    other => Failure::Numerical(other.to_string()),
+                });
             }
         }
     }
 
-    /// The first failed solve's error, if one failed.
+    /// The first failed solve's error, if one failed: the back-end's own (a rank stopped, the
+    /// connection lost) or the numbers'.
     pub fn health(&self) -> Result<()> {
         match self.failure.lock().ok().and_then(|f| f.clone()) {
-            Some(message) => Err(BuildError::Numerical(message)),
+            Some(Failure::Backend(message)) => Err(BuildError::Backend(message)),
+            Some(Failure::Numerical(message)) => Err(BuildError::Numerical(message)),
             None => Ok(()),
         }
     }
@@ -501,14 +537,19 @@ fn read_payload(c: &mut Connection, count: usize, watch: &Watch<'_>, what: &str)
 
 impl Drop for Session {
     fn drop(&mut self) {
+        let mut answered = false;
         if let Ok(mut c) = self.connection.lock() {
             let quit = c.writer.write_all(b"{\"op\": \"quit\"}\n").and_then(|_| c.writer.flush());
             if quit.is_ok() {
                 let mut line = String::new();
-                let _ = c.reader.read_line(&mut line);
+                answered = c.reader.read_line(&mut line).is_ok_and(|n| n > 0);
             }
         }
-        if let Ok(mut child) = self.child.lock() {
+        // a job that answered its quit ends by itself; one that did not (a rank stopped, the
+        // connection broken) is ended at once
+        if let Ok(mut child) = self.child.lock()
+            && answered
+        {
             let deadline = Instant::now() + Duration::from_secs(30);
             while matches!(child.try_wait(), Ok(None)) && Instant::now() < deadline {
                 std::thread::sleep(Duration::from_millis(20));
