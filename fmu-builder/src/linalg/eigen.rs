@@ -142,8 +142,6 @@ pub fn lowest_and_held(
             let mut next_check = first_check;
             let (both, count_whole, estimated, at_limit, refine, solves, dim) = loop {
                 let exhausted = !lanczos.extend(k)?;
-            // a block the distributed back-end failed to solve ends the search at once
-            distributed_health(k)?;
                 // a block the distributed back-end failed to solve ends the search at once
                 distributed_health(k)?;
                 let dim = lanczos.dim();
