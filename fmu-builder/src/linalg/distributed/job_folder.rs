@@ -35,6 +35,19 @@ pub fn create(base: &Path) -> Result<PathBuf> {
     Ok(folder)
 }
 
+/// Removes the job folder. Ranks the launcher did not hold (other nodes) may still be ending,
+/// their heartbeat watchers writing a last beat while the folder goes: again, for up to five
+/// seconds, until it is gone (a watcher stops once the folder is).
+pub fn remove(folder: &Path) {
+    for _ in 0..50 {
+        std::fs::remove_dir_all(folder).ok();
+        if !folder.exists() {
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+}
+
 /// A new file readable and writable by this user only (0600), truncating one of the builder's
 /// own; the error names the path.
 pub fn private_file(path: &Path) -> Result<std::fs::File> {

@@ -142,7 +142,7 @@ fn install_handler() {
             for job in &jobs {
                 kill_group(job.group);
                 if !job.keep_folder {
-                    std::fs::remove_dir_all(&job.folder).ok();
+                    super::job_folder::remove(&job.folder);
                 }
             }
             eprintln!("\nerror: interrupted (signal {signal}); the PETSc back-end's ranks were ended");

@@ -158,7 +158,7 @@ impl Session {
             Ok(session) => Ok(session),
             Err(e) => {
                 if !backend.keep_job_folder {
-                    std::fs::remove_dir_all(&folder).ok();
+                    job_folder::remove(&folder);
                 }
                 Err(e)
             }
@@ -562,7 +562,7 @@ impl Drop for Session {
         }
         process_group::unregister(self.group);
         if !self.keep_folder {
-            std::fs::remove_dir_all(&self.folder).ok();
+            job_folder::remove(&self.folder);
         }
     }
 }
