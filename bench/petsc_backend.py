@@ -201,18 +201,12 @@ def main(argv=None) -> int:
         if nominal < TIME_TARGETS_FROM:
             continue
         in_process, one, two_ranks = runs
-        ratio = one["wall_s"] / in_process["wall_s"]
-        ok = ratio <= ONE_RANK_TIME_TARGET
-        print(f"  {'PASS' if ok else 'MISS'} {bvc.label(nominal)}: wall time 1 rank / in process {ratio:.2f} <= "
-              f"{ONE_RANK_TIME_TARGET}")
-        if not ok:
-            misses.append(f"1 rank at {bvc.label(nominal)}")
-        ratio = two_ranks["wall_s"] / one["wall_s"]
-        ok = ratio <= TWO_RANKS_TIME_TARGET
-        print(f"  {'PASS' if ok else 'MISS'} {bvc.label(nominal)}: wall time 2 ranks / 1 rank {ratio:.2f} <= "
-              f"{TWO_RANKS_TIME_TARGET}")
-        if not ok:
-            misses.append(f"2 ranks at {bvc.label(nominal)}")
+        for what, ratio, target in [("1 rank / in process", one["wall_s"] / in_process["wall_s"], ONE_RANK_TIME_TARGET),
+                                    ("2 ranks / 1 rank", two_ranks["wall_s"] / one["wall_s"], TWO_RANKS_TIME_TARGET)]:
+            ok = ratio <= target
+            print(f"  {'PASS' if ok else 'MISS'} {bvc.label(nominal)}: wall time {what} {ratio:.2f} <= {target}")
+            if not ok:
+                misses.append(f"{what} at {bvc.label(nominal)}")
     return 1 if misses else 0
 
 

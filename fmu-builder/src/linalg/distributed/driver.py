@@ -17,7 +17,6 @@ import json
 import os
 import resource
 import socket
-import struct
 import sys
 import time
 import traceback
@@ -165,7 +164,7 @@ class Channel:
         header = dict(header)
         data = b""
         if doubles is not None:
-            data = bytes(doubles) if isinstance(doubles, (bytes, bytearray)) else struct.pack("<%dd" % len(doubles), *doubles)
+            data = bytes(doubles)
             header["doubles"] = len(data) // 8
         self.sock.sendall((json.dumps(header) + "\n").encode() + data)
 
