@@ -13,6 +13,15 @@ pub enum BuildError {
     /// A numerical step failed (a singular stiffness, an eigensolver that did not converge).
     #[error("{0}")]
     Numerical(String),
+    /// A numerical failure put against the part of the input that drives the stage it happened
+    /// in, with what to change there: the user fixes their input, not our code.
+    #[error("{}: {}{source}{}", .file.display(), field_prefix(.place.field), hint_suffix(.place.hint))]
+    InInput {
+        file: PathBuf,
+        place: InputHint,
+        #[source]
+        source: Box<BuildError>,
+    },
     #[error("{}: {message}", .path.display())]
     Io { path: PathBuf, message: String },
     /// The distributed back-end could not be started or reached (launcher, Python packages,
@@ -21,13 +30,34 @@ pub enum BuildError {
     Backend(String),
 }
 
+/// Where in the input a numerical failure is put, and what to change there.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct InputHint {
+    /// The field, as in `Input`'s; empty for the whole file.
+    pub field: &'static str,
+    /// What to change, appended after the failure; empty for nothing to add.
+    pub hint: &'static str,
+}
+
 fn field_prefix(field: &str) -> String {
     if field.is_empty() { String::new() } else { format!("{field}: ") }
+}
+
+fn hint_suffix(hint: &str) -> String {
+    if hint.is_empty() { String::new() } else { format!("; {hint}") }
 }
 
 impl BuildError {
     pub fn input(file: &std::path::Path, field: impl Into<String>, message: impl Into<String>) -> Self {
         BuildError::Input { file: file.to_owned(), field: field.into(), message: message.into() }
+    }
+    /// A numerical failure as one of the input's `place`; any other error is already the
+    /// input's, the back-end's or a file's, and stays as it is.
+    pub fn in_input(self, file: &std::path::Path, place: InputHint) -> Self {
+        match self {
+            BuildError::Numerical(_) => BuildError::InInput { file: file.to_owned(), place, source: Box::new(self) },
+            other => other,
+        }
     }
     pub fn io(path: &std::path::Path, e: impl fmt::Display) -> Self {
         BuildError::Io { path: path.to_owned(), message: e.to_string() }
@@ -48,5 +78,21 @@ mod tests {
         let whole_file = BuildError::input(Path::new("beam.json"), "", "is not JSON");
         assert_eq!(whole_file.to_string(), "beam.json: is not JSON");
         assert_eq!(BuildError::io(Path::new("out/B.fmu"), "denied").to_string(), "out/B.fmu: denied");
+    }
+
+    #[test]
+    fn a_numerical_failure_put_against_the_input_keeps_it_as_its_source() {
+        use super::InputHint;
+        use std::error::Error;
+        let place = InputHint { field: "geometry", hint: "check the mesh" };
+        let e = BuildError::Numerical("the stiffness is singular".into()).in_input(Path::new("part.json"), place);
+        assert_eq!(e.to_string(), "part.json: geometry: the stiffness is singular; check the mesh");
+        assert_eq!(e.source().map(|s| s.to_string()).as_deref(), Some("the stiffness is singular"));
+        let whole =
+            BuildError::Numerical("no FMU".into()).in_input(Path::new("p.json"), InputHint { field: "", hint: "" });
+        assert_eq!(whole.to_string(), "p.json: no FMU");
+        // an input error is already the input's: unchanged
+        let input = BuildError::input(Path::new("p.json"), "flanges", "none");
+        assert_eq!(input.in_input(Path::new("q.json"), place).to_string(), "p.json: flanges: none");
     }
 }

@@ -15,7 +15,8 @@
 //! 5. [`output`]: what the user gets: report, summary, HTML documentation and plots, the FMU
 //!    archive with its modelDescription.xml.
 //!
-//! [`build`] drives the stages for one spec (mounted or free-floating bodies, order sweeps).
+//! [`pipeline`] runs the stages for one spec as a sequence of phases (mounted or free-floating
+//! bodies as two strategies of one pipeline; order sweeps).
 
 pub mod error;
 pub mod linalg;
@@ -29,4 +30,4 @@ pub mod model;
 pub mod output;
 pub mod reduce;
 
-pub mod build;
+pub mod pipeline;

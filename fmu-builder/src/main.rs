@@ -265,23 +265,23 @@ fn sweep(args: &Args, input: &Input) -> ExitCode {
     };
     // the table's rows as they finish: a sweep takes minutes
     let band = spec.scene.as_ref().and_then(|s| s.band);
-    let mut header = Some(fmu_builder::build::sweep::table_header(band));
-    let mut print_row = |row: &fmu_builder::build::sweep::SweepRow| {
+    let mut header = Some(fmu_builder::pipeline::sweep::table_header(band));
+    let mut print_row = |row: &fmu_builder::pipeline::sweep::SweepRow| {
         use std::io::Write;
         let mut out = std::io::stdout();
         if let Some(h) = header.take() {
             let _ = out.write_all(h.as_bytes());
         }
-        let _ = out.write_all(fmu_builder::build::sweep::table_row(row).as_bytes());
+        let _ = out.write_all(fmu_builder::pipeline::sweep::table_row(row).as_bytes());
         let _ = out.flush();
     };
     fmu_builder::progress::enable(!args.quiet);
-    let result = fmu_builder::build::sweep::sweep(&spec, &input.path, &mut print_row);
+    let result = fmu_builder::pipeline::sweep::sweep(&spec, &input.path, &mut print_row);
     fmu_builder::progress::finish();
     match result {
         Ok(rows) => {
             if let Some(path) = &args.sweep_svg
-                && let Err(e) = std::fs::write(path, fmu_builder::build::sweep::plot(&rows))
+                && let Err(e) = std::fs::write(path, fmu_builder::pipeline::sweep::plot(&rows))
             {
                 eprintln!("error: --sweep-svg {}: {e}", path.display());
                 return ExitCode::FAILURE;
@@ -315,7 +315,7 @@ fn build(
         connect_timeout: args.connect_timeout,
         ..Default::default()
     };
-    let result = fmu_builder::build::build_from_text(&input.text, &input.path, output, binaries, &backend);
+    let result = fmu_builder::pipeline::build_from_text(&input.text, &input.path, output, binaries, &backend);
     fmu_builder::progress::finish();
     match result {
         Ok(built) => {
@@ -350,7 +350,7 @@ fn build(
 }
 
 /// The exports asked for besides the FMU; an error names the option.
-fn write_exports(args: &Args, b: &fmu_builder::build::Built) -> Result<(), String> {
+fn write_exports(args: &Args, b: &fmu_builder::pipeline::Built) -> Result<(), String> {
     let named = |option: &str, e: &dyn std::fmt::Display| format!("{option}: {e}");
     if let Some(path) = &args.report {
         let json = serde_json::to_string_pretty(&b.report).unwrap_or_default();

@@ -11,8 +11,8 @@
 //! noise in the finite difference, not a test of the derivative).
 
 use fmi2::{Causality, Interface, Model};
-use fmu_builder::build::reduce_spec;
 use fmu_builder::input::spec::Spec;
+use fmu_builder::pipeline::reduce_spec;
 use fmu_runtime::fmu::BodyFmu;
 use fmu_runtime::interface::VariableTable;
 use std::path::Path;

@@ -1,5 +1,5 @@
 //! The builder's layout, checked on its sources: a stage uses only the stages before it (input,
-//! model, reduce, ffrf, output, then the driver `build`; `error`, `linalg`, `profile`,
+//! model, reduce, ffrf, output, then the driver `pipeline`; `error`, `linalg`, `profile`,
 //! `out_of_memory` and `progress` serve all), and no module imports a module that imports it back. docs/ARCHITECTURE.md describes the stages.
 
 use std::collections::{BTreeMap, BTreeSet};
@@ -17,7 +17,7 @@ const STAGES: [(&str, usize); 11] = [
     ("reduce", 3),
     ("ffrf", 4),
     ("output", 5),
-    ("build", 6),
+    ("pipeline", 6),
 ];
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {

@@ -6,8 +6,8 @@
 //! fmu-runtime's tests/no_alloc.rs covers the exported C functions and free-floating bodies.
 
 use fmi2::Model;
-use fmu_builder::build::reduce_spec;
 use fmu_builder::input::spec::Spec;
+use fmu_builder::pipeline::reduce_spec;
 use fmu_runtime::fmu::BodyFmu;
 use fmu_runtime::interface::VariableTable;
 use std::path::Path;

@@ -3,10 +3,10 @@
 //! independent of our Lanczos and of the reduction).
 
 use faer::{Mat, Side};
-use fmu_builder::build::reduce_spec;
 use fmu_builder::input::spec::Spec;
 use fmu_builder::linalg::eigen;
 use fmu_builder::linalg::sparse::{Sparse, SpdSolve, SpdSolver, block};
+use fmu_builder::pipeline::reduce_spec;
 use fmu_builder::reduce::basis::EIGEN_TOL;
 use std::path::Path;
 

@@ -5,5 +5,7 @@
 
 pub mod inertia;
 pub mod invariants;
+pub mod prestress;
 pub mod rows;
+pub mod scene_loads;
 pub mod stiffening;

@@ -8,6 +8,7 @@ pub mod import;
 pub mod json_keys;
 pub mod mesh;
 pub mod ranges;
+pub mod reduction_checks;
 pub mod schema_errors;
 pub mod size;
 pub mod spec;

@@ -6,6 +6,7 @@
 //! writers of the full model for CalculiX and Matrix Market (`export`).
 
 pub mod assembly;
+mod centre_of_mass;
 mod congruence;
 pub mod connectivity;
 pub mod distributing;

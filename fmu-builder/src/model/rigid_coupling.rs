@@ -177,7 +177,7 @@ impl DofMap {
 pub struct Assembled {
     pub dofs: DofMap,
     /// n_dofs square as coupled; a mounted body's build keeps only its leading n_clamped block
-    /// once the mount is held (`build::mounted`), since no later stage reads the mount's rows.
+    /// once the mount is held (`pipeline::mounted`), since no later stage reads the mount's rows.
     pub stiffness: SparseColMat<usize, f64>,
     pub mass: SparseColMat<usize, f64>,
     /// Scalar consistent mass of the mesh nodes (n_nodes x n_nodes, before coupling): the mass

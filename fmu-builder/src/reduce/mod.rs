@@ -7,8 +7,11 @@
 pub mod accuracy;
 pub mod band_response;
 pub mod basis;
+pub mod compared_band;
 pub mod cutoff;
 pub mod damping;
 pub mod experiment;
+pub mod free_body;
 pub mod frf;
 pub mod order;
+pub mod order_selection;
