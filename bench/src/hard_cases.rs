@@ -3,8 +3,8 @@
 //! body on a steadily spinning mount stepped in Co-Simulation (the rotating-frame energy must
 //! not grow). Each line names its target; `run` returns false when one is missed.
 
-use fmu_builder::build::reduce_spec;
 use fmu_builder::input::spec::Spec;
+use fmu_builder::pipeline::reduce_spec;
 use fmu_runtime::body::FlexibleBody;
 use std::path::Path;
 use std::sync::Arc;

@@ -645,7 +645,7 @@ fn run_in(opts: &Options, work: &Path) -> Result<(), String> {
         std::fs::write(&input, spec).map_err(|e| e.to_string())?;
         let start = Instant::now();
         let built =
-            fmu_builder::build::build(&input, &output).map_err(|e| format!("building {}: {e}", input.display()))?;
+            fmu_builder::pipeline::build(&input, &output).map_err(|e| format!("building {}: {e}", input.display()))?;
         let build_s = start.elapsed().as_secs_f64();
         let order = built.reduced.n_modes();
         let top_hz =
@@ -817,7 +817,7 @@ struct NewmarkRun {
 /// from t = 0, `t_end` seconds, tip u_z compared every millisecond; Newmark at H / each of
 /// `subdivisions`, the three finest make the reference. Returns the ratio and allocation targets.
 fn full_comparison(
-    built: &fmu_builder::build::Built,
+    built: &fmu_builder::pipeline::Built,
     rows: &[&Row],
     t_end: f64,
     subdivisions: &[usize],

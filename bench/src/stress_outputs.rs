@@ -47,7 +47,7 @@ pub fn run(work: &Path, repeats: usize) -> Result<(String, String, bool), String
         let input = work.join(format!("stress{points}.json"));
         let output = work.join(format!("BenchStress{points}.fmu"));
         std::fs::write(&input, spec(points)).map_err(|e| e.to_string())?;
-        let built = fmu_builder::build::build(&input, &output).map_err(|e| format!("{}: {e}", input.display()))?;
+        let built = fmu_builder::pipeline::build(&input, &output).map_err(|e| format!("{}: {e}", input.display()))?;
         let names: Vec<String> = built
             .reduced
             .stress_points
