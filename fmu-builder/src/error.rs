@@ -22,8 +22,39 @@ pub enum BuildError {
         #[source]
         source: Box<BuildError>,
     },
+    /// The system refused a read or a write.
+    #[error("{}: {source}", .path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file that cannot be read, written or used as what it is given for, and why (not a
+    /// regular file, too large, a binary of the wrong platform, an export the part cannot give).
     #[error("{}: {message}", .path.display())]
-    Io { path: PathBuf, message: String },
+    File { path: PathBuf, message: String },
+    /// The input file itself cannot be read.
+    #[error("{}: cannot read the input: it {source}", .path.display())]
+    UnreadableInput {
+        path: PathBuf,
+        #[source]
+        source: Refusal,
+    },
+    /// A command-line option's value refused before the build.
+    #[error("{option}: {message}")]
+    CommandLine { option: String, message: String },
+    /// An output refused before any work: it cannot be written, or would overwrite the input,
+    /// another output or (without --force) an existing file. `shown` is the option and its path.
+    #[error("{shown}: {reason}")]
+    Destination { shown: String, reason: String },
+    /// An export asked for besides the FMU failed after the FMU was written.
+    #[error("{option}: {source}; the FMU {} was written", .fmu.display())]
+    Export {
+        option: &'static str,
+        fmu: PathBuf,
+        #[source]
+        source: Box<BuildError>,
+    },
     /// The distributed back-end could not be started or reached (launcher, Python packages,
     /// network): nothing in the input's model to change.
     #[error("the PETSc back-end: {0}")]
@@ -59,8 +90,24 @@ impl BuildError {
             other => other,
         }
     }
-    pub fn io(path: &std::path::Path, e: impl fmt::Display) -> Self {
-        BuildError::Io { path: path.to_owned(), message: e.to_string() }
+    pub fn io(path: &std::path::Path, source: std::io::Error) -> Self {
+        BuildError::Io { path: path.to_owned(), source }
+    }
+    pub fn file(path: &std::path::Path, message: impl fmt::Display) -> Self {
+        BuildError::File { path: path.to_owned(), message: message.to_string() }
+    }
+}
+
+/// Why a file is refused: a sentence without the path (callers name the path and the field or
+/// option the way their messages do).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Refusal(pub String);
+
+impl std::error::Error for Refusal {}
+
+impl std::fmt::Display for Refusal {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
     }
 }
 
@@ -77,7 +124,12 @@ mod tests {
         assert_eq!(with_field.to_string(), "beam.json: flanges[1].nodes: selects no node");
         let whole_file = BuildError::input(Path::new("beam.json"), "", "is not JSON");
         assert_eq!(whole_file.to_string(), "beam.json: is not JSON");
-        assert_eq!(BuildError::io(Path::new("out/B.fmu"), "denied").to_string(), "out/B.fmu: denied");
+        let denied = std::io::Error::from(std::io::ErrorKind::PermissionDenied);
+        let io = BuildError::io(Path::new("out/B.fmu"), denied);
+        assert_eq!(io.to_string(), "out/B.fmu: permission denied");
+        // the system's error stays reachable, not only its words
+        let source = std::error::Error::source(&io).and_then(|s| s.downcast_ref::<std::io::Error>());
+        assert_eq!(source.map(|e| e.kind()), Some(std::io::ErrorKind::PermissionDenied));
     }
 
     #[test]

@@ -16,7 +16,8 @@
 //!    archive with its modelDescription.xml.
 //!
 //! [`pipeline`] runs the stages for one spec as a sequence of phases (mounted or free-floating
-//! bodies as two strategies of one pipeline; order sweeps).
+//! bodies as two strategies of one pipeline; order sweeps); [`job`] is one run as the command
+//! line asks for it (destinations checked first, exports, summary).
 
 pub mod error;
 pub mod linalg;
@@ -31,3 +32,5 @@ pub mod output;
 pub mod reduce;
 
 pub mod pipeline;
+
+pub mod job;

@@ -42,16 +42,7 @@ impl FileKind {
     }
 }
 
-/// Why a file is refused: a sentence without the path (callers name the path and the field or
-/// option the way their messages do).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Refusal(pub String);
-
-impl std::fmt::Display for Refusal {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
+pub use crate::error::Refusal;
 
 /// What a non-regular file is, in words.
 pub fn file_type_words(t: std::fs::FileType) -> &'static str {

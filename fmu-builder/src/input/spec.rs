@@ -558,7 +558,7 @@ impl Spec {
     pub fn from_file(path: &Path) -> Result<Self> {
         use crate::input::{file_read, size::Memory};
         let text = file_read::read_text(path, file_read::FileKind::Input, Memory::of_this_machine().bytes)
-            .map_err(|e| BuildError::io(path, format!("cannot read the input: it {e}")))?;
+            .map_err(|source| BuildError::UnreadableInput { path: path.to_owned(), source })?;
         Self::from_str(path, &text)
     }
 

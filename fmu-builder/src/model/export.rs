@@ -100,7 +100,7 @@ pub fn abaqus_deck(part: &Part, flanges: &[Flange]) -> String {
 
 pub fn write_abaqus_deck(path: &Path, part: &Part, flanges: &[Flange]) -> Result<()> {
     if !part.has_elements() {
-        return Err(BuildError::io(
+        return Err(BuildError::file(
             path,
             "--export-inp needs a part with elements (this one is given by its matrices)",
         ));
@@ -134,7 +134,7 @@ fn matrix_market(a: &faer::sparse::SparseColMat<usize, f64>, what: &str) -> Stri
 /// the very model the mesh gives.
 pub fn write_free_free_matrices(dir: &Path, part: &Part) -> Result<()> {
     if !part.has_elements() {
-        return Err(BuildError::io(
+        return Err(BuildError::file(
             dir,
             "--export-free-free needs a part with elements (this one is given by its matrices)",
         ));

@@ -88,7 +88,7 @@ pub fn write_vtk(
     names: &[String],
 ) -> Result<()> {
     if !part.has_elements() {
-        return Err(BuildError::io(
+        return Err(BuildError::file(
             path,
             "--export-vtk needs a part with elements (this one is given by its matrices)",
         ));

@@ -7,6 +7,7 @@
 //! Files are compared by identity, not by spelling: the device and inode of an existing file
 //! (so links and `./a/../b` are seen through), else the canonical folder and the file name.
 
+use crate::error::BuildError;
 use std::path::{Path, PathBuf};
 
 /// One place the builder will write: a file, or a folder and the files it writes into it.
@@ -68,7 +69,7 @@ fn folder_of(path: &Path) -> &Path {
 /// Checks every destination before the build: Ok, or the refusal naming the option, the path,
 /// what is wrong and what to do. `inputs` are the files the build reads (the input file, its
 /// meshes and matrices): never overwritten, `--force` or not.
-pub fn check(destinations: &[Destination], inputs: &[PathBuf], force: bool) -> Result<(), String> {
+pub fn check(destinations: &[Destination], inputs: &[PathBuf], force: bool) -> Result<(), BuildError> {
     let input_ids: Vec<(Identity, &PathBuf)> = inputs.iter().filter_map(|p| Some((identity(p)?, p))).collect();
     let mut written: Vec<(Identity, &Destination, PathBuf)> = Vec::new();
     for d in destinations {
@@ -83,34 +84,46 @@ pub fn check(destinations: &[Destination], inputs: &[PathBuf], force: bool) -> R
                 && !m.is_file()
             {
                 // a FIFO would block the write until some reader came; a device is no file to keep
-                return Err(format!(
-                    "{shown}: {} is {}, not a regular file; name a file",
-                    file.display(),
-                    crate::input::file_read::file_type_words(m.file_type())
+                return Err(refuse(
+                    &shown,
+                    format!(
+                        "{} is {}, not a regular file; name a file",
+                        file.display(),
+                        crate::input::file_read::file_type_words(m.file_type())
+                    ),
                 ));
             }
             let Some(id) = identity(&file) else { continue };
             if let Some((_, input)) = input_ids.iter().find(|(i, _)| *i == id) {
-                return Err(format!(
-                    "{shown}: {} is the input {}; writing it would destroy the input. Name another file",
-                    if d.files_in_folder.is_empty() { "this".to_string() } else { file.display().to_string() },
-                    input.display()
+                return Err(refuse(
+                    &shown,
+                    format!(
+                        "{} is the input {}; writing it would destroy the input. Name another file",
+                        if d.files_in_folder.is_empty() { "this".to_string() } else { file.display().to_string() },
+                        input.display()
+                    ),
                 ));
             }
             if let Some((_, other, _)) = written.iter().find(|(i, _, _)| *i == id) {
-                return Err(format!(
-                    "{shown}: {} is also written by {} {}; the one written last would replace the other. Give \
+                return Err(refuse(
+                    &shown,
+                    format!(
+                        "{} is also written by {} {}; the one written last would replace the other. Give \
                      each output its own name",
-                    file.display(),
-                    other.option,
-                    other.path.display()
+                        file.display(),
+                        other.option,
+                        other.path.display()
+                    ),
                 ));
             }
             if !force && std::fs::symlink_metadata(&file).is_ok() {
-                return Err(format!(
-                    "{shown}: {} exists; pass --force to overwrite it, or name another {}",
-                    file.display(),
-                    if d.files_in_folder.is_empty() { "file" } else { "folder" }
+                return Err(refuse(
+                    &shown,
+                    format!(
+                        "{} exists; pass --force to overwrite it, or name another {}",
+                        file.display(),
+                        if d.files_in_folder.is_empty() { "file" } else { "folder" }
+                    ),
                 ));
             }
             written.push((id, d, file));
@@ -119,7 +132,7 @@ pub fn check(destinations: &[Destination], inputs: &[PathBuf], force: bool) -> R
     Ok(())
 }
 
-fn check_file_place(d: &Destination, shown: &str) -> Result<(), String> {
+fn check_file_place(d: &Destination, shown: &str) -> Result<(), BuildError> {
     if d.path.is_dir() {
         let example = d.path.join(match d.option {
             "-o" => "Model.fmu",
@@ -128,15 +141,17 @@ fn check_file_place(d: &Destination, shown: &str) -> Result<(), String> {
             "--sweep-svg" => "sweep.svg",
             _ => "report.json",
         });
-        return Err(format!("{shown}: is a folder; give a file name, e.g. {} {}", d.option, example.display()));
+        return Err(refuse(&shown, format!("is a folder; give a file name, e.g. {} {}", d.option, example.display())));
     }
     writable_folder(folder_of(&d.path), shown)
 }
 
-fn check_folder_place(d: &Destination, shown: &str) -> Result<(), String> {
+fn check_folder_place(d: &Destination, shown: &str) -> Result<(), BuildError> {
     match std::fs::metadata(&d.path) {
         Ok(m) if m.is_dir() => writable_folder(&d.path, shown),
-        Ok(_) => Err(format!("{shown}: is a file; this option writes several files into a folder: name a folder")),
+        Ok(_) => {
+            Err(refuse(shown, format!("is a file; this option writes several files into a folder: name a folder")))
+        }
         // created by the export, in a folder that must exist
         Err(_) => writable_folder(folder_of(&d.path), shown),
     }
@@ -144,9 +159,9 @@ fn check_folder_place(d: &Destination, shown: &str) -> Result<(), String> {
 
 /// Ok when `folder` exists and a file can be created in it (probed: permissions alone miss
 /// read-only mounts and ACLs).
-fn writable_folder(folder: &Path, shown: &str) -> Result<(), String> {
+fn writable_folder(folder: &Path, shown: &str) -> Result<(), BuildError> {
     if !folder.is_dir() {
-        return Err(format!("{shown}: the folder {} does not exist; create it first", folder.display()));
+        return Err(refuse(&shown, format!("the folder {} does not exist; create it first", folder.display())));
     }
     let probe = folder.join(format!(".fmu-builder-probe-{}", std::process::id()));
     match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
@@ -154,8 +169,13 @@ fn writable_folder(folder: &Path, shown: &str) -> Result<(), String> {
             let _ = std::fs::remove_file(&probe);
             Ok(())
         }
-        Err(e) => Err(format!("{shown}: cannot write into the folder {}: {e}", folder.display())),
+        Err(e) => Err(refuse(shown, format!("cannot write into the folder {}: {e}", folder.display()))),
     }
+}
+
+/// The refusal of a destination: `shown` is its option and path as the user wrote them.
+fn refuse(shown: &str, reason: String) -> BuildError {
+    BuildError::Destination { shown: shown.to_string(), reason }
 }
 
 #[cfg(test)]
@@ -177,7 +197,9 @@ mod tests {
         let link = dir.join("link.vtk");
         std::os::unix::fs::symlink(&input, &link).unwrap();
         for path in [input.clone(), link, dir.join(".").join("beam.json")] {
-            let e = check(&[Destination::file("--export-vtk", &path)], std::slice::from_ref(&input), true).unwrap_err();
+            let e = check(&[Destination::file("--export-vtk", &path)], std::slice::from_ref(&input), true)
+                .unwrap_err()
+                .to_string();
             assert!(e.starts_with("--export-vtk ") && e.contains("would destroy the input"), "{e}");
         }
         assert_eq!(std::fs::read_to_string(&input).unwrap(), "{}");
@@ -192,10 +214,10 @@ mod tests {
             Destination::file("-o", &fmu),
             Destination::file("--report", &dir.join("..").join(dir.file_name().unwrap()).join("B.fmu")),
         ];
-        let e = check(&both, &[], false).unwrap_err();
+        let e = check(&both, &[], false).unwrap_err().to_string();
         assert!(e.starts_with("--report ") && e.contains("is also written by -o"), "{e}");
         std::fs::write(&fmu, "x").unwrap();
-        let e = check(&both, &[], true).unwrap_err();
+        let e = check(&both, &[], true).unwrap_err().to_string();
         assert!(e.contains("is also written by -o"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
@@ -203,30 +225,33 @@ mod tests {
     #[test]
     fn folders_missing_folders_existing_files_and_folder_exports_are_checked() {
         let dir = scratch("places");
-        let e = check(&[Destination::file("--export-inp", &dir)], &[], false).unwrap_err();
+        let e = check(&[Destination::file("--export-inp", &dir)], &[], false).unwrap_err().to_string();
         assert!(e.contains("is a folder; give a file name, e.g. --export-inp"), "{e}");
-        let e = check(&[Destination::file("--report", &dir.join("no/such/r.json"))], &[], false).unwrap_err();
+        let e =
+            check(&[Destination::file("--report", &dir.join("no/such/r.json"))], &[], false).unwrap_err().to_string();
         assert!(e.starts_with("--report ") && e.contains("does not exist"), "{e}");
         let existing = dir.join("r.json");
         std::fs::write(&existing, "old").unwrap();
-        let e = check(&[Destination::file("--report", &existing)], &[], false).unwrap_err();
+        let e = check(&[Destination::file("--report", &existing)], &[], false).unwrap_err().to_string();
         assert!(e.contains("exists; pass --force"), "{e}");
         assert!(check(&[Destination::file("--report", &existing)], &[], true).is_ok());
         // a folder export onto a file, and onto a folder holding the input's matrices
-        let e =
-            check(&[Destination::folder("--export-free-free", &existing, FREE_FREE_FILES)], &[], false).unwrap_err();
+        let e = check(&[Destination::folder("--export-free-free", &existing, FREE_FREE_FILES)], &[], false)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("is a file; this option writes several files into a folder"), "{e}");
         let k = dir.join("K.mtx");
         std::fs::write(&k, "%%MatrixMarket").unwrap();
         let e =
             check(&[Destination::folder("--export-free-free", &dir, FREE_FREE_FILES)], std::slice::from_ref(&k), true)
-                .unwrap_err();
+                .unwrap_err()
+                .to_string();
         assert!(e.contains("K.mtx is the input"), "{e}");
         assert!(
             check(&[Destination::folder("--export-matrices", &dir.join("new"), MOUNTED_MATRIX_FILES)], &[], false)
                 .is_ok()
         );
-        let e = check(&[Destination::file("--export-inp", Path::new("/dev/null"))], &[], true).unwrap_err();
+        let e = check(&[Destination::file("--export-inp", Path::new("/dev/null"))], &[], true).unwrap_err().to_string();
         assert!(e.contains("/dev/null is a character device, not a regular file"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }

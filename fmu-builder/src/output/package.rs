@@ -108,7 +108,7 @@ pub fn write_fmu(
         ],
     };
     fmu::write_fmu(output, &archive).map_err(|e| match e {
-        fmu::FmuError::Archive { path, message } => BuildError::Io { path, message },
+        fmu::FmuError::Archive { path, message } => BuildError::File { path, message },
         other => BuildError::Numerical(other.to_string()),
     })
 }

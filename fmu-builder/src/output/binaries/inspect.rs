@@ -3,6 +3,7 @@
 //! exports the fmi2 functions the FMU needs. The file is read with the `object` crate and
 //! never executed; each refusal is a sentence saying what the file is and what was expected.
 
+use crate::error::Refusal;
 use object::read::elf::{ElfFile, FileHeader, ProgramHeader};
 use object::read::macho::{FatArch, MachHeader, MachOFatFile, MachOFile};
 use object::{Architecture, Endianness, FileKind, Object};
@@ -10,12 +11,12 @@ use object::{Architecture, Endianness, FileKind, Object};
 use super::platform::{Format, Platform, Processor};
 
 /// Ok when `data` can be `platform`'s binary exporting `required`; else what is wrong.
-pub fn check(platform: Platform, data: &[u8], required: &[&str]) -> Result<(), String> {
+pub fn check(platform: Platform, data: &[u8], required: &[&str]) -> Result<(), Refusal> {
     let kind = FileKind::parse(data).map_err(|_| {
-        format!(
+        Refusal(format!(
             "is not a shared library in a format this tool reads (PE, ELF, Mach-O); {platform} needs {}",
             platform.format().describe()
-        )
+        ))
     })?;
     match kind {
         FileKind::MachOFat32 => {
@@ -24,19 +25,19 @@ pub fn check(platform: Platform, data: &[u8], required: &[&str]) -> Result<(), S
         FileKind::MachOFat64 => {
             check_universal(platform, MachOFatFile::<object::macho::FatArch64>::parse(data), data, required)
         }
-        FileKind::Archive => Err(format!(
+        FileKind::Archive => Err(Refusal(format!(
             "is an archive (a static or import library, such as fmu_runtime.dll.lib), not a shared library; {platform} needs {}, e.g. {} from `cargo build -p fmu-runtime --release`",
             platform.format().describe(),
             platform.runtime_file()
-        )),
+        ))),
         _ => check_single(platform, data, required, true),
     }
 }
 
 /// One binary (not universal); `check_processor` is false for the other slices of a universal
 /// Mach-O file, which serve hosts of other processors.
-fn check_single(platform: Platform, data: &[u8], required: &[&str], check_processor: bool) -> Result<(), String> {
-    let file = object::File::parse(data).map_err(|e| format!("cannot be read as an object file: {e}"))?;
+fn check_single(platform: Platform, data: &[u8], required: &[&str], check_processor: bool) -> Result<(), Refusal> {
+    let file = object::File::parse(data).map_err(|e| Refusal(format!("cannot be read as an object file: {e}")))?;
     let expected = platform.format();
     let found = match &file {
         object::File::Pe32(_) | object::File::Pe64(_) => Some(Format::Pe),
@@ -46,12 +47,12 @@ fn check_single(platform: Platform, data: &[u8], required: &[&str], check_proces
     };
     match found {
         Some(f) if f == expected => {}
-        Some(f) => return Err(format!("is {}, not {} as {platform} needs", f.describe(), expected.describe())),
+        Some(f) => return Err(Refusal(format!("is {}, not {} as {platform} needs", f.describe(), expected.describe()))),
         None => {
-            return Err(format!(
+            return Err(Refusal(format!(
                 "is an object file (COFF), not a shared library; {platform} needs {}",
                 expected.describe()
-            ));
+            )));
         }
     }
     if check_processor {
@@ -61,7 +62,7 @@ fn check_single(platform: Platform, data: &[u8], required: &[&str], check_proces
     check_exports(&file, required)
 }
 
-fn check_architecture(platform: Platform, found: Architecture) -> Result<(), String> {
+fn check_architecture(platform: Platform, found: Architecture) -> Result<(), Refusal> {
     let wanted = match platform.processor() {
         Processor::X86 => Architecture::I386,
         Processor::X86_64 => Architecture::X86_64,
@@ -70,12 +71,12 @@ fn check_architecture(platform: Platform, found: Architecture) -> Result<(), Str
         return Ok(());
     }
     let mut reason =
-        format!("is built for {}, but {platform} is {}", describe_architecture(found), platform.processor().describe());
+        Refusal(format!("is built for {}, but {platform} is {}", describe_architecture(found), platform.processor().describe()));
     if !matches!(found, Architecture::I386 | Architecture::X86_64) {
-        reason.push_str(&format!(
+        reason.push_str(&Refusal(format!(
             "; FMI 2.0 has no platform for {} binaries (its platforms are x86 and x86-64 only)",
             describe_architecture(found)
-        ));
+        )));
         if platform == Platform::Darwin64 && found == Architecture::Aarch64 {
             reason.push_str(
                 "; for Macs with Apple silicon, pass a universal binary with an x86_64 slice (lipo -create), which hosts of either processor load",
@@ -92,13 +93,13 @@ fn describe_architecture(a: Architecture) -> String {
         Architecture::I386 => "x86 (32-bit)".into(),
         Architecture::Aarch64 => "aarch64 (arm64)".into(),
         Architecture::Arm => "32-bit ARM".into(),
-        other => format!("{other:?}").to_lowercase(),
+        other => Refusal(format!("{other:?}")).to_lowercase(),
     }
 }
 
 /// A library a host can load: an ELF without a program interpreter (a position-independent
 /// program is ET_DYN too, but names one), a PE with the DLL flag, a Mach-O dylib or bundle.
-fn check_shared_library(file: &object::File) -> Result<(), String> {
+fn check_shared_library(file: &object::File) -> Result<(), Refusal> {
     match file {
         object::File::Elf32(f) => elf_shared_library(f),
         object::File::Elf64(f) => elf_shared_library(f),
@@ -107,18 +108,18 @@ fn check_shared_library(file: &object::File) -> Result<(), String> {
         _ => match file.kind() {
             object::ObjectKind::Dynamic => Ok(()),
             object::ObjectKind::Executable => Err("is a Windows program (.exe), not a DLL".into()),
-            other => Err(format!("is not a DLL (kind {other:?})")),
+            other => Err(Refusal(format!("is not a DLL (kind {other:?})"))),
         },
     }
 }
 
-fn elf_shared_library<Elf: FileHeader<Endian = Endianness>>(f: &ElfFile<Elf>) -> Result<(), String> {
+fn elf_shared_library<Elf: FileHeader<Endian = Endianness>>(f: &ElfFile<Elf>) -> Result<(), Refusal> {
     let endian = f.endian();
     match f.elf_header().e_type(endian) {
         object::elf::ET_DYN => {}
         object::elf::ET_EXEC => return Err("is a program (ELF type EXEC), not a shared library".into()),
         object::elf::ET_REL => return Err("is an object file (ELF type REL), not a shared library".into()),
-        other => return Err(format!("is not a shared library (ELF type {other})")),
+        other => return Err(Refusal(format!("is not a shared library (ELF type {other})"))),
     }
     if f.elf_program_headers().iter().any(|p| p.p_type(endian) == object::elf::PT_INTERP) {
         return Err("is a program (it names a program interpreter), not a shared library".into());
@@ -126,17 +127,17 @@ fn elf_shared_library<Elf: FileHeader<Endian = Endianness>>(f: &ElfFile<Elf>) ->
     Ok(())
 }
 
-fn macho_shared_library<Mach: MachHeader<Endian = Endianness>>(f: &MachOFile<Mach>) -> Result<(), String> {
+fn macho_shared_library<Mach: MachHeader<Endian = Endianness>>(f: &MachOFile<Mach>) -> Result<(), Refusal> {
     match f.macho_header().filetype(f.endian()) {
         object::macho::MH_DYLIB | object::macho::MH_BUNDLE => Ok(()),
         object::macho::MH_EXECUTE => Err("is a program (Mach-O MH_EXECUTE), not a dynamic library".into()),
         object::macho::MH_OBJECT => Err("is an object file (Mach-O MH_OBJECT), not a dynamic library".into()),
-        other => Err(format!("is not a dynamic library (Mach-O file type {other})")),
+        other => Err(Refusal(format!("is not a dynamic library (Mach-O file type {other})"))),
     }
 }
 
-fn check_exports(file: &object::File, required: &[&str]) -> Result<(), String> {
-    let exports = file.exports().map_err(|e| format!("its export table cannot be read: {e}"))?;
+fn check_exports(file: &object::File, required: &[&str]) -> Result<(), Refusal> {
+    let exports = file.exports().map_err(|e| Refusal(format!("its export table cannot be read: {e}")))?;
     // Mach-O prefixes C symbols with an underscore
     let strip = matches!(file, object::File::MachO32(_) | object::File::MachO64(_));
     let names: std::collections::HashSet<&[u8]> =
@@ -145,12 +146,12 @@ fn check_exports(file: &object::File, required: &[&str]) -> Result<(), String> {
     if missing.is_empty() {
         Ok(())
     } else {
-        Err(format!(
+        Err(Refusal(format!(
             "does not export {} of the {} fmi2 functions the FMU's modelDescription.xml needs: {}",
             missing.len(),
             required.len(),
             missing.join(", ")
-        ))
+        )))
     }
 }
 
@@ -161,14 +162,14 @@ fn check_universal<Fat: FatArch>(
     parsed: object::Result<MachOFatFile<Fat>>,
     data: &[u8],
     required: &[&str],
-) -> Result<(), String> {
+) -> Result<(), Refusal> {
     if platform.format() != Format::MachO {
-        return Err(format!(
+        return Err(Refusal(format!(
             "is a universal macOS binary (Mach-O), not {} as {platform} needs",
             platform.format().describe()
-        ));
+        )));
     }
-    let fat = parsed.map_err(|e| format!("cannot be read as a universal Mach-O binary: {e}"))?;
+    let fat = parsed.map_err(|e| Refusal(format!("cannot be read as a universal Mach-O binary: {e}")))?;
     let wanted = match platform.processor() {
         Processor::X86 => Architecture::I386,
         Processor::X86_64 => Architecture::X86_64,
@@ -178,19 +179,19 @@ fn check_universal<Fat: FatArch>(
         let a = arch.architecture();
         let slice = arch
             .data(data)
-            .map_err(|e| format!("has a slice for {} that cannot be read: {e}", describe_architecture(a)))?;
+            .map_err(|e| Refusal(format!("has a slice for {} that cannot be read: {e}", describe_architecture(a))))?;
         check_single(platform, slice, required, false)
-            .map_err(|e| format!("has a slice for {} that {e}", describe_architecture(a)))?;
+            .map_err(|e| Refusal(format!("has a slice for {} that {e}", describe_architecture(a))))?;
         found.push(describe_architecture(a));
     }
     if fat.arches().iter().any(|a| a.architecture() == wanted) {
         Ok(())
     } else {
-        Err(format!(
+        Err(Refusal(format!(
             "is a universal binary with slices for {} but none for {}, which {platform} is",
             found.join(", "),
             platform.processor().describe()
-        ))
+        )))
     }
 }
 
@@ -221,7 +222,7 @@ mod tests {
             assert!(check(Platform::Linux64, bad, &all).is_err());
         }
         // an import library (fmu_runtime.dll.lib): an archive, not the DLL
-        let e = check(Platform::Win64, format!("!<arch>\n{:60}", "").as_bytes(), &all).unwrap_err();
+        let e = check(Platform::Win64, Refusal(format!("!<arch>\n{:60}", "")).as_bytes(), &all).unwrap_err();
         assert!(e.contains("archive") && e.contains("fmu_runtime.dll"), "{e}");
         // a universal header whose slice lies beyond the file
         let mut fat = Vec::new();

@@ -30,12 +30,13 @@ impl PlatformBinary {
     /// Model Exchange and Co-Simulation (as every FMU of this builder does).
     pub fn from_arg(arg: &str) -> Result<Self, BuildError> {
         let (name, file) = arg.split_once('=').filter(|(n, f)| !n.is_empty() && !f.is_empty()).ok_or_else(|| {
-            BuildError::Numerical(format!(
-                "--platform-binary {arg}: expected PLATFORM=FILE, e.g. win64=fmu_runtime.dll (platforms: win32, win64, linux32, linux64, darwin32, darwin64)"
-            ))
+            BuildError::CommandLine {
+                option: format!("--platform-binary {arg}"),
+                message: "expected PLATFORM=FILE, e.g. win64=fmu_runtime.dll (platforms: win32, win64, linux32, linux64, darwin32, darwin64)".into(),
+            }
         })?;
-        let platform =
-            Platform::parse(name).map_err(|e| BuildError::Numerical(format!("--platform-binary {arg}: {e}")))?;
+        let platform = Platform::parse(name)
+            .map_err(|message| BuildError::CommandLine { option: format!("--platform-binary {arg}"), message })?;
         let path = PathBuf::from(file);
         let binary = Self::read(platform, &path)?;
         binary.check(&fmi2_functions::model_exchange_and_co_simulation())?;
@@ -62,7 +63,7 @@ impl PlatformBinary {
 }
 
 fn refused(path: &Path, platform: Platform, reason: String) -> BuildError {
-    BuildError::Io {
+    BuildError::File {
         path: path.to_owned(),
         message: format!("refused as the FMU's {platform} binary (--platform-binary {platform}=...): it {reason}"),
     }
@@ -72,12 +73,14 @@ fn refused(path: &Path, platform: Platform, reason: String) -> BuildError {
 pub fn check_distinct(binaries: &[PlatformBinary]) -> Result<(), BuildError> {
     for (i, b) in binaries.iter().enumerate() {
         if let Some(first) = binaries[..i].iter().find(|o| o.platform == b.platform) {
-            return Err(BuildError::Numerical(format!(
-                "--platform-binary {}: given twice ({} and {}); an FMU has one binary per platform",
-                b.platform,
-                first.path.display(),
-                b.path.display()
-            )));
+            return Err(BuildError::CommandLine {
+                option: format!("--platform-binary {}", b.platform),
+                message: format!(
+                    "given twice ({} and {}); an FMU has one binary per platform",
+                    first.path.display(),
+                    b.path.display()
+                ),
+            });
         }
     }
     Ok(())

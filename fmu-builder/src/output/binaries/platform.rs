@@ -55,13 +55,13 @@ impl Platform {
 
     /// A platform by its FMI 2.0 name; the error lists the names (and says why there is no
     /// aarch64 one).
-    pub fn parse(name: &str) -> Result<Self, String> {
+    pub fn parse(name: &str) -> Result<Self, crate::error::Refusal> {
         Self::ALL.into_iter().find(|p| p.name() == name).ok_or_else(|| {
             let names: Vec<&str> = Self::ALL.iter().map(|p| p.name()).collect();
-            format!(
+            crate::error::Refusal(format!(
                 "'{name}' is not an FMI 2.0 platform: expected one of {} (FMI 2.0 names x86 and x86-64 platforms only, none for aarch64/arm64)",
                 names.join(", ")
-            )
+            ))
         })
     }
 

@@ -30,7 +30,7 @@ impl From<FmuError> for BuildError {
     fn from(e: FmuError) -> Self {
         match e {
             FmuError::Description(_) => BuildError::Numerical(e.to_string()),
-            FmuError::Archive { path, message } => BuildError::Io { path, message },
+            FmuError::Archive { path, message } => BuildError::File { path, message },
         }
     }
 }
