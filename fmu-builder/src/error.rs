@@ -33,6 +33,14 @@ pub enum BuildError {
     /// regular file, too large, a binary of the wrong platform, an export the part cannot give).
     #[error("{}: {message}", .path.display())]
     File { path: PathBuf, message: String },
+    /// A runtime binary of another platform refused as the FMU's binary, and why.
+    #[error("{}: refused as the FMU's {platform} binary (--platform-binary {platform}=...): it {reason}", .path.display())]
+    Binary {
+        path: PathBuf,
+        platform: String,
+        #[source]
+        reason: Refusal,
+    },
     /// The input file itself cannot be read.
     #[error("{}: cannot read the input: it {source}", .path.display())]
     UnreadableInput {
@@ -104,6 +112,12 @@ impl BuildError {
 pub struct Refusal(pub String);
 
 impl std::error::Error for Refusal {}
+
+impl From<&str> for Refusal {
+    fn from(reason: &str) -> Self {
+        Refusal(reason.to_string())
+    }
+}
 
 impl std::fmt::Display for Refusal {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

@@ -71,19 +71,19 @@ fn check_architecture(platform: Platform, found: Architecture) -> Result<(), Ref
         return Ok(());
     }
     let mut reason =
-        Refusal(format!("is built for {}, but {platform} is {}", describe_architecture(found), platform.processor().describe()));
+        format!("is built for {}, but {platform} is {}", describe_architecture(found), platform.processor().describe());
     if !matches!(found, Architecture::I386 | Architecture::X86_64) {
-        reason.push_str(&Refusal(format!(
+        reason.push_str(&format!(
             "; FMI 2.0 has no platform for {} binaries (its platforms are x86 and x86-64 only)",
             describe_architecture(found)
-        )));
+        ));
         if platform == Platform::Darwin64 && found == Architecture::Aarch64 {
             reason.push_str(
                 "; for Macs with Apple silicon, pass a universal binary with an x86_64 slice (lipo -create), which hosts of either processor load",
             );
         }
     }
-    Err(reason)
+    Err(Refusal(reason))
 }
 
 fn describe_architecture(a: Architecture) -> String {
@@ -93,7 +93,7 @@ fn describe_architecture(a: Architecture) -> String {
         Architecture::I386 => "x86 (32-bit)".into(),
         Architecture::Aarch64 => "aarch64 (arm64)".into(),
         Architecture::Arm => "32-bit ARM".into(),
-        other => Refusal(format!("{other:?}")).to_lowercase(),
+        other => format!("{other:?}").to_lowercase(),
     }
 }
 

@@ -15,7 +15,7 @@ pub use platform::Platform;
 
 use std::path::{Path, PathBuf};
 
-use crate::error::BuildError;
+use crate::error::{BuildError, Refusal};
 
 /// A runtime binary of another platform, read and checked.
 #[derive(Debug, Clone)]
@@ -36,7 +36,7 @@ impl PlatformBinary {
             }
         })?;
         let platform = Platform::parse(name)
-            .map_err(|message| BuildError::CommandLine { option: format!("--platform-binary {arg}"), message })?;
+            .map_err(|reason| BuildError::CommandLine { option: format!("--platform-binary {arg}"), message: reason.0 })?;
         let path = PathBuf::from(file);
         let binary = Self::read(platform, &path)?;
         binary.check(&fmi2_functions::model_exchange_and_co_simulation())?;
@@ -45,11 +45,11 @@ impl PlatformBinary {
 
     pub fn read(platform: Platform, path: &Path) -> Result<Self, BuildError> {
         if path.is_dir() {
-            return Err(refused(path, platform, format!("is a folder; give the {} file", platform.runtime_file())));
+            return Err(refused(path, platform, Refusal(format!("is a folder; give the {} file", platform.runtime_file()))));
         }
         use crate::input::{file_read, size::Memory};
         let data = file_read::read(path, file_read::FileKind::PlatformBinary, Memory::of_this_machine().bytes)
-            .map_err(|e| refused(path, platform, e.0))?;
+            .map_err(|e| refused(path, platform, e))?;
         Ok(Self { platform, path: path.to_owned(), data })
     }
 
@@ -62,11 +62,8 @@ impl PlatformBinary {
     }
 }
 
-fn refused(path: &Path, platform: Platform, reason: String) -> BuildError {
-    BuildError::File {
-        path: path.to_owned(),
-        message: format!("refused as the FMU's {platform} binary (--platform-binary {platform}=...): it {reason}"),
-    }
+fn refused(path: &Path, platform: Platform, reason: Refusal) -> BuildError {
+    BuildError::Binary { path: path.to_owned(), platform: platform.to_string(), reason }
 }
 
 /// At most one binary per platform.
