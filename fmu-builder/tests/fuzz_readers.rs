@@ -30,9 +30,7 @@ use fmu_builder::input::import::{ImportedMesh, read_inp, read_msh};
 use fmu_builder::input::spec::Spec;
 use proptest::prelude::*;
 use proptest::sample::select;
-#[path = "../../fmu-runtime/tests/common/fuzz.rs"]
-mod fuzz;
-use fuzz::{env_u64, limit_memory};
+use test_support::fuzz::{self, env_u64, limit_memory};
 
 // ---------------------------------------------------------------------------------------------
 // case directories

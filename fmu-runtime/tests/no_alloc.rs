@@ -14,14 +14,13 @@ use fmu_runtime::body::FlexibleBody;
 use fmu_runtime::fmu::BodyFmu;
 use fmu_runtime::interface::VariableTable;
 use fmu_runtime::reduced::{FlangeShapes, ReducedBody, RotationTerms, Stiffening, StressPoint, two_mode_body};
-use std::ffi::{CString, c_char, c_void};
+use std::ffi::CString;
 use std::sync::Arc;
+use test_support::alloc::{Counting, assert_no_allocation};
+use test_support::logger;
 
-#[path = "support/c_logger.rs"]
-mod c_logger;
-#[path = "support/counting_alloc.rs"]
-mod counting_alloc;
-use counting_alloc::assert_no_allocation;
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
 
 /// Deterministic numbers in [-1, 1).
 struct Lcg(u64);
@@ -300,18 +299,8 @@ fn fmi_model_calls_allocate_nothing() {
 
 // --- the exported C functions, as the FMU's binary runs them ---------------------------------
 
-unsafe extern "C" fn quiet_logger(
-    _: *mut c_void,
-    _: *const c_char,
-    _: fmi2Status,
-    _: *const c_char,
-    _: *const c_char,
-    _: *const c_char,
-) {
-}
-
 fn callbacks() -> fmi2CallbackFunctions {
-    c_logger::callbacks_with(quiet_logger, std::ptr::null_mut())
+    logger::callbacks_with(logger::quiet, std::ptr::null_mut())
 }
 
 struct Resources(std::path::PathBuf);
