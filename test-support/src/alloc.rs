@@ -96,3 +96,39 @@ pub fn assert_no_allocation<R>(what: &str, f: impl FnOnce() -> R) -> R {
     assert_eq!(n, 0, "{what}: {n} heap allocations (first one's stack on stderr)");
     r
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_this_threads_allocations_only() {
+        assert!(installed());
+        let (n, v) = allocations(|| vec![1u8; 100]);
+        assert!(n >= 1, "{n}");
+        assert_eq!(v.len(), 100);
+        let before = total();
+        let (n, ()) = allocations(|| {
+            std::thread::scope(|s| {
+                // spawning allocates on this thread too: the other thread's own vector is what
+                // the per-thread count must leave out and the process's total must see
+                s.spawn(|| std::hint::black_box(vec![0u64; 1 << 10]).len());
+            })
+        });
+        let (spawn_only, ()) = allocations(|| std::thread::scope(|s| drop(s.spawn(|| 0))));
+        assert!(n <= spawn_only + 1, "{n} allocations counted for spawning ({spawn_only} without the vector)");
+        assert!(total() > before);
+    }
+
+    #[test]
+    fn arithmetic_passes() {
+        let x = assert_no_allocation("sum", || (0..1000u64).map(|k| k * k).sum::<u64>());
+        assert_eq!(x, 332_833_500);
+    }
+
+    #[test]
+    #[should_panic(expected = "boxed: 1 heap allocations")]
+    fn an_allocation_fails() {
+        assert_no_allocation("boxed", || drop(std::hint::black_box(Box::new(1u64))));
+    }
+}

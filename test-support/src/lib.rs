@@ -13,3 +13,8 @@ pub mod alloc;
 pub mod fuzz;
 pub mod loader;
 pub mod logger;
+
+// this crate's own tests check the counter, so their binary must count
+#[cfg(test)]
+#[global_allocator]
+static ALLOCATOR: alloc::Counting = alloc::Counting;

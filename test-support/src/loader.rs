@@ -141,3 +141,22 @@ fn defining_object(address: *mut c_void) -> Option<PathBuf> {
         Some(PathBuf::from(std::ffi::OsStr::from_encoded_bytes_unchecked(name.to_bytes())))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_missing_file_is_an_error_naming_it() {
+        let e = FmuBinary::open(Path::new("/nonexistent/model.so")).err().unwrap();
+        assert!(e.contains("/nonexistent/model.so"), "{e}");
+    }
+
+    #[test]
+    fn a_library_without_fmi2_functions_is_refused() {
+        // the C library this process links: loadable, but no FMU
+        let libc_path = defining_object(libc::printf as *mut c_void).expect("dladdr of printf");
+        let e = FmuBinary::open(&libc_path).err().unwrap();
+        assert!(e.contains("fmi2Instantiate"), "{e}");
+    }
+}

@@ -184,3 +184,51 @@ unsafe extern "C" fn record<S: Copy>(
         log.0.borrow_mut().push(Entry { status, category: text(category), text: text(arg) });
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use fmi2::types::fmi2Status::*;
+
+    /// The call the FMI layer makes, through the variadic type.
+    fn log_through(callbacks: &fmi2CallbackFunctions, status: fmi2Status, category: &CStr, text: &CStr) {
+        let logger = callbacks.logger.unwrap();
+        unsafe {
+            logger(
+                callbacks.componentEnvironment,
+                c"instance".as_ptr(),
+                status,
+                category.as_ptr(),
+                c"%s".as_ptr(),
+                text.as_ptr(),
+            )
+        };
+    }
+
+    #[test]
+    fn the_log_records_what_the_variadic_logger_is_given() {
+        let log = Log::default();
+        let callbacks = log.callbacks();
+        assert_eq!(callbacks.componentEnvironment, log.environment());
+        assert!(log.is_empty() && log.last().is_empty() && log.last_entry().is_none());
+        log_through(&callbacks, fmi2Warning, c"logStatusWarning", c"50% done, 100% sure");
+        log_through(&callbacks, fmi2Error, c"logStatusError", c"broken");
+        assert_eq!(log.len(), 2);
+        assert_eq!(log.last(), "broken");
+        let last = log.last_entry().unwrap();
+        assert_eq!((last.status, last.category.as_str()), (fmi2Error, "logStatusError"));
+        assert_eq!(log.entries()[0].text, "50% done, 100% sure");
+        assert!(log.contains("100% sure") && !log.contains("absent"));
+        assert_eq!(log.count("logStatusWarning"), 1);
+        log.clear();
+        assert!(log.is_empty());
+    }
+
+    #[test]
+    fn quiet_and_stderr_loggers_take_the_call() {
+        for logger in [quiet as FixedLogger, stderr] {
+            let callbacks = callbacks_with(logger, std::ptr::null_mut());
+            log_through(&callbacks, fmi2OK, c"logAll", c"a message");
+        }
+    }
+}
