@@ -24,9 +24,9 @@ mod hard_cases;
 mod newmark;
 mod stress_outputs;
 
+use clap::Parser;
 use fmi::{Fmu, Instance};
 use fmi2::types::{fmi2CoSimulation, fmi2FMUstate, fmi2ModelExchange, fmi2Status};
-use clap::Parser;
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -516,7 +516,11 @@ fn machine() -> String {
 
 /// Command line (`fmu-bench --help`). The defaults are the full run's; `--short` changes them.
 #[derive(Parser)]
-#[command(name = "fmu-bench", about = "Runtime speed of the reduced-body FMUs through the FMI 2.0 C API, against the full FE model", args_override_self = true)]
+#[command(
+    name = "fmu-bench",
+    about = "Runtime speed of the reduced-body FMUs through the FMI 2.0 C API, against the full FE model",
+    args_override_self = true
+)]
 struct Cli {
     #[arg(long, help = format!("CI mode: defaults --modes 20 --fixed-modes \"\" --repeats 5, a {SHORT_T_END} s window for the full model, hard cases without the 300-mode build; the same ratio targets"))]
     short: bool,
@@ -562,7 +566,8 @@ struct Options {
 impl From<Cli> for Options {
     /// `--short` sets the defaults only: an explicit option wins wherever it stands.
     fn from(cli: Cli) -> Self {
-        let (modes, fixed_modes, repeats) = if cli.short { (vec![20], vec![], 5) } else { (vec![10, 20, 50, 100], vec![20], 21) };
+        let (modes, fixed_modes, repeats) =
+            if cli.short { (vec![20], vec![], 5) } else { (vec![10, 20, 50, 100], vec![20], 21) };
         Options {
             modes: cli.modes.map_or(modes, |l| l.0),
             fixed_modes: cli.fixed_modes.map_or(fixed_modes, |l| l.0),

@@ -22,8 +22,7 @@ pub type SetupExperiment =
 pub type ComponentOnly = unsafe extern "C" fn(fmi2Component) -> fmi2Status;
 pub type NewDiscreteStates = unsafe extern "C" fn(fmi2Component, *mut fmi2EventInfo) -> fmi2Status;
 pub type DoStep = unsafe extern "C" fn(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean) -> fmi2Status;
-pub type SetReal =
-    unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *const fmi2Real) -> fmi2Status;
+pub type SetReal = unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *const fmi2Real) -> fmi2Status;
 pub type GetReal = unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *mut fmi2Real) -> fmi2Status;
 pub type SetStates = unsafe extern "C" fn(fmi2Component, *const fmi2Real, usize) -> fmi2Status;
 pub type GetStates = unsafe extern "C" fn(fmi2Component, *mut fmi2Real, usize) -> fmi2Status;
@@ -112,8 +111,8 @@ impl FmuBinary {
 /// `T` is the type of the function `name` (a function pointer); the copy returned is valid while
 /// `library` stays loaded.
 unsafe fn resolve<T: Copy>(library: &Library, path: &Path, name: &CStr) -> Result<T, String> {
-    let symbol: Symbol<T> = unsafe { library.get(name.to_bytes_with_nul()) }
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+    let symbol: Symbol<T> =
+        unsafe { library.get(name.to_bytes_with_nul()) }.map_err(|e| format!("{}: {e}", path.display()))?;
     let function = *symbol;
     let defined_in =
         defining_object(symbol.into_raw()).ok_or_else(|| format!("dladdr failed for {}", name.to_string_lossy()))?;

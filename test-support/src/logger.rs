@@ -52,7 +52,7 @@ pub fn callbacks_with(logger: FixedLogger, environment: *mut c_void) -> fmi2Call
 }
 
 /// A logger that drops every message, for tests that judge by status alone.
-pub unsafe extern "C" fn quiet(
+pub extern "C" fn quiet(
     _: *mut c_void,
     _: *const c_char,
     _: fmi2Status,
@@ -71,6 +71,10 @@ pub unsafe fn text(p: *const c_char) -> String {
 }
 
 /// A logger that prints `[instance] status category: message` on stderr, as a host would.
+///
+/// # Safety
+/// As the FMI layer calls it: every string NULL or NUL-terminated, `arg` a string wherever
+/// `message` is "%s".
 pub unsafe extern "C" fn stderr(
     _: *mut c_void,
     instance: *const c_char,
