@@ -19,8 +19,6 @@
 //! `FUZZ_CASES=20000 FUZZ_SEED=7 cargo test --release -p fmu-runtime --test fuzz_reduced_loader`.
 
 use std::ffi::CString;
-use std::path::PathBuf;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use fmi2::api;
 use fmi2::types::fmi2Status::{fmi2OK, fmi2Warning};
@@ -34,6 +32,7 @@ use proptest::prelude::*;
 use proptest::sample::select;
 use test_support::fuzz::{self, limit_memory};
 use test_support::logger::Log;
+use test_support::scratch::{Scratch, file_uri};
 
 // ---------------------------------------------------------------------------------------------
 // seeds
@@ -456,19 +455,9 @@ impl Host<'_> {
 
 /// Instantiates the accepted body through the FMI entry points and runs it a little.
 fn exercise(body: &ReducedBody, bytes: &[u8], kind: fmi2Type) -> Vec<String> {
-    static COUNT: AtomicUsize = AtomicUsize::new(0);
-    let k = COUNT.fetch_add(1, Ordering::Relaxed);
-    let dir = std::env::temp_dir().join(format!("fuzz-loader-{}-{k}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    struct Clean(PathBuf);
-    impl Drop for Clean {
-        fn drop(&mut self) {
-            let _ = std::fs::remove_dir_all(&self.0);
-        }
-    }
-    let _clean = Clean(dir.clone());
-    std::fs::write(dir.join(RESOURCE_FILE), bytes).unwrap();
-    let uri = CString::new(format!("file://{}", dir.display())).unwrap();
+    let dir = Scratch::new("fuzz-loader");
+    std::fs::write(dir.path().join(RESOURCE_FILE), bytes).unwrap();
+    let uri = file_uri(dir.path());
     let Ok(guid) = CString::new(body.guid.clone()) else { return vec![] };
     let table = VariableTable::new(body);
     let reals: Vec<u32> = table

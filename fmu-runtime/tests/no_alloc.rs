@@ -18,6 +18,7 @@ use std::ffi::CString;
 use std::sync::Arc;
 use test_support::alloc::{Counting, assert_no_allocation};
 use test_support::logger;
+use test_support::scratch::{Scratch, file_uri};
 
 #[global_allocator]
 static ALLOCATOR: Counting = Counting;
@@ -303,20 +304,11 @@ fn callbacks() -> fmi2CallbackFunctions {
     logger::callbacks_with(logger::quiet, std::ptr::null_mut())
 }
 
-struct Resources(std::path::PathBuf);
-impl Drop for Resources {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn resources(reduced: &ReducedBody, tag: &str) -> (Resources, CString) {
-    let dir = std::env::temp_dir().join(format!("fmu-runtime-no-alloc-{}-{tag}", std::process::id()));
-    let res = dir.join("resources");
-    std::fs::create_dir_all(&res).unwrap();
+fn resources(reduced: &ReducedBody, tag: &str) -> (Scratch, CString) {
+    let dir = Scratch::new(&format!("fmu-runtime-no-alloc-{tag}"));
+    let res = dir.folder("resources");
     std::fs::write(res.join(fmu_runtime::format::RESOURCE_FILE), reduced.to_bytes()).unwrap();
-    let uri = CString::new(format!("file://{}", res.display())).unwrap();
-    (Resources(dir), uri)
+    (dir, file_uri(&res))
 }
 
 fn ok(what: &str, s: fmi2Status) {

@@ -11,6 +11,7 @@ use std::ffi::CString;
 use std::ptr::null_mut;
 use std::time::Instant;
 use test_support::logger::Log;
+use test_support::scratch::{Scratch, file_uri};
 
 use fmi2Status::*;
 
@@ -20,17 +21,17 @@ struct Fmu {
     table: VariableTable,
     log: Box<Log>,
     _callbacks: Box<fmi2CallbackFunctions>,
-    dir: std::path::PathBuf,
+    /// Removed after the instance is freed (fields drop after `Drop::drop`).
+    _dir: Scratch,
 }
 
 impl Fmu {
     fn new(mut reduced: ReducedBody, kind: fmi2Type, tag: &str) -> Fmu {
         reduced.seal();
-        let dir = std::env::temp_dir().join(format!("fmu-runtime-guards-{}-{tag}", std::process::id()));
-        let res = dir.join("resources");
-        std::fs::create_dir_all(&res).unwrap();
+        let dir = Scratch::new(&format!("fmu-runtime-guards-{tag}"));
+        let res = dir.folder("resources");
         std::fs::write(res.join(fmu_runtime::format::RESOURCE_FILE), reduced.to_bytes()).unwrap();
-        let uri = CString::new(format!("file://{}", res.display())).unwrap();
+        let uri = file_uri(&res);
         let guid = CString::new(reduced.guid.clone()).unwrap();
         let log = Box::<Log>::default();
         let cb = Box::new(log.callbacks());
@@ -39,7 +40,7 @@ impl Fmu {
             fmu_runtime::fmi2Instantiate(name.as_ptr(), kind, guid.as_ptr(), uri.as_ptr(), &*cb, fmi2False, fmi2True)
         };
         assert!(!c.is_null(), "{:?}", log.last());
-        Fmu { c, table: VariableTable::new(&reduced), log, _callbacks: cb, dir }
+        Fmu { c, table: VariableTable::new(&reduced), log, _callbacks: cb, _dir: dir }
     }
 
     fn vr(&self, name: &str) -> u32 {
@@ -97,7 +98,6 @@ impl Fmu {
 impl Drop for Fmu {
     fn drop(&mut self) {
         unsafe { fmu_runtime::fmi2FreeInstance(self.c) };
-        let _ = std::fs::remove_dir_all(&self.dir);
     }
 }
 

@@ -6,6 +6,7 @@
 //!   the FMI layer reports.
 //! - [`alloc`]: the counting global allocator behind every "no allocation per step" check.
 //! - [`loader`]: an FMU's shared library and its fmi2 entry points, through `libloading`.
+//! - [`scratch`]: a temporary folder per test or case (FMU resources, input files), removed on drop.
 //! - [`fuzz`] (feature `fuzz`): the fuzz targets' proptest settings and memory ceiling.
 
 pub mod alloc;
@@ -13,6 +14,7 @@ pub mod alloc;
 pub mod fuzz;
 pub mod loader;
 pub mod logger;
+pub mod scratch;
 
 // this crate's own tests check the counter, so their binary must count
 #[cfg(test)]
