@@ -962,3 +962,47 @@ fn full_comparison(
     });
     Ok(targets)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    fn options(args: &[&str]) -> Options {
+        Options::from(Cli::try_parse_from(std::iter::once("fmu-bench").chain(args.iter().copied())).unwrap())
+    }
+
+    #[test]
+    fn the_command_line_is_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn defaults_and_the_short_mode() {
+        let o = options(&[]);
+        assert_eq!(
+            (o.modes, o.fixed_modes, o.repeats, o.short, o.skip_full),
+            (vec![10, 20, 50, 100], vec![20], 21, false, false)
+        );
+        let o = options(&["--short"]);
+        assert_eq!((o.modes, o.fixed_modes, o.repeats, o.short), (vec![20], vec![], 5, true));
+    }
+
+    #[test]
+    fn explicit_options_win_over_short_wherever_they_stand() {
+        for args in [["--modes", "10, 50", "--short"], ["--short", "--modes", "10,,50"]] {
+            let o = options(&args);
+            assert_eq!((o.modes, o.repeats, o.short), (vec![10, 50], 5, true));
+        }
+        let o = options(&["--fixed-modes", "", "--repeats", "0", "--skip-full", "--keep", "out", "--repeats", "3"]);
+        assert_eq!((o.fixed_modes, o.repeats, o.skip_full, o.keep), (vec![], 3, true, Some(PathBuf::from("out"))));
+        assert_eq!(options(&["--repeats", "0"]).repeats, 1);
+    }
+
+    #[test]
+    fn bad_arguments_are_refused() {
+        for args in [&["--modes", "ten"][..], &["--repeats", "x"], &["--bogus"], &["--keep"]] {
+            assert!(Cli::try_parse_from(std::iter::once("fmu-bench").chain(args.iter().copied())).is_err(), "{args:?}");
+        }
+    }
+}
