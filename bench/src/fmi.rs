@@ -1,57 +1,17 @@
 //! An FMU as a co-simulation master sees it: unzip, read modelDescription.xml, dlopen the
-//! binary and call it through the FMI 2.0 C API only. The C types come from fmu-runtime, and
-//! every timed call goes through the dlopen'ed library (checked with dladdr). One exception,
+//! binary and call it through the FMI 2.0 C API only. The C types come from fmi2, and every
+//! timed call goes through the dlopen'ed library (test-support's loader checks each symbol with
+//! dladdr). One exception,
 //! `Fmu::open_in_process`: the same FMU (its modelDescription.xml and resources) driven through
 //! the runtime's exported C functions as linked into this binary, so that the bench's counting
 //! allocator sees their heap allocations (the dlopen'ed binary has its own allocator).
 
 use fmi2::types::*;
 use std::collections::HashMap;
-use std::ffi::{CStr, CString, c_char, c_void};
+use std::ffi::CString;
 use std::path::{Path, PathBuf};
-
-type Instantiate = unsafe extern "C" fn(
-    fmi2String,
-    fmi2Type,
-    fmi2String,
-    fmi2String,
-    *const fmi2CallbackFunctions,
-    fmi2Boolean,
-    fmi2Boolean,
-) -> fmi2Component;
-type FreeInstance = unsafe extern "C" fn(fmi2Component);
-type SetupExperiment =
-    unsafe extern "C" fn(fmi2Component, fmi2Boolean, fmi2Real, fmi2Real, fmi2Boolean, fmi2Real) -> fmi2Status;
-type ComponentOnly = unsafe extern "C" fn(fmi2Component) -> fmi2Status;
-type NewDiscreteStates = unsafe extern "C" fn(fmi2Component, *mut fmi2EventInfo) -> fmi2Status;
-type DoStep = unsafe extern "C" fn(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean) -> fmi2Status;
-type SetReal = unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *const fmi2Real) -> fmi2Status;
-type GetReal = unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *mut fmi2Real) -> fmi2Status;
-type SetStates = unsafe extern "C" fn(fmi2Component, *const fmi2Real, usize) -> fmi2Status;
-type GetStates = unsafe extern "C" fn(fmi2Component, *mut fmi2Real, usize) -> fmi2Status;
-type GetFmuState = unsafe extern "C" fn(fmi2Component, *mut fmi2FMUstate) -> fmi2Status;
-type SetFmuState = unsafe extern "C" fn(fmi2Component, fmi2FMUstate) -> fmi2Status;
-type FreeFmuState = unsafe extern "C" fn(fmi2Component, *mut fmi2FMUstate) -> fmi2Status;
-
-/// The entry points a master uses, resolved from the FMU's binary.
-pub struct Api {
-    pub instantiate: Instantiate,
-    pub free_instance: FreeInstance,
-    pub setup_experiment: SetupExperiment,
-    pub enter_initialization_mode: ComponentOnly,
-    pub exit_initialization_mode: ComponentOnly,
-    pub terminate: ComponentOnly,
-    pub new_discrete_states: NewDiscreteStates,
-    pub enter_continuous_time_mode: ComponentOnly,
-    pub do_step: DoStep,
-    pub set_real: SetReal,
-    pub get_real: GetReal,
-    pub set_continuous_states: SetStates,
-    pub get_derivatives: GetStates,
-    pub get_fmu_state: GetFmuState,
-    pub set_fmu_state: SetFmuState,
-    pub free_fmu_state: FreeFmuState,
-}
+use test_support::loader::{Fmi2Functions, FmuBinary};
+use test_support::logger;
 
 /// What the master needs from modelDescription.xml.
 pub struct ModelDescription {
@@ -106,15 +66,9 @@ pub struct Fmu {
     pub description: ModelDescription,
     pub binary: PathBuf,
     resource_uri: CString,
-    /// dlopen handle; null for the in-process runtime.
-    handle: *mut c_void,
-    pub api: Api,
-}
-
-fn dl_error() -> String {
-    // SAFETY: dlerror returns NULL or a NUL-terminated string valid until the next dl* call.
-    let e = unsafe { libc::dlerror() };
-    if e.is_null() { "unknown dl error".into() } else { unsafe { CStr::from_ptr(e) }.to_string_lossy().into_owned() }
+    /// The loaded binary `api` points into; None for the in-process runtime.
+    _library: Option<FmuBinary>,
+    pub api: Fmi2Functions,
 }
 
 impl Fmu {
@@ -128,61 +82,9 @@ impl Fmu {
         let binary = dir.join("binaries/linux64").join(format!("{}.so", description.model_identifier));
         let resources = dir.join("resources").canonicalize().map_err(|e| format!("resources: {e}"))?;
         let resource_uri = CString::new(format!("file://{}", resources.display())).map_err(|e| e.to_string())?;
-        let c_path = CString::new(
-            binary.canonicalize().map_err(|e| format!("{}: {e}", binary.display()))?.as_os_str().as_encoded_bytes(),
-        )
-        .map_err(|e| e.to_string())?;
-        // SAFETY: a NUL-terminated path; RTLD_LOCAL keeps each FMU's fmi2* symbols to itself.
-        let handle = unsafe { libc::dlopen(c_path.as_ptr(), libc::RTLD_NOW | libc::RTLD_LOCAL) };
-        if handle.is_null() {
-            return Err(format!("dlopen {}: {}", binary.display(), dl_error()));
-        }
-        let sym = |name: &CStr| -> Result<*mut c_void, String> {
-            // SAFETY: handle from dlopen, name NUL-terminated.
-            let p = unsafe { libc::dlsym(handle, name.as_ptr()) };
-            if p.is_null() {
-                return Err(format!("{}: no symbol {}", binary.display(), name.to_string_lossy()));
-            }
-            // the call must land in the FMU's binary, not in anything this process links
-            let mut info: libc::Dl_info = unsafe { std::mem::zeroed() };
-            if unsafe { libc::dladdr(p, &mut info) } == 0 || info.dli_fname.is_null() {
-                return Err(format!("dladdr failed for {}", name.to_string_lossy()));
-            }
-            let from = unsafe { CStr::from_ptr(info.dli_fname) };
-            if from != c_path.as_c_str() {
-                return Err(format!(
-                    "{} resolved to {} instead of the FMU's binary",
-                    name.to_string_lossy(),
-                    from.to_string_lossy()
-                ));
-            }
-            Ok(p)
-        };
-        // SAFETY: each symbol is the FMI 2.0 function of that name, with the standard's signature.
-        macro_rules! f {
-            ($name:literal, $ty:ty) => {
-                unsafe { std::mem::transmute::<*mut c_void, $ty>(sym($name)?) }
-            };
-        }
-        let api = Api {
-            instantiate: f!(c"fmi2Instantiate", Instantiate),
-            free_instance: f!(c"fmi2FreeInstance", FreeInstance),
-            setup_experiment: f!(c"fmi2SetupExperiment", SetupExperiment),
-            enter_initialization_mode: f!(c"fmi2EnterInitializationMode", ComponentOnly),
-            exit_initialization_mode: f!(c"fmi2ExitInitializationMode", ComponentOnly),
-            terminate: f!(c"fmi2Terminate", ComponentOnly),
-            new_discrete_states: f!(c"fmi2NewDiscreteStates", NewDiscreteStates),
-            enter_continuous_time_mode: f!(c"fmi2EnterContinuousTimeMode", ComponentOnly),
-            do_step: f!(c"fmi2DoStep", DoStep),
-            set_real: f!(c"fmi2SetReal", SetReal),
-            get_real: f!(c"fmi2GetReal", GetReal),
-            set_continuous_states: f!(c"fmi2SetContinuousStates", SetStates),
-            get_derivatives: f!(c"fmi2GetDerivatives", GetStates),
-            get_fmu_state: f!(c"fmi2GetFMUstate", GetFmuState),
-            set_fmu_state: f!(c"fmi2SetFMUstate", SetFmuState),
-            free_fmu_state: f!(c"fmi2FreeFMUstate", FreeFmuState),
-        };
-        Ok(Self { description, binary, resource_uri, handle, api })
+        let library = FmuBinary::open(&binary)?;
+        let api = *library.functions();
+        Ok(Self { description, binary, resource_uri, _library: Some(library), api })
     }
 
     /// The FMU unzipped in `dir` by `open`, driven through the runtime's C functions linked into
@@ -193,7 +95,7 @@ impl Fmu {
         let description = ModelDescription::parse(&xml)?;
         let resources = dir.join("resources").canonicalize().map_err(|e| format!("resources: {e}"))?;
         let resource_uri = CString::new(format!("file://{}", resources.display())).map_err(|e| e.to_string())?;
-        let api = Api {
+        let api = Fmi2Functions {
             instantiate: fmu_runtime::fmi2Instantiate,
             free_instance: fmu_runtime::fmi2FreeInstance,
             setup_experiment: fmu_runtime::fmi2SetupExperiment,
@@ -211,14 +113,14 @@ impl Fmu {
             set_fmu_state: fmu_runtime::fmi2SetFMUstate,
             free_fmu_state: fmu_runtime::fmi2FreeFMUstate,
         };
-        Ok(Self { description, binary: PathBuf::from("(in process)"), resource_uri, handle: std::ptr::null_mut(), api })
+        Ok(Self { description, binary: PathBuf::from("(in process)"), resource_uri, _library: None, api })
     }
 
     /// fmi2Instantiate and fmi2SetupExperiment (start 0, no tolerance, no stop time).
     pub fn instantiate(&self, kind: fmi2Type, name: &str) -> Result<Instance<'_>, String> {
         let name = CString::new(name).map_err(|e| e.to_string())?;
         let guid = CString::new(self.description.guid.as_str()).map_err(|e| e.to_string())?;
-        let callbacks = callbacks();
+        let callbacks = logger::callbacks_with(logger::stderr, std::ptr::null_mut());
         // SAFETY: FMI 2.0 contract; all strings live across the call, the layer copies them.
         let c = unsafe {
             (self.api.instantiate)(
@@ -239,50 +141,6 @@ impl Fmu {
             (self.api.setup_experiment)(c, fmi2False, 0.0, 0.0, fmi2False, 0.0)
         })?;
         Ok(inst)
-    }
-}
-
-impl Drop for Fmu {
-    fn drop(&mut self) {
-        // SAFETY: every instance borrowed self and is gone.
-        if !self.handle.is_null() {
-            unsafe { libc::dlclose(self.handle) };
-        }
-    }
-}
-
-/// Stable Rust cannot define a C-variadic function, so the logger takes the one vararg the
-/// runtime passes (the text for its constant "%s" format) as a sixth fixed parameter and is
-/// transmuted to the variadic type: on x86-64 System V (the only platform of these FMUs) the
-/// first six integer/pointer arguments travel in the same registers either way. This is what
-/// fmu-runtime's own FMI-layer tests do.
-unsafe extern "C" fn logger(
-    _env: *mut c_void,
-    instance: *const c_char,
-    status: fmi2Status,
-    category: *const c_char,
-    message: *const c_char,
-    arg: *const c_char,
-) {
-    let text = |p: *const c_char| {
-        if p.is_null() { String::new() } else { unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned() }
-    };
-    let message = text(message);
-    let message = if message == "%s" { text(arg) } else { message };
-    eprintln!("[{}] {:?} {}: {}", text(instance), status, text(category), message);
-}
-
-fn callbacks() -> fmi2CallbackFunctions {
-    type Fixed =
-        unsafe extern "C" fn(*mut c_void, *const c_char, fmi2Status, *const c_char, *const c_char, *const c_char);
-    // SAFETY: see `logger`.
-    let logger: fmi2CallbackLogger = unsafe { std::mem::transmute(logger as Fixed) };
-    fmi2CallbackFunctions {
-        logger: Some(logger),
-        allocateMemory: None,
-        freeMemory: None,
-        stepFinished: None,
-        componentEnvironment: std::ptr::null_mut(),
     }
 }
 

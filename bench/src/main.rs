@@ -24,40 +24,20 @@ mod hard_cases;
 mod newmark;
 mod stress_outputs;
 
+use clap::Parser;
 use fmi::{Fmu, Instance};
 use fmi2::types::{fmi2CoSimulation, fmi2FMUstate, fmi2ModelExchange, fmi2Status};
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
+use test_support::alloc;
 
 /// Counts this process's own heap allocations (the dlopen'ed FMU binaries have their own
 /// allocator), to check that the full model's Newmark loop and the runtime's C functions linked
-/// into this binary (`fmi::Fmu::open_in_process`) allocate nothing per step.
-struct Counting;
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
+/// into this binary (`fmi::Fmu::open_in_process`) allocate nothing per step. Process-wide
+/// (`alloc::total`), so that work a library hands to other threads counts too.
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static ALLOCATOR: alloc::Counting = alloc::Counting;
 
 /// Communication step of every co-simulation measurement [s].
 const H: f64 = 1e-3;
@@ -411,21 +391,21 @@ fn count_allocations(dir: &Path, spin: bool) -> Result<Vec<(String, usize)>, Str
     let mut out = [0.0; 18];
     let mut sink = 0.0;
     {
-        let before = ALLOCATIONS.load(Ordering::Relaxed);
+        let before = alloc::total();
         let inst = fmu.instantiate(fmi2CoSimulation, "count")?;
         if spin {
             rotating_mount(&inst)?;
         }
         inst.initialize()?;
         // the counter sees the runtime's allocations: instantiation reads and stores the body
-        if ALLOCATIONS.load(Ordering::Relaxed) == before {
+        if alloc::total() == before {
             return Err(
                 "the allocation counter saw no allocation in fmi2Instantiate: it does not count the runtime".into()
             );
         }
         let c = inst.c;
         let mut t = 0.0;
-        let before = ALLOCATIONS.load(Ordering::Relaxed);
+        let before = alloc::total();
         for k in 0..COUNTED_CALLS {
             let f = [0.0, 0.3 * F_TIP, F_TIP * (1.0 + 0.5 * (0.1 * k as f64).sin())];
             unsafe {
@@ -437,11 +417,11 @@ fn count_allocations(dir: &Path, spin: bool) -> Result<Vec<(String, usize)>, Str
             sink += out[2];
             t += H;
         }
-        let n = ALLOCATIONS.load(Ordering::Relaxed) - before; // before the label allocates
+        let n = alloc::total() - before; // before the label allocates
         counts.push((format!("master loop (fmi2SetReal, fmi2DoStep, fmi2GetReal), {motion}"), n));
         if spin {
             let w_vr = d.vr("base.w[3]");
-            let before = ALLOCATIONS.load(Ordering::Relaxed);
+            let before = alloc::total();
             for k in 0..COUNTED_CALLS {
                 let w = [SPIN + SPIN_UP_RATE * H * (k % 1000) as f64];
                 unsafe {
@@ -450,7 +430,7 @@ fn count_allocations(dir: &Path, spin: bool) -> Result<Vec<(String, usize)>, Str
                 }
                 t += H;
             }
-            let n = ALLOCATIONS.load(Ordering::Relaxed) - before;
+            let n = alloc::total() - before;
             counts.push(("spin-up (fmi2SetReal(base.w[3]), fmi2DoStep)".to_string(), n));
         }
     }
@@ -466,7 +446,7 @@ fn count_allocations(dir: &Path, spin: bool) -> Result<Vec<(String, usize)>, Str
         let mut x = vec![0.0; nx];
         let mut dx = vec![0.0; nx];
         let c = inst.c;
-        let before = ALLOCATIONS.load(Ordering::Relaxed);
+        let before = alloc::total();
         for k in 0..COUNTED_CALLS {
             x[k % nx] += 1e-7;
             unsafe {
@@ -475,7 +455,7 @@ fn count_allocations(dir: &Path, spin: bool) -> Result<Vec<(String, usize)>, Str
             }
             sink += dx[nx - 1];
         }
-        let n = ALLOCATIONS.load(Ordering::Relaxed) - before;
+        let n = alloc::total() - before;
         counts.push((format!("Model Exchange (fmi2SetContinuousStates, fmi2GetDerivatives), {motion}"), n));
     }
     if bad > 0 || !sink.is_finite() {
@@ -534,6 +514,45 @@ fn machine() -> String {
     format!("{cpu}, {cores} cores available")
 }
 
+/// Command line (`fmu-bench --help`). The defaults are the full run's; `--short` changes them.
+#[derive(Parser)]
+#[command(
+    name = "fmu-bench",
+    about = "Runtime speed of the reduced-body FMUs through the FMI 2.0 C API, against the full FE model",
+    args_override_self = true
+)]
+struct Cli {
+    #[arg(long, help = format!("CI mode: defaults --modes 20 --fixed-modes \"\" --repeats 5, a {SHORT_T_END} s window for the full model, hard cases without the 300-mode build; the same ratio targets"))]
+    short: bool,
+    /// FMUs with the rotating-frame terms (no scene), timed with the mount fixed and spinning [default: 10,20,50,100]
+    #[arg(long, value_name = "LIST", value_parser = mode_list)]
+    modes: Option<ModeList>,
+    /// FMUs built for a mount that does not rotate (scene without rotation), fixed mount only; "" for none [default: 20]
+    #[arg(long, value_name = "LIST", value_parser = mode_list)]
+    fixed_modes: Option<ModeList>,
+    /// Batches per timing, of which the median is reported (at least 1) [default: 21]
+    #[arg(long, value_name = "N")]
+    repeats: Option<usize>,
+    /// Leave out the full FE model's Newmark comparison
+    #[arg(long)]
+    skip_full: bool,
+    /// Build the FMUs in DIR and keep them (default: a temporary folder, removed at the end)
+    #[arg(long, value_name = "DIR")]
+    keep: Option<PathBuf>,
+}
+
+/// A comma-separated list of mode counts; empty entries are skipped, so "" is no FMU at all.
+#[derive(Clone)]
+struct ModeList(Vec<usize>);
+
+fn mode_list(text: &str) -> Result<ModeList, String> {
+    text.split(',')
+        .filter(|m| !m.trim().is_empty())
+        .map(|m| m.trim().parse().map_err(|e| format!("mode list {text}: {e}")))
+        .collect::<Result<_, _>>()
+        .map(ModeList)
+}
+
 struct Options {
     modes: Vec<usize>,
     fixed_modes: Vec<usize>,
@@ -544,61 +563,20 @@ struct Options {
     short: bool,
 }
 
-fn options() -> Result<Options, String> {
-    let mut o = Options {
-        modes: vec![10, 20, 50, 100],
-        fixed_modes: vec![20],
-        repeats: 21,
-        skip_full: false,
-        keep: None,
-        short: false,
-    };
-    // --short first, so that explicit options after it still apply
-    if std::env::args().any(|a| a == "--short") {
-        o = Options { modes: vec![20], fixed_modes: vec![], repeats: 5, short: true, ..o };
-    }
-    let list = |text: &str| -> Result<Vec<usize>, String> {
-        text.split(',')
-            .filter(|m| !m.trim().is_empty())
-            .map(|m| m.trim().parse().map_err(|e| format!("mode list {text}: {e}")))
-            .collect()
-    };
-    let mut args = std::env::args().skip(1);
-    while let Some(a) = args.next() {
-        match a.as_str() {
-            "--modes" => {
-                o.modes = list(&args.next().ok_or("--modes needs a list, e.g. 10,20")?)?;
-            }
-            "--fixed-modes" => {
-                o.fixed_modes = list(&args.next().ok_or("--fixed-modes needs a list, e.g. 20 (\"\" for none)")?)?;
-            }
-            "--repeats" => {
-                o.repeats =
-                    args.next().ok_or("--repeats needs a number")?.parse().map_err(|e| format!("--repeats: {e}"))?;
-                o.repeats = o.repeats.max(1);
-            }
-            "--skip-full" => o.skip_full = true,
-            "--short" => {}
-            "--keep" => o.keep = Some(PathBuf::from(args.next().ok_or("--keep needs a folder")?)),
-            "-h" | "--help" => {
-                println!(
-                    "fmu-bench [--short] [--modes 10,20,50,100] [--fixed-modes 20] [--repeats 21] [--skip-full] [--keep DIR]"
-                );
-                println!(
-                    "  --short: CI mode: --modes 20 --fixed-modes \"\" --repeats 5, a {SHORT_T_END} s window for the full model, hard cases without the 300-mode build; the same ratio targets"
-                );
-                println!(
-                    "  --modes: FMUs with the rotating-frame terms (no scene), timed with the mount fixed and spinning"
-                );
-                println!(
-                    "  --fixed-modes: FMUs built for a mount that does not rotate (scene without rotation), fixed mount only"
-                );
-                std::process::exit(0);
-            }
-            other => return Err(format!("unknown argument {other} (try --help)")),
+impl From<Cli> for Options {
+    /// `--short` sets the defaults only: an explicit option wins wherever it stands.
+    fn from(cli: Cli) -> Self {
+        let (modes, fixed_modes, repeats) =
+            if cli.short { (vec![20], vec![], 5) } else { (vec![10, 20, 50, 100], vec![20], 21) };
+        Options {
+            modes: cli.modes.map_or(modes, |l| l.0),
+            fixed_modes: cli.fixed_modes.map_or(fixed_modes, |l| l.0),
+            repeats: cli.repeats.unwrap_or(repeats).max(1),
+            skip_full: cli.skip_full,
+            keep: cli.keep,
+            short: cli.short,
         }
     }
-    Ok(o)
 }
 
 fn main() {
@@ -609,7 +587,7 @@ fn main() {
 }
 
 fn run() -> Result<(), String> {
-    let opts = options()?;
+    let opts = Options::from(Cli::parse());
     let started = Instant::now();
     let work = match &opts.keep {
         Some(dir) => dir.clone(),
@@ -839,7 +817,7 @@ fn full_comparison(
         nm.step(); // warm-up, then the timed trajectory from rest
         nm.reset();
         let mut u = Vec::with_capacity(samples);
-        let before = ALLOCATIONS.load(Ordering::Relaxed);
+        let before = alloc::total();
         let start = Instant::now();
         for _ in 0..samples {
             for _ in 0..sub {
@@ -848,7 +826,7 @@ fn full_comparison(
             u.push(nm.u[tip_z]);
         }
         let elapsed = start.elapsed().as_secs_f64();
-        let allocations = ALLOCATIONS.load(Ordering::Relaxed) - before;
+        let allocations = alloc::total() - before;
         let step_ns = elapsed * 1e9 / (samples * sub) as f64;
         eprintln!(
             "full model, Newmark h = {:.4} ms: {elapsed:.1} s, {} ns per step, {allocations} allocations",
@@ -983,4 +961,48 @@ fn full_comparison(
         ok: newmark_allocations == 0,
     });
     Ok(targets)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    fn options(args: &[&str]) -> Options {
+        Options::from(Cli::try_parse_from(std::iter::once("fmu-bench").chain(args.iter().copied())).unwrap())
+    }
+
+    #[test]
+    fn the_command_line_is_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn defaults_and_the_short_mode() {
+        let o = options(&[]);
+        assert_eq!(
+            (o.modes, o.fixed_modes, o.repeats, o.short, o.skip_full),
+            (vec![10, 20, 50, 100], vec![20], 21, false, false)
+        );
+        let o = options(&["--short"]);
+        assert_eq!((o.modes, o.fixed_modes, o.repeats, o.short), (vec![20], vec![], 5, true));
+    }
+
+    #[test]
+    fn explicit_options_win_over_short_wherever_they_stand() {
+        for args in [["--modes", "10, 50", "--short"], ["--short", "--modes", "10,,50"]] {
+            let o = options(&args);
+            assert_eq!((o.modes, o.repeats, o.short), (vec![10, 50], 5, true));
+        }
+        let o = options(&["--fixed-modes", "", "--repeats", "0", "--skip-full", "--keep", "out", "--repeats", "3"]);
+        assert_eq!((o.fixed_modes, o.repeats, o.skip_full, o.keep), (vec![], 3, true, Some(PathBuf::from("out"))));
+        assert_eq!(options(&["--repeats", "0"]).repeats, 1);
+    }
+
+    #[test]
+    fn bad_arguments_are_refused() {
+        for args in [&["--modes", "ten"][..], &["--repeats", "x"], &["--bogus"], &["--keep"]] {
+            assert!(Cli::try_parse_from(std::iter::once("fmu-bench").chain(args.iter().copied())).is_err(), "{args:?}");
+        }
+    }
 }

@@ -23,35 +23,14 @@
 //! the child's address-space ceiling.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use fmu_builder::input::import::matrices::{MatrixFiles, parse_matrix_market, read_matrix_model};
 use fmu_builder::input::import::{ImportedMesh, read_inp, read_msh};
 use fmu_builder::input::spec::Spec;
 use proptest::prelude::*;
 use proptest::sample::select;
-#[path = "../../fmu-runtime/tests/common/fuzz.rs"]
-mod fuzz;
-use fuzz::{env_u64, limit_memory};
-
-// ---------------------------------------------------------------------------------------------
-// case directories
-
-/// A fresh directory per case (the child runs many cases; a crash restarts it).
-fn case_dir(target: &str) -> PathBuf {
-    static COUNT: AtomicUsize = AtomicUsize::new(0);
-    let k = COUNT.fetch_add(1, Ordering::Relaxed);
-    let dir = std::env::temp_dir().join(format!("fuzz-readers-{}-{target}-{k}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-struct Cleanup(PathBuf);
-impl Drop for Cleanup {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+use test_support::fuzz::{self, env_u64, limit_memory};
+use test_support::scratch::Scratch;
 
 // ---------------------------------------------------------------------------------------------
 // mutations
@@ -541,8 +520,8 @@ struct Generated {
 fn generated() -> &'static Generated {
     static CELL: std::sync::OnceLock<Generated> = std::sync::OnceLock::new();
     CELL.get_or_init(|| {
-        let dir = case_dir("seeds");
-        let _clean = Cleanup(dir.clone());
+        let scratch = Scratch::new("fuzz-readers-seeds");
+        let dir = scratch.path();
         let mut decks = Vec::new();
         let mut matrices = Vec::new();
         for (element, elements) in [("hex8", "[2, 1, 1]"), ("hex20", "[1, 1, 1]")] {
@@ -583,8 +562,8 @@ proptest! {
             Some(name) => std::fs::read(examples().join(name)).unwrap(),
             None => MATRIX_SPEC.as_bytes().to_vec(),
         };
-        let dir = case_dir("spec");
-        let _clean = Cleanup(dir.clone());
+        let scratch = Scratch::new("fuzz-readers-spec");
+        let dir = scratch.path();
         let file = dir.join("case.json");
         std::fs::write(&file, mutate(&text, &ms)).unwrap();
         if let Err(e) = Spec::from_file(&file) {
@@ -605,8 +584,8 @@ proptest! {
             _ if long => std::fs::read(examples().join("bracket/bracket.inp")).unwrap(),
             _ => g.decks[0].as_bytes().to_vec(),
         };
-        let dir = case_dir("inp");
-        let _clean = Cleanup(dir.clone());
+        let scratch = Scratch::new("fuzz-readers-inp");
+        let dir = scratch.path();
         let file = dir.join("case.inp");
         std::fs::write(&file, mutate(&text, &ms)).unwrap();
         match read_inp(&file) {
@@ -620,8 +599,8 @@ proptest! {
     fn msh_reader(seed in 0..MSH_SEEDS.len(), ms in mutations()) {
         limit_memory();
         let (name, bytes) = MSH_SEEDS[seed];
-        let dir = case_dir("msh");
-        let _clean = Cleanup(dir.clone());
+        let scratch = Scratch::new("fuzz-readers-msh");
+        let dir = scratch.path();
         let file = dir.join(name);
         std::fs::write(&file, mutate(bytes, &ms)).unwrap();
         match read_msh(&file) {
@@ -649,8 +628,8 @@ proptest! {
     fn matrix_model_reader(which in prop::collection::vec((0..4usize, mutations()), 1..3)) {
         limit_memory();
         let g = generated();
-        let dir = case_dir("matrices");
-        let _clean = Cleanup(dir.clone());
+        let scratch = Scratch::new("fuzz-readers-matrices");
+        let dir = scratch.path();
         let mut files: Vec<(PathBuf, Vec<u8>)> =
             g.matrices.iter().map(|(n, b)| (dir.join(n), b.clone())).collect();
         for (k, ms) in &which {
@@ -682,8 +661,8 @@ proptest! {
 /// The seeds themselves are valid: the mutations start from inputs the readers accept.
 #[test]
 fn seeds_are_accepted() {
-    let dir = case_dir("check");
-    let _clean = Cleanup(dir.clone());
+    let scratch = Scratch::new("fuzz-readers-check");
+    let dir = scratch.path();
     for name in SPEC_SEEDS {
         Spec::from_file(&examples().join(name)).unwrap();
     }

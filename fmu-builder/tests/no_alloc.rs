@@ -12,9 +12,10 @@ use fmu_runtime::fmu::BodyFmu;
 use fmu_runtime::interface::VariableTable;
 use std::path::Path;
 
-#[path = "../../fmu-runtime/tests/support/counting_alloc.rs"]
-mod counting_alloc;
-use counting_alloc::assert_no_allocation;
+use test_support::alloc::{Counting, assert_no_allocation};
+
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
 
 #[test]
 fn a_built_beam_steps_without_allocating() {

@@ -4,6 +4,7 @@
 
 use std::ffi::CString;
 use std::ptr::null;
+use test_support::scratch::{Scratch, file_uri};
 
 use fmi2::api;
 use fmi2::types::fmi2Status::fmi2OK;
@@ -36,7 +37,6 @@ struct Setup {
 fn setup(dir: &std::path::Path) -> Setup {
     let mut body = two_mode_body();
     body.seal();
-    std::fs::create_dir_all(dir).unwrap();
     std::fs::write(dir.join(RESOURCE_FILE), body.to_bytes()).unwrap();
     let table = VariableTable::new(&body);
     let outputs = table
@@ -47,7 +47,7 @@ fn setup(dir: &std::path::Path) -> Setup {
         .collect();
     let vr = |name: &str| table.value_reference(name).unwrap();
     Setup {
-        uri: CString::new(format!("file://{}", dir.display())).unwrap(),
+        uri: file_uri(dir),
         guid: CString::new(body.guid.clone()).unwrap(),
         force: vr("tip.f[2]"),
         shake: vr("base.a[3]"),
@@ -110,8 +110,8 @@ impl Setup {
 
 #[test]
 fn a_thousand_instances_on_eight_threads_match_the_same_instances_run_alone() {
-    let dir = std::env::temp_dir().join(format!("fmu-runtime-concurrent-{}", std::process::id()));
-    let s = setup(&dir);
+    let dir = Scratch::new("fmu-runtime-concurrent");
+    let s = setup(dir.path());
     assert!(s.outputs.len() > 10, "{} outputs of {}", s.outputs.len(), s.table.variables.len());
 
     // alone: one instance at a time, from instantiation to free
@@ -156,7 +156,6 @@ fn a_thousand_instances_on_eight_threads_match_the_same_instances_run_alone() {
         handles.into_iter().flat_map(|h| h.join().unwrap()).collect()
     });
     together.sort_by_key(|(k, _)| *k);
-    let _ = std::fs::remove_dir_all(&dir);
 
     assert_eq!(together.len(), alone.len());
     for ((k, record), expected) in together.iter().zip(&alone) {

@@ -18,10 +18,7 @@
 //! Short mode (CI): `FUZZ_CASES` cases, default 96. Long mode (docs/FUZZING.md):
 //! `FUZZ_CASES=20000 FUZZ_SEED=7 cargo test --release -p fmu-runtime --test fuzz_reduced_loader`.
 
-use std::cell::RefCell;
-use std::ffi::{CString, c_char};
-use std::path::PathBuf;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::ffi::CString;
 
 use fmi2::api;
 use fmi2::types::fmi2Status::{fmi2OK, fmi2Warning};
@@ -33,9 +30,9 @@ use fmu_runtime::interface::VariableTable;
 use fmu_runtime::reduced::{ReducedBody, free_two_mode_body, rotating_two_mode_body, two_mode_body};
 use proptest::prelude::*;
 use proptest::sample::select;
-#[path = "common/fuzz.rs"]
-mod fuzz;
-use fuzz::limit_memory;
+use test_support::fuzz::{self, limit_memory};
+use test_support::logger::Log;
+use test_support::scratch::{Scratch, file_uri};
 
 // ---------------------------------------------------------------------------------------------
 // seeds
@@ -431,48 +428,19 @@ fn debug_dump(msg: &str) -> Option<&'static str> {
         .find(|p| msg.contains(p))
 }
 
-thread_local! {
-    static LOG: RefCell<Vec<(fmi2Status, String)>> = const { RefCell::new(Vec::new()) };
-}
-
-/// The runtime calls the logger as `logger(env, name, status, category, "%s", text)`; on x86-64
-/// (System V) this two-argument definition receives that call unchanged.
-unsafe extern "C" fn record(
-    _env: fmi2ComponentEnvironment,
-    _name: fmi2String,
-    status: fmi2Status,
-    _category: fmi2String,
-    _format: fmi2String,
-    text: *const c_char,
-) {
-    let text = if text.is_null() {
-        String::new()
-    } else {
-        unsafe { std::ffi::CStr::from_ptr(text) }.to_string_lossy().into_owned()
-    };
-    LOG.with(|l| l.borrow_mut().push((status, text)));
-}
-
-fn callbacks() -> fmi2CallbackFunctions {
-    type Plain =
-        unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, *const c_char);
-    // SAFETY: see `record`: same calling convention for the call the runtime makes.
-    let logger: fmi2CallbackLogger = unsafe { std::mem::transmute::<Plain, fmi2CallbackLogger>(record) };
-    fmi2CallbackFunctions { logger: Some(logger), ..fmi2CallbackFunctions::NONE }
-}
-
 /// Checks one FMI call: non-OK needs a logged message; no panic logged.
-struct Host {
+struct Host<'a> {
+    log: &'a Log,
     violations: Vec<String>,
 }
 
-impl Host {
+impl Host<'_> {
     fn check(&mut self, call: &str, status: fmi2Status, logged_before: usize) -> bool {
-        let log = LOG.with(|l| l.borrow()[logged_before..].to_vec());
-        if let Some((_, m)) = log.iter().find(|(_, m)| m.contains("panic")) {
-            self.violations.push(format!("{call}: panic in the model: {m}"));
+        let log = self.log.entries()[logged_before..].to_vec();
+        if let Some(e) = log.iter().find(|e| e.text.contains("panic")) {
+            self.violations.push(format!("{call}: panic in the model: {}", e.text));
         }
-        if status != fmi2OK && !log.iter().any(|(s, _)| *s != fmi2OK) {
+        if status != fmi2OK && !log.iter().any(|e| e.status != fmi2OK) {
             self.violations.push(format!("{call} returned {status:?} without a logged message"));
         }
         status == fmi2OK || status == fmi2Warning
@@ -485,25 +453,11 @@ impl Host {
     }
 }
 
-fn logged() -> usize {
-    LOG.with(|l| l.borrow().len())
-}
-
 /// Instantiates the accepted body through the FMI entry points and runs it a little.
 fn exercise(body: &ReducedBody, bytes: &[u8], kind: fmi2Type) -> Vec<String> {
-    static COUNT: AtomicUsize = AtomicUsize::new(0);
-    let k = COUNT.fetch_add(1, Ordering::Relaxed);
-    let dir = std::env::temp_dir().join(format!("fuzz-loader-{}-{k}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    struct Clean(PathBuf);
-    impl Drop for Clean {
-        fn drop(&mut self) {
-            let _ = std::fs::remove_dir_all(&self.0);
-        }
-    }
-    let _clean = Clean(dir.clone());
-    std::fs::write(dir.join(RESOURCE_FILE), bytes).unwrap();
-    let uri = CString::new(format!("file://{}", dir.display())).unwrap();
+    let dir = Scratch::new("fuzz-loader");
+    std::fs::write(dir.path().join(RESOURCE_FILE), bytes).unwrap();
+    let uri = file_uri(dir.path());
     let Ok(guid) = CString::new(body.guid.clone()) else { return vec![] };
     let table = VariableTable::new(body);
     let reals: Vec<u32> = table
@@ -512,19 +466,19 @@ fn exercise(body: &ReducedBody, bytes: &[u8], kind: fmi2Type) -> Vec<String> {
         .filter(|v| v.var_type == VarType::Real && v.causality != Causality::Input)
         .map(|v| v.vr)
         .collect();
-    LOG.with(|l| l.borrow_mut().clear());
-    let cb = callbacks();
-    let mut host = Host { violations: Vec::new() };
+    let log = Box::<Log>::default();
+    let cb = log.callbacks();
+    let mut host = Host { log: &log, violations: Vec::new() };
     unsafe {
-        let n = logged();
+        let n = log.len();
         let c = api::fmi2Instantiate::<BodyFmu>(c"fuzz".as_ptr(), kind, guid.as_ptr(), uri.as_ptr(), &cb, 0, 1);
         if c.is_null() {
-            if !LOG.with(|l| l.borrow()[n..].iter().any(|(s, _)| *s != fmi2OK)) {
+            if !log.entries()[n..].iter().any(|e| e.status != fmi2OK) {
                 host.violations.push("fmi2Instantiate returned NULL without a logged message".into());
             }
             return host.violations;
         }
-        let n = logged();
+        let n = log.len();
         let s = api::fmi2SetupExperiment::<BodyFmu>(c, 0, 0.0, 0.0, 0, 0.0);
         let mut alive = host.check("fmi2SetupExperiment", s, n);
         for (name, f) in [
@@ -532,7 +486,7 @@ fn exercise(body: &ReducedBody, bytes: &[u8], kind: fmi2Type) -> Vec<String> {
             ("fmi2ExitInitializationMode", api::fmi2ExitInitializationMode::<BodyFmu>),
         ] {
             if alive {
-                let n = logged();
+                let n = log.len();
                 let s = f(c);
                 alive = host.check(name, s, n);
             }
@@ -542,27 +496,27 @@ fn exercise(body: &ReducedBody, bytes: &[u8], kind: fmi2Type) -> Vec<String> {
             if kind == fmi2CoSimulation {
                 let mut t = 0.0;
                 for h in [1e-3, 1e-2, 1.0] {
-                    let n = logged();
+                    let n = log.len();
                     let s = api::fmi2DoStep::<BodyFmu>(c, t, h, 1);
                     t += h;
                     if !host.check("fmi2DoStep", s, n) {
                         break;
                     }
-                    let n = logged();
+                    let n = log.len();
                     let s = api::fmi2GetReal::<BodyFmu>(c, reals.as_ptr(), reals.len(), values.as_mut_ptr());
                     if host.check("fmi2GetReal", s, n) {
                         host.finite("fmi2GetReal", &values);
                     }
                 }
             } else {
-                let n = logged();
+                let n = log.len();
                 let s = api::fmi2EnterContinuousTimeMode::<BodyFmu>(c);
                 if host.check("fmi2EnterContinuousTimeMode", s, n) {
                     let nx = BodyFmu::for_interface(body.clone(), Interface::ModelExchange).n_states();
                     let mut x = vec![0.0; nx];
                     let mut dx = vec![0.0; nx];
                     for name in ["fmi2GetContinuousStates", "fmi2GetDerivatives", "fmi2GetReal"] {
-                        let n = logged();
+                        let n = log.len();
                         let (s, out) = match name {
                             "fmi2GetContinuousStates" => {
                                 (api::fmi2GetContinuousStates::<BodyFmu>(c, x.as_mut_ptr(), nx), &x)

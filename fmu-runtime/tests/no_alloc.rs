@@ -14,14 +14,14 @@ use fmu_runtime::body::FlexibleBody;
 use fmu_runtime::fmu::BodyFmu;
 use fmu_runtime::interface::VariableTable;
 use fmu_runtime::reduced::{FlangeShapes, ReducedBody, RotationTerms, Stiffening, StressPoint, two_mode_body};
-use std::ffi::{CString, c_char, c_void};
+use std::ffi::CString;
 use std::sync::Arc;
+use test_support::alloc::{Counting, assert_no_allocation};
+use test_support::logger;
+use test_support::scratch::{Scratch, file_uri};
 
-#[path = "support/c_logger.rs"]
-mod c_logger;
-#[path = "support/counting_alloc.rs"]
-mod counting_alloc;
-use counting_alloc::assert_no_allocation;
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
 
 /// Deterministic numbers in [-1, 1).
 struct Lcg(u64);
@@ -300,34 +300,15 @@ fn fmi_model_calls_allocate_nothing() {
 
 // --- the exported C functions, as the FMU's binary runs them ---------------------------------
 
-unsafe extern "C" fn quiet_logger(
-    _: *mut c_void,
-    _: *const c_char,
-    _: fmi2Status,
-    _: *const c_char,
-    _: *const c_char,
-    _: *const c_char,
-) {
-}
-
 fn callbacks() -> fmi2CallbackFunctions {
-    c_logger::callbacks_with(quiet_logger, std::ptr::null_mut())
+    logger::callbacks_with(logger::quiet, std::ptr::null_mut())
 }
 
-struct Resources(std::path::PathBuf);
-impl Drop for Resources {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn resources(reduced: &ReducedBody, tag: &str) -> (Resources, CString) {
-    let dir = std::env::temp_dir().join(format!("fmu-runtime-no-alloc-{}-{tag}", std::process::id()));
-    let res = dir.join("resources");
-    std::fs::create_dir_all(&res).unwrap();
+fn resources(reduced: &ReducedBody, tag: &str) -> (Scratch, CString) {
+    let dir = Scratch::new(&format!("fmu-runtime-no-alloc-{tag}"));
+    let res = dir.folder("resources");
     std::fs::write(res.join(fmu_runtime::format::RESOURCE_FILE), reduced.to_bytes()).unwrap();
-    let uri = CString::new(format!("file://{}", res.display())).unwrap();
-    (Resources(dir), uri)
+    (dir, file_uri(&res))
 }
 
 fn ok(what: &str, s: fmi2Status) {

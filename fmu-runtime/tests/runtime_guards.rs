@@ -4,48 +4,16 @@
 //! cannot be evaluated in Model Exchange (fmi2Discard, then recovery), a mount orientation that
 //! is no rotation, and a free body's step whose substeps would take seconds.
 
-#[path = "support/c_logger.rs"]
-mod c_logger;
-
 use fmi2::types::*;
 use fmu_runtime::interface::VariableTable;
 use fmu_runtime::reduced::{ReducedBody, free_two_mode_body, rotating_two_mode_body, two_mode_body};
-use std::cell::RefCell;
-use std::ffi::{CStr, CString, c_char, c_void};
+use std::ffi::CString;
 use std::ptr::null_mut;
 use std::time::Instant;
+use test_support::logger::Log;
+use test_support::scratch::{Scratch, file_uri};
 
 use fmi2Status::*;
-
-#[derive(Default)]
-struct Log(RefCell<Vec<(fmi2Status, String)>>);
-
-impl Log {
-    fn last(&self) -> (fmi2Status, String) {
-        self.0.borrow().last().cloned().unwrap_or((fmi2OK, String::new()))
-    }
-    fn clear(&self) {
-        self.0.borrow_mut().clear();
-    }
-}
-
-unsafe extern "C" fn record(
-    env: *mut c_void,
-    _: *const c_char,
-    status: fmi2Status,
-    _: *const c_char,
-    _: *const c_char,
-    arg: *const c_char,
-) {
-    unsafe {
-        let log = &*(env as *const Log);
-        log.0.borrow_mut().push((status, CStr::from_ptr(arg).to_string_lossy().into_owned()));
-    }
-}
-
-fn callbacks(log: &Log) -> fmi2CallbackFunctions {
-    c_logger::callbacks_with(record, log as *const Log as *mut c_void)
-}
 
 /// An instance of `reduced` through fmi2Instantiate, its resources in a folder of its own.
 struct Fmu {
@@ -53,26 +21,26 @@ struct Fmu {
     table: VariableTable,
     log: Box<Log>,
     _callbacks: Box<fmi2CallbackFunctions>,
-    dir: std::path::PathBuf,
+    /// Removed after the instance is freed (fields drop after `Drop::drop`).
+    _dir: Scratch,
 }
 
 impl Fmu {
     fn new(mut reduced: ReducedBody, kind: fmi2Type, tag: &str) -> Fmu {
         reduced.seal();
-        let dir = std::env::temp_dir().join(format!("fmu-runtime-guards-{}-{tag}", std::process::id()));
-        let res = dir.join("resources");
-        std::fs::create_dir_all(&res).unwrap();
+        let dir = Scratch::new(&format!("fmu-runtime-guards-{tag}"));
+        let res = dir.folder("resources");
         std::fs::write(res.join(fmu_runtime::format::RESOURCE_FILE), reduced.to_bytes()).unwrap();
-        let uri = CString::new(format!("file://{}", res.display())).unwrap();
+        let uri = file_uri(&res);
         let guid = CString::new(reduced.guid.clone()).unwrap();
         let log = Box::<Log>::default();
-        let cb = Box::new(callbacks(&log));
+        let cb = Box::new(log.callbacks());
         let name = CString::new(tag).unwrap();
         let c = unsafe {
             fmu_runtime::fmi2Instantiate(name.as_ptr(), kind, guid.as_ptr(), uri.as_ptr(), &*cb, fmi2False, fmi2True)
         };
         assert!(!c.is_null(), "{:?}", log.last());
-        Fmu { c, table: VariableTable::new(&reduced), log, _callbacks: cb, dir }
+        Fmu { c, table: VariableTable::new(&reduced), log, _callbacks: cb, _dir: dir }
     }
 
     fn vr(&self, name: &str) -> u32 {
@@ -121,7 +89,7 @@ impl Fmu {
 
     /// The message logged with the last call's status, which must be `status`.
     fn reason(&self, status: fmi2Status) -> String {
-        let (logged, text) = self.log.last();
+        let (logged, text) = self.log.last_entry().map_or((fmi2OK, String::new()), |e| (e.status, e.text));
         assert_eq!(logged, status, "{text}");
         text
     }
@@ -130,7 +98,6 @@ impl Fmu {
 impl Drop for Fmu {
     fn drop(&mut self) {
         unsafe { fmu_runtime::fmi2FreeInstance(self.c) };
-        let _ = std::fs::remove_dir_all(&self.dir);
     }
 }
 

@@ -4,9 +4,8 @@
 //! geometric stiffening) and free-floating (rigid-body states).
 
 use std::ffi::CString;
-use std::path::PathBuf;
 use std::ptr::{null, null_mut};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use test_support::scratch::{Scratch, file_uri};
 
 use fmi2::api;
 use fmi2::instance::Snapshot;
@@ -25,7 +24,7 @@ type Inputs = fn(f64) -> Vec<(&'static str, f64)>;
 struct Case {
     body: ReducedBody,
     table: VariableTable,
-    dir: PathBuf,
+    _dir: Scratch,
     uri: CString,
     guid: CString,
     /// Time-varying inputs, by name.
@@ -34,25 +33,15 @@ struct Case {
     start: Vec<(&'static str, f64)>,
 }
 
-impl Drop for Case {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.dir);
-    }
-}
-
 fn install(mut body: ReducedBody, name: &str, inputs: Inputs, start: Vec<(&'static str, f64)>) -> Case {
     // a GUID per case (the runtime checks it is the content's): states must not cross cases
     body.model_name = name.to_owned();
     body.seal();
-    // one directory per case and test: the tests run in parallel and each removes its own
-    static COUNT: AtomicUsize = AtomicUsize::new(0);
-    let k = COUNT.fetch_add(1, Ordering::Relaxed);
-    let dir = std::env::temp_dir().join(format!("fmu-runtime-serialize-{}-{k}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join(RESOURCE_FILE), body.to_bytes()).unwrap();
-    let uri = CString::new(format!("file://{}", dir.display())).unwrap();
+    let dir = Scratch::new(&format!("fmu-runtime-serialize-{name}"));
+    std::fs::write(dir.path().join(RESOURCE_FILE), body.to_bytes()).unwrap();
+    let uri = file_uri(dir.path());
     let guid = CString::new(body.guid.clone()).unwrap();
-    Case { table: VariableTable::new(&body), body, dir, uri, guid, inputs, start }
+    Case { table: VariableTable::new(&body), body, _dir: dir, uri, guid, inputs, start }
 }
 
 fn mounted() -> Case {

@@ -2,8 +2,7 @@
 
 mod mock;
 
-use std::cell::RefCell;
-use std::ffi::{CStr, CString, c_char, c_void};
+use std::ffi::{CStr, CString};
 use std::ptr::{null, null_mut};
 
 use crate::api;
@@ -11,66 +10,15 @@ use crate::types::fmi2Status::*;
 use crate::types::*;
 use mock::*;
 
-#[derive(Debug, Clone)]
-struct Entry {
-    status: fmi2Status,
-    category: String,
-    text: String,
-}
-
-#[derive(Default)]
-struct Log(RefCell<Vec<Entry>>);
-
-impl Log {
-    fn contains(&self, needle: &str) -> bool {
-        self.0.borrow().iter().any(|e| e.text.contains(needle))
-    }
-    fn last(&self) -> String {
-        self.0.borrow().last().map(|e| e.text.clone()).unwrap_or_default()
-    }
-    fn count(&self, category: &str) -> usize {
-        self.0.borrow().iter().filter(|e| e.category == category).count()
-    }
-    fn clear(&self) {
-        self.0.borrow_mut().clear();
-    }
-}
-
-/// Stable Rust cannot define a C-variadic function, so the test logger takes the one
-/// vararg the layer passes (the text for its "%s" format) as a fixed parameter and is
-/// transmuted to the variadic type. This relies on the calling convention passing
-/// variadic and fixed integer/pointer arguments identically, true for x86_64 SysV
-/// and Windows x64 and AArch64 Linux, but not for Apple arm64.
-unsafe extern "C" fn record(
-    env: *mut c_void,
-    name: *const c_char,
-    status: fmi2Status,
-    category: *const c_char,
-    message: *const c_char,
-    arg: *const c_char,
-) {
-    unsafe {
-        let log = &*(env as *const Log);
-        assert_eq!(CStr::from_ptr(message).to_str().unwrap(), "%s");
-        assert!(!name.is_null());
-        log.0.borrow_mut().push(Entry {
-            status,
-            category: CStr::from_ptr(category).to_str().unwrap().to_owned(),
-            text: CStr::from_ptr(arg).to_str().unwrap().to_owned(),
-        });
-    }
-}
+type Log = test_support::logger::Log<fmi2Status>;
 
 fn callbacks(log: &Log) -> fmi2CallbackFunctions {
-    type Fixed =
-        unsafe extern "C" fn(*mut c_void, *const c_char, fmi2Status, *const c_char, *const c_char, *const c_char);
-    let logger: fmi2CallbackLogger = unsafe { std::mem::transmute(record as Fixed) };
     fmi2CallbackFunctions {
-        logger: Some(logger),
+        logger: Some(Log::logger()),
         allocateMemory: None,
         freeMemory: None,
         stepFinished: None,
-        componentEnvironment: log as *const Log as *mut c_void,
+        componentEnvironment: log.environment(),
     }
 }
 
@@ -154,8 +102,8 @@ fn instantiate_checks_guid_and_type() {
     let c = instantiate_with(&log, fmi2CoSimulation, "{wrong}", None, false);
     assert!(c.is_null());
     assert!(log.contains(&format!("GUID mismatch: expected {GUID} got {{wrong}}")), "{}", log.last());
-    assert_eq!(log.0.borrow().last().unwrap().status, fmi2Error);
-    assert_eq!(log.0.borrow().last().unwrap().category, "logStatusError");
+    assert_eq!(log.entries().last().unwrap().status, fmi2Error);
+    assert_eq!(log.entries().last().unwrap().category, "logStatusError");
 
     assert!(instantiate_with(&log, 7, GUID, None, false).is_null());
     assert!(log.contains("invalid fmuType 7"));
@@ -266,7 +214,7 @@ fn state_machine_errors() {
         assert_eq!(api::fmi2GetReal::<Spring>(c, &X, 1, &mut x), fmi2OK);
         api::fmi2FreeInstance::<Spring>(c);
     }
-    for e in log.0.borrow().iter() {
+    for e in log.entries().iter() {
         assert_eq!(e.status, fmi2Error);
         assert_eq!(e.category, "logStatusError");
     }
@@ -557,7 +505,7 @@ fn many_instances_are_independent() {
     assert!((get_real(b, X) - 2.0f64.cos()).abs() < 1e-9);
     assert_eq!(unsafe { api::fmi2DoStep::<Spring>(a, 0.0, 0.1, 0) }, fmi2Error);
     assert!(log_a.contains("currentCommunicationPoint"));
-    assert!(log_b.0.borrow().is_empty());
+    assert!(log_b.entries().is_empty());
     unsafe {
         api::fmi2FreeInstance::<Spring>(a);
         api::fmi2FreeInstance::<Spring>(b);
@@ -893,7 +841,7 @@ fn output_derivatives(c: fmi2Component, vrs: &[u32], orders: &[i32]) -> (fmi2Sta
 fn assert_refused(c: fmi2Component, log: &Log, status: fmi2Status, function: &str, reason: &str) {
     let state = model_state_of(c);
     assert_eq!(status, fmi2Error, "accepted; expected: {reason}");
-    let last = log.0.borrow().last().cloned().expect("no message logged");
+    let last = log.entries().last().cloned().expect("no message logged");
     assert_eq!((last.status, last.category.as_str()), (fmi2Error, "logStatusError"));
     assert!(last.text.starts_with(function), "{} (expected from {function})", last.text);
     assert!(last.text.contains(reason), "{} (expected {reason})", last.text);

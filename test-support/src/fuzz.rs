@@ -1,9 +1,10 @@
-//! The fuzz targets' shared settings (this crate's reduced-model loader and, through
-//! `#[path]`, fmu-builder's readers): cases, per-case time limit and seed from the environment
-//! (docs/FUZZING.md), every case in a forked child, and the child's memory ceiling.
+//! The fuzz targets' settings (fmu-runtime's reduced-model loader, fmu-builder's readers): cases,
+//! per-case time limit and seed from the environment (docs/FUZZING.md), every case in a forked
+//! child, and the child's memory ceiling.
 
 use proptest::test_runner::{Config, RngSeed};
 
+/// The environment variable `name` as a number, `default` when unset or not a number.
 pub fn env_u64(name: &str, default: u64) -> u64 {
     std::env::var(name).ok().and_then(|v| v.trim().parse().ok()).unwrap_or(default)
 }
