@@ -116,12 +116,12 @@ impl SizeEstimate {
 
     /// Ok when the estimate fits in `available` bytes; else the complaint, for the caller to
     /// put against the field that made the model this large.
-    pub fn fits(&self, available: Memory) -> std::result::Result<(), String> {
+    pub fn fits(&self, available: Memory) -> std::result::Result<(), crate::error::Refusal> {
         crate::out_of_memory::record_estimate(self.bytes, available.bytes, available.source);
         if self.bytes <= available.bytes {
             return Ok(());
         }
-        Err(format!(
+        Err(crate::error::Refusal(format!(
             "the model would have {} nodes ({} DoFs{}), a stiffness with about {} non-zeros and a sparse Cholesky factor \
              with about {} (nested-dissection estimate): about {} of memory, but {} {} available ({}). Use fewer \
              elements: the factor grows like (DoFs)^(4/3) for a solid part",
@@ -134,7 +134,7 @@ impl SizeEstimate {
             gib(available.bytes),
             if available.source.starts_with("no ") { "is assumed" } else { "are" },
             available.source,
-        ))
+        )))
     }
 }
 

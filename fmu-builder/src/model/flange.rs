@@ -3,7 +3,7 @@
 //! Here the slaves are selected on the mesh and checked, and a distributing flange's weights
 //! found; the coupling itself enters at assembly (`rigid_coupling`).
 
-use crate::error::{BuildError, Result};
+use crate::error::{BuildError, Refusal, Result};
 use crate::input::mesh::Mesh;
 use crate::input::spec::{Coupling, NodeSelector, Role, Spec, Weights};
 use crate::model::distributing;
@@ -54,7 +54,7 @@ pub fn model_size(mesh: &Mesh) -> f64 {
 }
 
 /// The slave nodes a selector names; Err(message) when a named node set or box does not exist.
-fn select(selector: &NodeSelector, part: &Part, size: f64) -> std::result::Result<Vec<usize>, String> {
+fn select(selector: &NodeSelector, part: &Part, size: f64) -> std::result::Result<Vec<usize>, Refusal> {
     let mesh = &part.mesh;
     let tol_default = 1e-6 * size;
     let within = |keep: &dyn Fn(Vector3<f64>) -> bool| {
@@ -65,14 +65,14 @@ fn select(selector: &NodeSelector, part: &Part, size: f64) -> std::result::Resul
             Some(nodes) => nodes.to_vec(),
             None => {
                 let known: Vec<&str> = part.node_sets.keys().map(|k| k.as_str()).collect();
-                return Err(format!(
+                return Err(Refusal(format!(
                     "there is no node set \"{name}\" ({})",
                     if known.is_empty() {
                         "the part has no node sets".to_string()
                     } else {
                         format!("node sets: {}", known.join(", "))
                     }
-                ));
+                )));
             }
         },
         NodeSelector::Box { min, max } => {
@@ -92,7 +92,7 @@ fn select(selector: &NodeSelector, part: &Part, size: f64) -> std::result::Resul
         }
         NodeSelector::BoxFace { box_index, face } => {
             let Some(b) = part.boxes.get(*box_index) else {
-                return Err(format!("there is no box {box_index}: the part has {} box(es)", part.boxes.len()));
+                return Err(Refusal(format!("there is no box {box_index}: the part has {} box(es)", part.boxes.len())));
             };
             let (axis, upper) = face.axis_side();
             let level = if upper { b.max[axis] } else { b.min[axis] };

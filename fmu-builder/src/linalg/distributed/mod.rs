@@ -12,6 +12,7 @@ mod petsc_binary;
 pub mod process_group;
 pub mod session;
 
+use crate::error::Refusal;
 pub use session::Session;
 use std::path::{Path, PathBuf};
 
@@ -132,7 +133,7 @@ fn find_program(name: &str) -> Option<PathBuf> {
 
 /// Runs the driver's import check (`--probe`) under `python`: Ok with what it printed, or the
 /// last line of its error.
-fn probe_python(python: &str) -> Result<String, String> {
+fn probe_python(python: &str) -> Result<String, Refusal> {
     use std::io::Write;
     use std::process::{Command, Stdio};
     let mut command = Command::new(python);
@@ -141,14 +142,16 @@ fn probe_python(python: &str) -> Result<String, String> {
     if unsafe { libc::geteuid() } == 0 {
         command.env("OMPI_ALLOW_RUN_AS_ROOT", "1").env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
     }
-    let mut child = command.spawn().map_err(|e| format!("cannot be started: {e}"))?;
+    let mut child = command.spawn().map_err(|e| Refusal(format!("cannot be started: {e}")))?;
     if let Some(mut stdin) = child.stdin.take() {
-        stdin.write_all(session::DRIVER.as_bytes()).map_err(|e| format!("cannot be given the driver: {e}"))?;
+        stdin.write_all(session::DRIVER.as_bytes()).map_err(|e| Refusal(format!("cannot be given the driver: {e}")))?;
     }
-    let output = child.wait_with_output().map_err(|e| e.to_string())?;
+    let output = child.wait_with_output().map_err(|e| Refusal(e.to_string()))?;
     if output.status.success() {
         return Ok(String::from_utf8_lossy(&output.stdout).trim().to_string());
     }
     let stderr = String::from_utf8_lossy(&output.stderr);
-    Err(stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("failed without a message").trim().to_string())
+    Err(Refusal(
+        stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("failed without a message").trim().to_string(),
+    ))
 }

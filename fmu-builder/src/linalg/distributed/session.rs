@@ -450,32 +450,49 @@ impl Session {
 
 /// The connection of a peer that greets with `token` and the protocol within GREETING_SECONDS;
 /// else why it was dropped.
-fn greeted(stream: TcpStream, token: &str) -> std::result::Result<Connection, String> {
-    stream.set_nonblocking(false).map_err(|e| e.to_string())?;
+/// Why a connection to the builder's port was dropped before it proved to be the driver's.
+#[derive(Debug, thiserror::Error)]
+enum Dropped {
+    #[error("{0}")]
+    Io(#[from] std::io::Error),
+    #[error("it closed without a greeting")]
+    Closed,
+    #[error("no greeting within {GREETING_SECONDS} s")]
+    Silent,
+    #[error("a greeting that is not the driver's")]
+    NotTheDriver,
+    #[error("a wrong token")]
+    WrongToken,
+    #[error("protocol {0} where the builder speaks {PROTOCOL}")]
+    Protocol(Value),
+}
+
+fn greeted(stream: TcpStream, token: &str) -> std::result::Result<Connection, Dropped> {
+    stream.set_nonblocking(false)?;
     stream.set_nodelay(true).ok();
-    stream.set_read_timeout(Some(Duration::from_secs(GREETING_SECONDS))).map_err(|e| e.to_string())?;
-    let reader = BufReader::with_capacity(1 << 20, stream.try_clone().map_err(|e| e.to_string())?);
+    stream.set_read_timeout(Some(Duration::from_secs(GREETING_SECONDS)))?;
+    let reader = BufReader::with_capacity(1 << 20, stream.try_clone()?);
     let writer = std::io::BufWriter::with_capacity(1 << 20, stream);
     let mut connection = Connection { reader, writer };
     let mut line = Vec::new();
     let read = (&mut connection.reader).take(GREETING_BYTES).read_until(b'\n', &mut line);
     match read {
-        Ok(0) => return Err("it closed without a greeting".into()),
+        Ok(0) => return Err(Dropped::Closed),
         Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {
-            return Err(format!("no greeting within {GREETING_SECONDS} s"));
+            return Err(Dropped::Silent);
         }
-        Err(e) => return Err(e.to_string()),
+        Err(e) => return Err(e.into()),
         Ok(_) => {}
     }
-    let hello: Value = serde_json::from_slice(&line).map_err(|_| "a greeting that is not the driver's".to_string())?;
+    let hello: Value = serde_json::from_slice(&line).map_err(|_| Dropped::NotTheDriver)?;
     if hello["hello"].as_str() != Some(token) {
-        return Err("a wrong token".into());
+        return Err(Dropped::WrongToken);
     }
     if hello["protocol"].as_u64() != Some(PROTOCOL) {
-        return Err(format!("protocol {} where the builder speaks {PROTOCOL}", hello["protocol"]));
+        return Err(Dropped::Protocol(hello["protocol"].clone()));
     }
     // from here on a read waits in WATCH_INTERVAL slices, looking at the ranks between them
-    connection.reader.get_ref().set_read_timeout(Some(WATCH_INTERVAL)).map_err(|e| e.to_string())?;
+    connection.reader.get_ref().set_read_timeout(Some(WATCH_INTERVAL))?;
     Ok(connection)
 }
 

@@ -47,7 +47,9 @@ fn check_single(platform: Platform, data: &[u8], required: &[&str], check_proces
     };
     match found {
         Some(f) if f == expected => {}
-        Some(f) => return Err(Refusal(format!("is {}, not {} as {platform} needs", f.describe(), expected.describe()))),
+        Some(f) => {
+            return Err(Refusal(format!("is {}, not {} as {platform} needs", f.describe(), expected.describe())));
+        }
         None => {
             return Err(Refusal(format!(
                 "is an object file (COFF), not a shared library; {platform} needs {}",

@@ -35,8 +35,10 @@ impl PlatformBinary {
                 message: "expected PLATFORM=FILE, e.g. win64=fmu_runtime.dll (platforms: win32, win64, linux32, linux64, darwin32, darwin64)".into(),
             }
         })?;
-        let platform = Platform::parse(name)
-            .map_err(|reason| BuildError::CommandLine { option: format!("--platform-binary {arg}"), message: reason.0 })?;
+        let platform = Platform::parse(name).map_err(|reason| BuildError::CommandLine {
+            option: format!("--platform-binary {arg}"),
+            message: reason.0,
+        })?;
         let path = PathBuf::from(file);
         let binary = Self::read(platform, &path)?;
         binary.check(&fmi2_functions::model_exchange_and_co_simulation())?;
@@ -45,7 +47,11 @@ impl PlatformBinary {
 
     pub fn read(platform: Platform, path: &Path) -> Result<Self, BuildError> {
         if path.is_dir() {
-            return Err(refused(path, platform, Refusal(format!("is a folder; give the {} file", platform.runtime_file()))));
+            return Err(refused(
+                path,
+                platform,
+                Refusal(format!("is a folder; give the {} file", platform.runtime_file())),
+            ));
         }
         use crate::input::{file_read, size::Memory};
         let data = file_read::read(path, file_read::FileKind::PlatformBinary, Memory::of_this_machine().bytes)

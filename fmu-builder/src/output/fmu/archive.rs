@@ -13,6 +13,7 @@ use zip::write::SimpleFileOptions;
 use zip::{CompressionMethod, ZipWriter};
 
 use super::{FmuError, is_model_identifier};
+use crate::error::Refusal;
 use crate::output::binaries::Platform;
 
 pub struct FmuArchive<'a> {
@@ -29,7 +30,7 @@ pub struct FmuArchive<'a> {
 /// Writes the FMU at `path`, replacing an existing file only once the new one is complete.
 pub fn write_fmu(path: &Path, a: &FmuArchive) -> Result<(), FmuError> {
     let fail = |message: String| FmuError::Archive { path: path.to_owned(), message };
-    let entries = entries(a).map_err(&fail)?;
+    let entries = entries(a).map_err(|e| fail(e.0))?;
 
     let file_name = path.file_name().ok_or_else(|| fail("is not a file path".into()))?.to_string_lossy().into_owned();
     let dir = match path.parent() {
@@ -40,7 +41,7 @@ pub fn write_fmu(path: &Path, a: &FmuArchive) -> Result<(), FmuError> {
         create_temp(&dir, &file_name).map_err(|e| fail(format!("cannot create a file in {}: {e}", dir.display())))?;
     let guard = RemoveOnDrop(Some(tmp.clone()));
 
-    write_zip(file, &entries).map_err(&fail)?;
+    write_zip(file, &entries).map_err(|e| fail(e.0))?;
     fs::rename(&tmp, path).map_err(|e| fail(format!("cannot move {} into place: {e}", tmp.display())))?;
     guard.disarm();
     Ok(())
@@ -53,9 +54,9 @@ struct Entry<'a> {
     mode: u32,
 }
 
-fn entries<'a>(a: &'a FmuArchive) -> Result<Vec<Entry<'a>>, String> {
+fn entries<'a>(a: &'a FmuArchive) -> Result<Vec<Entry<'a>>, Refusal> {
     if !is_model_identifier(a.model_identifier) {
-        return Err(format!("model identifier '{}' is not a valid C identifier", a.model_identifier));
+        return Err(Refusal(format!("model identifier '{}' is not a valid C identifier", a.model_identifier)));
     }
     if a.binaries.is_empty() {
         return Err("there is no binary for any platform".into());
@@ -64,7 +65,7 @@ fn entries<'a>(a: &'a FmuArchive) -> Result<Vec<Entry<'a>>, String> {
         vec![Entry { name: "modelDescription.xml".into(), data: a.model_description.as_bytes(), mode: 0o644 }];
     for (platform, data) in &a.binaries {
         if data.is_empty() {
-            return Err(format!("the {platform} binary is empty"));
+            return Err(Refusal(format!("the {platform} binary is empty")));
         }
         let name = format!("binaries/{platform}/{}.{}", a.model_identifier, platform.extension());
         // Importers dlopen this file: it must be executable once extracted.
@@ -72,14 +73,14 @@ fn entries<'a>(a: &'a FmuArchive) -> Result<Vec<Entry<'a>>, String> {
     }
     for (folder, files) in [("resources", &a.resources), ("documentation", &a.documentation)] {
         for (name, data) in files {
-            check_relative(name).map_err(|m| format!("{folder} entry '{name}': {m}"))?;
+            check_relative(name).map_err(|m| Refusal(format!("{folder} entry '{name}': {m}")))?;
             list.push(Entry { name: format!("{folder}/{name}"), data, mode: 0o644 });
         }
     }
     let mut seen = HashSet::new();
     for e in &list {
         if !seen.insert(e.name.as_str()) {
-            return Err(format!("the archive would contain '{}' twice", e.name));
+            return Err(Refusal(format!("the archive would contain '{}' twice", e.name)));
         }
     }
     Ok(list)
@@ -115,7 +116,7 @@ fn create_temp(dir: &Path, file_name: &str) -> std::io::Result<(File, PathBuf)> 
     Err(last.unwrap_or_else(|| std::io::Error::other("no free temporary file name")))
 }
 
-fn write_zip(file: File, entries: &[Entry]) -> Result<(), String> {
+fn write_zip(file: File, entries: &[Entry]) -> Result<(), Refusal> {
     let mut zip = ZipWriter::new(BufWriter::new(file));
     let base = SimpleFileOptions::default().compression_method(CompressionMethod::Deflated);
     // Explicit directory entries: some importers extract entry by entry without creating parents.
@@ -127,16 +128,16 @@ fn write_zip(file: File, entries: &[Entry]) -> Result<(), String> {
             let d = &e.name[..end];
             if !dirs.contains(&d) {
                 dirs.push(d);
-                zip.add_directory(d, base.unix_permissions(0o755)).map_err(|e| format!("adding {d}: {e}"))?;
+                zip.add_directory(d, base.unix_permissions(0o755)).map_err(|e| Refusal(format!("adding {d}: {e}")))?;
             }
         }
         let options = base.unix_permissions(e.mode).large_file(e.data.len() as u64 >= u32::MAX as u64);
-        zip.start_file(e.name.as_str(), options).map_err(|err| format!("adding {}: {err}", e.name))?;
-        zip.write_all(e.data).map_err(|err| format!("writing {}: {err}", e.name))?;
+        zip.start_file(e.name.as_str(), options).map_err(|err| Refusal(format!("adding {}: {err}", e.name)))?;
+        zip.write_all(e.data).map_err(|err| Refusal(format!("writing {}: {err}", e.name)))?;
     }
-    let buffered = zip.finish().map_err(|e| format!("finishing the archive: {e}"))?;
-    let file = buffered.into_inner().map_err(|e| format!("flushing the archive: {}", e.error()))?;
-    file.sync_all().map_err(|e| format!("syncing the archive: {e}"))
+    let buffered = zip.finish().map_err(|e| Refusal(format!("finishing the archive: {e}")))?;
+    let file = buffered.into_inner().map_err(|e| Refusal(format!("flushing the archive: {}", e.error())))?;
+    file.sync_all().map_err(|e| Refusal(format!("syncing the archive: {e}")))
 }
 
 /// Deletes the temporary file on every early return; disarmed after the rename.
