@@ -203,6 +203,13 @@ pub struct Structure {
     pub free: bool,
 }
 
+/// Sets a variable of the body from an f64 (its value, or its rate).
+pub type Write = fn(&mut FlexibleBody, At, f64);
+
+/// The input or state a directional derivative seeds (None where a free body's frame is asked
+/// of a mounted one).
+pub type Seed = fn(&mut FlexibleBody<Dual>, At) -> Option<&mut Dual>;
+
 /// Whether `known` is a dependency of a variable at `at`, for a mounted body.
 pub type Depends = fn(&Structure, At, &Quantity) -> bool;
 
@@ -287,12 +294,10 @@ pub struct Family {
     pub state: StateOf,
     pub value: Value,
     /// fmi2SetReal (the layer has checked finiteness and `range` before).
-    pub write: Option<fn(&mut FlexibleBody, At, f64)>,
-    /// The input or state a directional derivative seeds (None where a free body's frame is
-    /// asked of a mounted one).
-    pub seed: Option<fn(&mut FlexibleBody<Dual>, At) -> Option<&mut Dual>>,
+    pub write: Option<Write>,
+    pub seed: Option<Seed>,
     /// fmi2SetRealInputDerivatives.
-    pub rate: Option<fn(&mut FlexibleBody, At, f64)>,
+    pub rate: Option<Write>,
     pub range: Range,
     /// The inputs and states the value depends on in a mounted body (ModelStructure); a free
     /// body's unknowns may depend on every state and flange load.
@@ -382,13 +387,13 @@ impl Family {
     pub const fn state(self, state: StateOf) -> Self {
         Family { state, ..self }
     }
-    pub const fn write(self, write: fn(&mut FlexibleBody, At, f64)) -> Self {
+    pub const fn write(self, write: Write) -> Self {
         Family { write: Some(write), ..self }
     }
-    pub const fn seed(self, seed: fn(&mut FlexibleBody<Dual>, At) -> Option<&mut Dual>) -> Self {
+    pub const fn seed(self, seed: Seed) -> Self {
         Family { seed: Some(seed), ..self }
     }
-    pub const fn rate(self, rate: fn(&mut FlexibleBody, At, f64)) -> Self {
+    pub const fn rate(self, rate: Write) -> Self {
         Family { rate: Some(rate), ..self }
     }
     pub const fn range(self, range: Range) -> Self {
