@@ -27,12 +27,17 @@ const fn stress(pattern: &'static str, description: &'static str, component: usi
 
 pub static FAMILIES: &[Family] = &[
     // the mount's motion, set by the host, and the reaction it answers with
-    input("<mount>.r[i]", "Mount position, {axis} component, world frame", Role::MountPosition, read!(|b, at| b.mount().r[at.i]))
-        .scope(Scope::Mounted)
-        .unit("m")
-        .write(|b, at, x| b.mount_mut().r[at.i] = x)
-        .seed(|b, at| Some(&mut b.mount_mut().r[at.i]))
-        .rate(|b, at, x| b.mount_rate_mut().r[at.i] = x),
+    input(
+        "<mount>.r[i]",
+        "Mount position, {axis} component, world frame",
+        Role::MountPosition,
+        read!(|b, at| b.mount().r[at.i]),
+    )
+    .scope(Scope::Mounted)
+    .unit("m")
+    .write(|b, at, x| b.mount_mut().r[at.i] = x)
+    .seed(|b, at| Some(&mut b.mount_mut().r[at.i]))
+    .rate(|b, at, x| b.mount_rate_mut().r[at.i] = x),
     input(
         "<mount>.R[i,j]",
         "Mount orientation, row {row} column {column} (columns: frame axes in world)",
@@ -47,12 +52,17 @@ pub static FAMILIES: &[Family] = &[
     .write(|b, at, x| b.set_mount_rotation(3 * at.i + at.j, x))
     .seed(|b, at| Some(&mut b.mount_mut().rot[3 * at.i + at.j]))
     .rate(|b, at, x| b.mount_rate_mut().rot[3 * at.i + at.j] = x),
-    input("<mount>.v[i]", "Mount velocity, {axis} component, world frame", Role::MountVelocity, read!(|b, at| b.mount().v[at.i]))
-        .scope(Scope::Mounted)
-        .unit("m/s")
-        .write(|b, at, x| b.mount_mut().v[at.i] = x)
-        .seed(|b, at| Some(&mut b.mount_mut().v[at.i]))
-        .rate(|b, at, x| b.mount_rate_mut().v[at.i] = x),
+    input(
+        "<mount>.v[i]",
+        "Mount velocity, {axis} component, world frame",
+        Role::MountVelocity,
+        read!(|b, at| b.mount().v[at.i]),
+    )
+    .scope(Scope::Mounted)
+    .unit("m/s")
+    .write(|b, at, x| b.mount_mut().v[at.i] = x)
+    .seed(|b, at| Some(&mut b.mount_mut().v[at.i]))
+    .rate(|b, at, x| b.mount_rate_mut().v[at.i] = x),
     input(
         "<mount>.w[i]",
         "Mount angular velocity, {axis} component, world frame",

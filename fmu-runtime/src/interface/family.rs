@@ -196,7 +196,8 @@ pub struct Structure {
     pub n_dynamic: usize,
     /// Modes n_dynamic..n_integrated are relaxing, the rest quasi-static.
     pub n_integrated: usize,
-    /// Some modes are not dynamic (relaxing or quasi-static): solved from the loads.
+    /// Some modes are not dynamic (relaxing or quasi-static): the modal coordinates follow the
+    /// loads directly, not only through the dynamic states.
     pub solved_modes: bool,
     /// The body has rotating-frame terms, through which q'_d loads the quasi-static modes.
     pub rotates: bool,
