@@ -9,7 +9,9 @@ folds the variables into name patterns: indices become [i] / [i,j] (vectors, mat
 (modes), flange names become <mount> and <flange> (by their role in the input), a stress node's
 id becomes <id>, and mode frequencies in descriptions become <f>. The output depends only on
 what the builder writes, never on the order of files or on timings, so tests/test_docs.py can
-compare it with the committed file.
+compare it with the committed file. Each row is a variable family of
+fmu-runtime/src/interface/families.rs, where the runtime defines every variable; the unit test
+interface::tests::variables_md_lists_the_families checks the rows against those descriptors.
 """
 
 import copy

@@ -162,6 +162,16 @@ impl CoupledPropagator {
         for v in a.iter_mut() {
             *v *= scale;
         }
+        self.exponentiate(s, tau);
+        Prepared::Computed
+    }
+
+    /// exp of the scaled generator in `a` (with its load blocks), squared `s` times back to the
+    /// step: the transition `top` = [P, G1, G2].
+    fn exponentiate(&mut self, s: i32, tau: f64) {
+        let n = self.n;
+        let m = 2 * n;
+        let a = &self.a;
         // The block matrix X = [[a, e, 0], [0, 0, tau I], [0, 0, 0]] (a = A tau, e = [0; tau I])
         // has X^k = [[a^k, a^(k-1) e, a^(k-2) e tau], 0, 0], so exp(X) = [[P, G1, G2], [0, I,
         // tau I], [0, 0, I]] with P = I + a phi1(a), G1 = phi1(a) e, G2 = phi2(a) e tau, and
@@ -213,7 +223,6 @@ impl CoupledPropagator {
             self.top[r * w + m..r * w + m + n].copy_from_slice(&g1[r * n..(r + 1) * n]);
             self.top[r * w + m + n..(r + 1) * w].copy_from_slice(&g2[r * n..(r + 1) * n]);
         }
-        Prepared::Computed
     }
 
     /// Advance q, q' by the prepared step under the load p0 + t p1 (t from the step's start).

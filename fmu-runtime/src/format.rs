@@ -225,33 +225,7 @@ impl Container {
                 .map_err(|_| FormatError::Malformed("entry name is not UTF-8".into()))?
                 .to_owned();
             let entry = match r.u8()? {
-                0 => {
-                    let rank = r.u8()? as usize;
-                    let mut dims = Vec::with_capacity(rank);
-                    let mut total: usize = 1;
-                    for _ in 0..rank {
-                        let d = usize::try_from(r.u64()?)
-                            .map_err(|_| FormatError::Malformed(format!("dimension of '{name}' overflows")))?;
-                        total = total
-                            .checked_mul(d)
-                            .ok_or_else(|| FormatError::Malformed(format!("size of '{name}' overflows")))?;
-                        dims.push(d);
-                    }
-                    let nbytes = total
-                        .checked_mul(8)
-                        .ok_or_else(|| FormatError::Malformed(format!("size of '{name}' overflows")))?;
-                    let raw = r.take(nbytes)?;
-                    let values: Vec<f64> =
-                        raw.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8]))).collect();
-                    // the builder writes finite numbers only: anything else is damage or forgery
-                    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-                        return Err(FormatError::Malformed(format!(
-                            "entry '{name}' holds {} at index {i}, not a finite number",
-                            values[i]
-                        )));
-                    }
-                    Entry::Array { dims, values }
-                }
+                0 => read_array(&mut r, &name)?,
                 1 => {
                     let n = usize::try_from(r.u64()?)
                         .map_err(|_| FormatError::Malformed(format!("length of '{name}' overflows")))?;
@@ -270,6 +244,30 @@ impl Container {
         }
         Ok(Self { entries })
     }
+}
+
+/// An array entry after its name and kind: rank, dimensions, values (finite only).
+fn read_array(r: &mut Reader, name: &str) -> Result<Entry, FormatError> {
+    let rank = r.u8()? as usize;
+    let mut dims = Vec::with_capacity(rank);
+    let mut total: usize = 1;
+    for _ in 0..rank {
+        let d = usize::try_from(r.u64()?)
+            .map_err(|_| FormatError::Malformed(format!("dimension of '{name}' overflows")))?;
+        total = total.checked_mul(d).ok_or_else(|| FormatError::Malformed(format!("size of '{name}' overflows")))?;
+        dims.push(d);
+    }
+    let nbytes = total.checked_mul(8).ok_or_else(|| FormatError::Malformed(format!("size of '{name}' overflows")))?;
+    let raw = r.take(nbytes)?;
+    let values: Vec<f64> = raw.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8]))).collect();
+    // the builder writes finite numbers only: anything else is damage or forgery
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        return Err(FormatError::Malformed(format!(
+            "entry '{name}' holds {} at index {i}, not a finite number",
+            values[i]
+        )));
+    }
+    Ok(Entry::Array { dims, values })
 }
 
 struct Reader<'a> {

@@ -224,95 +224,17 @@ impl ReducedBody {
     }
 
     pub fn from_container(c: &Container) -> Result<Self, FormatError> {
-        let n = match c.dims("omega")? {
-            [n] => *n,
-            other => {
-                return Err(FormatError::Shape { name: "omega".into(), found: other.to_vec(), expected: vec![0] });
-            }
-        };
-        let omega = c.array("omega", &[n])?.to_vec();
-        if let Some(bad) = omega.iter().position(|w| !(w.is_finite() && *w > 0.0)) {
-            return Err(FormatError::Malformed(format!(
-                "modal frequency omega[{bad}] = {} is not a positive number",
-                omega[bad]
-            )));
-        }
-        if let Some(k) = (1..n).find(|&k| omega[k] < omega[k - 1]) {
-            return Err(FormatError::Malformed(format!(
-                "modal frequencies must ascend: omega[{k}] = {} < omega[{}] = {}",
-                omega[k],
-                k - 1,
-                omega[k - 1]
-            )));
-        }
+        let omega = read_omega(c)?;
+        let n = omega.len();
         let dynamic_cutoff = if c.contains("dynamic_cutoff") { c.scalar("dynamic_cutoff")? } else { f64::INFINITY };
         if !(dynamic_cutoff > 0.0) {
             return Err(FormatError::Malformed(format!("dynamic_cutoff = {dynamic_cutoff} is not a positive number")));
         }
-        let count = c.scalar("flange.count")?;
-        if !(count >= 0.0 && count.fract() == 0.0 && count < 1e4) {
-            return Err(FormatError::Malformed(format!("flange.count = {count}")));
-        }
-        let mut flanges = Vec::new();
-        for i in 0..count as usize {
-            flanges.push(FlangeShapes {
-                name: c.text(&format!("flange.{i}.name"))?.to_owned(),
-                position: to3(c.array(&format!("flange.{i}.position"), &[3])?),
-                shapes: c.array(&format!("flange.{i}.shapes"), &[6, n])?.to_vec(),
-            });
-        }
-        let stress_count = if c.contains("stress.count") { c.scalar("stress.count")? } else { 0.0 };
-        if !(stress_count >= 0.0 && stress_count.fract() == 0.0 && stress_count <= 1e4) {
-            return Err(FormatError::Malformed(format!("stress.count = {stress_count}")));
-        }
-        let mut stress_points = Vec::new();
-        for i in 0..stress_count as usize {
-            stress_points.push(StressPoint {
-                name: c.text(&format!("stress.{i}.name"))?.to_owned(),
-                description: c.text(&format!("stress.{i}.description"))?.to_owned(),
-                position: to3(c.array(&format!("stress.{i}.position"), &[3])?),
-                modes: c.array(&format!("stress.{i}.modes"), &[6, n])?.to_vec(),
-            });
-        }
-        let rotation = if c.contains("rotation.G") {
-            Some(RotationTerms {
-                g: c.array("rotation.G", &[3, n, n])?.to_vec(),
-                o_mat: c.array("rotation.O", &[3, 3, n, n])?.to_vec(),
-                o_vec: c.array("rotation.o", &[3, 3, n])?.to_vec(),
-            })
-        } else {
-            None
-        };
-        let optional = |name: &str, dims: &[usize]| -> Result<Option<Vec<f64>>, FormatError> {
-            if c.contains(name) { Ok(Some(c.array(name, dims)?.to_vec())) } else { Ok(None) }
-        };
-        let stiffening = if c.contains("stiffening") {
-            let mut flange_k = Vec::new();
-            for i in 0..flanges.len() {
-                flange_k.push(optional(&format!("stiffening.flange.{i}"), &[6, n, n])?.unwrap_or_default());
-            }
-            Some(Stiffening {
-                centrifugal: optional("stiffening.centrifugal", &[3, 3, n, n])?,
-                euler: optional("stiffening.euler", &[3, n, n])?,
-                translation: optional("stiffening.translation", &[3, n, n])?,
-                flanges: flange_k,
-            })
-        } else {
-            None
-        };
-        // the builder never writes these (finiteness is the container's check)
-        let mass = c.scalar("mass")?;
-        if !(mass > 0.0) {
-            return Err(FormatError::Malformed(format!("mass = {mass} is not positive")));
-        }
-        for name in ["damping.alpha", "damping.beta"] {
-            if c.scalar(name)? < 0.0 {
-                return Err(FormatError::Malformed(format!("{name} = {} is negative", c.scalar(name)?)));
-            }
-        }
-        if let Some(j) = c.array("damping.modal", &[n])?.iter().position(|&d| d < 0.0) {
-            return Err(FormatError::Malformed(format!("damping.modal[{j}] is negative")));
-        }
+        let flanges = read_flanges(c, n)?;
+        let stress_points = read_stress_points(c, n)?;
+        let rotation = read_rotation(c, n)?;
+        let stiffening = read_stiffening(c, n, flanges.len())?;
+        let mass = read_mass_and_check_damping(c, n)?;
         let mut inertia = [0.0; 9];
         inertia.copy_from_slice(c.array("inertia", &[3, 3])?);
         Ok(Self {
@@ -364,6 +286,115 @@ impl ReducedBody {
         }
         Self::from_container(&c)
     }
+}
+
+/// The modal frequencies: positive, ascending.
+fn read_omega(c: &Container) -> Result<Vec<f64>, FormatError> {
+    let n = match c.dims("omega")? {
+        [n] => *n,
+        other => {
+            return Err(FormatError::Shape { name: "omega".into(), found: other.to_vec(), expected: vec![0] });
+        }
+    };
+    let omega = c.array("omega", &[n])?.to_vec();
+    if let Some(bad) = omega.iter().position(|w| !(w.is_finite() && *w > 0.0)) {
+        return Err(FormatError::Malformed(format!(
+            "modal frequency omega[{bad}] = {} is not a positive number",
+            omega[bad]
+        )));
+    }
+    if let Some(k) = (1..n).find(|&k| omega[k] < omega[k - 1]) {
+        return Err(FormatError::Malformed(format!(
+            "modal frequencies must ascend: omega[{k}] = {} < omega[{}] = {}",
+            omega[k],
+            k - 1,
+            omega[k - 1]
+        )));
+    }
+    Ok(omega)
+}
+
+fn read_flanges(c: &Container, n: usize) -> Result<Vec<FlangeShapes>, FormatError> {
+    let count = c.scalar("flange.count")?;
+    if !(count >= 0.0 && count.fract() == 0.0 && count < 1e4) {
+        return Err(FormatError::Malformed(format!("flange.count = {count}")));
+    }
+    let mut flanges = Vec::new();
+    for i in 0..count as usize {
+        flanges.push(FlangeShapes {
+            name: c.text(&format!("flange.{i}.name"))?.to_owned(),
+            position: to3(c.array(&format!("flange.{i}.position"), &[3])?),
+            shapes: c.array(&format!("flange.{i}.shapes"), &[6, n])?.to_vec(),
+        });
+    }
+    Ok(flanges)
+}
+
+fn read_stress_points(c: &Container, n: usize) -> Result<Vec<StressPoint>, FormatError> {
+    let stress_count = if c.contains("stress.count") { c.scalar("stress.count")? } else { 0.0 };
+    if !(stress_count >= 0.0 && stress_count.fract() == 0.0 && stress_count <= 1e4) {
+        return Err(FormatError::Malformed(format!("stress.count = {stress_count}")));
+    }
+    let mut stress_points = Vec::new();
+    for i in 0..stress_count as usize {
+        stress_points.push(StressPoint {
+            name: c.text(&format!("stress.{i}.name"))?.to_owned(),
+            description: c.text(&format!("stress.{i}.description"))?.to_owned(),
+            position: to3(c.array(&format!("stress.{i}.position"), &[3])?),
+            modes: c.array(&format!("stress.{i}.modes"), &[6, n])?.to_vec(),
+        });
+    }
+    Ok(stress_points)
+}
+
+fn read_rotation(c: &Container, n: usize) -> Result<Option<RotationTerms>, FormatError> {
+    Ok(if c.contains("rotation.G") {
+        Some(RotationTerms {
+            g: c.array("rotation.G", &[3, n, n])?.to_vec(),
+            o_mat: c.array("rotation.O", &[3, 3, n, n])?.to_vec(),
+            o_vec: c.array("rotation.o", &[3, 3, n])?.to_vec(),
+        })
+    } else {
+        None
+    })
+}
+
+fn read_stiffening(c: &Container, n: usize, n_flanges: usize) -> Result<Option<Stiffening>, FormatError> {
+    let optional = |name: &str, dims: &[usize]| -> Result<Option<Vec<f64>>, FormatError> {
+        if c.contains(name) { Ok(Some(c.array(name, dims)?.to_vec())) } else { Ok(None) }
+    };
+    Ok(if c.contains("stiffening") {
+        let mut flange_k = Vec::new();
+        for i in 0..n_flanges {
+            flange_k.push(optional(&format!("stiffening.flange.{i}"), &[6, n, n])?.unwrap_or_default());
+        }
+        Some(Stiffening {
+            centrifugal: optional("stiffening.centrifugal", &[3, 3, n, n])?,
+            euler: optional("stiffening.euler", &[3, n, n])?,
+            translation: optional("stiffening.translation", &[3, n, n])?,
+            flanges: flange_k,
+        })
+    } else {
+        None
+    })
+}
+
+/// The mass, after the checks of mass and damping.
+fn read_mass_and_check_damping(c: &Container, n: usize) -> Result<f64, FormatError> {
+    // the builder never writes these (finiteness is the container's check)
+    let mass = c.scalar("mass")?;
+    if !(mass > 0.0) {
+        return Err(FormatError::Malformed(format!("mass = {mass} is not positive")));
+    }
+    for name in ["damping.alpha", "damping.beta"] {
+        if c.scalar(name)? < 0.0 {
+            return Err(FormatError::Malformed(format!("{name} = {} is negative", c.scalar(name)?)));
+        }
+    }
+    if let Some(j) = c.array("damping.modal", &[n])?.iter().position(|&d| d < 0.0) {
+        return Err(FormatError::Malformed(format!("damping.modal[{j}] is negative")));
+    }
+    Ok(mass)
 }
 
 fn to3(s: &[f64]) -> [f64; 3] {

@@ -4,8 +4,8 @@
 
 use super::mounted::fill_coupling;
 use super::{
-    Coupling, FlangeLoad, FlexibleBody, FrameState, FreeWork, HostMount, InputRates, MountMotion, Parameters,
-    REAL_LIMIT, UNSTABLE_STIFFNESS,
+    CoupledWork, Coupling, FlangeLoad, FlexibleBody, FrameState, FreeWork, HostMount, InputRates, MountMotion,
+    Parameters, REAL_LIMIT, UNSTABLE_STIFFNESS,
 };
 use crate::coupled_propagator::Prepared;
 use crate::kinematics::{self as k3, Mat3, Vec3};
@@ -344,106 +344,21 @@ impl FlexibleBody {
         let steady = held.steady && self.steady_coupling();
         // inputs that move over the step move the coupling too: its matrices at the step's end
         let mut work = std::mem::take(&mut self.coupled_work);
-        if ramp && !steady {
-            let mut end = self.mount;
-            let r = &self.rates.mount;
-            for i in 0..3 {
-                end.w[i] += h * r.w[i];
-                end.z[i] += h * r.z[i];
-                end.a[i] += h * r.a[i];
-            }
-            for i in 0..9 {
-                end.rot[i] += h * r.rot[i];
-            }
-            for ((e, l), rate) in work.loads_end.iter_mut().zip(&self.loads).zip(&self.rates.loads) {
-                *e = FlangeLoad { f: k3::add(l.f, k3::scale(h, rate.f)), t: k3::add(l.t, k3::scale(h, rate.t)) };
-            }
-            let end_rot = k3::nearest_rotation(&end.rot);
-            fill_coupling(&self.body, &end_rot, &end, &work.loads_end, self.params.g, &mut work.coupling_end);
+        let moving = ramp && !steady;
+        if moving {
+            self.coupling_at_step_end(&mut work, h);
         }
         // a coupling that starts at zero (spin-up from rest) still couples within the step
-        let coupled = self.coupling.active || (ramp && !steady && work.coupling_end.active);
-        if !coupled {
-            self.coupled_work = work;
+        let coupled = self.coupling.active || (moving && work.coupling_end.active);
+        if coupled {
+            self.advance_coupled(&mut work, ramp, moving, h);
+        } else {
             self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, h);
             if ramp {
                 self.propagator.advance_ramp(&self.body.omega, &self.load, &self.load_rate, &mut self.q, &mut self.qd);
-                self.extrapolate_inputs(h);
-                self.record_stepped_inputs();
-                self.advance_held_mount(&held, h);
             } else {
                 self.propagator.advance(&self.body.omega, &self.load, &mut self.q, &mut self.qd);
-                self.record_stepped_inputs();
             }
-            self.eval.valid = false;
-            return Ok(());
-        }
-        // The transition is exact for the coupling it was made for (the reference). A coupling
-        // that drifted from it (spin-up, a tumbling mount, or only the round-off of a rotating
-        // base.R) enters as the small difference dC = C - C_ref, by a predictor-corrector load on
-        // top of the exact coupled transition; the reference is renewed (one matrix exponential,
-        // at the step's midpoint coupling) when h |dC| exceeds REFERENCE_DRIFT. A steady spin
-        // runs on one exponential.
-        let prepared = self.coupled.is_prepared(h, self.params.alpha, self.params.beta);
-        // a steady spin meets its own transition again: compared first, cheaper than the drift
-        let held_exactly = (!ramp || steady)
-            && prepared
-            && self.coupled.reference() == (&self.coupling.c_d[..], &self.coupling.c_k[..]);
-        let drift_ok =
-            |c: &Coupling<f64>| h * coupling_drift(c, self.coupled.reference(), &self.body.omega) <= REFERENCE_DRIFT;
-        let current =
-            held_exactly || prepared && drift_ok(&self.coupling) && (!ramp || steady || drift_ok(&work.coupling_end));
-        if !current {
-            let (c_d, c_k): (&[f64], &[f64]) = if ramp && !steady {
-                for (m, (a, b)) in work.c_d_mid.iter_mut().zip(self.coupling.c_d.iter().zip(&work.coupling_end.c_d)) {
-                    *m = 0.5 * (a + b);
-                }
-                for (m, (a, b)) in work.c_k_mid.iter_mut().zip(self.coupling.c_k.iter().zip(&work.coupling_end.c_k)) {
-                    *m = 0.5 * (a + b);
-                }
-                (&work.c_d_mid, &work.c_k_mid)
-            } else {
-                (&self.coupling.c_d, &self.coupling.c_k)
-            };
-            let was_definite = self.coupled.definite();
-            let prepared = self.coupled.prepare(
-                &self.body.omega,
-                self.params.alpha,
-                self.params.beta,
-                &self.body.modal_damping,
-                c_d,
-                c_k,
-                h,
-            );
-            if prepared == Prepared::Computed && was_definite && !self.coupled.definite() {
-                self.warning = Some(UNSTABLE_STIFFNESS);
-            }
-        }
-        let end = if ramp && !steady { &work.coupling_end } else { &self.coupling };
-        // a transition made for this step (held or midpoint coupling) needs no correction
-        let exact = held_exactly || !current;
-        let rate: &[f64] = if ramp { &self.load_rate } else { &work.zeros };
-        if exact {
-            self.coupled.advance(&self.body.omega, &self.load, rate, &mut self.q, &mut self.qd);
-        } else {
-            // Heun: the residual coupling force held at its start value, then ramped to its
-            // value at the predicted end
-            let n = self.q.len();
-            work.q0.copy_from_slice(&self.q);
-            work.qd0.copy_from_slice(&self.qd);
-            for i in 0..n {
-                work.f0[i] = self.load[i]
-                    - residual_coupling_force(&self.coupling, self.coupled.reference(), i, &work.q0, &work.qd0);
-            }
-            self.coupled.advance(&self.body.omega, &work.f0, rate, &mut self.q, &mut self.qd);
-            for (i, rate) in rate.iter().enumerate() {
-                let f_end = self.load[i] + h * rate
-                    - residual_coupling_force(end, self.coupled.reference(), i, &self.q, &self.qd);
-                work.f1[i] = (f_end - work.f0[i]) / h;
-            }
-            self.q.copy_from_slice(&work.q0);
-            self.qd.copy_from_slice(&work.qd0);
-            self.coupled.advance(&self.body.omega, &work.f0, &work.f1, &mut self.q, &mut self.qd);
         }
         self.coupled_work = work;
         if ramp {
@@ -454,7 +369,7 @@ impl FlexibleBody {
             self.record_stepped_inputs();
         }
         self.eval.valid = false;
-        if !(self.q.iter().chain(&self.qd).all(|v| v.is_finite())) {
+        if coupled && !(self.q.iter().chain(&self.qd).all(|v| v.is_finite())) {
             return Err(if self.coupled.definite() {
                 format!(
                     "the modal state became non-finite in this step of h = {h} s (a step or load beyond the body's range)"
@@ -464,6 +379,98 @@ impl FlexibleBody {
             });
         }
         Ok(())
+    }
+
+    /// The coupling matrices at the step's end, where the inputs' rates carry the mount and the
+    /// loads.
+    fn coupling_at_step_end(&self, work: &mut CoupledWork, h: f64) {
+        let mut end = self.mount;
+        let r = &self.rates.mount;
+        for i in 0..3 {
+            end.w[i] += h * r.w[i];
+            end.z[i] += h * r.z[i];
+            end.a[i] += h * r.a[i];
+        }
+        for i in 0..9 {
+            end.rot[i] += h * r.rot[i];
+        }
+        for ((e, l), rate) in work.loads_end.iter_mut().zip(&self.loads).zip(&self.rates.loads) {
+            *e = FlangeLoad { f: k3::add(l.f, k3::scale(h, rate.f)), t: k3::add(l.t, k3::scale(h, rate.t)) };
+        }
+        let end_rot = k3::nearest_rotation(&end.rot);
+        fill_coupling(&self.body, &end_rot, &end, &work.loads_end, self.params.g, &mut work.coupling_end);
+    }
+
+    /// The modes over a step with coupling. The transition is exact for the coupling it was
+    /// made for (the reference). A coupling that drifted from it (spin-up, a tumbling mount, or
+    /// only the round-off of a rotating base.R) enters as the small difference dC = C - C_ref,
+    /// by a predictor-corrector load on top of the exact coupled transition; the reference is
+    /// renewed (one matrix exponential, at the step's midpoint coupling) when h |dC| exceeds
+    /// REFERENCE_DRIFT. A steady spin runs on one exponential.
+    fn advance_coupled(&mut self, work: &mut CoupledWork, ramp: bool, moving: bool, h: f64) {
+        let prepared = self.coupled.is_prepared(h, self.params.alpha, self.params.beta);
+        // a steady spin meets its own transition again: compared first, cheaper than the drift
+        let held_exactly =
+            !moving && prepared && self.coupled.reference() == (&self.coupling.c_d[..], &self.coupling.c_k[..]);
+        let drift_ok =
+            |c: &Coupling<f64>| h * coupling_drift(c, self.coupled.reference(), &self.body.omega) <= REFERENCE_DRIFT;
+        let current = held_exactly || prepared && drift_ok(&self.coupling) && (!moving || drift_ok(&work.coupling_end));
+        if !current {
+            self.renew_reference(work, moving, h);
+        }
+        let rate: &[f64] = if ramp { &self.load_rate } else { &work.zeros };
+        // a transition made for this step (held or midpoint coupling) needs no correction
+        if held_exactly || !current {
+            self.coupled.advance(&self.body.omega, &self.load, rate, &mut self.q, &mut self.qd);
+            return;
+        }
+        // Heun: the residual coupling force held at its start value, then ramped to its value at
+        // the predicted end
+        let end = if moving { &work.coupling_end } else { &self.coupling };
+        let n = self.q.len();
+        work.q0.copy_from_slice(&self.q);
+        work.qd0.copy_from_slice(&self.qd);
+        for i in 0..n {
+            work.f0[i] = self.load[i]
+                - residual_coupling_force(&self.coupling, self.coupled.reference(), i, &work.q0, &work.qd0);
+        }
+        self.coupled.advance(&self.body.omega, &work.f0, rate, &mut self.q, &mut self.qd);
+        for (i, rate) in rate.iter().enumerate() {
+            let f_end =
+                self.load[i] + h * rate - residual_coupling_force(end, self.coupled.reference(), i, &self.q, &self.qd);
+            work.f1[i] = (f_end - work.f0[i]) / h;
+        }
+        self.q.copy_from_slice(&work.q0);
+        self.qd.copy_from_slice(&work.qd0);
+        self.coupled.advance(&self.body.omega, &work.f0, &work.f1, &mut self.q, &mut self.qd);
+    }
+
+    /// A new reference transition, at the step's midpoint coupling where the inputs move.
+    fn renew_reference(&mut self, work: &mut CoupledWork, moving: bool, h: f64) {
+        let (c_d, c_k): (&[f64], &[f64]) = if moving {
+            for (m, (a, b)) in work.c_d_mid.iter_mut().zip(self.coupling.c_d.iter().zip(&work.coupling_end.c_d)) {
+                *m = 0.5 * (a + b);
+            }
+            for (m, (a, b)) in work.c_k_mid.iter_mut().zip(self.coupling.c_k.iter().zip(&work.coupling_end.c_k)) {
+                *m = 0.5 * (a + b);
+            }
+            (&work.c_d_mid, &work.c_k_mid)
+        } else {
+            (&self.coupling.c_d, &self.coupling.c_k)
+        };
+        let was_definite = self.coupled.definite();
+        let prepared = self.coupled.prepare(
+            &self.body.omega,
+            self.params.alpha,
+            self.params.beta,
+            &self.body.modal_damping,
+            c_d,
+            c_k,
+            h,
+        );
+        if prepared == Prepared::Computed && was_definite && !self.coupled.definite() {
+            self.warning = Some(UNSTABLE_STIFFNESS);
+        }
     }
 
     /// A warning about the last step, once: the FMI layer logs it.

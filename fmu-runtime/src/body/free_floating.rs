@@ -4,6 +4,7 @@
 use super::dense::{dot, shape_dot, solve_dense};
 use super::{FlexibleBody, FrameState, Invariants, MountMotion};
 use crate::kinematics::{self as k3, Mat3, Vec3};
+use crate::reduced::RotationTerms;
 use crate::scalar::{Scalar, c};
 
 impl FlexibleBody {
@@ -33,24 +34,9 @@ impl<T: Scalar> FlexibleBody<T> {
     pub(super) fn free_accelerations(&mut self) -> Result<(), String> {
         let frame = self.frame.ok_or("not a free-floating body")?;
         let n = self.q.len();
-        let nn = n * n;
         let b = self.body.clone();
         let rot_terms = b.rotation.as_ref().ok_or("a free-floating body needs its rotation invariants")?;
-        let [q0, q1, q2, q3] = frame.quat;
-        let norm = (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3).sqrt();
-        // the state holds an orientation only near the unit sphere (a host's integrator keeps it
-        // there to its tolerance); the rates below keep the norm, so a state off it is the host's
-        if !(norm.value() > 0.5 && norm.value() < 2.0) {
-            return Err(format!(
-                "the orientation quaternion frame.Q = {:?} has norm {:e}, which is no orientation \
-                 (a state of norm between 0.5 and 2 is normalised; retry with states nearer the last \
-                 accepted ones)",
-                frame.quat.map(|x| x.value()),
-                norm.value()
-            ));
-        }
-        let quat = frame.quat.map(|x| x / norm);
-        let a = k3::rotation_of_quaternion(quat);
+        let a = k3::rotation_of_quaternion(unit_quaternion(frame.quat)?);
         let w = frame.w_body;
         let total_force: Vec3<T> = self.loads.iter().fold([T::zero(); 3], |acc, l| k3::add(acc, l.f));
         let accel = k3::add(k3::scale(c(1.0 / b.mass), total_force), self.gravity());
@@ -63,8 +49,46 @@ impl<T: Scalar> FlexibleBody<T> {
         if nd < n {
             self.free_quasi_static(w)?;
         }
+        self.modal_right_hand_side(rot_terms, w, nd);
+        let (j, j_rate) = self.inertia_in_deformation(rot_terms);
+        let cr_qd: Vec3<T> = [0, 1, 2].map(|i| dot(&self.cr_q[i * n..(i + 1) * n], &self.qd));
+        let h = k3::add(k3::mul(&j, w), cr_qd);
+        let torque = self.flange_torque(&a);
+        let rhs_w = k3::sub(k3::sub(torque, k3::cross(w, h)), k3::mul(&j_rate, w));
+        // quasi-static modes have no acceleration: they neither load the frame nor take its share
+        self.eval.qdd[nd..].fill(T::zero());
+        // Schur complement over the accelerated modes: (J - C_r C_r^T) W' = rhs_w - C_r rhs_q
+        let mut s = j;
+        let mut rhs = rhs_w;
+        for p in 0..3 {
+            let cp = &self.cr_q[p * n..p * n + nd];
+            rhs[p] -= dot(cp, &self.eval.qdd[..nd]);
+            for q_ in 0..3 {
+                let cq = &self.cr_q[q_ * n..q_ * n + nd];
+                s[3 * p + q_] -= dot(cp, cq);
+            }
+        }
+        let mut w_dot = rhs;
+        solve_dense(&mut s, &mut w_dot, 3).map_err(|_| "the body's inertia matrix became singular".to_string())?;
+        for r in 0..nd {
+            let f = self.cr_q[r] * w_dot[0] + self.cr_q[n + r] * w_dot[1] + self.cr_q[2 * n + r] * w_dot[2];
+            self.eval.qdd[r] -= f;
+        }
+        self.mount.z = k3::mul(&a, w_dot);
+        let quat_rate = quaternion_rate(frame.quat, w);
+        self.frame_rate = FrameState { r: frame.v, quat: quat_rate, v: accel, w_body: w_dot };
+        Ok(())
+    }
+
+    /// The modes' side of the free body's equations, before the frame's angular acceleration:
+    /// p - D q' - K q - 2 sum W_a G_a q' - sum W_a W_b O_ab q, into the accelerations of the
+    /// first `nd` modes.
+    fn modal_right_hand_side(&mut self, rot_terms: &RotationTerms, w: Vec3<T>, nd: usize) {
+        let n = self.q.len();
+        let nn = n * n;
         let (alpha, beta) = (self.params.alpha, self.params.beta);
         // the quasi-static rows stay at zero acceleration: no right-hand side for them
+        let b = &self.body;
         let rhs_q = &mut self.eval.qdd[..nd];
         for (j, rhs) in rhs_q.iter_mut().enumerate() {
             let w2 = b.omega[j] * b.omega[j];
@@ -89,7 +113,13 @@ impl<T: Scalar> FlexibleBody<T> {
                 }
             }
         }
-        // C_r(q), J(q), J'(q)
+    }
+
+    /// C_r(q) (into `cr_q`), J(q) and J'(q) at the present deformation and its rate.
+    fn inertia_in_deformation(&mut self, rot_terms: &RotationTerms) -> (Mat3<T>, Mat3<T>) {
+        let b = self.body.clone();
+        let n = self.q.len();
+        let nn = n * n;
         for i in 0..3 {
             let g = &rot_terms.g[i * nn..(i + 1) * nn];
             for col in 0..n {
@@ -118,49 +148,19 @@ impl<T: Scalar> FlexibleBody<T> {
                 j_rate[3 * p + q_] = -(lin_rate + quad_rate);
             }
         }
-        let cr_qd: Vec3<T> = [0, 1, 2].map(|i| dot(&self.cr_q[i * n..(i + 1) * n], &self.qd));
-        let h = k3::add(k3::mul(&j, w), cr_qd);
-        // torque of the flange loads about the centre of mass, body frame
+        (j, j_rate)
+    }
+
+    /// Torque of the flange loads about the centre of mass, body frame.
+    fn flange_torque(&self, a: &Mat3<T>) -> Vec3<T> {
+        let n = self.q.len();
         let mut torque = [T::zero(); 3];
-        for (flange, load) in b.flanges.iter().zip(&self.loads) {
+        for (flange, load) in self.body.flanges.iter().zip(&self.loads) {
             let u: Vec3<T> = [0, 1, 2].map(|r| shape_dot(&flange.shapes[r * n..(r + 1) * n], &self.q));
-            let f_b = k3::mul_t(&a, load.f);
-            torque =
-                k3::add(torque, k3::add(k3::cross(k3::add(flange.position.map(c), u), f_b), k3::mul_t(&a, load.t)));
+            let f_b = k3::mul_t(a, load.f);
+            torque = k3::add(torque, k3::add(k3::cross(k3::add(flange.position.map(c), u), f_b), k3::mul_t(a, load.t)));
         }
-        let rhs_w = k3::sub(k3::sub(torque, k3::cross(w, h)), k3::mul(&j_rate, w));
-        // quasi-static modes have no acceleration: they neither load the frame nor take its share
-        self.eval.qdd[nd..].fill(T::zero());
-        // Schur complement over the accelerated modes: (J - C_r C_r^T) W' = rhs_w - C_r rhs_q
-        let mut s = j;
-        let mut rhs = rhs_w;
-        for p in 0..3 {
-            let cp = &self.cr_q[p * n..p * n + nd];
-            rhs[p] -= dot(cp, &self.eval.qdd[..nd]);
-            for q_ in 0..3 {
-                let cq = &self.cr_q[q_ * n..q_ * n + nd];
-                s[3 * p + q_] -= dot(cp, cq);
-            }
-        }
-        let mut w_dot = rhs;
-        solve_dense(&mut s, &mut w_dot, 3).map_err(|_| "the body's inertia matrix became singular".to_string())?;
-        for r in 0..nd {
-            let f = self.cr_q[r] * w_dot[0] + self.cr_q[n + r] * w_dot[1] + self.cr_q[2 * n + r] * w_dot[2];
-            self.eval.qdd[r] -= f;
-        }
-        self.mount.z = k3::mul(&a, w_dot);
-        // d/dt quat = 1/2 quat (x) (0, W) of the state's own quaternion: keeps its norm, so the
-        // frame turns at exactly W whatever the norm has drifted to
-        let [q0, q1, q2, q3] = frame.quat;
-        let half = [w[0] * 0.5, w[1] * 0.5, w[2] * 0.5];
-        let quat_rate = [
-            -(q1 * half[0]) - q2 * half[1] - q3 * half[2],
-            q0 * half[0] + q2 * half[2] - q3 * half[1],
-            q0 * half[1] + q3 * half[0] - q1 * half[2],
-            q0 * half[2] + q1 * half[1] - q2 * half[0],
-        ];
-        self.frame_rate = FrameState { r: frame.v, quat: quat_rate, v: accel, w_body: w_dot };
-        Ok(())
+        torque
     }
 
     /// q_s of a free body's quasi-static modes: their rows of the rotating-frame coupling at the
@@ -234,4 +234,35 @@ impl<T: Scalar> FlexibleBody<T> {
         let angular_momentum = k3::add(k3::cross(frame.r, momentum), k3::mul(&self.mount.rot, h));
         Ok(Invariants { energy, momentum, angular_momentum })
     }
+}
+
+/// The state's quaternion normalised. The state holds an orientation only near the unit sphere
+/// (a host's integrator keeps it there to its tolerance); the rates keep the norm, so a state off
+/// it is the host's.
+fn unit_quaternion<T: Scalar>(quat: [T; 4]) -> Result<[T; 4], String> {
+    let [q0, q1, q2, q3] = quat;
+    let norm = (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3).sqrt();
+    if !(norm.value() > 0.5 && norm.value() < 2.0) {
+        return Err(format!(
+            "the orientation quaternion frame.Q = {:?} has norm {:e}, which is no orientation \
+             (a state of norm between 0.5 and 2 is normalised; retry with states nearer the last \
+             accepted ones)",
+            quat.map(|x| x.value()),
+            norm.value()
+        ));
+    }
+    Ok(quat.map(|x| x / norm))
+}
+
+/// d/dt quat = 1/2 quat (x) (0, W) of the state's own quaternion: keeps its norm, so the frame
+/// turns at exactly W whatever the norm has drifted to.
+fn quaternion_rate<T: Scalar>(quat: [T; 4], w: Vec3<T>) -> [T; 4] {
+    let [q0, q1, q2, q3] = quat;
+    let half = [w[0] * 0.5, w[1] * 0.5, w[2] * 0.5];
+    [
+        -(q1 * half[0]) - q2 * half[1] - q3 * half[2],
+        q0 * half[0] + q2 * half[2] - q3 * half[1],
+        q0 * half[1] + q3 * half[0] - q1 * half[2],
+        q0 * half[2] + q1 * half[1] - q2 * half[0],
+    ]
 }

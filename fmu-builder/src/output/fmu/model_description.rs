@@ -238,16 +238,7 @@ impl<'t> Plan<'t> {
         let mut units: Vec<(&str, [i32; 4])> = Vec::new();
         for v in &table.variables {
             rows.push(row(v, &to_index)?);
-            if let Some(unit) = v.unit
-                && !units.iter().any(|(u, _)| *u == unit)
-            {
-                let exponents = match UNITS.iter().find(|(u, _)| *u == unit) {
-                    Some((_, e)) => *e,
-                    None if unit == "1" => [0; 4],
-                    None => return err(format!("unit '{unit}' of '{}' has no definition in interface::UNITS", v.name)),
-                };
-                units.push((unit, exponents));
-            }
+            add_unit(&mut units, v)?;
         }
 
         let outputs = table
@@ -286,6 +277,21 @@ impl<'t> Plan<'t> {
 
         Ok(Plan { units, rows, outputs, derivatives, initial_unknowns: initial.into_values().collect() })
     }
+}
+
+/// The variable's unit with its base-unit exponents, once per unit.
+fn add_unit<'t>(units: &mut Vec<(&'t str, [i32; 4])>, v: &'t Variable) -> Result<()> {
+    if let Some(unit) = v.unit
+        && !units.iter().any(|(u, _)| *u == unit)
+    {
+        let exponents = match UNITS.iter().find(|(u, _)| *u == unit) {
+            Some((_, e)) => *e,
+            None if unit == "1" => [0; 4],
+            None => return err(format!("unit '{unit}' of '{}' has no definition in interface::UNITS", v.name)),
+        };
+        units.push((unit, exponents));
+    }
+    Ok(())
 }
 
 /// Resolves a variable's start and derivative, enforcing where FMI 2.0 requires or forbids a
@@ -355,7 +361,7 @@ fn write_document(w: &mut W, info: &ModelInfo, plan: &Plan) -> io::Result<()> {
 }
 
 /// Capability flags: what the runtime's fmi layer implements (fmu-runtime/src/fmi), and what
-/// the body model provides (fmu-runtime/src/fmu.rs says so in constants).
+/// the body model provides (fmu-runtime/src/fmu/mod.rs says so in constants).
 fn write_interfaces(w: &mut W, model_identifier: &str) -> io::Result<()> {
     use fmu_runtime::fmu::{CAN_INTERPOLATE_INPUTS, MAX_OUTPUT_DERIVATIVE_ORDER, PROVIDES_DIRECTIONAL_DERIVATIVE};
     let flag = |b: bool| if b { "true" } else { "false" };

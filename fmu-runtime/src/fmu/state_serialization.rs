@@ -1,0 +1,213 @@
+//! The body's part of a serialized FMU state (fmi2SerializeFMUstate, fmi2GetFMUstate).
+
+use super::BodyFmu;
+use super::values::{admissible, real_value};
+use crate::body::{
+    BodyState, CouplingReference, FlangeLoad, FrameState, InitialFrame, InputRates, MountMotion, Parameters,
+    SteppedState,
+};
+use fmi2::bytes::{Reader, Writer};
+use fmi2::{Causality, VarType};
+
+/// Version of the body's part of a serialized FMU state (the layer has its own).
+/// Layout, little-endian: version (u32), modes n (u32), force flanges m (u32), free-floating
+/// (u8 0/1), static_start (u8 0/1), then f64s: mount r[3] R[9] (row-major) v[3] w[3] a[3] z[3];
+/// per force flange f[3] t[3]; g[3], alpha, beta; q[n]; qd[n]; initial r[3] phi[3] v[3] w[3];
+/// free-floating only: frame r[3] quaternion[4] v[3] W[3]; then the input derivatives set for
+/// the next step: flag (u8 0/1), mount rates r[3] R[9] v[3] w[3] a[3] z[3], per force flange
+/// f[3] t[3]; since version 2 the coupled transition's reference: flag (u8), then h, alpha,
+/// beta, C_d[n*n], C_k[n*n]; since version 3 the loads the last step ended with: flag (u8),
+/// then mount a[3] z[3], per force flange f[3] t[3], g[3], alpha, beta.
+/// Sizes are checked against the body before any array is read.
+pub const BODY_STATE_VERSION: u32 = 3;
+
+impl BodyFmu {
+    pub(super) fn write_state(&self, out: &mut Vec<u8>) {
+        let s = self.body.state();
+        let mut w = Writer::new(out);
+        w.u32(BODY_STATE_VERSION);
+        w.u32(s.q.len() as u32);
+        w.u32(s.loads.len() as u32);
+        w.bool(s.frame.is_some());
+        w.bool(self.static_start);
+        write_mount(&mut w, &s.mount);
+        write_loads(&mut w, &s.loads);
+        write_parameters(&mut w, &s.params);
+        w.f64s(&s.q);
+        w.f64s(&s.qd);
+        let i = &s.initial_frame;
+        for v in [&i.r, &i.phi, &i.v, &i.w] {
+            w.f64s(v);
+        }
+        if let Some(f) = &s.frame {
+            write_frame_state(&mut w, f);
+        }
+        w.bool(s.rates.any);
+        write_mount(&mut w, &s.rates.mount);
+        write_loads(&mut w, &s.rates.loads);
+        w.bool(s.coupling_reference.is_some());
+        if let Some(c) = &s.coupling_reference {
+            w.f64(c.h);
+            w.f64(c.alpha);
+            w.f64(c.beta);
+            w.f64s(&c.c_d);
+            w.f64s(&c.c_k);
+        }
+        w.bool(s.stepped_inputs.is_some());
+        if let Some(st) = &s.stepped_inputs {
+            w.f64s(&st.a);
+            w.f64s(&st.z);
+            write_loads(&mut w, &st.loads);
+            write_parameters(&mut w, &st.params);
+        }
+    }
+
+    pub(super) fn read_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+        let mut r = Reader::new(bytes);
+        let version = r.u32("body state version")?;
+        if version > BODY_STATE_VERSION {
+            return Err(format!(
+                "body state version {version} was written by a newer runtime (this one reads up to {BODY_STATE_VERSION})"
+            ));
+        }
+        if version == 0 {
+            return Err("body state version 0 is invalid".into());
+        }
+        let n = r.u32("number of modes")? as usize;
+        let nf = r.u32("number of force flanges")? as usize;
+        let free = r.bool("free-floating flag")?;
+        let static_start = r.bool("static_start")?;
+        // sizes first: the bytes must describe this body before anything is read by them
+        let (n_body, nf_body, free_body) = (self.body.n_modes(), self.body.loads().len(), self.body.frame().is_some());
+        if (n, nf, free) != (n_body, nf_body, free_body) {
+            return Err(format!(
+                "the state is of a body with {n} modes, {nf} force flanges{}; this one has {n_body}, {nf_body}{}",
+                if free { ", free-floating" } else { "" },
+                if free_body { ", free-floating" } else { "" },
+            ));
+        }
+        let state = read_body_state(&mut r, version, n, nf, free)?;
+        r.finish("body state")?;
+        self.body = self.body.with_state(state)?;
+        self.static_start = static_start;
+        self.check_restored_knowns()
+    }
+
+    /// What the host can set, restored from bytes, obeys the rule fmi2SetReal applies.
+    fn check_restored_knowns(&mut self) -> Result<(), String> {
+        let knowns =
+            self.table.variables.iter().filter(|v| matches!(v.causality, Causality::Input | Causality::Parameter));
+        for v in knowns {
+            if v.var_type == VarType::Real {
+                let value = real_value(&mut self.body, v.quantity)?;
+                admissible(v.quantity, value).map_err(|e| format!("{} = {value}: {e}", v.name))?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The body's state after the header, its sizes checked.
+fn read_body_state(r: &mut Reader, version: u32, n: usize, nf: usize, free: bool) -> Result<BodyState, String> {
+    let mount = read_mount(r, "")?;
+    let loads = read_loads(r, nf, "flange force", "flange torque")?;
+    let params = Parameters { g: r.f64_array("g")?, alpha: r.f64("damping.alpha")?, beta: r.f64("damping.beta")? };
+    let mut q = vec![0.0; n];
+    r.f64s_into(&mut q, "q")?;
+    let mut qd = vec![0.0; n];
+    r.f64s_into(&mut qd, "qd")?;
+    let initial_frame = InitialFrame {
+        r: r.f64_array("initial.r")?,
+        phi: r.f64_array("initial.phi")?,
+        v: r.f64_array("initial.v")?,
+        w: r.f64_array("initial.w")?,
+    };
+    let frame = if free { Some(read_frame_state(r)?) } else { None };
+    let any = r.bool("input rates flag")?;
+    let rate_mount = read_mount(r, " rate")?;
+    let rate_loads = read_loads(r, nf, "flange force rate", "flange torque rate")?;
+    let coupling_reference =
+        if version >= 2 && r.bool("coupling reference flag")? { Some(read_coupling_reference(r, n)?) } else { None };
+    let stepped_inputs =
+        if version >= 3 && r.bool("stepped inputs flag")? { Some(read_stepped_inputs(r, nf)?) } else { None };
+    let rates = InputRates { mount: rate_mount, loads: rate_loads, any };
+    Ok(BodyState { mount, loads, params, q, qd, frame, initial_frame, rates, coupling_reference, stepped_inputs })
+}
+
+fn write_mount(w: &mut Writer, m: &MountMotion) {
+    for v in [&m.r[..], &m.rot, &m.v, &m.w, &m.a, &m.z] {
+        w.f64s(v);
+    }
+}
+
+/// The mount's motion or (`suffix` " rate") its rates.
+fn read_mount(r: &mut Reader, suffix: &str) -> Result<MountMotion, String> {
+    let what = |name: &str| format!("mount {name}{suffix}");
+    Ok(MountMotion {
+        r: r.f64_array(&what("r"))?,
+        rot: r.f64_array(&what("R"))?,
+        v: r.f64_array(&what("v"))?,
+        w: r.f64_array(&what("w"))?,
+        a: r.f64_array(&what("a"))?,
+        z: r.f64_array(&what("z"))?,
+    })
+}
+
+/// Force and torque of every force flange, in flange order.
+fn write_loads(w: &mut Writer, loads: &[FlangeLoad]) {
+    for l in loads {
+        w.f64s(&l.f);
+        w.f64s(&l.t);
+    }
+}
+
+fn read_loads(r: &mut Reader, nf: usize, force: &str, torque: &str) -> Result<Vec<FlangeLoad>, String> {
+    let mut loads = Vec::with_capacity(nf);
+    for _ in 0..nf {
+        loads.push(FlangeLoad { f: r.f64_array(force)?, t: r.f64_array(torque)? });
+    }
+    Ok(loads)
+}
+
+fn write_parameters(w: &mut Writer, p: &Parameters) {
+    w.f64s(&p.g);
+    w.f64(p.alpha);
+    w.f64(p.beta);
+}
+
+fn write_frame_state(w: &mut Writer, f: &FrameState) {
+    w.f64s(&f.r);
+    w.f64s(&f.quat);
+    w.f64s(&f.v);
+    w.f64s(&f.w_body);
+}
+
+fn read_frame_state(r: &mut Reader) -> Result<FrameState, String> {
+    Ok(FrameState {
+        r: r.f64_array("frame r")?,
+        quat: r.f64_array("frame quaternion")?,
+        v: r.f64_array("frame v")?,
+        w_body: r.f64_array("frame W")?,
+    })
+}
+
+fn read_coupling_reference(r: &mut Reader, n: usize) -> Result<CouplingReference, String> {
+    let (h, alpha, beta) =
+        (r.f64("coupling reference h")?, r.f64("coupling reference alpha")?, r.f64("coupling reference beta")?);
+    let mut c_d = vec![0.0; n * n];
+    r.f64s_into(&mut c_d, "coupling reference C_d")?;
+    let mut c_k = vec![0.0; n * n];
+    r.f64s_into(&mut c_k, "coupling reference C_k")?;
+    Ok(CouplingReference { h, alpha, beta, c_d, c_k })
+}
+
+fn read_stepped_inputs(r: &mut Reader, nf: usize) -> Result<SteppedState, String> {
+    let (a, z) = (r.f64_array("stepped mount a")?, r.f64_array("stepped mount z")?);
+    let loads = read_loads(r, nf, "stepped force", "stepped torque")?;
+    let params = Parameters {
+        g: r.f64_array("stepped g")?,
+        alpha: r.f64("stepped damping.alpha")?,
+        beta: r.f64("stepped damping.beta")?,
+    };
+    Ok(SteppedState { a, z, loads, params })
+}
