@@ -246,7 +246,7 @@ def test_nominals_are_the_static_response_to_unit_loads(build_dir):
         np.testing.assert_array_equal(nom[at], xml)
         largest = np.maximum(largest, np.abs(q))
     # the nominal is NOMINAL_FRACTION (1e-3) of the static response p_k / omega_k^2 (see
-    # fmu-runtime/src/interface.rs for why), up to round-off
+    # fmu-runtime/src/interface/nominals.rs for why), up to round-off
     xml = xml / 1e-3
     floor = 1e-6 * xml.max()
     excited = largest > floor
