@@ -99,6 +99,15 @@ impl Container {
         self.entries.insert(name.to_owned(), Entry::Text(text.to_owned()));
     }
 
+    /// Every array with its name, in name order: what the file carries, for checks that must
+    /// see all of it.
+    pub fn arrays(&self) -> impl Iterator<Item = (&str, &[f64])> {
+        self.entries.iter().filter_map(|(name, e)| match e {
+            Entry::Array { values, .. } => Some((name.as_str(), values.as_slice())),
+            Entry::Text(_) => None,
+        })
+    }
+
     pub fn contains(&self, name: &str) -> bool {
         self.entries.contains_key(name)
     }

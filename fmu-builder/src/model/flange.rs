@@ -284,7 +284,9 @@ mod tests {
 
     fn selected(part: &Part, json: &str) -> std::result::Result<Vec<[f64; 3]>, String> {
         let selector: NodeSelector = serde_json::from_str(json).unwrap();
-        select(&selector, part, model_size(&part.mesh)).map(|s| s.iter().map(|&i| part.mesh.nodes[i]).collect())
+        select(&selector, part, model_size(&part.mesh))
+            .map(|s| s.iter().map(|&i| part.mesh.nodes[i]).collect())
+            .map_err(|e| e.0)
     }
 
     #[test]

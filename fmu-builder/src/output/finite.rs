@@ -37,43 +37,15 @@ pub fn check_report<T: Serialize>(report: &T) -> Result<()> {
 }
 
 /// Refuses a reduced body with a non-finite array entry (the FMU's resources), naming the array.
+/// Every array the FMU's file carries is checked: they are read from the very container that is
+/// written, so an array added to the file cannot be missed here.
 pub fn check_reduced(body: &ReducedBody) -> Result<()> {
-    let mut arrays: Vec<(String, &[f64])> = vec![
-        ("omega (modal frequencies)".into(), &body.omega),
-        ("damping alpha".into(), std::slice::from_ref(&body.alpha)),
-        ("damping beta".into(), std::slice::from_ref(&body.beta)),
-        ("modal damping".into(), &body.modal_damping),
-        ("mass".into(), std::slice::from_ref(&body.mass)),
-        ("first moment of mass".into(), &body.first_moment),
-        ("inertia".into(), &body.inertia),
-        ("C_t (translational coupling)".into(), &body.c_t),
-        ("C_r (rotational coupling)".into(), &body.c_r),
-    ];
-    for f in &body.flanges {
-        arrays.push((format!("flange \"{}\" reference point", f.name), &f.position));
-        arrays.push((format!("flange \"{}\" shapes", f.name), &f.shapes));
-    }
-    if let Some(r) = &body.rotation {
-        arrays.extend([
-            ("G_a (gyroscopic terms)".into(), &r.g[..]),
-            ("O_ab".into(), &r.o_mat),
-            ("o_ab".into(), &r.o_vec),
-        ]);
-    }
-    if let Some(s) = &body.stiffening {
-        for (name, a) in [("centrifugal", &s.centrifugal), ("euler", &s.euler), ("translation", &s.translation)] {
-            if let Some(a) = a {
-                arrays.push((format!("geometric stiffening ({name})"), a));
-            }
-        }
-        for (k, a) in s.flanges.iter().enumerate() {
-            arrays.push((format!("geometric stiffening of flange load {}", k + 1), a));
-        }
-    }
-    for (name, values) in arrays {
+    let container = body.to_container();
+    for (key, values) in container.arrays() {
         if let Some(i) = values.iter().position(|v| !v.is_finite()) {
             return Err(BuildError::Numerical(format!(
-                "the reduced body's {name} has a non-finite entry ({} at index {i}): {LIKELY_CAUSES}",
+                "the reduced body's {} has a non-finite entry ({} at index {i}): {LIKELY_CAUSES}",
+                array_words(body, key),
                 values[i]
             )));
         }
@@ -85,6 +57,40 @@ pub fn check_reduced(body: &ReducedBody) -> Result<()> {
         )));
     }
     Ok(())
+}
+
+/// The array `key` of the reduced-body file in the words of the model.
+fn array_words(body: &ReducedBody, key: &str) -> String {
+    let named = |list: &str, i: &str| -> Option<String> {
+        let i: usize = i.parse().ok()?;
+        match list {
+            "flange" => body.flanges.get(i).map(|f| format!("flange \"{}\"", f.name)),
+            _ => body.stress_points.get(i).map(|p| format!("stress point \"{}\"", p.name)),
+        }
+    };
+    let parts: Vec<&str> = key.split('.').collect();
+    let words = match parts.as_slice() {
+        ["omega"] => "omega (modal frequencies)".to_string(),
+        ["damping", "modal"] => "modal damping".to_string(),
+        ["damping", which] => format!("damping {which}"),
+        ["first_moment"] => "first moment of mass".to_string(),
+        ["c_t"] => "C_t (translational coupling)".to_string(),
+        ["c_r"] => "C_r (rotational coupling)".to_string(),
+        ["rotation", "G"] => "G_a (gyroscopic terms)".to_string(),
+        ["rotation", "O"] => "O_ab".to_string(),
+        ["rotation", "o"] => "o_ab".to_string(),
+        ["stiffening", "flange", i] => {
+            format!("geometric stiffening of flange load {}", i.parse::<usize>().map_or(0, |i| i + 1))
+        }
+        ["stiffening", case] => format!("geometric stiffening ({case})"),
+        [list @ ("flange" | "stress"), i, "position"] => {
+            named(list, i).map_or(key.to_string(), |n| format!("{n} reference point"))
+        }
+        ["flange", i, "shapes"] => named("flange", i).map_or(key.to_string(), |n| format!("{n} shapes")),
+        ["stress", i, "modes"] => named("stress", i).map_or(key.to_string(), |n| format!("{n} stress modes")),
+        _ => key.replace('_', " "),
+    };
+    words
 }
 
 /// A few Co-Simulation steps of the FMU's own equations: at rest, then with a unit force and
@@ -382,5 +388,23 @@ mod tests {
         let mut bad = two_mode_body();
         bad.omega[1] = f64::INFINITY;
         assert!(check_reduced(&bad).unwrap_err().to_string().contains("omega"));
+        // every array the file carries is checked, the stress points' too
+        let mut bad = two_mode_body();
+        let n = bad.n_modes();
+        let point = fmu_runtime::reduced::StressPoint {
+            name: "stress.n7".into(),
+            description: "node 7".into(),
+            position: [0.5, 0.0, 0.0],
+            modes: vec![0.0; 6 * n],
+        };
+        bad.stress_points.push(point.clone());
+        check_reduced(&bad).unwrap();
+        bad.stress_points[0].modes[6 * n - 1] = f64::NAN;
+        let e = check_reduced(&bad).unwrap_err().to_string();
+        assert!(e.contains("stress point \"stress.n7\" stress modes"), "{e}");
+        bad.stress_points[0] = point;
+        bad.stress_points[0].position[2] = f64::NEG_INFINITY;
+        let e = check_reduced(&bad).unwrap_err().to_string();
+        assert!(e.contains("stress point \"stress.n7\" reference point"), "{e}");
     }
 }

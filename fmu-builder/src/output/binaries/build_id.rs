@@ -64,10 +64,10 @@ mod tests {
 
     #[test]
     fn a_missing_or_foreign_identity_is_refused() {
-        let e = check(b"no identity here", own()).unwrap_err();
+        let e = check(b"no identity here", own()).unwrap_err().0;
         assert!(e.contains("carries no fmu-runtime build identity"), "{e}");
-        let foreign = Refusal(format!("xx{BUILD_ID_MARKER}0.0.9+src.0123456789abcdef\0yy"));
-        let e = check(foreign.as_bytes(), own()).unwrap_err();
+        let foreign = format!("xx{BUILD_ID_MARKER}0.0.9+src.0123456789abcdef\0yy");
+        let e = check(foreign.as_bytes(), own()).unwrap_err().0;
         assert!(e.contains("was built from fmu-runtime 0.0.9+src.0123456789abcdef"), "{e}");
         // a marker at the very end, or without its NUL, is no identity
         assert!(identities(BUILD_ID_MARKER.as_bytes()).is_empty());

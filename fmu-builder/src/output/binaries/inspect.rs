@@ -207,13 +207,13 @@ mod tests {
     fn the_embedded_runtime_is_a_valid_linux64_binary_and_nothing_else() {
         let all = fmi2_functions::model_exchange_and_co_simulation();
         check(Platform::Linux64, RUNTIME_SO, &all).unwrap();
-        let e = check(Platform::Win64, RUNTIME_SO, &all).unwrap_err();
+        let e = check(Platform::Win64, RUNTIME_SO, &all).unwrap_err().0;
         assert!(e.contains("is a Linux shared object (ELF), not a Windows DLL (PE)"), "{e}");
-        let e = check(Platform::Darwin64, RUNTIME_SO, &all).unwrap_err();
+        let e = check(Platform::Darwin64, RUNTIME_SO, &all).unwrap_err().0;
         assert!(e.contains("Mach-O"), "{e}");
-        let e = check(Platform::Linux32, RUNTIME_SO, &all).unwrap_err();
+        let e = check(Platform::Linux32, RUNTIME_SO, &all).unwrap_err().0;
         assert!(e.contains("is built for x86-64, but linux32 is x86 (32-bit)"), "{e}");
-        let e = check(Platform::Linux64, RUNTIME_SO, &["fmi2DoStep", "fmi3DoStep"]).unwrap_err();
+        let e = check(Platform::Linux64, RUNTIME_SO, &["fmi2DoStep", "fmi3DoStep"]).unwrap_err().0;
         assert!(e.contains("does not export 1 of the 2 fmi2 functions") && e.ends_with(": fmi3DoStep"), "{e}");
     }
 
@@ -224,7 +224,7 @@ mod tests {
             assert!(check(Platform::Linux64, bad, &all).is_err());
         }
         // an import library (fmu_runtime.dll.lib): an archive, not the DLL
-        let e = check(Platform::Win64, Refusal(format!("!<arch>\n{:60}", "")).as_bytes(), &all).unwrap_err();
+        let e = check(Platform::Win64, format!("!<arch>\n{:60}", "").as_bytes(), &all).unwrap_err().0;
         assert!(e.contains("archive") && e.contains("fmu_runtime.dll"), "{e}");
         // a universal header whose slice lies beyond the file
         let mut fat = Vec::new();
@@ -240,7 +240,7 @@ mod tests {
         }
         fat.resize(offset as usize, 0);
         fat.extend_from_slice(RUNTIME_SO);
-        let e = check(Platform::Darwin64, &fat, &all).unwrap_err();
+        let e = check(Platform::Darwin64, &fat, &all).unwrap_err().0;
         assert!(e.starts_with("has a slice for x86-64 that is a Linux shared object (ELF)"), "{e}");
     }
 }

@@ -134,7 +134,7 @@ mod tests {
         for p in Platform::ALL {
             assert_eq!(Platform::parse(p.name()), Ok(p));
         }
-        let e = Platform::parse("aarch64-linux").unwrap_err();
+        let e = Platform::parse("aarch64-linux").unwrap_err().0;
         assert!(e.contains("win32, win64, linux32, linux64, darwin32, darwin64") && e.contains("aarch64"), "{e}");
         assert!(Platform::parse("Win64").is_err());
     }
