@@ -141,7 +141,7 @@ fn check_file_place(d: &Destination, shown: &str) -> Result<(), BuildError> {
             "--sweep-svg" => "sweep.svg",
             _ => "report.json",
         });
-        return Err(refuse(&shown, format!("is a folder; give a file name, e.g. {} {}", d.option, example.display())));
+        return Err(refuse(shown, format!("is a folder; give a file name, e.g. {} {}", d.option, example.display())));
     }
     writable_folder(folder_of(&d.path), shown)
 }
@@ -150,7 +150,7 @@ fn check_folder_place(d: &Destination, shown: &str) -> Result<(), BuildError> {
     match std::fs::metadata(&d.path) {
         Ok(m) if m.is_dir() => writable_folder(&d.path, shown),
         Ok(_) => {
-            Err(refuse(shown, format!("is a file; this option writes several files into a folder: name a folder")))
+            Err(refuse(shown, "is a file; this option writes several files into a folder: name a folder".to_string()))
         }
         // created by the export, in a folder that must exist
         Err(_) => writable_folder(folder_of(&d.path), shown),
@@ -161,7 +161,7 @@ fn check_folder_place(d: &Destination, shown: &str) -> Result<(), BuildError> {
 /// read-only mounts and ACLs).
 fn writable_folder(folder: &Path, shown: &str) -> Result<(), BuildError> {
     if !folder.is_dir() {
-        return Err(refuse(&shown, format!("the folder {} does not exist; create it first", folder.display())));
+        return Err(refuse(shown, format!("the folder {} does not exist; create it first", folder.display())));
     }
     let probe = folder.join(format!(".fmu-builder-probe-{}", std::process::id()));
     match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {

@@ -69,7 +69,7 @@ fn array_words(body: &ReducedBody, key: &str) -> String {
         }
     };
     let parts: Vec<&str> = key.split('.').collect();
-    let words = match parts.as_slice() {
+    match parts.as_slice() {
         ["omega"] => "omega (modal frequencies)".to_string(),
         ["damping", "modal"] => "modal damping".to_string(),
         ["damping", which] => format!("damping {which}"),
@@ -89,8 +89,7 @@ fn array_words(body: &ReducedBody, key: &str) -> String {
         ["flange", i, "shapes"] => named("flange", i).map_or(key.to_string(), |n| format!("{n} shapes")),
         ["stress", i, "modes"] => named("stress", i).map_or(key.to_string(), |n| format!("{n} stress modes")),
         _ => key.replace('_', " "),
-    };
-    words
+    }
 }
 
 /// A few Co-Simulation steps of the FMU's own equations: at rest, then with a unit force and
