@@ -161,4 +161,51 @@ mod tests {
         let input = BuildError::input(Path::new("p.json"), "flanges", "none");
         assert_eq!(input.in_input(Path::new("q.json"), place).to_string(), "p.json: flanges: none");
     }
+
+    /// The words users read for each failure class: the variants are typed, the messages are
+    /// the ones the command line has always printed.
+    #[test]
+    fn every_failure_class_keeps_its_message() {
+        use super::Refusal;
+        use std::path::PathBuf;
+        let cases: Vec<(BuildError, &str)> = vec![
+            (BuildError::file(Path::new("a.vtk"), "needs a part with elements"), "a.vtk: needs a part with elements"),
+            (
+                BuildError::UnreadableInput { path: PathBuf::from("b.json"), source: Refusal("is a folder".into()) },
+                "b.json: cannot read the input: it is a folder",
+            ),
+            (
+                BuildError::CommandLine {
+                    option: "--platform-binary x".into(),
+                    message: "expected PLATFORM=FILE".into(),
+                },
+                "--platform-binary x: expected PLATFORM=FILE",
+            ),
+            (
+                BuildError::Destination { shown: "-o B.fmu".into(), reason: "B.fmu exists; pass --force".into() },
+                "-o B.fmu: B.fmu exists; pass --force",
+            ),
+            (
+                BuildError::Export {
+                    option: "--report",
+                    fmu: PathBuf::from("B.fmu"),
+                    source: Box::new(BuildError::io(Path::new("r.json"), std::io::Error::other("disk full"))),
+                },
+                "--report: r.json: disk full; the FMU B.fmu was written",
+            ),
+            (
+                BuildError::Binary {
+                    path: PathBuf::from("f.dll"),
+                    platform: "win64".into(),
+                    reason: "is empty".into(),
+                },
+                "f.dll: refused as the FMU's win64 binary (--platform-binary win64=...): it is empty",
+            ),
+            (BuildError::Backend("mpirun not found".into()), "the PETSc back-end: mpirun not found"),
+        ];
+        assert_eq!(cases.len(), 7);
+        for (error, words) in cases {
+            assert_eq!(error.to_string(), words);
+        }
+    }
 }
