@@ -6,7 +6,7 @@ use crate::error::{BuildError, Result};
 use crate::ffrf::inertia::LoadCase;
 use crate::model::flange::Flange;
 use crate::model::part::Part;
-use crate::model::stress::{Recovery, hot_spots, nodal_stresses};
+use crate::model::stress::{Recovery, RecoveryPoint, hot_spots, nodal_stresses};
 use crate::output::report::{StressPointReport, UnitCaseStress};
 use crate::profile;
 use faer::MatRef;
@@ -72,22 +72,7 @@ pub fn recover(
     profile::phase("stress recovery", || {
         let mut points = recovery.points;
         if recovery.hot_spots > 0 {
-            if unit.names.is_empty() {
-                return Err(BuildError::input(
-                    file,
-                    "outputs.stress.hot_spots",
-                    "hot spots are found under the unit load cases, and this body has none (no force flange, no scene \
-                     loads): add a force flange or declare scene.loads, or name the nodes (node_sets, points)",
-                ));
-            }
-            let mut tied = vec![false; part.mesh.n_nodes()];
-            for f in flanges {
-                for &n in &f.slaves {
-                    tied[n] = true;
-                }
-            }
-            let found = hot_spots(part, unit.fields, &unit.names, &tied, &points, recovery.hot_spots)?;
-            points.extend(found);
+            points.extend(hot_spots_of(file, part, flanges, unit, &points, recovery.hot_spots)?);
         }
         profile::note(|| format!("{} points, {} unit load cases", points.len(), unit.names.len()));
         let nodes: Vec<usize> = points.iter().map(|p| p.node).collect();
@@ -111,22 +96,53 @@ pub fn recover(
                 position: [0, 1, 2].map(|a| x[a] - origin[a]),
                 modes: rows,
             });
-            report.push(StressPointReport {
-                name: point.name(part),
-                description: point.description(part),
-                position: x,
-                unit_cases: (0..k)
-                    .map(|c| {
-                        let stress = statics[i * k + c];
-                        UnitCaseStress {
-                            case: unit.names[c].clone(),
-                            stress,
-                            von_mises: crate::model::fe::stress::von_mises(&stress),
-                        }
-                    })
-                    .collect(),
-            });
+            report.push(point_report(part, point, &statics[i * k..(i + 1) * k], &unit.names));
         }
         Ok(Recovered { points: stress_points, report, nodes })
     })
+}
+
+/// The `count` nodes of highest von Mises stress over the unit cases, flange-tied nodes left
+/// out (their stresses are the idealised tie's).
+fn hot_spots_of(
+    file: &Path,
+    part: &Part,
+    flanges: &[Flange],
+    unit: &UnitCases<'_>,
+    chosen: &[RecoveryPoint],
+    count: usize,
+) -> Result<Vec<RecoveryPoint>> {
+    if unit.names.is_empty() {
+        return Err(BuildError::input(
+            file,
+            "outputs.stress.hot_spots",
+            "hot spots are found under the unit load cases, and this body has none (no force flange, no scene \
+             loads): add a force flange or declare scene.loads, or name the nodes (node_sets, points)",
+        ));
+    }
+    let mut tied = vec![false; part.mesh.n_nodes()];
+    for f in flanges {
+        for &n in &f.slaves {
+            tied[n] = true;
+        }
+    }
+    hot_spots(part, unit.fields, &unit.names, &tied, chosen, count)
+}
+
+/// A point's static stresses under each unit case, for the report.
+fn point_report(part: &Part, point: &RecoveryPoint, statics: &[[f64; 6]], cases: &[String]) -> StressPointReport {
+    StressPointReport {
+        name: point.name(part),
+        description: point.description(part),
+        position: part.mesh.nodes[point.node],
+        unit_cases: statics
+            .iter()
+            .zip(cases)
+            .map(|(&stress, case)| UnitCaseStress {
+                case: case.clone(),
+                stress,
+                von_mises: crate::model::fe::stress::von_mises(&stress),
+            })
+            .collect(),
+    }
 }

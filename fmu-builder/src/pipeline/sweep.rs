@@ -69,6 +69,34 @@ pub fn sweep(spec: &Spec, file: &Path, on_row: &mut dyn FnMut(&SweepRow)) -> Res
             [0.0, f.get(9).or(f.last()).copied().unwrap_or(1.0)]
         }
     };
+    let rotating = with_rotation(spec, band);
+    let mut rows = Vec::new();
+    for (method, setting, reduction) in runs(spec, band) {
+        let base = if setting.ends_with("rotation declared") { &rotating } else { spec };
+        let mut v = variant(base, reduction, band);
+        if let Some(sc) = v.scene.as_mut() {
+            sc.loads = base.scene.as_ref().map(|s| s.loads.clone()).unwrap_or_default();
+        }
+        let start = Instant::now();
+        let built = match reduce_spec(v, file) {
+            Ok(b) => b,
+            Err(_) => continue, // e.g. more modes than the mesh has
+        };
+        let build_s = start.elapsed().as_secs_f64();
+        let frf_error = built.report.accuracy.frequency_response.as_ref().map_or(f64::NAN, |f| f.max_relative_error);
+        let step_ns = step_cost(&built, 0.0);
+        let step_ns_rotating = built.reduced.rotation.is_some().then(|| step_cost(&built, 10.0));
+        let row =
+            SweepRow { method, setting, order: built.reduced.n_modes(), frf_error, step_ns, step_ns_rotating, build_s };
+        on_row(&row);
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+/// The reductions compared: each method at growing orders, and Craig-Bampton with rotation
+/// declared (what modelling rotation costs per step).
+fn runs(spec: &Spec, band: [f64; 2]) -> Vec<(&'static str, String, Reduction)> {
     let points = spec.reduction.expansion_points.clone().unwrap_or_else(|| vec![0.5 * band[1], band[1]]);
     let mut runs: Vec<(&'static str, String, Reduction)> = Vec::new();
     for m in [2, 4, 8, 16, 32, 64] {
@@ -94,7 +122,12 @@ pub fn sweep(spec: &Spec, file: &Path, on_row: &mut dyn FnMut(&SweepRow)) -> Res
             },
         ));
     }
-    // the same body with rotation declared in the scene: what modelling rotation costs per step
+    runs.push(("craig_bampton", "16 modes, rotation declared".to_string(), cb(16)));
+    runs
+}
+
+/// The same body with rotation declared in the scene.
+fn with_rotation(spec: &Spec, band: [f64; 2]) -> Spec {
     let mut rotating = spec.clone();
     let mut scene = rotating.scene.clone().unwrap_or_default();
     if !scene.loads.contains(&crate::input::spec::SceneLoad::Rotation) {
@@ -103,32 +136,7 @@ pub fn sweep(spec: &Spec, file: &Path, on_row: &mut dyn FnMut(&SweepRow)) -> Res
     scene.band = Some(band);
     scene.tolerance = None;
     rotating.scene = Some(scene);
-    runs.push(("craig_bampton", "16 modes, rotation declared".to_string(), cb(16)));
-    let mut rows = Vec::new();
-    for (method, setting, reduction) in runs {
-        let base = if setting.ends_with("rotation declared") { &rotating } else { spec };
-        let variant = |r: Reduction| {
-            let mut v = variant(base, r, band);
-            if let Some(sc) = v.scene.as_mut() {
-                sc.loads = base.scene.as_ref().map(|s| s.loads.clone()).unwrap_or_default();
-            }
-            v
-        };
-        let start = Instant::now();
-        let built = match reduce_spec(variant(reduction), file) {
-            Ok(b) => b,
-            Err(_) => continue, // e.g. more modes than the mesh has
-        };
-        let build_s = start.elapsed().as_secs_f64();
-        let frf_error = built.report.accuracy.frequency_response.as_ref().map_or(f64::NAN, |f| f.max_relative_error);
-        let step_ns = step_cost(&built, 0.0);
-        let step_ns_rotating = built.reduced.rotation.is_some().then(|| step_cost(&built, 10.0));
-        let row =
-            SweepRow { method, setting, order: built.reduced.n_modes(), frf_error, step_ns, step_ns_rotating, build_s };
-        on_row(&row);
-        rows.push(row);
-    }
-    Ok(rows)
+    rotating
 }
 
 fn cb(modes: usize) -> Reduction {
