@@ -211,15 +211,17 @@ fn scan(src: &str) -> Scan {
                     result.test_modules.push(name.to_string());
                 }
             }
-            if word == "fn" && !test_item && code.get(next_word_at).is_some_and(|&c| is_word(c)) {
-                if let Some(open) = body_start(code, next_word_at) {
-                    let close = matching_brace(code, open);
-                    result.functions.push(Function {
-                        name: word_at(next_word_at).to_string(),
-                        first_line: line_of(i),
-                        last_line: line_of(close),
-                    });
-                }
+            if word == "fn"
+                && !test_item
+                && code.get(next_word_at).is_some_and(|&c| is_word(c))
+                && let Some(open) = body_start(code, next_word_at)
+            {
+                let close = matching_brace(code, open);
+                result.functions.push(Function {
+                    name: word_at(next_word_at).to_string(),
+                    first_line: line_of(i),
+                    last_line: line_of(close),
+                });
             }
             i = after.max(i + 1) - 1;
         }

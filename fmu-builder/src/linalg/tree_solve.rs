@@ -62,6 +62,9 @@ impl TreeSolve {
     }
 }
 
+/// Per thread, its subtrees as ranges of supernodes.
+type Subtrees = Vec<Vec<Range<usize>>>;
+
 /// The tree of a factor's supernodes, in postorder.
 struct Tree {
     /// Factor entries per supernode.
@@ -121,7 +124,7 @@ impl Tree {
     /// Subtrees for each of `threads` threads, of loads within 10 % of each other, and the
     /// supernodes above them (the roots split to get there); None where no such split keeps the
     /// top within `MAX_TOP_SHARE` of the factor.
-    fn split(&self, threads: usize) -> Option<(Vec<Vec<Range<usize>>>, Vec<usize>)> {
+    fn split(&self, threads: usize) -> Option<(Subtrees, Vec<usize>)> {
         let Self { work, parent, first, subtree_work, children } = self;
         let ns = work.len();
         let total: usize = work.iter().sum();

@@ -350,6 +350,9 @@ fn method(fast: Option<&crate::reduce::band_response::BandResponse<'_>>, cut: f6
     }
 }
 
+/// Complex stresses at the probe's points, point-major (point, load).
+type PointStresses = Vec<[c64; 6]>;
+
 /// The full model's flange responses at `f` Hz and their stresses at the probe's points: from
 /// the band's modes and Krylov blocks (`fast`) where they were computed, else a complex LU.
 fn full_response(
@@ -360,7 +363,7 @@ fn full_response(
     rows: &[usize],
     damping: ComparisonDamping,
     f: f64,
-) -> Result<(Mat<c64>, Option<Vec<[c64; 6]>>)> {
+) -> Result<(Mat<c64>, Option<PointStresses>)> {
     Ok(match (fast, direct) {
         (Some(fr), _) => {
             let (y, w) = fr.coefficients(damping, f);

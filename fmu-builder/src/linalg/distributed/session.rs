@@ -447,7 +447,7 @@ fn write_job(backend: &PetscBackend, folder: &Path, port: u16, token: &str) -> R
 
 /// The launcher's command line with its output to the job folder's files.
 fn launcher_command(program: &str, arguments: &[String], stdout: std::fs::File, stderr: std::fs::File) -> Command {
-    let mut command = Command::new(&program);
+    let mut command = Command::new(program);
     command.args(arguments).stdin(Stdio::null()).stdout(stdout).stderr(stderr);
     // its own process group, so that the builder ends the launcher and every rank it forked
     // together, and a Ctrl-C reaches the builder only (process_group.rs)

@@ -81,23 +81,26 @@ pub fn parse_dof_map(text: &str, path: &Path) -> Result<(DofMapFormat, Vec<DofRo
     in_row_order(format, listed, path)
 }
 
+/// A line that is neither blank nor a comment, with its 1-based number.
+type DataLine<'a> = (usize, &'a str);
+
 /// The format the first data line shows, and the data lines that list rows (after the ANSYS
 /// header, if any).
 fn detect_format<'d, 'a>(
-    data: &'d [(usize, &'a str)],
+    data: &'d [DataLine<'a>],
     first_line: usize,
     first: &str,
     path: &Path,
-) -> Result<(DofMapFormat, &'d [(usize, &'a str)]), ImportError> {
+) -> Result<(DofMapFormat, &'d [DataLine<'a>]), ImportError> {
     let err = |line: usize, msg: String| ImportError::new(path, line, msg);
     let first_fields = split_fields(first);
     let (format, body) = if first_fields.first().is_some_and(|t| t.eq_ignore_ascii_case("matrix")) {
         (DofMapFormat::AnsysMapping, &data[1..])
     } else {
         match first_fields.len() {
-            1 if first.contains('.') => (DofMapFormat::CalculixDof, &data[..]),
-            2 => (DofMapFormat::NodeDirection, &data[..]),
-            3 => (DofMapFormat::AnsysMapping, &data[..]),
+            1 if first.contains('.') => (DofMapFormat::CalculixDof, data),
+            2 => (DofMapFormat::NodeDirection, data),
+            3 => (DofMapFormat::AnsysMapping, data),
             _ => {
                 return Err(err(
                     first_line,
