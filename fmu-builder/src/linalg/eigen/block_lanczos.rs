@@ -22,6 +22,7 @@ pub(super) fn start_vector(n: usize) -> Vec<f64> {
         })
         .collect()
 }
+
 /// Columns per Lanczos block. A solve reads the whole factor from memory whatever the number of
 /// right-hand sides, so a block costs less per vector: on a 249k-DoF bracket one right-hand side
 /// took 0.21 s, 4 took 0.45 s, 8 0.65 s (one thread; split over two, 5 take 0.30 s and 33

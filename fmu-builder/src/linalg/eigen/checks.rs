@@ -64,6 +64,7 @@ pub(super) fn checked(
         .collect();
     (Eigenpairs { values, vectors: pairs.vectors }, residuals)
 }
+
 /// Fold step for the largest residual and its index (NaN counts as largest).
 pub(super) fn worst_of(worst: (f64, usize), (c, &r): (usize, &f64)) -> (f64, usize) {
     if !(r <= worst.0) { (r, c) } else { worst }

@@ -73,6 +73,7 @@ pub fn lowest_shifted(
 ) -> Result<Eigenpairs> {
     search(k, m, Want::Lowest(count), tol, shift, deflate)
 }
+
 /// Most modes a shared search (`lowest_and_held`) is used for: its checks decompose the
 /// projection twice (dim^3), and its held projection's round-off grows with the spread of the
 /// modes it resolves (a 600-mode slender beam stalled there); more modes go separately.
@@ -103,6 +104,7 @@ fn search(
 fn distributed_health(k: &dyn SpdSolve) -> Result<()> {
     k.distributed_session().map_or(Ok(()), |s| s.health())
 }
+
 /// All eigenpairs with omega below `omega_max`, at least `min_count` of them.
 pub fn below(k: &dyn SpdSolve, m: &Sparse, omega_max: f64, min_count: usize, tol: f64) -> Result<Eigenpairs> {
     below_shifted(k, m, omega_max, min_count, tol, 0.0, None)
