@@ -602,6 +602,19 @@ impl Spec {
     }
 
     fn check(&self, path: &Path) -> Result<()> {
+        self.check_mount(path)?;
+        for (i, f) in self.flanges.iter().enumerate() {
+            self.check_flange(path, i, f)?;
+            self.check_node_selector(path, i, &f.nodes)?;
+        }
+        self.check_part(path)?;
+        self.check_ranges(path)?;
+        self.check_requests(path)?;
+        self.check_boxes(path)
+    }
+
+    /// One "motion" flange, or none for a free-floating body.
+    fn check_mount(&self, path: &Path) -> Result<()> {
         let mounts: Vec<usize> =
             self.flanges.iter().enumerate().filter(|(_, f)| f.role == Role::Motion).map(|(i, _)| i).collect();
         match mounts.len() {
@@ -627,77 +640,88 @@ impl Spec {
                 ));
             }
         }
-        for (i, f) in self.flanges.iter().enumerate() {
-            if let Some(j) = self.flanges[..i].iter().position(|g| g.name == f.name) {
+        Ok(())
+    }
+
+    /// Flange `i`'s name is its own, and its weights fit its coupling.
+    fn check_flange(&self, path: &Path, i: usize, f: &FlangeSpec) -> Result<()> {
+        if let Some(j) = self.flanges[..i].iter().position(|g| g.name == f.name) {
+            return Err(BuildError::input(
+                path,
+                format!("flanges[{i}].name"),
+                format!("\"{}\" is already the name of flanges[{j}]", f.name),
+            ));
+        }
+        match (f.coupling, f.weights) {
+            (Coupling::Rigid, Some(_)) => {
                 return Err(BuildError::input(
                     path,
-                    format!("flanges[{i}].name"),
-                    format!("\"{}\" is already the name of flanges[{j}]", f.name),
+                    format!("flanges[{i}].weights"),
+                    "weights belong to a distributing coupling; this flange is rigid (add \"coupling\": \"distributing\", \
+                     or remove weights)",
                 ));
             }
-            match (f.coupling, f.weights) {
-                (Coupling::Rigid, Some(_)) => {
-                    return Err(BuildError::input(
-                        path,
-                        format!("flanges[{i}].weights"),
-                        "weights belong to a distributing coupling; this flange is rigid (add \"coupling\": \"distributing\", \
-                         or remove weights)",
-                    ));
-                }
-                (Coupling::Distributing, Some(Weights::Area)) if self.geometry.matrices.is_some() => {
-                    return Err(BuildError::input(
-                        path,
-                        format!("flanges[{i}].weights"),
-                        "area weights need the part's element faces, and matrix input has no elements; use \"uniform\" \
-                         weights, or give the mesh",
-                    ));
-                }
-                _ => {}
+            (Coupling::Distributing, Some(Weights::Area)) if self.geometry.matrices.is_some() => {
+                return Err(BuildError::input(
+                    path,
+                    format!("flanges[{i}].weights"),
+                    "area weights need the part's element faces, and matrix input has no elements; use \"uniform\" \
+                     weights, or give the mesh",
+                ));
             }
-            match &f.nodes {
-                NodeSelector::BoxFace { box_index, .. } if *box_index >= self.geometry.boxes.len() => {
-                    return Err(BuildError::input(
-                        path,
-                        format!("flanges[{i}].nodes.box_face.box"),
-                        format!(
-                            "box {box_index} does not exist: geometry.boxes has {} boxes (indices from 0)",
-                            self.geometry.boxes.len()
-                        ),
-                    ));
-                }
-                NodeSelector::BoxFace { .. } if self.geometry.boxes.is_empty() => {
-                    return Err(BuildError::input(
-                        path,
-                        format!("flanges[{i}].nodes.box_face"),
-                        "box_face selects a face of geometry.boxes, and this part has none; use node_set, plane, box, sphere or cylinder",
-                    ));
-                }
-                NodeSelector::Plane { normal, .. } if normal.iter().map(|c| c * c).sum::<f64>() == 0.0 => {
-                    return Err(BuildError::input(
-                        path,
-                        format!("flanges[{i}].nodes.plane.normal"),
-                        "the normal is the zero vector",
-                    ));
-                }
-                NodeSelector::Cylinder { axis, .. } if axis.iter().map(|c| c * c).sum::<f64>() == 0.0 => {
-                    return Err(BuildError::input(
-                        path,
-                        format!("flanges[{i}].nodes.cylinder.axis"),
-                        "the axis is the zero vector",
-                    ));
-                }
-                NodeSelector::Box { min, max } if (0..3).any(|a| !(max[a] > min[a])) => {
-                    return Err(BuildError::input(
-                        path,
-                        format!("flanges[{i}].nodes.box"),
-                        format!("empty box: every coordinate of max {max:?} must exceed min {min:?}"),
-                    ));
-                }
-                _ => {}
-            }
+            _ => {}
         }
-        self.check_part(path)?;
-        self.check_ranges(path)?;
+        Ok(())
+    }
+
+    /// Flange `i`'s node selector names a box that exists and is not degenerate.
+    fn check_node_selector(&self, path: &Path, i: usize, nodes: &NodeSelector) -> Result<()> {
+        match nodes {
+            NodeSelector::BoxFace { box_index, .. } if *box_index >= self.geometry.boxes.len() => {
+                return Err(BuildError::input(
+                    path,
+                    format!("flanges[{i}].nodes.box_face.box"),
+                    format!(
+                        "box {box_index} does not exist: geometry.boxes has {} boxes (indices from 0)",
+                        self.geometry.boxes.len()
+                    ),
+                ));
+            }
+            NodeSelector::BoxFace { .. } if self.geometry.boxes.is_empty() => {
+                return Err(BuildError::input(
+                    path,
+                    format!("flanges[{i}].nodes.box_face"),
+                    "box_face selects a face of geometry.boxes, and this part has none; use node_set, plane, box, sphere or cylinder",
+                ));
+            }
+            NodeSelector::Plane { normal, .. } if normal.iter().map(|c| c * c).sum::<f64>() == 0.0 => {
+                return Err(BuildError::input(
+                    path,
+                    format!("flanges[{i}].nodes.plane.normal"),
+                    "the normal is the zero vector",
+                ));
+            }
+            NodeSelector::Cylinder { axis, .. } if axis.iter().map(|c| c * c).sum::<f64>() == 0.0 => {
+                return Err(BuildError::input(
+                    path,
+                    format!("flanges[{i}].nodes.cylinder.axis"),
+                    "the axis is the zero vector",
+                ));
+            }
+            NodeSelector::Box { min, max } if (0..3).any(|a| !(max[a] > min[a])) => {
+                return Err(BuildError::input(
+                    path,
+                    format!("flanges[{i}].nodes.box"),
+                    format!("empty box: every coordinate of max {max:?} must exceed min {min:?}"),
+                ));
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// The modes and the band requested are within what a build computes.
+    fn check_requests(&self, path: &Path) -> Result<()> {
         if let Some(n) = self.reduction.modes
             && n > MAX_MODES
         {
@@ -719,6 +743,11 @@ impl Spec {
                 format!("the band's upper limit {hi} Hz must exceed its lower limit {lo} Hz"),
             ));
         }
+        Ok(())
+    }
+
+    /// Every box of the geometry has a volume and proportions a mesh can resolve.
+    fn check_boxes(&self, path: &Path) -> Result<()> {
         for (i, b) in self.geometry.boxes.iter().enumerate() {
             for axis in 0..3 {
                 if !(b.max[axis] > b.min[axis]) {

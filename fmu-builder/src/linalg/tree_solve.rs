@@ -44,6 +44,42 @@ impl TreeSolve {
         if threads < 2 {
             return None;
         }
+        let tree = Tree::of(sn)?;
+        let (parts, mut top) = tree.split(threads)?;
+        top.sort_unstable();
+        let (top_index, top_rows) = rows_of(&top, sn);
+        // each subtree ends at its root: work within it in increasing supernode order (children
+        // before parents) and in decreasing order for the transposed solve
+        let mut parts = parts;
+        for p in &mut parts {
+            p.sort_by_key(|r| r.start);
+        }
+        let cycle_leaders = match symbolic.perm() {
+            Some(perm) => cycle_leaders(perm.arrays().0),
+            None => Vec::new(),
+        };
+        Some(Self { parts, top, top_index, top_rows, cycle_leaders })
+    }
+}
+
+/// Per thread, its subtrees as ranges of supernodes.
+type Subtrees = Vec<Vec<Range<usize>>>;
+
+/// The tree of a factor's supernodes, in postorder.
+struct Tree {
+    /// Factor entries per supernode.
+    work: Vec<usize>,
+    parent: Vec<Option<usize>>,
+    /// The first supernode of each one's subtree (which ends at the supernode itself).
+    first: Vec<usize>,
+    subtree_work: Vec<usize>,
+    children: Vec<Vec<usize>>,
+}
+
+impl Tree {
+    /// The supernodal tree of `sn`, or None where its supernodes do not tile the columns in a
+    /// postorder of the tree.
+    fn of(sn: &SymbolicSupernodalCholesky<usize>) -> Option<Self> {
         let ns = sn.n_supernodes();
         let n = sn.nrows();
         let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
@@ -82,6 +118,15 @@ impl TreeSolve {
         if (0..ns).any(|s| s + 1 - first[s] != size[s]) {
             return None;
         }
+        Some(Self { work, parent, first, subtree_work, children })
+    }
+
+    /// Subtrees for each of `threads` threads, of loads within 10 % of each other, and the
+    /// supernodes above them (the roots split to get there); None where no such split keeps the
+    /// top within `MAX_TOP_SHARE` of the factor.
+    fn split(&self, threads: usize) -> Option<(Subtrees, Vec<usize>)> {
+        let Self { work, parent, first, subtree_work, children } = self;
+        let ns = work.len();
         let total: usize = work.iter().sum();
         let mut pool: Vec<usize> = (0..ns).filter(|&s| parent[s].is_none()).collect();
         let mut top = Vec::new();
@@ -111,28 +156,27 @@ impl TreeSolve {
             top_work += work[big];
             pool.extend(children[big].iter().copied());
         };
-        top.sort_unstable();
-        let mut top_index = vec![NOT_TOP; n];
-        let mut top_rows = Vec::new();
-        for &s in &top {
-            for row in begin[s]..end[s] {
-                top_index[row] = top_rows.len();
-                top_rows.push(row);
-            }
-        }
-        // each subtree ends at its root: work within it in increasing supernode order (children
-        // before parents) and in decreasing order for the transposed solve
-        let mut parts = parts;
-        for p in &mut parts {
-            p.sort_by_key(|r| r.start);
-        }
-        let cycle_leaders = match symbolic.perm() {
-            Some(perm) => cycle_leaders(perm.arrays().0),
-            None => Vec::new(),
-        };
-        Some(Self { parts, top, top_index, top_rows, cycle_leaders })
+        Some((parts, top))
     }
+}
 
+/// Each row's position among the rows of the `top` supernodes (`NOT_TOP` for the others), and
+/// those rows.
+fn rows_of(top: &[usize], sn: &SymbolicSupernodalCholesky<usize>) -> (Vec<usize>, Vec<usize>) {
+    let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
+    let n = sn.nrows();
+    let mut top_index = vec![NOT_TOP; n];
+    let mut top_rows = Vec::new();
+    for &s in top {
+        for row in begin[s]..end[s] {
+            top_index[row] = top_rows.len();
+            top_rows.push(row);
+        }
+    }
+    (top_index, top_rows)
+}
+
+impl TreeSolve {
     /// How many subtrees each thread walks.
     pub fn subtrees_per_thread(&self) -> Vec<usize> {
         self.parts.iter().map(Vec::len).collect()

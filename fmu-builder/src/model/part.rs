@@ -202,55 +202,9 @@ fn mesh_file_part(spec: &Spec, file: &Path, mesh_path: &Path) -> Result<Part> {
         ));
     }
     check_imported_size(file, mesh_path, &imported.nodes, &imported.element_types, None, Memory::of_this_machine())?;
-    for name in spec.materials.keys() {
-        if imported.material(name).is_none() {
-            let known: Vec<&str> = imported.materials.iter().map(|m| m.name.as_str()).collect();
-            return Err(BuildError::input(
-                file,
-                format!("materials.{name}"),
-                format!(
-                    "{} defines no material \"{name}\" (its materials: {})",
-                    mesh_path.display(),
-                    if known.is_empty() { "none".to_string() } else { known.join(", ") }
-                ),
-            ));
-        }
-    }
-    // element -> material name of its *SOLID SECTION (the first section naming it)
-    let mut section_of: Vec<Option<&str>> = vec![None; imported.connectivity.len()];
-    for (elset, material) in &imported.sections {
-        let Some(members) = imported.element_sets.get(elset) else {
-            return Err(BuildError::input(
-                mesh_path,
-                "",
-                format!("*SOLID SECTION names element set {elset}, which is not defined"),
-            ));
-        };
-        if imported.material(material).is_none() {
-            return Err(BuildError::input(
-                mesh_path,
-                "",
-                format!("*SOLID SECTION, ELSET={elset} names material {material}, which is not defined"),
-            ));
-        }
-        for &e in members {
-            section_of[e].get_or_insert(material.as_str());
-        }
-    }
-    let mut materials: Vec<SolidMaterial> = Vec::new();
-    let mut index_of: BTreeMap<Option<String>, usize> = BTreeMap::new();
-    let mut element_material = Vec::with_capacity(section_of.len());
-    for (e, section) in section_of.iter().enumerate() {
-        let key = section.map(|s| s.to_uppercase());
-        if let Some(&i) = index_of.get(&key) {
-            element_material.push(i);
-            continue;
-        }
-        let m = resolve_material(spec, file, mesh_path, &imported, *section, imported.element_ids[e])?;
-        index_of.insert(key, materials.len());
-        element_material.push(materials.len());
-        materials.push(m);
-    }
+    check_materials_defined(spec, file, mesh_path, &imported)?;
+    let section_of = section_materials(mesh_path, &imported)?;
+    let (materials, element_material) = element_materials(spec, file, mesh_path, &imported, &section_of)?;
     let (mut nodes, new_index) = compact(&imported);
     // the mesh file's coordinates are in geometry.length_unit: metres from here on
     let scale = spec.length_scale();
@@ -289,6 +243,75 @@ fn mesh_file_part(spec: &Spec, file: &Path, mesh_path: &Path) -> Result<Part> {
         length_scale: scale,
         notes: imported.notes.clone(),
     })
+}
+
+/// Every material the input names is one the mesh file defines.
+fn check_materials_defined(spec: &Spec, file: &Path, mesh_path: &Path, imported: &ImportedMesh) -> Result<()> {
+    for name in spec.materials.keys() {
+        if imported.material(name).is_none() {
+            let known: Vec<&str> = imported.materials.iter().map(|m| m.name.as_str()).collect();
+            return Err(BuildError::input(
+                file,
+                format!("materials.{name}"),
+                format!(
+                    "{} defines no material \"{name}\" (its materials: {})",
+                    mesh_path.display(),
+                    if known.is_empty() { "none".to_string() } else { known.join(", ") }
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Every element's material name of its *SOLID SECTION (the first section naming it).
+fn section_materials<'m>(mesh_path: &Path, imported: &'m ImportedMesh) -> Result<Vec<Option<&'m str>>> {
+    let mut section_of: Vec<Option<&str>> = vec![None; imported.connectivity.len()];
+    for (elset, material) in &imported.sections {
+        let Some(members) = imported.element_sets.get(elset) else {
+            return Err(BuildError::input(
+                mesh_path,
+                "",
+                format!("*SOLID SECTION names element set {elset}, which is not defined"),
+            ));
+        };
+        if imported.material(material).is_none() {
+            return Err(BuildError::input(
+                mesh_path,
+                "",
+                format!("*SOLID SECTION, ELSET={elset} names material {material}, which is not defined"),
+            ));
+        }
+        for &e in members {
+            section_of[e].get_or_insert(material.as_str());
+        }
+    }
+    Ok(section_of)
+}
+
+/// The distinct materials of the elements' sections, and every element's index into them.
+fn element_materials(
+    spec: &Spec,
+    file: &Path,
+    mesh_path: &Path,
+    imported: &ImportedMesh,
+    section_of: &[Option<&str>],
+) -> Result<(Vec<SolidMaterial>, Vec<usize>)> {
+    let mut materials: Vec<SolidMaterial> = Vec::new();
+    let mut index_of: BTreeMap<Option<String>, usize> = BTreeMap::new();
+    let mut element_material = Vec::with_capacity(section_of.len());
+    for (e, section) in section_of.iter().enumerate() {
+        let key = section.map(|s| s.to_uppercase());
+        if let Some(&i) = index_of.get(&key) {
+            element_material.push(i);
+            continue;
+        }
+        let m = resolve_material(spec, file, mesh_path, imported, *section, imported.element_ids[e])?;
+        index_of.insert(key, materials.len());
+        element_material.push(materials.len());
+        materials.push(m);
+    }
+    Ok((materials, element_material))
 }
 
 /// A mesh or matrix file's model against the machine's memory, before assembly and factoring

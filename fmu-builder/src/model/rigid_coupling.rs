@@ -58,60 +58,9 @@ pub struct DofMap {
 impl DofMap {
     pub fn new(nodes: &[[f64; 3]], flanges: &[Flange]) -> Result<Self> {
         let mut node = vec![NodeDofs::Free(0); nodes.len()];
-        // a distributing flange's eliminations, by node: which directions are dependent
-        let mut eliminations = Vec::new();
-        let mut dependent_at: Vec<[Option<usize>; 3]> = Vec::new();
-        let mut slot_of = std::collections::HashMap::new();
-        for (k, f) in flanges.iter().enumerate() {
-            match &f.coupling {
-                FlangeCoupling::Rigid => {
-                    for &s in &f.slaves {
-                        node[s] = NodeDofs::Slave(k);
-                    }
-                }
-                FlangeCoupling::Distributing { weights } => {
-                    let points: Vec<[f64; 3]> = f.slaves.iter().map(|&s| nodes[s]).collect();
-                    let refused = |why| {
-                        BuildError::Numerical(format!(
-                            "the distributing coupling of flange \"{}\" is singular ({why:?})",
-                            f.name
-                        ))
-                    };
-                    let c = distributing::constraint(&points, weights, f.reference).map_err(refused)?;
-                    let e = distributing::eliminate(&c).map_err(refused)?;
-                    for (j, &(i, dir)) in e.dependent.iter().enumerate() {
-                        let n = f.slaves[i];
-                        let slot = *slot_of.entry(n).or_insert_with(|| {
-                            dependent_at.push([None; 3]);
-                            dependent_at.len() - 1
-                        });
-                        dependent_at[slot][dir] = Some(6 * eliminations.len() + j);
-                    }
-                    eliminations.push((k, e));
-                }
-            }
-        }
-        let mut next = 0;
-        for (n, nd) in node.iter_mut().enumerate() {
-            match slot_of.get(&n) {
-                Some(&slot) => {
-                    *nd = NodeDofs::Partial(std::array::from_fn(|dir| match dependent_at[slot][dir] {
-                        Some(j) => DofOf::Dependent(j),
-                        None => {
-                            next += 1;
-                            DofOf::Own(next - 1)
-                        }
-                    }))
-                }
-                None => {
-                    if let NodeDofs::Free(d) = nd {
-                        *d = next;
-                        next += 3;
-                    }
-                }
-            }
-        }
-        let n_interior = next;
+        let Couplings { eliminations, dependent_at, slot_of } = couplings(nodes, flanges, &mut node)?;
+        let n_interior = number_node_dofs(&mut node, &slot_of, &dependent_at);
+        let mut next = n_interior;
         let mut flange_first = vec![0; flanges.len()];
         for (k, f) in flanges.iter().enumerate() {
             if f.role == Role::Force {
@@ -126,11 +75,18 @@ impl DofMap {
         }
         let mut this = Self { node, flange_first, n_interior, n_dofs: next, mount, dependent: Vec::new() };
         // the dependent DoFs' images, now that every own DoF has its number
+        this.push_dependent(flanges, eliminations);
+        Ok(this)
+    }
+
+    /// The dependent DoFs of the distributing flanges' `eliminations`, each with its image in
+    /// the own DoFs and the flange masters.
+    fn push_dependent(&mut self, flanges: &[Flange], eliminations: Vec<(usize, distributing::Elimination)>) {
         for (k, e) in eliminations {
             let f = &flanges[k];
             for (j, &(i, dir)) in e.dependent.iter().enumerate() {
-                let master = (0..6).map(|m| (this.flange_first[k] + m, e.master[j][m]));
-                let others = e.others[j].iter().map(|&(o, d, c)| match this.node[f.slaves[o]] {
+                let master = (0..6).map(|m| (self.flange_first[k] + m, e.master[j][m]));
+                let others = e.others[j].iter().map(|&(o, d, c)| match self.node[f.slaves[o]] {
                     NodeDofs::Free(first) => (first + d, c),
                     NodeDofs::Partial(dofs) => match dofs[d] {
                         DofOf::Own(g) => (g, c),
@@ -140,10 +96,9 @@ impl DofMap {
                 });
                 let mut image: Vec<(usize, f64)> = master.chain(others).filter(|t| t.1 != 0.0).collect();
                 image.sort_unstable_by_key(|t| t.0);
-                this.dependent.push(DependentDof { node: f.slaves[i], direction: dir, image });
+                self.dependent.push(DependentDof { node: f.slaves[i], direction: dir, image });
             }
         }
-        Ok(this)
     }
 
     /// What DoF `d` of the constrained model is, for messages: a node's direction (the node
@@ -172,6 +127,82 @@ impl DofMap {
     pub fn n_clamped(&self) -> usize {
         self.n_dofs - if self.mount.is_some() { 6 } else { 0 }
     }
+}
+
+/// The flanges' couplings by node: rigid flanges' slaves marked in `node`, and the distributing
+/// flanges' eliminations (flange, elimination) with, per node having dependent directions (its
+/// slot), the dependent DoF of each direction.
+struct Couplings {
+    eliminations: Vec<(usize, distributing::Elimination)>,
+    dependent_at: Vec<[Option<usize>; 3]>,
+    slot_of: std::collections::HashMap<usize, usize>,
+}
+
+/// The flanges' couplings; an error where a distributing one is singular.
+fn couplings(nodes: &[[f64; 3]], flanges: &[Flange], node: &mut [NodeDofs]) -> Result<Couplings> {
+    let mut eliminations = Vec::new();
+    let mut dependent_at: Vec<[Option<usize>; 3]> = Vec::new();
+    let mut slot_of = std::collections::HashMap::new();
+    for (k, f) in flanges.iter().enumerate() {
+        match &f.coupling {
+            FlangeCoupling::Rigid => {
+                for &s in &f.slaves {
+                    node[s] = NodeDofs::Slave(k);
+                }
+            }
+            FlangeCoupling::Distributing { weights } => {
+                let points: Vec<[f64; 3]> = f.slaves.iter().map(|&s| nodes[s]).collect();
+                let refused = |why| {
+                    BuildError::Numerical(format!(
+                        "the distributing coupling of flange \"{}\" is singular ({why:?})",
+                        f.name
+                    ))
+                };
+                let c = distributing::constraint(&points, weights, f.reference).map_err(refused)?;
+                let e = distributing::eliminate(&c).map_err(refused)?;
+                for (j, &(i, dir)) in e.dependent.iter().enumerate() {
+                    let n = f.slaves[i];
+                    let slot = *slot_of.entry(n).or_insert_with(|| {
+                        dependent_at.push([None; 3]);
+                        dependent_at.len() - 1
+                    });
+                    dependent_at[slot][dir] = Some(6 * eliminations.len() + j);
+                }
+                eliminations.push((k, e));
+            }
+        }
+    }
+    Ok(Couplings { eliminations, dependent_at, slot_of })
+}
+
+/// Numbers the nodes' own DoFs in node order, three per free node and one per own direction of
+/// a node with dependent ones; returns how many there are.
+fn number_node_dofs(
+    node: &mut [NodeDofs],
+    slot_of: &std::collections::HashMap<usize, usize>,
+    dependent_at: &[[Option<usize>; 3]],
+) -> usize {
+    let mut next = 0;
+    for (n, nd) in node.iter_mut().enumerate() {
+        match slot_of.get(&n) {
+            Some(&slot) => {
+                *nd = NodeDofs::Partial(std::array::from_fn(|dir| match dependent_at[slot][dir] {
+                    Some(j) => DofOf::Dependent(j),
+                    None => {
+                        next += 1;
+                        DofOf::Own(next - 1)
+                    }
+                }))
+            }
+            None => {
+                if let NodeDofs::Free(d) = nd {
+                    *d = next;
+                    next += 3;
+                }
+            }
+        }
+    }
+    next
 }
 
 pub struct Assembled {

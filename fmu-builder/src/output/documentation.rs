@@ -13,6 +13,47 @@ use std::fmt::Write;
 
 pub fn index_html(r: &Report, table: &VariableTable, input: &str) -> String {
     let mut h = String::new();
+    rigid_body_html(&mut h, r);
+    flanges_html(&mut h, r);
+    h.push_str(&pictures_html(&r.pictures));
+    h.push_str(&scene_html(r));
+    h.push_str(&stress_points_html(&r.stress_points));
+    reduction_html(&mut h, r);
+    let a = &r.accuracy;
+    let tolerance = frequency_tolerance(input);
+    let (marked, across) = if a.pairs.is_empty() {
+        (mode_table(&mut h, a, tolerance), Vec::new())
+    } else {
+        paired_table(&mut h, a, tolerance)
+    };
+    h.push_str("</table>\n");
+    h.push_str(&eigenfrequency_legend(a.pairs.is_empty(), tolerance, input, marked, &across));
+    if let Some(plot) = frequency_error_plot(a) {
+        let _ = write!(h, "<div class=\"plot\">\n{plot}</div>\n");
+    }
+    let _ = write!(
+        h,
+        "<h3>Static compliance of the force flanges</h3>\n<p>Largest deviation of the reduced from the full-model \
+compliance (relative to its largest entry): {:.2e}. Constraint modes make it exact up to round-off.</p>\n",
+        a.compliance_max_relative_error
+    );
+    h.push_str(&crate::output::verdict::html(&r.verdict));
+    if let Some(fr) = &a.frequency_response {
+        h.push_str(&accuracy_over_band_html(fr, &a.compliance_flanges));
+    }
+    h.push_str(&variables_html(table));
+    let _ = write!(
+        h,
+        "<h2>Input</h2>\n<p>The input as the builder read it (defaults filled in, unset fields left out), also <code>input.json</code> beside this \
+file:</p>\n<pre>{}</pre>\n",
+        esc(input)
+    );
+    h.push_str("<p>The machine-readable report, with the full compliance matrices, is <code>report.json</code> beside this file.</p>\n</body></html>\n");
+    h
+}
+
+/// The page's head, its title and the rigid body's properties.
+fn rigid_body_html(h: &mut String, r: &Report) {
     let _ = write!(
         h,
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{name}</title>\
@@ -44,6 +85,10 @@ the undeformed part as meshed. World frame: the host's; the mount's inputs place
         scientific(&r.inertia_about_origin).chunks(3).map(|row| row.join(", ")).collect::<Vec<_>>().join("<br>"),
         esc(&r.damping)
     );
+}
+
+/// The flanges' table.
+fn flanges_html(h: &mut String, r: &Report) {
     h.push_str("<h2>Flanges</h2>\n<table><tr><th>name</th><th>role</th><th>reference point [m]</th><th>slave nodes</th><th>coupling</th></tr>\n");
     for f in &r.flanges {
         let p = f.reference_point;
@@ -60,9 +105,10 @@ the undeformed part as meshed. World frame: the host's; the mount's inputs place
         );
     }
     h.push_str("</table>\n");
-    h.push_str(&pictures_html(&r.pictures));
-    h.push_str(&scene_html(r));
-    h.push_str(&stress_points_html(&r.stress_points));
+}
+
+/// The reduction's method and order, and what the model exchange does.
+fn reduction_html(h: &mut String, r: &Report) {
     let _ = write!(
         h,
         "<h2>Reduction</h2>\n<p>{} with {} fixed-interface normal modes and {} constraint modes: reduced order {}.</p>\n",
@@ -74,88 +120,72 @@ the undeformed part as meshed. World frame: the host's; the mount's inputs place
     for sentence in crate::output::model_exchange::sentences(r) {
         let _ = writeln!(h, "<p>{}</p>", esc(&sentence));
     }
-    let a = &r.accuracy;
-    let tolerance = frequency_tolerance(input);
+}
+
+/// The eigenfrequency table row by row (no pairs of reduced and full modes): the rows marked
+/// outside the tolerance.
+fn mode_table(h: &mut String, a: &Accuracy, tolerance: f64) -> usize {
+    let mut marked = 0usize;
+    h.push_str("<h3>Eigenfrequencies of the mounted body</h3>\n<table><tr><th>mode</th><th>reduced [Hz]</th><th>full FE [Hz]</th><th>relative error</th></tr>\n");
+    for i in 0..a.reduced_hz.len() {
+        let full = a.full_hz.get(i).map(|f| format!("{f:.6}")).unwrap_or_default();
+        let e = a.relative_error.get(i).copied();
+        let out = e.is_some_and(|e| !(e.abs() <= tolerance));
+        marked += usize::from(out);
+        let err = e.map(|e| format!("{e:.2e}")).unwrap_or_default();
+        let _ = writeln!(
+            h,
+            "<tr{}><td>{}</td><td>{:.6}</td><td>{full}</td><td>{err}{}</td></tr>",
+            row_class(out),
+            i + 1,
+            a.reduced_hz[i],
+            mark(out)
+        );
+    }
+    marked
+}
+
+/// The eigenfrequency table of paired modes: the rows marked outside the valid range, and the
+/// pairs across indices (reduced, full).
+fn paired_table(h: &mut String, a: &Accuracy, tolerance: f64) -> (usize, Vec<(usize, usize)>) {
     let mut marked = 0usize;
     let mut across = Vec::new();
-    if a.pairs.is_empty() {
-        h.push_str("<h3>Eigenfrequencies of the mounted body</h3>\n<table><tr><th>mode</th><th>reduced [Hz]</th><th>full FE [Hz]</th><th>relative error</th></tr>\n");
-        for i in 0..a.reduced_hz.len() {
-            let full = a.full_hz.get(i).map(|f| format!("{f:.6}")).unwrap_or_default();
-            let e = a.relative_error.get(i).copied();
-            let out = e.is_some_and(|e| !(e.abs() <= tolerance));
-            marked += usize::from(out);
-            let err = e.map(|e| format!("{e:.2e}")).unwrap_or_default();
-            let _ = writeln!(
-                h,
-                "<tr{}><td>{}</td><td>{:.6}</td><td>{full}</td><td>{err}{}</td></tr>",
-                row_class(out),
-                i + 1,
-                a.reduced_hz[i],
-                mark(out)
-            );
-        }
-    } else {
-        h.push_str(
-            "<h3>Eigenfrequencies: reduced modes and the full modes of the same shape</h3>\n<p>Each reduced mode is paired \
+    h.push_str(
+        "<h3>Eigenfrequencies: reduced modes and the full modes of the same shape</h3>\n<p>Each reduced mode is paired \
 with the computed full-model mode whose shape it resembles most (modal assurance criterion, MAC, in the mass inner \
 product); a reduced mode that resembles none (MAC below 0.9) lies beyond what the model represents: a constraint or \
 residual-flexibility mode, there to make statics exact, not a vibration mode of the part.</p>\n\
 <table><tr><th>reduced mode</th><th>reduced [Hz]</th><th>full mode</th><th>full FE [Hz]</th><th>MAC</th>\
 <th>relative error</th></tr>\n",
+    );
+    for p in &a.pairs {
+        let out = outside_valid_range(p, tolerance);
+        marked += usize::from(out);
+        let (full, full_hz, err) = match (p.full, p.full_hz, p.relative_error) {
+            (Some(j), Some(f), Some(e)) => {
+                // a pair across indices is the one place a negative error is no sign of a
+                // broken projection: it gets its note below the table
+                let note = if j == p.reduced {
+                    String::new()
+                } else {
+                    across.push((p.reduced, j));
+                    format!(" <sup>{ACROSS_MARK}</sup>")
+                };
+                (format!("{j}{note}"), format!("{f:.6}"), format!("{e:.2e}"))
+            }
+            _ => ("-".to_string(), "-".to_string(), "outside the valid range".to_string()),
+        };
+        let _ = writeln!(
+            h,
+            "<tr{}><td>{}</td><td>{:.6}</td><td>{full}</td><td>{full_hz}</td><td>{:.4}</td><td>{err}{}</td></tr>",
+            row_class(out),
+            p.reduced,
+            p.reduced_hz,
+            p.mac,
+            mark(out)
         );
-        for p in &a.pairs {
-            let out = outside_valid_range(p, tolerance);
-            marked += usize::from(out);
-            let (full, full_hz, err) = match (p.full, p.full_hz, p.relative_error) {
-                (Some(j), Some(f), Some(e)) => {
-                    // a pair across indices is the one place a negative error is no sign of a
-                    // broken projection: it gets its note below the table
-                    let note = if j == p.reduced {
-                        String::new()
-                    } else {
-                        across.push((p.reduced, j));
-                        format!(" <sup>{ACROSS_MARK}</sup>")
-                    };
-                    (format!("{j}{note}"), format!("{f:.6}"), format!("{e:.2e}"))
-                }
-                _ => ("-".to_string(), "-".to_string(), "outside the valid range".to_string()),
-            };
-            let _ = writeln!(
-                h,
-                "<tr{}><td>{}</td><td>{:.6}</td><td>{full}</td><td>{full_hz}</td><td>{:.4}</td><td>{err}{}</td></tr>",
-                row_class(out),
-                p.reduced,
-                p.reduced_hz,
-                p.mac,
-                mark(out)
-            );
-        }
     }
-    h.push_str("</table>\n");
-    h.push_str(&eigenfrequency_legend(a.pairs.is_empty(), tolerance, input, marked, &across));
-    if let Some(plot) = frequency_error_plot(a) {
-        let _ = write!(h, "<div class=\"plot\">\n{plot}</div>\n");
-    }
-    let _ = write!(
-        h,
-        "<h3>Static compliance of the force flanges</h3>\n<p>Largest deviation of the reduced from the full-model \
-compliance (relative to its largest entry): {:.2e}. Constraint modes make it exact up to round-off.</p>\n",
-        a.compliance_max_relative_error
-    );
-    h.push_str(&crate::output::verdict::html(&r.verdict));
-    if let Some(fr) = &a.frequency_response {
-        h.push_str(&accuracy_over_band_html(fr, &a.compliance_flanges));
-    }
-    h.push_str(&variables_html(table));
-    let _ = write!(
-        h,
-        "<h2>Input</h2>\n<p>The input as the builder read it (defaults filled in, unset fields left out), also <code>input.json</code> beside this \
-file:</p>\n<pre>{}</pre>\n",
-        esc(input)
-    );
-    h.push_str("<p>The machine-readable report, with the full compliance matrices, is <code>report.json</code> beside this file.</p>\n</body></html>\n");
-    h
+    (marked, across)
 }
 
 /// Largest relative eigenfrequency error of a mode still counted as represented where the scene

@@ -260,15 +260,9 @@ fn truncate(s: &str, n: usize) -> String {
 /// `annotations` as circled points with their text. Log axes draw zeros and negatives at the
 /// floor; NaN/inf points break the line. Every coordinate written is finite.
 pub fn line_plot(spec: &PlotSpec, series: &[Series], annotations: &[Annotation]) -> String {
-    const ROW: f64 = 15.0;
     let legend: Vec<&Series> = series.iter().filter(|s| s.label.is_some()).collect();
-    let width = if spec.width.is_finite() { spec.width.clamp(200.0, 4000.0) } else { 700.0 };
-    let (left, top) = (72.0, 34.0);
-    let right = width - if legend.is_empty() { 24.0 } else { 170.0 };
-    let min_height = if spec.height.is_finite() { spec.height.clamp(150.0, 4000.0) } else { 350.0 };
-    let height = min_height.max(top + 10.0 + ROW * legend.len() as f64 + 20.0);
-    let bottom = height - 48.0;
-
+    let frame = Frame::new(spec, legend.len());
+    let Frame { left, top, right, bottom, .. } = frame;
     let xs: Vec<f64> = series
         .iter()
         .flat_map(|s| s.x.iter().take(s.y.len()).copied())
@@ -285,6 +279,51 @@ pub fn line_plot(spec: &PlotSpec, series: &[Series], annotations: &[Annotation])
     let sy = Scale { lo: ylo, hi: yhi, log: spec.log_y, p0: bottom, p1: top };
 
     let mut s = String::new();
+    write_title(&mut s, spec, &frame);
+    // grid and ticks
+    write_x_ticks(&mut s, &sx, &frame);
+    write_y_ticks(&mut s, &sy, &frame);
+    write_box(&mut s, spec, &frame);
+    // curves
+    for se in series {
+        write_curve(&mut s, se, &sx, &sy);
+    }
+    write_annotations(&mut s, annotations, &sx, &sy, &frame);
+    write_legend(&mut s, &legend, &frame);
+    s.push_str("</svg>\n");
+    s
+}
+
+/// Legend rows' height.
+const ROW: f64 = 15.0;
+
+/// The picture's size and the plot area's edges in it.
+#[derive(Clone, Copy)]
+struct Frame {
+    width: f64,
+    height: f64,
+    left: f64,
+    top: f64,
+    right: f64,
+    bottom: f64,
+}
+
+impl Frame {
+    /// Room for the axes' labels, and for a legend of `legend` rows at the right.
+    fn new(spec: &PlotSpec, legend: usize) -> Self {
+        let width = if spec.width.is_finite() { spec.width.clamp(200.0, 4000.0) } else { 700.0 };
+        let (left, top) = (72.0, 34.0);
+        let right = width - if legend == 0 { 24.0 } else { 170.0 };
+        let min_height = if spec.height.is_finite() { spec.height.clamp(150.0, 4000.0) } else { 350.0 };
+        let height = min_height.max(top + 10.0 + ROW * legend as f64 + 20.0);
+        let bottom = height - 48.0;
+        Self { width, height, left, top, right, bottom }
+    }
+}
+
+/// The SVG element, its title and its white background.
+fn write_title(s: &mut String, spec: &PlotSpec, frame: &Frame) {
+    let Frame { width, height, left, right, .. } = *frame;
     let _ = write!(
         s,
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{width:.0}\" height=\"{height:.0}\" viewBox=\"0 0 {width:.0} {height:.0}\" \
@@ -294,8 +333,12 @@ font-family=\"sans-serif\" font-size=\"11\" role=\"img\" aria-label=\"{t}\">\n<t
         t = esc(&spec.title),
         tx = (left + right) / 2.0,
     );
-    // grid and ticks
-    for (t, label) in axis_ticks(xlo, xhi, spec.log_x) {
+}
+
+/// The x axis's ticks and labels, grid lines at the labelled ones.
+fn write_x_ticks(s: &mut String, sx: &Scale, frame: &Frame) {
+    let Frame { top, bottom, .. } = *frame;
+    for (t, label) in axis_ticks(sx.lo, sx.hi, sx.log) {
         let x = sx.at(t);
         let len = if label.is_some() { 5.0 } else { 3.0 };
         if label.is_some() {
@@ -313,7 +356,12 @@ font-family=\"sans-serif\" font-size=\"11\" role=\"img\" aria-label=\"{t}\">\n<t
             let _ = writeln!(s, "<text x=\"{x:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{l}</text>", bottom + 18.0);
         }
     }
-    for (t, label) in axis_ticks(ylo, yhi, spec.log_y) {
+}
+
+/// The y axis's ticks and labels, grid lines at the labelled ones.
+fn write_y_ticks(s: &mut String, sy: &Scale, frame: &Frame) {
+    let Frame { left, right, .. } = *frame;
+    for (t, label) in axis_ticks(sy.lo, sy.hi, sy.log) {
         let y = sy.at(t);
         let len = if label.is_some() { 5.0 } else { 3.0 };
         if label.is_some() {
@@ -331,6 +379,11 @@ font-family=\"sans-serif\" font-size=\"11\" role=\"img\" aria-label=\"{t}\">\n<t
             let _ = writeln!(s, "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">{l}</text>", left - 8.0, y + 4.0);
         }
     }
+}
+
+/// The plot area's border and the axes' labels.
+fn write_box(s: &mut String, spec: &PlotSpec, frame: &Frame) {
+    let Frame { height, left, top, right, bottom, .. } = *frame;
     let _ = write!(
         s,
         "<rect x=\"{left:.1}\" y=\"{top:.1}\" width=\"{:.1}\" height=\"{:.1}\" fill=\"none\" stroke=\"#444\"/>\n\
@@ -344,31 +397,36 @@ font-family=\"sans-serif\" font-size=\"11\" role=\"img\" aria-label=\"{t}\">\n<t
         esc(&spec.y_label),
         yc = (top + bottom) / 2.0,
     );
-    // curves
-    for se in series {
-        let pts: Vec<Option<(f64, f64)>> =
-            se.x.iter().zip(&se.y).map(|(&x, &y)| Some((sx.px(x)?, sy.px(y)?))).collect();
-        let segments: Vec<&[Option<(f64, f64)>]> = pts.split(|p| p.is_none()).filter(|g| !g.is_empty()).collect();
-        let mut dots = Vec::new();
-        let mut d = String::new();
-        for g in segments {
-            let g: Vec<(f64, f64)> = g.iter().flatten().copied().collect();
-            if se.stroke == Stroke::Markers || g.len() == 1 {
-                dots.extend(g);
-                continue;
-            }
-            for (i, (x, y)) in g.iter().enumerate() {
-                let _ = write!(d, "{}{x:.1} {y:.1}", if i == 0 { if d.is_empty() { "M" } else { " M" } } else { " L" });
-            }
+}
+
+/// One series: a path through its finite points (broken where one is not), dots for markers and
+/// for points standing alone.
+fn write_curve(s: &mut String, se: &Series, sx: &Scale, sy: &Scale) {
+    let pts: Vec<Option<(f64, f64)>> = se.x.iter().zip(&se.y).map(|(&x, &y)| Some((sx.px(x)?, sy.px(y)?))).collect();
+    let segments: Vec<&[Option<(f64, f64)>]> = pts.split(|p| p.is_none()).filter(|g| !g.is_empty()).collect();
+    let mut dots = Vec::new();
+    let mut d = String::new();
+    for g in segments {
+        let g: Vec<(f64, f64)> = g.iter().flatten().copied().collect();
+        if se.stroke == Stroke::Markers || g.len() == 1 {
+            dots.extend(g);
+            continue;
         }
-        if !d.is_empty() {
-            let _ = writeln!(s, "<path d=\"{d}\" {}/>", stroke_attrs(&se.color, se.stroke));
-        }
-        for (x, y) in dots {
-            let _ = writeln!(s, "<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"2.5\" fill=\"{}\"/>", esc(&se.color));
+        for (i, (x, y)) in g.iter().enumerate() {
+            let _ = write!(d, "{}{x:.1} {y:.1}", if i == 0 { if d.is_empty() { "M" } else { " M" } } else { " L" });
         }
     }
-    // annotations
+    if !d.is_empty() {
+        let _ = writeln!(s, "<path d=\"{d}\" {}/>", stroke_attrs(&se.color, se.stroke));
+    }
+    for (x, y) in dots {
+        let _ = writeln!(s, "<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"2.5\" fill=\"{}\"/>", esc(&se.color));
+    }
+}
+
+/// Circled points with their text, on the side of the point towards the plot's middle.
+fn write_annotations(s: &mut String, annotations: &[Annotation], sx: &Scale, sy: &Scale, frame: &Frame) {
+    let Frame { left, top, right, .. } = *frame;
     for a in annotations {
         let (Some(x), Some(y)) = (sx.px(a.x), sy.px(a.y)) else { continue };
         let _ = writeln!(
@@ -383,7 +441,11 @@ font-family=\"sans-serif\" font-size=\"11\" role=\"img\" aria-label=\"{t}\">\n<t
             esc(&a.text)
         );
     }
-    // legend
+}
+
+/// The labelled series' strokes and labels at the right.
+fn write_legend(s: &mut String, legend: &[&Series], frame: &Frame) {
+    let Frame { top, right, .. } = *frame;
     for (i, se) in legend.iter().enumerate() {
         let y = top + 10.0 + ROW * i as f64;
         let x = right + 12.0;
@@ -400,8 +462,6 @@ font-family=\"sans-serif\" font-size=\"11\" role=\"img\" aria-label=\"{t}\">\n<t
         let label = se.label.as_deref().unwrap_or_default();
         let _ = writeln!(s, "<text x=\"{:.1}\" y=\"{:.1}\">{}</text>", x + 28.0, y + 4.0, esc(&truncate(label, 20)));
     }
-    s.push_str("</svg>\n");
-    s
 }
 
 #[cfg(test)]

@@ -12,6 +12,29 @@ fn point(p: [f64; 3]) -> String {
 
 pub fn text(r: &Report) -> String {
     let mut s = String::new();
+    body(&mut s, r);
+    scene(&mut s, r);
+    accuracy(&mut s, r);
+    if !r.stress_points.is_empty() {
+        let hot = r.stress_points.iter().filter(|p| p.description.contains("hot spot")).count();
+        let _ = writeln!(
+            s,
+            "  stress outputs at {} points ({hot} hot spots): <point>.sxx .. .szx, .mises [Pa], listed in the documentation",
+            r.stress_points.len()
+        );
+        for p in r.stress_points.iter().filter(|p| p.description.contains("hot spot")) {
+            let _ = writeln!(s, "    {}: {}", p.name, p.description);
+        }
+    }
+    if let (Some(band), Some(frf)) = (verdict::band_sentence(&r.verdict), &r.accuracy.frequency_response) {
+        let _ = writeln!(s, "  {band}; {} frequencies", frf.frequencies_hz.len());
+    }
+    let _ = writeln!(s, "  verdict: {}", verdict::sentence(&r.verdict));
+    s
+}
+
+/// The model, its mass, flanges, reduction and back-end.
+fn body(s: &mut String, r: &Report) {
     let _ = writeln!(
         s,
         "{}: {} mesh, {} nodes, {} elements, {} DoFs after flange coupling",
@@ -53,6 +76,10 @@ pub fn text(r: &Report) -> String {
             peaks.join(" / ")
         );
     }
+}
+
+/// What the scene includes and what the FMU refuses.
+fn scene(s: &mut String, r: &Report) {
     let yes = |b: bool| if b { "yes" } else { "no" };
     let sc = &r.scene;
     let _ = writeln!(
@@ -69,6 +96,10 @@ pub fn text(r: &Report) -> String {
     for sentence in crate::output::model_exchange::sentences(r) {
         let _ = writeln!(s, "  {sentence}");
     }
+}
+
+/// The lowest frequencies and how far up the spectrum, and in statics, the reduction is exact.
+fn accuracy(s: &mut String, r: &Report) {
     let a = &r.accuracy;
     let shown = a.reduced_hz.len().min(8);
     let freqs: Vec<String> = a.reduced_hz[..shown].iter().map(|f| format!("{f:.4}")).collect();
@@ -104,20 +135,4 @@ pub fn text(r: &Report) -> String {
         );
     }
     let _ = writeln!(s, "  vs full FE: static flange compliance within {:.1e}", a.compliance_max_relative_error);
-    if !r.stress_points.is_empty() {
-        let hot = r.stress_points.iter().filter(|p| p.description.contains("hot spot")).count();
-        let _ = writeln!(
-            s,
-            "  stress outputs at {} points ({hot} hot spots): <point>.sxx .. .szx, .mises [Pa], listed in the documentation",
-            r.stress_points.len()
-        );
-        for p in r.stress_points.iter().filter(|p| p.description.contains("hot spot")) {
-            let _ = writeln!(s, "    {}: {}", p.name, p.description);
-        }
-    }
-    if let (Some(band), Some(frf)) = (verdict::band_sentence(&r.verdict), &a.frequency_response) {
-        let _ = writeln!(s, "  {band}; {} frequencies", frf.frequencies_hz.len());
-    }
-    let _ = writeln!(s, "  verdict: {}", verdict::sentence(&r.verdict));
-    s
 }

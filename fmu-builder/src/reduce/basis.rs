@@ -107,13 +107,27 @@ pub fn craig_bampton(
 /// taking K W with compensated sums keeps every Ritz value at round-off of itself.
 pub fn orthonormalise(model: &Assembled, v: Mat<f64>) -> Result<(Mat<f64>, Vec<f64>)> {
     // products with the clamped K and M through the whole matrices: no copy of either
-    let m_times = |x: MatRef<'_, f64>| mul_leading(&model.mass, x, false);
     // unit M-norm columns first: static shapes of stiff directions are 1e-9 of the modes, and the
     // dependency test below must judge directions, not their units. One product with M for the
     // whole block: M W scales with W.
     let mut w = v;
-    let mut mw = m_times(w.as_ref());
-    let norms0: Vec<f64> = column_dots(&w, &mw).into_iter().map(|d| d.max(0.0).sqrt()).collect();
+    let mut mw = mul_leading(&model.mass, w.as_ref(), false);
+    let norms0 = scale_to_unit_m_norm(&mut w, &mut mw);
+    let kept = gram_schmidt(model, &mut w, &mut mw, &norms0);
+    if kept == 0 {
+        return Err(BuildError::Numerical(
+            "the reduction basis is empty: every candidate shape (modes, static flange and load shapes) depends on the \
+             others or has no mass; request modes (reduction.modes or max_frequency) or a force flange, and check material.rho"
+                .into(),
+        ));
+    }
+    drop(mw);
+    rayleigh_ritz(model, w, kept)
+}
+
+/// Every column of W with a positive M-norm scaled to M-norm one, M W alongside; the norms they had.
+fn scale_to_unit_m_norm(w: &mut Mat<f64>, mw: &mut Mat<f64>) -> Vec<f64> {
+    let norms0: Vec<f64> = column_dots(w, mw).into_iter().map(|d| d.max(0.0).sqrt()).collect();
     for (j, norm) in norms0.iter().enumerate() {
         if *norm > 0.0 {
             let s = 1.0 / norm;
@@ -121,22 +135,28 @@ pub fn orthonormalise(model: &Assembled, v: Mat<f64>) -> Result<(Mat<f64>, Vec<f
             mw.col_mut(j).iter_mut().for_each(|x| *x *= s);
         }
     }
-    // Gram-Schmidt in the columns' order, each column twice against those kept. Callers put the
-    // static shapes first: their K-products are then formed as they are (exact compliance),
-    // and the modes after them change only by a small, soft correction. The other order makes
-    // the static shapes' remainder carry W^T K W = psi^T K psi + m^T Lambda m with m the modes'
-    // mass coupling, from which the Cholesky takes m^T Lambda m away again: a cancellation of
-    // 1e6 on a slender part, which cost the 200-mode L-beam's compliance its tenth digit
-    // (1.6e-9). A symmetric orthonormalisation would mix every column into every other.
-    //
-    // The columns go in panels: each panel against the columns kept before it by matrix
-    // products (one read of the kept basis per pass for the whole panel; column by column,
-    // those reads cost 0.6 s at 249k DoFs), then column by column within the panel. Classical
-    // Gram-Schmidt twice either way, so the same basis to round-off.
-    // the kept columns are compacted into w and M w themselves (column `kept` <= the one being
-    // processed, whose panel is copied out first): no second n x r pair at the build's peak
+    norms0
+}
+
+/// Gram-Schmidt in the columns' order, each column twice against those kept. Callers put the
+/// static shapes first: their K-products are then formed as they are (exact compliance),
+/// and the modes after them change only by a small, soft correction. The other order makes
+/// the static shapes' remainder carry W^T K W = psi^T K psi + m^T Lambda m with m the modes'
+/// mass coupling, from which the Cholesky takes m^T Lambda m away again: a cancellation of
+/// 1e6 on a slender part, which cost the 200-mode L-beam's compliance its tenth digit
+/// (1.6e-9). A symmetric orthonormalisation would mix every column into every other.
+///
+/// The columns go in panels: each panel against the columns kept before it by matrix
+/// products (one read of the kept basis per pass for the whole panel; column by column,
+/// those reads cost 0.6 s at 249k DoFs), then column by column within the panel. Classical
+/// Gram-Schmidt twice either way, so the same basis to round-off.
+/// The kept columns are compacted into w and M w themselves (column `kept` <= the one being
+/// processed, whose panel is copied out first): no second n x r pair at the build's peak
+///
+/// Returns the number of columns kept, compacted to the front of `basis` and `m_basis`.
+fn gram_schmidt(model: &Assembled, basis: &mut Mat<f64>, m_basis: &mut Mat<f64>, norms0: &[f64]) -> usize {
+    let m_times = |x: MatRef<'_, f64>| mul_leading(&model.mass, x, false);
     let mut kept = 0;
-    let (basis, m_basis) = (&mut w, &mut mw);
     for start in (0..basis.ncols()).step_by(PANEL) {
         let width = PANEL.min(basis.ncols() - start);
         let mut panel = basis.subcols(start, width).to_owned();
@@ -175,15 +195,11 @@ pub fn orthonormalise(model: &Assembled, v: Mat<f64>) -> Result<(Mat<f64>, Vec<f
             kept += 1;
         }
     }
-    if kept == 0 {
-        return Err(BuildError::Numerical(
-            "the reduction basis is empty: every candidate shape (modes, static flange and load shapes) depends on the \
-             others or has no mass; request modes (reduction.modes or max_frequency) or a force flange, and check material.rho"
-                .into(),
-        ));
-    }
-    drop(mw);
-    let mut w = w;
+    kept
+}
+
+/// The eigenpairs of the reduced stiffness W^T K W on the first `kept` columns of W: Phi = W Y and omega.
+fn rayleigh_ritz(model: &Assembled, mut w: Mat<f64>, kept: usize) -> Result<(Mat<f64>, Vec<f64>)> {
     let rows = w.nrows();
     w.truncate(rows, kept);
     let kw = mul_leading(&model.stiffness, w.as_ref(), true);

@@ -305,60 +305,21 @@ pub fn compare(
         (Some(f), Some(probe)) => Some((probe.full)(f.columns().as_ref())?),
         _ => None,
     };
-    let method = match &fast {
-        Some(f) => format!(
-            "{} full modes below {:.4} Hz exactly, the rest by {} Krylov blocks of the complement",
-            f.modes,
-            cut * band[1],
-            f.blocks
-        ),
-        None => "a complex sparse LU of the full model per frequency".to_string(),
-    };
+    let method = method(fast.as_ref(), cut, band);
     for (i, &f) in frequencies.iter().enumerate() {
         crate::progress::step(|| format!("{} of {} frequencies ({f:.4} Hz)", i + 1, frequencies.len()));
-        let (full, full_stress) = match (&fast, &mut direct) {
-            (Some(fr), _) => {
-                let (y, w) = fr.coefficients(damping, f);
-                let full = fr.rows_of(&rows, &y, &w);
-                let s = column_stresses.as_ref().map(|cs| combine_stresses(cs, &y, &w));
-                (full, s)
-            }
-            (None, Some(d)) => {
-                let x = d.response(damping, f)?;
-                let full = Mat::from_fn(rows.len(), rows.len(), |i, j| x[(rows[i], j)]);
-                let s = match stress {
-                    Some(probe) => Some(stresses_of_complex(probe, &x)?),
-                    None => None,
-                };
-                (full, s)
-            }
-            (None, None) => unreachable!("one of the two is built"),
-        };
+        let (full, full_stress) =
+            full_response(fast.as_ref(), direct.as_mut(), column_stresses.as_deref(), stress, &rows, damping, f)?;
         if let (Some(probe), Some(fs)) = (stress, &full_stress) {
             let (error, kept) = stress_responses(probe, fs, &rows, basis, damping, f);
             stress_relative_error.push(error);
             stress_full.push(kept);
         }
         let red = reduced_response(&rows, basis, damping, f);
-        let (mut num, mut den) = (0.0, 0.0);
-        for i in 0..full.nrows() {
-            for j in 0..full.ncols() {
-                let s = scale[i] * scale[j];
-                num += ((full[(i, j)] - red[(i, j)]) * s).norm_sqr();
-                den += (full[(i, j)] * s).norm_sqr();
-            }
-        }
-        relative_error.push(if den > 0.0 { (num / den).sqrt() } else { 0.0 });
+        relative_error.push(scaled_relative_error(&full, &red, &scale));
         driving_point_full.push((0..full.nrows()).map(|i| full[(i, i)].norm()).collect());
         driving_point_reduced.push((0..red.nrows()).map(|i| red[(i, i)].norm()).collect());
-        full_matrices.push(
-            (0..full.nrows() * full.ncols())
-                .map(|e| {
-                    let z = full[(e / full.ncols(), e % full.ncols())];
-                    [z.re, z.im]
-                })
-                .collect(),
-        );
+        full_matrices.push(re_im_entries(&full));
     }
     let max_relative_error = relative_error.iter().copied().fold(0.0, f64::max);
     Ok(FrequencyResponse {
@@ -374,6 +335,77 @@ pub fn compare(
         stress_full,
         method,
     })
+}
+
+/// How the full model's responses were computed, for the report.
+fn method(fast: Option<&crate::reduce::band_response::BandResponse<'_>>, cut: f64, band: [f64; 2]) -> String {
+    match fast {
+        Some(f) => format!(
+            "{} full modes below {:.4} Hz exactly, the rest by {} Krylov blocks of the complement",
+            f.modes,
+            cut * band[1],
+            f.blocks
+        ),
+        None => "a complex sparse LU of the full model per frequency".to_string(),
+    }
+}
+
+/// Complex stresses at the probe's points, point-major (point, load).
+type PointStresses = Vec<[c64; 6]>;
+
+/// The full model's flange responses at `f` Hz and their stresses at the probe's points: from
+/// the band's modes and Krylov blocks (`fast`) where they were computed, else a complex LU.
+fn full_response(
+    fast: Option<&crate::reduce::band_response::BandResponse<'_>>,
+    direct: Option<&mut FullResponse>,
+    column_stresses: Option<&[[f64; 6]]>,
+    stress: Option<&StressProbe<'_>>,
+    rows: &[usize],
+    damping: ComparisonDamping,
+    f: f64,
+) -> Result<(Mat<c64>, Option<PointStresses>)> {
+    Ok(match (fast, direct) {
+        (Some(fr), _) => {
+            let (y, w) = fr.coefficients(damping, f);
+            let full = fr.rows_of(rows, &y, &w);
+            let s = column_stresses.map(|cs| combine_stresses(cs, &y, &w));
+            (full, s)
+        }
+        (None, Some(d)) => {
+            let x = d.response(damping, f)?;
+            let full = Mat::from_fn(rows.len(), rows.len(), |i, j| x[(rows[i], j)]);
+            let s = match stress {
+                Some(probe) => Some(stresses_of_complex(probe, &x)?),
+                None => None,
+            };
+            (full, s)
+        }
+        (None, None) => unreachable!("one of the two is built"),
+    })
+}
+
+/// |full - reduced| / |full| in the Frobenius norm, each entry scaled by the static compliances
+/// of its row and column (so every flange direction weighs alike).
+fn scaled_relative_error(full: &Mat<c64>, red: &Mat<c64>, scale: &[f64]) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for i in 0..full.nrows() {
+        for j in 0..full.ncols() {
+            let s = scale[i] * scale[j];
+            num += ((full[(i, j)] - red[(i, j)]) * s).norm_sqr();
+            den += (full[(i, j)] * s).norm_sqr();
+        }
+    }
+    if den > 0.0 { (num / den).sqrt() } else { 0.0 }
+}
+
+/// The matrix's entries row by row as [re, im].
+fn re_im_entries(full: &Mat<c64>) -> Vec<[f64; 2]> {
+    (0..full.nrows() * full.ncols())
+        .map(|e| {
+            let z = full[(e / full.ncols(), e % full.ncols())];
+            [z.re, z.im]
+        })
+        .collect()
 }
 
 /// Stresses at the probe's points of a complex response x (n x nb): point-major (point, load).

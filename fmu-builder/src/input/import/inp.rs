@@ -222,6 +222,9 @@ enum SetItem {
     Name(String),
 }
 
+/// Sets by name, their members as indices.
+type Sets = BTreeMap<String, BTreeSet<usize>>;
+
 struct SetOp {
     kind: SetKind,
     name: String,
@@ -697,8 +700,28 @@ impl Parser {
     }
 
     fn finish(self) -> Res<ImportedMesh> {
+        let notes = self.skipped_notes()?;
+        let connectivity = self.connectivity()?;
+        let (node_sets, element_sets) = self.sets()?;
+        let sections = self.sections(&element_sets)?;
+        Ok(ImportedMesh {
+            nodes: self.nodes,
+            node_ids: self.node_ids,
+            element_types: self.element_types,
+            connectivity,
+            element_ids: self.elements.iter().map(|e| e.id).collect(),
+            node_sets: node_sets.into_iter().map(|(k, v)| (k, v.into_iter().collect())).collect(),
+            element_sets: element_sets.into_iter().map(|(k, v)| (k, v.into_iter().collect())).collect(),
+            materials: self.materials,
+            sections,
+            notes,
+        })
+    }
+
+    /// A note on the surface and line elements skipped; an error where nothing else is left.
+    fn skipped_notes(&self) -> Res<Vec<String>> {
         let file = self.files[0].display().to_string();
-        let notes = match self.skipped_summary() {
+        Ok(match self.skipped_summary() {
             Some((what, types)) if self.elements.is_empty() => {
                 return Err(ImportError::new(
                     &self.files[0],
@@ -716,7 +739,11 @@ impl Parser {
                  / use physical groups of the volume)"
             )],
             None => Vec::new(),
-        };
+        })
+    }
+
+    /// Every element's nodes as indices into the node list.
+    fn connectivity(&self) -> Res<Vec<Vec<usize>>> {
         let mut connectivity = Vec::with_capacity(self.elements.len());
         for e in &self.elements {
             let conn = e
@@ -731,7 +758,11 @@ impl Parser {
                 .collect::<Res<Vec<usize>>>()?;
             connectivity.push(conn);
         }
+        Ok(connectivity)
+    }
 
+    /// The node and element sets, by name: `*NSET` and `*ELSET` resolved in file order.
+    fn sets(&self) -> Res<(Sets, Sets)> {
         let mut node_sets: BTreeMap<String, BTreeSet<usize>> = BTreeMap::new();
         let mut element_sets: BTreeMap<String, BTreeSet<usize>> = BTreeMap::new();
         for op in &self.set_ops {
@@ -739,51 +770,61 @@ impl Parser {
                 SetKind::Node => (&mut node_sets, &self.node_index),
                 SetKind::Element => (&mut element_sets, &self.element_index),
             };
-            let mut members = BTreeSet::new();
-            let lookup = |id: u64, loc: Loc| {
-                index.get(&id).copied().ok_or_else(|| {
-                    self.err(loc, format!("*{} {}: {} {id} is not defined", op.kind.keyword(), op.name, op.kind.what()))
-                })
-            };
-            // skipped surface and line elements leave the sets that list them
-            let skipped = |id: u64| op.kind == SetKind::Element && self.skipped_ids.contains(&id);
-            for (item, loc) in &op.items {
-                match item {
-                    SetItem::Id(id) if skipped(*id) => {}
-                    SetItem::Id(id) => {
-                        members.insert(lookup(*id, *loc)?);
-                    }
-                    SetItem::Range(a, b, s) => {
-                        let mut id = *a;
-                        while id <= *b {
-                            if !skipped(id) {
-                                members.insert(lookup(id, *loc)?);
-                            }
-                            id = match id.checked_add(*s) {
-                                Some(v) => v,
-                                None => break,
-                            };
-                        }
-                    }
-                    SetItem::Name(n) => match sets.get(n) {
-                        Some(s) => members.extend(s.iter().copied()),
-                        None => {
-                            return Err(self.err(
-                                *loc,
-                                format!(
-                                    "*{} {}: references undefined {} set {n}",
-                                    op.kind.keyword(),
-                                    op.name,
-                                    op.kind.what()
-                                ),
-                            ));
-                        }
-                    },
-                }
-            }
+            let members = self.set_members(op, sets, index)?;
             sets.entry(op.name.clone()).or_default().extend(members);
         }
+        Ok((node_sets, element_sets))
+    }
 
+    /// The members of one `*NSET` or `*ELSET`: ids, generated ranges and the sets named before.
+    fn set_members(&self, op: &SetOp, sets: &Sets, index: &HashMap<u64, usize>) -> Res<BTreeSet<usize>> {
+        let mut members = BTreeSet::new();
+        let lookup = |id: u64, loc: Loc| {
+            index.get(&id).copied().ok_or_else(|| {
+                self.err(loc, format!("*{} {}: {} {id} is not defined", op.kind.keyword(), op.name, op.kind.what()))
+            })
+        };
+        // skipped surface and line elements leave the sets that list them
+        let skipped = |id: u64| op.kind == SetKind::Element && self.skipped_ids.contains(&id);
+        for (item, loc) in &op.items {
+            match item {
+                SetItem::Id(id) if skipped(*id) => {}
+                SetItem::Id(id) => {
+                    members.insert(lookup(*id, *loc)?);
+                }
+                SetItem::Range(a, b, s) => {
+                    let mut id = *a;
+                    while id <= *b {
+                        if !skipped(id) {
+                            members.insert(lookup(id, *loc)?);
+                        }
+                        id = match id.checked_add(*s) {
+                            Some(v) => v,
+                            None => break,
+                        };
+                    }
+                }
+                SetItem::Name(n) => match sets.get(n) {
+                    Some(s) => members.extend(s.iter().copied()),
+                    None => {
+                        return Err(self.err(
+                            *loc,
+                            format!(
+                                "*{} {}: references undefined {} set {n}",
+                                op.kind.keyword(),
+                                op.name,
+                                op.kind.what()
+                            ),
+                        ));
+                    }
+                },
+            }
+        }
+        Ok(members)
+    }
+
+    /// The `*SOLID SECTION`s, their element sets and materials defined.
+    fn sections(&self, element_sets: &Sets) -> Res<Vec<(String, String)>> {
         let mut sections = Vec::with_capacity(self.sections.len());
         for (elset, material, loc) in &self.sections {
             if !element_sets.contains_key(elset) {
@@ -794,19 +835,7 @@ impl Parser {
             }
             sections.push((elset.clone(), material.clone()));
         }
-
-        Ok(ImportedMesh {
-            nodes: self.nodes,
-            node_ids: self.node_ids,
-            element_types: self.element_types,
-            connectivity,
-            element_ids: self.elements.iter().map(|e| e.id).collect(),
-            node_sets: node_sets.into_iter().map(|(k, v)| (k, v.into_iter().collect())).collect(),
-            element_sets: element_sets.into_iter().map(|(k, v)| (k, v.into_iter().collect())).collect(),
-            materials: self.materials,
-            sections,
-            notes,
-        })
+        Ok(sections)
     }
 }
 

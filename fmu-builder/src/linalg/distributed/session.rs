@@ -169,47 +169,16 @@ impl Session {
         let driver = folder.join("driver.py");
         job_folder::write_private(&driver, DRIVER)?;
         crate::profile::phase("job files written", || petsc_binary::write_symmetric(&folder.join("stiffness.bin"), k))?;
-        let address = backend.listen_address();
-        let listener = TcpListener::bind((address, 0)).map_err(|e| {
-            BuildError::Backend(format!(
-                "cannot listen at {address} (reduction.backend.host: the address of this machine the ranks reach \
-                 the builder at): {e}"
-            ))
-        })?;
-        let port = listener.local_addr().map_err(io_error("opening a port"))?.port();
+        let (listener, port) = listen(backend)?;
         let token = job_folder::random_hex(32)?;
-        let job = json!({
-            "host": backend.host,
-            "port": port,
-            "token": token,
-            "stiffness": "stiffness.bin",
-            "partitioner": backend.partitioner,
-        });
-        let job_path = folder.join("job.json");
-        job_folder::write_private(&job_path, &job.to_string())?;
+        let job_path = write_job(backend, folder, port, &token)?;
         let (program, arguments) = backend.command(&driver, &job_path);
         let stderr_path = folder.join("driver.err");
         let stdout = job_folder::private_file(&folder.join("driver.out"))?;
         let stderr = job_folder::private_file(&stderr_path)?;
         let launched = format!("{program} {}", arguments.join(" "));
         crate::profile::note(|| format!("launched: {launched}"));
-        let mut command = Command::new(&program);
-        command.args(&arguments).stdin(Stdio::null()).stdout(stdout).stderr(stderr);
-        // its own process group, so that the builder ends the launcher and every rank it forked
-        // together, and a Ctrl-C reaches the builder only (process_group.rs)
-        std::os::unix::process::CommandExt::process_group(&mut command, 0);
-        // idle ranks wait in the kernel instead of spinning a core each (rank 0 spun at 83 %
-        // while the builder computed)
-        command.env("OMPI_MCA_mpi_yield_when_idle", "1");
-        // SAFETY: geteuid only reads the process's user id
-        if unsafe { libc::geteuid() } == 0 {
-            // OpenMPI refuses root without both (containers and CI machines run as root)
-            for v in ["OMPI_ALLOW_RUN_AS_ROOT", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM"] {
-                if std::env::var_os(v).is_none() {
-                    command.env(v, "1");
-                }
-            }
-        }
+        let mut command = launcher_command(&program, &arguments, stdout, stderr);
         let child = command.spawn().map_err(|e| {
             BuildError::Backend(format!(
                 "could not start `{program}`: {e}; install OpenMPI (mpirun) or name the launcher \
@@ -446,6 +415,56 @@ impl Session {
         let (answer, _) = self.request(json!({"op": "stats"}), &[])?;
         Ok(answer["peak_mib"].as_array().map(|a| a.iter().filter_map(Value::as_f64).collect()).unwrap_or_default())
     }
+}
+
+/// A listener for the driver's connection at the address the ranks reach the builder at, and its port.
+fn listen(backend: &PetscBackend) -> Result<(TcpListener, u16)> {
+    let address = backend.listen_address();
+    let listener = TcpListener::bind((address, 0)).map_err(|e| {
+        BuildError::Backend(format!(
+            "cannot listen at {address} (reduction.backend.host: the address of this machine the ranks reach \
+                 the builder at): {e}"
+        ))
+    })?;
+    let port = listener.local_addr().map_err(io_error("opening a port"))?.port();
+    Ok((listener, port))
+}
+
+/// `job.json`: where the driver connects back to, the token it greets with, the matrix and the
+/// partitioner.
+fn write_job(backend: &PetscBackend, folder: &Path, port: u16, token: &str) -> Result<PathBuf> {
+    let job = json!({
+        "host": backend.host,
+        "port": port,
+        "token": token,
+        "stiffness": "stiffness.bin",
+        "partitioner": backend.partitioner,
+    });
+    let job_path = folder.join("job.json");
+    job_folder::write_private(&job_path, &job.to_string())?;
+    Ok(job_path)
+}
+
+/// The launcher's command line with its output to the job folder's files.
+fn launcher_command(program: &str, arguments: &[String], stdout: std::fs::File, stderr: std::fs::File) -> Command {
+    let mut command = Command::new(program);
+    command.args(arguments).stdin(Stdio::null()).stdout(stdout).stderr(stderr);
+    // its own process group, so that the builder ends the launcher and every rank it forked
+    // together, and a Ctrl-C reaches the builder only (process_group.rs)
+    std::os::unix::process::CommandExt::process_group(&mut command, 0);
+    // idle ranks wait in the kernel instead of spinning a core each (rank 0 spun at 83 %
+    // while the builder computed)
+    command.env("OMPI_MCA_mpi_yield_when_idle", "1");
+    // SAFETY: geteuid only reads the process's user id
+    if unsafe { libc::geteuid() } == 0 {
+        // OpenMPI refuses root without both (containers and CI machines run as root)
+        for v in ["OMPI_ALLOW_RUN_AS_ROOT", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM"] {
+            if std::env::var_os(v).is_none() {
+                command.env(v, "1");
+            }
+        }
+    }
+    command
 }
 
 /// The connection of a peer that greets with `token` and the protocol within GREETING_SECONDS;

@@ -182,18 +182,12 @@ fn rigid_body_check(k: &SparseColMat<usize, f64>, nodes: &[[f64; 3]]) -> [(f64, 
     // storage; a caller's matrix with per-column counts is rebuilt first.
     let compact;
     let k = if k.symbolic().col_nnz().is_some() {
-        let mut trip = Vec::new();
-        for j in 0..n {
-            for (&i, &v) in k.row_idx_of_col_raw(j).iter().zip(k.val_of_col(j)) {
-                trip.push(Triplet::new(i, j, v));
-            }
-        }
-        match SparseColMat::try_new_from_triplets(n, n, &trip) {
-            Ok(m) => {
+        match compacted(k, n) {
+            Some(m) => {
                 compact = m;
                 &compact
             }
-            Err(_) => return [(f64::NAN, 0); 6],
+            None => return [(f64::NAN, 0); 6],
         }
     } else {
         k
@@ -205,6 +199,26 @@ fn rigid_body_check(k: &SparseColMat<usize, f64>, nodes: &[[f64; 3]]) -> [(f64, 
         }
     }
 
+    let r = rigid_body_fields(nodes);
+    let kr = crate::linalg::sparse::mul_compensated(None, 1.0, k, r.as_ref());
+    largest_reactions(&kr, &r, kmax)
+}
+
+/// `k` rebuilt in compact storage; None where that fails.
+fn compacted(k: &SparseColMat<usize, f64>, n: usize) -> Option<SparseColMat<usize, f64>> {
+    let mut trip = Vec::new();
+    for j in 0..n {
+        for (&i, &v) in k.row_idx_of_col_raw(j).iter().zip(k.val_of_col(j)) {
+            trip.push(Triplet::new(i, j, v));
+        }
+    }
+    SparseColMat::try_new_from_triplets(n, n, &trip).ok()
+}
+
+/// The six rigid-body displacement fields of `nodes` (3 per node): translations along x, y, z,
+/// and rotations about the centroid, scaled so the farthest node moves by one.
+fn rigid_body_fields(nodes: &[[f64; 3]]) -> Mat<f64> {
+    let n = 3 * nodes.len();
     let count = nodes.len() as f64;
     let mut c = [0.0; 3];
     for p in nodes {
@@ -231,7 +245,12 @@ fn rigid_body_check(k: &SparseColMat<usize, f64>, nodes: &[[f64; 3]]) -> [(f64, 
         r[(3 * a, 5)] = -x[1];
         r[(3 * a + 1, 5)] = x[0];
     }
-    let kr = crate::linalg::sparse::mul_compensated(None, 1.0, k, r.as_ref());
+    r
+}
+
+/// Per field, |K r| at its largest relative to max |K_ij| max |r|, and the DoF where it is.
+fn largest_reactions(kr: &Mat<f64>, r: &Mat<f64>, kmax: f64) -> [(f64, usize); 6] {
+    let n = r.nrows();
     let mut out = [(0.0, 0); 6];
     for (col, o) in out.iter_mut().enumerate() {
         let mut rmax = 0.0f64;
@@ -259,7 +278,6 @@ fn rigid_body_check(k: &SparseColMat<usize, f64>, nodes: &[[f64; 3]]) -> [(f64, 
     }
     out
 }
-
 #[cfg(test)]
 mod tests {
     use super::*;

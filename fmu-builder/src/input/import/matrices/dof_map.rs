@@ -66,14 +66,41 @@ pub fn parse_dof_map(text: &str, path: &Path) -> Result<(DofMapFormat, Vec<DofRo
     let Some(&(first_line, first)) = data.first() else {
         return Err(err(0, "the DoF map lists no rows".into()));
     };
+    let (format, body) = detect_format(&data, first_line, first, path)?;
+    if body.is_empty() {
+        return Err(err(0, "the DoF map lists no rows".into()));
+    }
+    let rows = RowReader { path };
+    // Rows in file order, with their 0-based matrix row.
+    let listed = match format {
+        DofMapFormat::CalculixDof => rows.calculix_dof(body)?,
+        DofMapFormat::NodeDirection => rows.node_direction(body)?,
+        DofMapFormat::AnsysMapping => rows.ansys_mapping(body)?,
+    };
+    check_every_dof_once(&listed, path)?;
+    in_row_order(format, listed, path)
+}
+
+/// A line that is neither blank nor a comment, with its 1-based number.
+type DataLine<'a> = (usize, &'a str);
+
+/// The format the first data line shows, and the data lines that list rows (after the ANSYS
+/// header, if any).
+fn detect_format<'d, 'a>(
+    data: &'d [DataLine<'a>],
+    first_line: usize,
+    first: &str,
+    path: &Path,
+) -> Result<(DofMapFormat, &'d [DataLine<'a>]), ImportError> {
+    let err = |line: usize, msg: String| ImportError::new(path, line, msg);
     let first_fields = split_fields(first);
     let (format, body) = if first_fields.first().is_some_and(|t| t.eq_ignore_ascii_case("matrix")) {
         (DofMapFormat::AnsysMapping, &data[1..])
     } else {
         match first_fields.len() {
-            1 if first.contains('.') => (DofMapFormat::CalculixDof, &data[..]),
-            2 => (DofMapFormat::NodeDirection, &data[..]),
-            3 => (DofMapFormat::AnsysMapping, &data[..]),
+            1 if first.contains('.') => (DofMapFormat::CalculixDof, data),
+            2 => (DofMapFormat::NodeDirection, data),
+            3 => (DofMapFormat::AnsysMapping, data),
             _ => {
                 return Err(err(
                     first_line,
@@ -87,114 +114,136 @@ pub fn parse_dof_map(text: &str, path: &Path) -> Result<(DofMapFormat, Vec<DofRo
             }
         }
     };
-    if body.is_empty() {
-        return Err(err(0, "the DoF map lists no rows".into()));
+    Ok((format, body))
+}
+
+/// Reads the rows of each format.
+struct RowReader<'p> {
+    path: &'p Path,
+}
+
+impl RowReader<'_> {
+    fn err(&self, line: usize, msg: String) -> ImportError {
+        ImportError::new(self.path, line, msg)
     }
 
-    let node_id = |s: &str, line: usize| {
-        s.parse::<u64>().map_err(|_| err(line, format!("malformed node id '{s}': expected a non-negative integer")))
-    };
-    let dir = |tok: &str, node: u64, line: usize, expected: &str| match direction(tok) {
-        Direction::Translation(d) => Ok(d),
-        Direction::Rotation => Err(err(
-            line,
-            format!(
-                "node {node}: rotational DoF '{tok}': only solid models (three translations per node) \
-                 are supported; beam and shell models carry rotations the import cannot represent"
-            ),
-        )),
-        Direction::Unknown => {
-            Err(err(line, format!("node {node}: unsupported direction '{tok}', expected {expected}")))
-        }
-    };
+    fn node_id(&self, s: &str, line: usize) -> Result<u64, ImportError> {
+        s.parse::<u64>()
+            .map_err(|_| self.err(line, format!("malformed node id '{s}': expected a non-negative integer")))
+    }
 
-    // Rows in file order, with their 0-based matrix row.
-    let mut listed: Vec<(usize, DofRow)> = Vec::with_capacity(body.len());
-    match format {
-        DofMapFormat::CalculixDof => {
-            for (r, &(line, t)) in body.iter().enumerate() {
-                let Some((ns, ds)) = t.split_once('.').filter(|_| !t.contains(char::is_whitespace)) else {
-                    return Err(err(
-                        line,
-                        format!("found '{}', expected 'node.direction' like the first line (CalculiX .dof)", clip(t)),
-                    ));
-                };
-                let node = node_id(ns, line)?;
-                let d = dir(ds, node, line, "1, 2 or 3")?;
-                listed.push((r, DofRow { node, direction: d, line }));
+    fn direction(&self, tok: &str, node: u64, line: usize, expected: &str) -> Result<usize, ImportError> {
+        match direction(tok) {
+            Direction::Translation(d) => Ok(d),
+            Direction::Rotation => Err(self.err(
+                line,
+                format!(
+                    "node {node}: rotational DoF '{tok}': only solid models (three translations per node) \
+                     are supported; beam and shell models carry rotations the import cannot represent"
+                ),
+            )),
+            Direction::Unknown => {
+                Err(self.err(line, format!("node {node}: unsupported direction '{tok}', expected {expected}")))
             }
         }
-        DofMapFormat::NodeDirection => {
-            for (r, &(line, t)) in body.iter().enumerate() {
-                let f = split_fields(t);
-                if f.len() != 2 {
-                    return Err(err(
-                        line,
-                        format!("found {} values in '{}', expected 'node direction'", f.len(), clip(t)),
-                    ));
-                }
-                let node = node_id(f[0], line)?;
-                let d = dir(f[1], node, line, "1, 2, 3, x, y, z or UX, UY, UZ")?;
-                listed.push((r, DofRow { node, direction: d, line }));
-            }
+    }
+
+    /// CalculiX `.dof`: `node.direction` per line, in row order.
+    fn calculix_dof(&self, body: &[(usize, &str)]) -> Result<Vec<(usize, DofRow)>, ImportError> {
+        let mut listed: Vec<(usize, DofRow)> = Vec::with_capacity(body.len());
+        for (r, &(line, t)) in body.iter().enumerate() {
+            let Some((ns, ds)) = t.split_once('.').filter(|_| !t.contains(char::is_whitespace)) else {
+                return Err(self.err(
+                    line,
+                    format!("found '{}', expected 'node.direction' like the first line (CalculiX .dof)", clip(t)),
+                ));
+            };
+            let node = self.node_id(ns, line)?;
+            let d = self.direction(ds, node, line, "1, 2 or 3")?;
+            listed.push((r, DofRow { node, direction: d, line }));
         }
-        DofMapFormat::AnsysMapping => {
-            let mut eqn_line: HashMap<usize, usize> = HashMap::with_capacity(body.len());
-            let mut max_eqn = (0, 0);
-            for &(line, t) in body {
-                let f = split_fields(t);
-                if f.len() != 3 {
-                    return Err(err(
-                        line,
-                        format!("found {} values in '{}', expected 'eqn node label' (ANSYS mapping)", f.len(), clip(t)),
-                    ));
-                }
-                let eqn = match f[0].parse::<usize>() {
-                    Ok(e) if e >= 1 => e,
-                    _ => {
-                        return Err(err(
-                            line,
-                            format!("malformed equation number '{}': expected a positive integer", f[0]),
-                        ));
-                    }
-                };
-                if let Some(first) = eqn_line.insert(eqn, line) {
-                    return Err(err(line, format!("equation {eqn} is listed twice (first on line {first})")));
-                }
-                if eqn > max_eqn.0 {
-                    max_eqn = (eqn, line);
-                }
-                let node = node_id(f[1], line)?;
-                let d = dir(f[2], node, line, "UX, UY or UZ")?;
-                listed.push((eqn - 1, DofRow { node, direction: d, line }));
+        Ok(listed)
+    }
+
+    /// Two columns `node direction`, in row order.
+    fn node_direction(&self, body: &[(usize, &str)]) -> Result<Vec<(usize, DofRow)>, ImportError> {
+        let mut listed: Vec<(usize, DofRow)> = Vec::with_capacity(body.len());
+        for (r, &(line, t)) in body.iter().enumerate() {
+            let f = split_fields(t);
+            if f.len() != 2 {
+                return Err(
+                    self.err(line, format!("found {} values in '{}', expected 'node direction'", f.len(), clip(t)))
+                );
             }
-            if max_eqn.0 > body.len() {
-                // The equation numbers are distinct, so at most body.len()
-                // of the first body.len() + 5 are present: the scan is short.
-                let missing: Vec<String> =
-                    (1..=max_eqn.0).filter(|e| !eqn_line.contains_key(e)).take(5).map(|e| e.to_string()).collect();
-                return Err(err(
-                    0,
-                    format!(
-                        "the map lists {} rows but equation numbers go up to {} (line {}): rows {}{} have \
-                         no entry",
-                        body.len(),
-                        max_eqn.0,
-                        max_eqn.1,
-                        missing.join(", "),
-                        if max_eqn.0 - body.len() > missing.len() { ", ..." } else { "" }
-                    ),
+            let node = self.node_id(f[0], line)?;
+            let d = self.direction(f[1], node, line, "1, 2, 3, x, y, z or UX, UY, UZ")?;
+            listed.push((r, DofRow { node, direction: d, line }));
+        }
+        Ok(listed)
+    }
+
+    /// ANSYS `.mapping`: `eqn node label` rows in any order, every equation number listed once.
+    fn ansys_mapping(&self, body: &[(usize, &str)]) -> Result<Vec<(usize, DofRow)>, ImportError> {
+        let mut listed: Vec<(usize, DofRow)> = Vec::with_capacity(body.len());
+        let mut eqn_line: HashMap<usize, usize> = HashMap::with_capacity(body.len());
+        let mut max_eqn = (0, 0);
+        for &(line, t) in body {
+            let f = split_fields(t);
+            if f.len() != 3 {
+                return Err(self.err(
+                    line,
+                    format!("found {} values in '{}', expected 'eqn node label' (ANSYS mapping)", f.len(), clip(t)),
                 ));
             }
+            let eqn = match f[0].parse::<usize>() {
+                Ok(e) if e >= 1 => e,
+                _ => {
+                    return Err(
+                        self.err(line, format!("malformed equation number '{}': expected a positive integer", f[0]))
+                    );
+                }
+            };
+            if let Some(first) = eqn_line.insert(eqn, line) {
+                return Err(self.err(line, format!("equation {eqn} is listed twice (first on line {first})")));
+            }
+            if eqn > max_eqn.0 {
+                max_eqn = (eqn, line);
+            }
+            let node = self.node_id(f[1], line)?;
+            let d = self.direction(f[2], node, line, "UX, UY or UZ")?;
+            listed.push((eqn - 1, DofRow { node, direction: d, line }));
         }
+        if max_eqn.0 > body.len() {
+            // The equation numbers are distinct, so at most body.len()
+            // of the first body.len() + 5 are present: the scan is short.
+            let missing: Vec<String> =
+                (1..=max_eqn.0).filter(|e| !eqn_line.contains_key(e)).take(5).map(|e| e.to_string()).collect();
+            return Err(self.err(
+                0,
+                format!(
+                    "the map lists {} rows but equation numbers go up to {} (line {}): rows {}{} have \
+                     no entry",
+                    body.len(),
+                    max_eqn.0,
+                    max_eqn.1,
+                    missing.join(", "),
+                    if max_eqn.0 - body.len() > missing.len() { ", ..." } else { "" }
+                ),
+            ));
+        }
+        Ok(listed)
     }
+}
 
+/// No (node, direction) twice, and all three directions at every node.
+fn check_every_dof_once(listed: &[(usize, DofRow)], path: &Path) -> Result<(), ImportError> {
+    let err = |line: usize, msg: String| ImportError::new(path, line, msg);
     let mut seen: HashMap<(u64, usize), usize> = HashMap::with_capacity(listed.len());
     // Per node: first line and the line of each direction, in order of first
     // appearance so the reported node is the first incomplete one in the file.
     let mut per_node: HashMap<u64, usize> = HashMap::new();
     let mut nodes: Vec<(u64, usize, [Option<usize>; 3])> = Vec::new();
-    for (_, row) in &listed {
+    for (_, row) in listed {
         if let Some(first) = seen.insert((row.node, row.direction), row.line) {
             return Err(err(
                 row.line,
@@ -228,7 +277,16 @@ pub fn parse_dof_map(text: &str, path: &Path) -> Result<(DofMapFormat, Vec<DofRo
             ));
         }
     }
+    Ok(())
+}
 
+/// The rows in matrix order, every row covered.
+fn in_row_order(
+    format: DofMapFormat,
+    listed: Vec<(usize, DofRow)>,
+    path: &Path,
+) -> Result<(DofMapFormat, Vec<DofRow>), ImportError> {
+    let err = |line: usize, msg: String| ImportError::new(path, line, msg);
     let mut rows = vec![None; listed.len()];
     for (r, row) in listed {
         if let Some(slot) = rows.get_mut(r) {

@@ -103,6 +103,29 @@ fn parse_mm(
             "empty file: expected a Matrix Market header '%%MatrixMarket matrix coordinate real symmetric'".into(),
         ));
     };
+    let Header { integer, symmetric } = header(first, path)?;
+    let mut last = 1;
+    let Some((size_line, size_text)) = next_data(&mut lines, &mut last) else {
+        return Err(err(last, "missing size line 'rows columns entries' after the header".into()));
+    };
+    let (n, nnz) = size(size_line, size_text, expect, path)?;
+    let entries =
+        entries(&mut lines, &mut last, Size { n, nnz, line: size_line, text_len: text.len() }, integer, path)?;
+    let merged = merge_duplicates(entries, path)?;
+    let upper = if symmetric { stored_triangle(&merged, path)? } else { symmetrised(&merged, label, path)? };
+    Ok(SymMatrix { n, upper })
+}
+
+/// What the header line declares of the entries: integer (else real) values, one triangle
+/// stored (else both).
+struct Header {
+    integer: bool,
+    symmetric: bool,
+}
+
+/// The header line `%%MatrixMarket matrix coordinate real|integer general|symmetric`.
+fn header(first: &str, path: &Path) -> Result<Header, ImportError> {
+    let err = |line: usize, msg: String| ImportError::new(path, line, msg);
     let head: Vec<&str> = first.split_whitespace().collect();
     if !head.first().is_some_and(|t| t.eq_ignore_ascii_case("%%MatrixMarket")) {
         let looks_like_triplet = head.len() == 3
@@ -134,12 +157,7 @@ fn parse_mm(
             ),
         ));
     }
-    let (object, format, field, symmetry) = (
-        head[1].to_ascii_lowercase(),
-        head[2].to_ascii_lowercase(),
-        head[3].to_ascii_lowercase(),
-        head[4].to_ascii_lowercase(),
-    );
+    let (object, format) = (head[1].to_ascii_lowercase(), head[2].to_ascii_lowercase());
     if object != "matrix" {
         return Err(err(1, format!("Matrix Market object '{}' is not supported: expected 'matrix'", head[1])));
     }
@@ -157,6 +175,13 @@ fn parse_mm(
             return Err(err(1, format!("unknown Matrix Market format '{}': expected 'coordinate'", head[2])));
         }
     }
+    Ok(Header { integer: integer_field(&head, path)?, symmetric: symmetric_storage(&head, path)? })
+}
+
+/// The header's field: `integer` (true) or `real` (false).
+fn integer_field(head: &[&str], path: &Path) -> Result<bool, ImportError> {
+    let err = |line: usize, msg: String| ImportError::new(path, line, msg);
+    let field = head[3].to_ascii_lowercase();
     let integer = match field.as_str() {
         "real" => false,
         "integer" => true,
@@ -174,6 +199,13 @@ fn parse_mm(
             return Err(err(1, format!("unknown Matrix Market field '{}': expected 'real' or 'integer'", head[3])));
         }
     };
+    Ok(integer)
+}
+
+/// The header's symmetry: `symmetric` (true) or `general` (false).
+fn symmetric_storage(head: &[&str], path: &Path) -> Result<bool, ImportError> {
+    let err = |line: usize, msg: String| ImportError::new(path, line, msg);
+    let symmetry = head[4].to_ascii_lowercase();
     let symmetric = match symmetry.as_str() {
         "general" => false,
         "symmetric" => true,
@@ -195,10 +227,17 @@ fn parse_mm(
         }
     };
 
-    let mut last = 1;
-    let Some((size_line, size_text)) = next_data(&mut lines, &mut last) else {
-        return Err(err(last, "missing size line 'rows columns entries' after the header".into()));
-    };
+    Ok(symmetric)
+}
+
+/// The size line `rows columns entries`: the matrix's size and its entry count.
+fn size(
+    size_line: usize,
+    size_text: &str,
+    expect: Option<(usize, &Path)>,
+    path: &Path,
+) -> Result<(usize, usize), ImportError> {
+    let err = |line: usize, msg: String| ImportError::new(path, line, msg);
     let size: Vec<&str> = size_text.split_whitespace().collect();
     if size.len() != 3 {
         return Err(err(
@@ -235,10 +274,30 @@ fn parse_mm(
             ),
         ));
     }
+    Ok((n, nnz))
+}
 
+/// What the size line announced, and the file's length (which bounds a lying size line).
+struct Size {
+    n: usize,
+    nnz: usize,
+    line: usize,
+    text_len: usize,
+}
+
+/// The entries after the size line, as many as it announced.
+fn entries<'a>(
+    lines: &mut impl Iterator<Item = (usize, &'a str)>,
+    last: &mut usize,
+    size: Size,
+    integer: bool,
+    path: &Path,
+) -> Result<Vec<Entry>, ImportError> {
+    let err = |line: usize, msg: String| ImportError::new(path, line, msg);
+    let Size { n, nnz, line: size_line, text_len } = size;
     // Each entry needs at least 6 bytes, which bounds a lying size line.
-    let mut entries = Vec::with_capacity(nnz.min(text.len() / 6 + 1));
-    while let Some((k, t)) = next_data(&mut lines, &mut last) {
+    let mut entries = Vec::with_capacity(nnz.min(text_len / 6 + 1));
+    while let Some((k, t)) = next_data(lines, last) {
         if entries.len() == nnz {
             return Err(err(
                 k,
@@ -249,36 +308,7 @@ fn parse_mm(
                 ),
             ));
         }
-        let mut it = t.split_whitespace();
-        let (Some(si), Some(sj), Some(sv), None) = (it.next(), it.next(), it.next(), it.next()) else {
-            return Err(err(
-                k,
-                format!("entry '{}' has {} values, expected 'row column value'", clip(t), t.split_whitespace().count()),
-            ));
-        };
-        let index = |s: &str, what: &str| -> Result<u32, ImportError> {
-            match s.parse::<usize>() {
-                Ok(v) if (1..=n).contains(&v) => Ok((v - 1) as u32),
-                Ok(v) => Err(err(
-                    k,
-                    format!("{what} index {v} out of range: the matrix is {n} x {n} and indices are 1-based"),
-                )),
-                Err(_) => Err(err(k, format!("malformed {what} index '{s}': expected a positive integer"))),
-            }
-        };
-        let i = index(si, "row")?;
-        let j = index(sj, "column")?;
-        let v = if integer {
-            sv.parse::<i64>()
-                .map(|v| v as f64)
-                .map_err(|_| err(k, format!("malformed value '{sv}': the header declares 'integer' entries")))?
-        } else {
-            parse_f64(sv).ok_or_else(|| err(k, format!("malformed number '{sv}': expected a real value")))?
-        };
-        if !v.is_finite() {
-            return Err(err(k, format!("value '{sv}' is not finite (NaN or infinity)")));
-        }
-        entries.push(Entry { i, j, v, line: k });
+        entries.push(entry(k, t, n, integer, path)?);
     }
     if entries.len() != nnz {
         return Err(err(
@@ -286,7 +316,46 @@ fn parse_mm(
             format!("the size line announces {nnz} entries but the file contains {}", entries.len()),
         ));
     }
+    Ok(entries)
+}
 
+/// One entry line `row column value` (line `k`) of an `n` x `n` matrix.
+fn entry(k: usize, t: &str, n: usize, integer: bool, path: &Path) -> Result<Entry, ImportError> {
+    let err = |line: usize, msg: String| ImportError::new(path, line, msg);
+    let mut it = t.split_whitespace();
+    let (Some(si), Some(sj), Some(sv), None) = (it.next(), it.next(), it.next(), it.next()) else {
+        return Err(err(
+            k,
+            format!("entry '{}' has {} values, expected 'row column value'", clip(t), t.split_whitespace().count()),
+        ));
+    };
+    let index = |s: &str, what: &str| -> Result<u32, ImportError> {
+        match s.parse::<usize>() {
+            Ok(v) if (1..=n).contains(&v) => Ok((v - 1) as u32),
+            Ok(v) => {
+                Err(err(k, format!("{what} index {v} out of range: the matrix is {n} x {n} and indices are 1-based")))
+            }
+            Err(_) => Err(err(k, format!("malformed {what} index '{s}': expected a positive integer"))),
+        }
+    };
+    let i = index(si, "row")?;
+    let j = index(sj, "column")?;
+    let v = if integer {
+        sv.parse::<i64>()
+            .map(|v| v as f64)
+            .map_err(|_| err(k, format!("malformed value '{sv}': the header declares 'integer' entries")))?
+    } else {
+        parse_f64(sv).ok_or_else(|| err(k, format!("malformed number '{sv}': expected a real value")))?
+    };
+    if !v.is_finite() {
+        return Err(err(k, format!("value '{sv}' is not finite (NaN or infinity)")));
+    }
+    Ok(Entry { i, j, v, line: k })
+}
+
+/// The entries sorted by position, duplicates summed.
+fn merge_duplicates(mut entries: Vec<Entry>, path: &Path) -> Result<Vec<Entry>, ImportError> {
+    let err = |line: usize, msg: String| ImportError::new(path, line, msg);
     // Stable sort: the first line of a run of duplicates stays first, so
     // messages point at the entry a reader finds first.
     entries.sort_by_key(|e| (e.i, e.j));
@@ -302,80 +371,94 @@ fn parse_mm(
             _ => merged.push(e),
         }
     }
-    let find = |i: u32, j: u32| merged.binary_search_by_key(&(i, j), |e| (e.i, e.j)).ok().map(|p| merged[p]);
+    Ok(merged)
+}
 
+/// The entry at (i, j) of the sorted, merged entries.
+fn find(merged: &[Entry], i: u32, j: u32) -> Option<Entry> {
+    merged.binary_search_by_key(&(i, j), |e| (e.i, e.j)).ok().map(|p| merged[p])
+}
+
+/// The upper triangle of a `symmetric` file, which stores one triangle, either one.
+fn stored_triangle(merged: &[Entry], path: &Path) -> Result<Vec<Entry>, ImportError> {
+    let err = |line: usize, msg: String| ImportError::new(path, line, msg);
     let mut upper = Vec::with_capacity(merged.len());
-    if symmetric {
-        for e in &merged {
-            if e.i > e.j
-                && let Some(m) = find(e.j, e.i)
-            {
-                let (a, b) = if e.line > m.line { (e, &m) } else { (&m, e) };
-                return Err(err(
-                    a.line,
-                    format!(
-                        "entry ({}, {}) mirrors the entry ({}, {}) on line {}: a 'symmetric' file stores one \
-                         triangle only, so this position would be counted twice (declare the file \
-                         'general' if it holds both triangles)",
-                        a.i + 1,
-                        a.j + 1,
-                        b.i + 1,
-                        b.j + 1,
-                        b.line
-                    ),
-                ));
-            }
-            let (i, j) = (e.i.min(e.j), e.i.max(e.j));
-            upper.push(Entry { i, j, ..*e });
-        }
-    } else {
-        let max_diag = merged.iter().filter(|e| e.i == e.j).fold(0.0f64, |m, e| m.max(e.v.abs()));
-        let tol = SYMMETRY_TOLERANCE * max_diag;
-        // (difference, entry, value of the mirror, line of the mirror)
-        let mut worst: Option<(f64, Entry, f64, Option<usize>)> = None;
-        for e in &merged {
-            if e.i == e.j {
-                upper.push(*e);
-                continue;
-            }
-            let mirror = find(e.j, e.i);
-            if e.i > e.j && mirror.is_some() {
-                continue; // handled with its mirror
-            }
-            let mv = mirror.map_or(0.0, |m| m.v);
-            let diff = (e.v - mv).abs();
-            if diff > tol && worst.as_ref().is_none_or(|w| diff > w.0) {
-                worst = Some((diff, *e, mv, mirror.map(|m| m.line)));
-            }
-            let (i, j) = (e.i.min(e.j), e.i.max(e.j));
-            // Halves first: the sum of two large values may overflow.
-            upper.push(Entry { i, j, v: 0.5 * e.v + 0.5 * mv, line: e.line });
-        }
-        if let Some((diff, e, mv, mline)) = worst {
-            let mirror = match mline {
-                Some(l) => format!("{mv:e} (line {l})"),
-                None => "0 (no entry)".to_string(),
-            };
+    for e in merged {
+        if e.i > e.j
+            && let Some(m) = find(merged, e.j, e.i)
+        {
+            let (a, b) = if e.line > m.line { (e, &m) } else { (&m, e) };
             return Err(err(
-                e.line,
+                a.line,
                 format!(
-                    "matrix declared 'general' is not symmetric: A({}, {}) = {:e} but A({}, {}) = {mirror}; \
-                     |difference| {diff:.3e} exceeds {SYMMETRY_TOLERANCE:e} x max|diagonal| = {tol:.3e} \
-                     ({} / {}). Stiffness, mass and damping of a linear elastic model are symmetric: \
-                     check the export",
-                    e.i + 1,
-                    e.j + 1,
-                    e.v,
-                    e.j + 1,
-                    e.i + 1,
-                    label(e.i as usize),
-                    label(e.j as usize)
+                    "entry ({}, {}) mirrors the entry ({}, {}) on line {}: a 'symmetric' file stores one \
+                     triangle only, so this position would be counted twice (declare the file \
+                     'general' if it holds both triangles)",
+                    a.i + 1,
+                    a.j + 1,
+                    b.i + 1,
+                    b.j + 1,
+                    b.line
                 ),
             ));
         }
-        upper.sort_by_key(|e| (e.i, e.j));
+        let (i, j) = (e.i.min(e.j), e.i.max(e.j));
+        upper.push(Entry { i, j, ..*e });
     }
-    Ok(SymMatrix { n, upper })
+    Ok(upper)
+}
+
+/// The upper triangle of a `general` file: each entry and its mirror averaged, refused where
+/// they differ beyond the tolerance.
+fn symmetrised(merged: &[Entry], label: &dyn Fn(usize) -> String, path: &Path) -> Result<Vec<Entry>, ImportError> {
+    let err = |line: usize, msg: String| ImportError::new(path, line, msg);
+    let mut upper = Vec::with_capacity(merged.len());
+    let max_diag = merged.iter().filter(|e| e.i == e.j).fold(0.0f64, |m, e| m.max(e.v.abs()));
+    let tol = SYMMETRY_TOLERANCE * max_diag;
+    // (difference, entry, value of the mirror, line of the mirror)
+    let mut worst: Option<(f64, Entry, f64, Option<usize>)> = None;
+    for e in merged {
+        if e.i == e.j {
+            upper.push(*e);
+            continue;
+        }
+        let mirror = find(merged, e.j, e.i);
+        if e.i > e.j && mirror.is_some() {
+            continue; // handled with its mirror
+        }
+        let mv = mirror.map_or(0.0, |m| m.v);
+        let diff = (e.v - mv).abs();
+        if diff > tol && worst.as_ref().is_none_or(|w| diff > w.0) {
+            worst = Some((diff, *e, mv, mirror.map(|m| m.line)));
+        }
+        let (i, j) = (e.i.min(e.j), e.i.max(e.j));
+        // Halves first: the sum of two large values may overflow.
+        upper.push(Entry { i, j, v: 0.5 * e.v + 0.5 * mv, line: e.line });
+    }
+    if let Some((diff, e, mv, mline)) = worst {
+        let mirror = match mline {
+            Some(l) => format!("{mv:e} (line {l})"),
+            None => "0 (no entry)".to_string(),
+        };
+        return Err(err(
+            e.line,
+            format!(
+                "matrix declared 'general' is not symmetric: A({}, {}) = {:e} but A({}, {}) = {mirror}; \
+                 |difference| {diff:.3e} exceeds {SYMMETRY_TOLERANCE:e} x max|diagonal| = {tol:.3e} \
+                 ({} / {}). Stiffness, mass and damping of a linear elastic model are symmetric: \
+                 check the export",
+                e.i + 1,
+                e.j + 1,
+                e.v,
+                e.j + 1,
+                e.i + 1,
+                label(e.i as usize),
+                label(e.j as usize)
+            ),
+        ));
+    }
+    upper.sort_by_key(|e| (e.i, e.j));
+    Ok(upper)
 }
 
 #[cfg(test)]

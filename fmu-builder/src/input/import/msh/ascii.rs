@@ -68,6 +68,166 @@ fn float(path: &Path, line: usize, s: &str, what: &str) -> Res<f64> {
     }
 }
 
+/// The sections of the file, each read from the line after its header (`n`, for messages).
+impl Cursor<'_> {
+    /// `$MeshFormat`: version 4.1, ASCII.
+    fn mesh_format(&mut self) -> Res<()> {
+        let (n, t) = self.tokens("$MeshFormat")?;
+        if t.len() != 3 {
+            return Err(self.err(n, "$MeshFormat: expected 'version file-type data-size'"));
+        }
+        if t[1] == "1" {
+            return Err(self.err(
+                n,
+                "binary .msh not supported here, save as ASCII (binary MSH 4.1 is read from bytes, by read_msh / parse_msh_bytes)",
+            ));
+        }
+        if t[1] != "0" {
+            return Err(
+                self.err(n, format!("$MeshFormat: file-type '{}' (expected 0 for ASCII or 1 for binary)", t[1]))
+            );
+        }
+        if t[0] != "4.1" {
+            return Err(self.err(
+                n,
+                format!(
+                    "MSH version {} not supported: only 4.1, ASCII or binary (in Gmsh: Mesh.MshFileVersion = 4.1, or -format msh41)",
+                    t[0]
+                ),
+            ));
+        }
+        self.expect_end("MeshFormat")?;
+        Ok(())
+    }
+
+    /// `$PhysicalNames`: the names of the physical groups.
+    fn physical_names(&mut self, n: usize, mb: &mut MeshBuilder<'_>) -> Res<()> {
+        let (_, c) = self.ints(1, "$PhysicalNames count")?;
+        for _ in 0..count(self.path, n, c[0], "count")? {
+            let (n, l) = self.next("physical name")?;
+            let (key, name) = physical_name(self.path, Loc::Line(n), l)?;
+            mb.physical_names.insert(key, name);
+        }
+        self.expect_end("PhysicalNames")?;
+        Ok(())
+    }
+
+    /// `$Entities`: the physical groups of every point, curve, surface and volume.
+    fn entities(&mut self, n: usize, mb: &mut MeshBuilder<'_>) -> Res<()> {
+        let (_, c) = self.ints(4, "$Entities counts")?;
+        for dim in 0..4i64 {
+            for _ in 0..count(self.path, n, c[dim as usize], "entity count")? {
+                let (n, t) = self.tokens("entity")?;
+                // point: tag x y z nphys ...; others: tag bbox(6) nphys ...
+                let at = if dim == 0 { 4 } else { 7 };
+                let what = "entity";
+                let bad = || self.err(n, format!("malformed {dim}D entity line"));
+                let tag = int(self.path, n, t.first().ok_or_else(bad)?, what)?;
+                let np = count(self.path, n, int(self.path, n, t.get(at).ok_or_else(bad)?, what)?, what)?;
+                let phys = t.get(at + 1..at + 1 + np).ok_or_else(bad)?;
+                let phys = phys.iter().map(|s| int(self.path, n, s, what).map(i64::abs)).collect::<Res<Vec<_>>>()?;
+                mb.entity_physicals.insert((dim, tag), phys);
+            }
+        }
+        self.expect_end("Entities")?;
+        mb.have_entities = true;
+        Ok(())
+    }
+
+    /// `$Nodes`: blocks of node tags, then their coordinates.
+    fn nodes(&mut self, n: usize, mb: &mut MeshBuilder<'_>) -> Res<()> {
+        mb.begin_nodes(Loc::Line(n))?;
+        let (hn, h) = self.ints(4, "$Nodes header")?;
+        let blocks = count(self.path, hn, h[0], "block count")?;
+        let total = count(self.path, hn, h[1], "node count")?;
+        for _ in 0..blocks {
+            let (bn, b) = self.ints(4, "node block header (entityDim entityTag parametric numNodes)")?;
+            let dim = b[0];
+            let parametric = b[2] != 0;
+            let nb = count(self.path, bn, b[3], "node count")?;
+            let mut tags = Vec::with_capacity(nb.min(self.lines.len()));
+            for _ in 0..nb {
+                let (n, t) = self.ints(1, "node tag")?;
+                let tag = u64::try_from(t[0]).map_err(|_| self.err(n, format!("invalid node tag {}", t[0])))?;
+                mb.node_tag(Loc::Line(n), tag)?;
+                tags.push(tag);
+            }
+            let expect = if parametric { 3 + dim.max(0) as usize } else { 3 };
+            for &tag in &tags {
+                let (n, t) = self.tokens("node coordinates")?;
+                if t.len() != expect && t.len() != 3 {
+                    return Err(
+                        self.err(n, format!("coordinates of node {tag}: expected {expect} values, got {}", t.len()))
+                    );
+                }
+                let mut x = [0.0; 3];
+                for d in 0..3 {
+                    x[d] = float(self.path, n, t[d], &format!("coordinates of node {tag}"))?;
+                }
+                mb.push_node(tag, x);
+            }
+        }
+        mb.end_nodes(Loc::Line(hn), total)?;
+        self.expect_end("Nodes")?;
+        Ok(())
+    }
+
+    /// `$Elements`: blocks of one element type, a line per element.
+    fn elements(&mut self, n: usize, mb: &mut MeshBuilder<'_>) -> Res<()> {
+        mb.begin_elements(Loc::Line(n))?;
+        let (hn, h) = self.ints(4, "$Elements header")?;
+        let blocks = count(self.path, hn, h[0], "block count")?;
+        let total = count(self.path, hn, h[1], "element count")?;
+        let mut seen = 0usize;
+        for _ in 0..blocks {
+            let (bn, b) = self.ints(4, "element block header (entityDim entityTag elementType numElements)")?;
+            let ne = count(self.path, bn, b[3], "element count")?;
+            let block = mb.element_block(Loc::Line(bn), b[0], b[1], b[2])?;
+            for _ in 0..ne {
+                let (n, t) = self.tokens("element")?;
+                let tag = int(self.path, n, t[0], "element tag")?;
+                let tag = u64::try_from(tag).map_err(|_| self.err(n, format!("invalid element tag {tag}")))?;
+                mb.element_tag(Loc::Line(n), tag)?;
+                let nn = t.len() - 1;
+                if let Some((name, expect, _)) = block.info
+                    && nn != expect
+                {
+                    return Err(self.err(
+                        n,
+                        format!("element {tag}: type {} ({name}) needs {expect} nodes, got {nn}", block.etype),
+                    ));
+                }
+                if nn == 0 {
+                    return Err(self.err(n, format!("element {tag} has no nodes")));
+                }
+                let mut nodes = Vec::with_capacity(nn);
+                for s in &t[1..] {
+                    let id = int(self.path, n, s, "element node tag")?;
+                    nodes.push(mb.node_ref(Loc::Line(n), tag, id)?);
+                }
+                mb.push_element(&block, tag, nodes);
+            }
+            seen += ne;
+        }
+        mb.end_elements(Loc::Line(hn), total, seen)?;
+        self.expect_end("Elements")?;
+        Ok(())
+    }
+
+    /// A section the import does not need ($Comments, $NodeData, $Periodic, ...), up to its end.
+    fn skip_section(&mut self, n: usize, section: &str) -> Res<()> {
+        let end = format!("$End{section}");
+        loop {
+            let (_, l) =
+                self.next(&end).map_err(|_| self.err(n, format!("section ${section} is not terminated by {end}")))?;
+            if l == end {
+                break;
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Parses the text of a MSH 4.1 ASCII file; `path` is used for messages.
 /// Binary files must be read as bytes: [`read_msh`](super::read_msh),
 /// [`parse_msh_bytes`](super::parse_msh_bytes).
@@ -92,151 +252,17 @@ pub fn parse_msh(text: &str, path: &Path) -> Result<ImportedMesh, ImportError> {
         }
         match section {
             "MeshFormat" => {
-                let (n, t) = cur.tokens("$MeshFormat")?;
-                if t.len() != 3 {
-                    return Err(cur.err(n, "$MeshFormat: expected 'version file-type data-size'"));
-                }
-                if t[1] == "1" {
-                    return Err(cur.err(
-                        n,
-                        "binary .msh not supported here, save as ASCII (binary MSH 4.1 is read from bytes, by read_msh / parse_msh_bytes)",
-                    ));
-                }
-                if t[1] != "0" {
-                    return Err(
-                        cur.err(n, format!("$MeshFormat: file-type '{}' (expected 0 for ASCII or 1 for binary)", t[1]))
-                    );
-                }
-                if t[0] != "4.1" {
-                    return Err(cur.err(
-                        n,
-                        format!(
-                            "MSH version {} not supported: only 4.1, ASCII or binary (in Gmsh: Mesh.MshFileVersion = 4.1, or -format msh41)",
-                            t[0]
-                        ),
-                    ));
-                }
-                cur.expect_end("MeshFormat")?;
+                cur.mesh_format()?;
                 have_format = true;
             }
-            "PhysicalNames" => {
-                let (_, c) = cur.ints(1, "$PhysicalNames count")?;
-                for _ in 0..count(path, n, c[0], "count")? {
-                    let (n, l) = cur.next("physical name")?;
-                    let (key, name) = physical_name(path, Loc::Line(n), l)?;
-                    mb.physical_names.insert(key, name);
-                }
-                cur.expect_end("PhysicalNames")?;
-            }
-            "Entities" => {
-                let (_, c) = cur.ints(4, "$Entities counts")?;
-                for dim in 0..4i64 {
-                    for _ in 0..count(path, n, c[dim as usize], "entity count")? {
-                        let (n, t) = cur.tokens("entity")?;
-                        // point: tag x y z nphys ...; others: tag bbox(6) nphys ...
-                        let at = if dim == 0 { 4 } else { 7 };
-                        let what = "entity";
-                        let bad = || cur.err(n, format!("malformed {dim}D entity line"));
-                        let tag = int(path, n, t.first().ok_or_else(bad)?, what)?;
-                        let np = count(path, n, int(path, n, t.get(at).ok_or_else(bad)?, what)?, what)?;
-                        let phys = t.get(at + 1..at + 1 + np).ok_or_else(bad)?;
-                        let phys = phys.iter().map(|s| int(path, n, s, what).map(i64::abs)).collect::<Res<Vec<_>>>()?;
-                        mb.entity_physicals.insert((dim, tag), phys);
-                    }
-                }
-                cur.expect_end("Entities")?;
-                mb.have_entities = true;
-            }
+            "PhysicalNames" => cur.physical_names(n, &mut mb)?,
+            "Entities" => cur.entities(n, &mut mb)?,
             "PartitionedEntities" => {
                 return Err(cur.err(n, "partitioned .msh files are not supported"));
             }
-            "Nodes" => {
-                mb.begin_nodes(Loc::Line(n))?;
-                let (hn, h) = cur.ints(4, "$Nodes header")?;
-                let blocks = count(path, hn, h[0], "block count")?;
-                let total = count(path, hn, h[1], "node count")?;
-                for _ in 0..blocks {
-                    let (bn, b) = cur.ints(4, "node block header (entityDim entityTag parametric numNodes)")?;
-                    let dim = b[0];
-                    let parametric = b[2] != 0;
-                    let nb = count(path, bn, b[3], "node count")?;
-                    let mut tags = Vec::with_capacity(nb.min(cur.lines.len()));
-                    for _ in 0..nb {
-                        let (n, t) = cur.ints(1, "node tag")?;
-                        let tag = u64::try_from(t[0]).map_err(|_| cur.err(n, format!("invalid node tag {}", t[0])))?;
-                        mb.node_tag(Loc::Line(n), tag)?;
-                        tags.push(tag);
-                    }
-                    let expect = if parametric { 3 + dim.max(0) as usize } else { 3 };
-                    for &tag in &tags {
-                        let (n, t) = cur.tokens("node coordinates")?;
-                        if t.len() != expect && t.len() != 3 {
-                            return Err(cur.err(
-                                n,
-                                format!("coordinates of node {tag}: expected {expect} values, got {}", t.len()),
-                            ));
-                        }
-                        let mut x = [0.0; 3];
-                        for d in 0..3 {
-                            x[d] = float(path, n, t[d], &format!("coordinates of node {tag}"))?;
-                        }
-                        mb.push_node(tag, x);
-                    }
-                }
-                mb.end_nodes(Loc::Line(hn), total)?;
-                cur.expect_end("Nodes")?;
-            }
-            "Elements" => {
-                mb.begin_elements(Loc::Line(n))?;
-                let (hn, h) = cur.ints(4, "$Elements header")?;
-                let blocks = count(path, hn, h[0], "block count")?;
-                let total = count(path, hn, h[1], "element count")?;
-                let mut seen = 0usize;
-                for _ in 0..blocks {
-                    let (bn, b) = cur.ints(4, "element block header (entityDim entityTag elementType numElements)")?;
-                    let ne = count(path, bn, b[3], "element count")?;
-                    let block = mb.element_block(Loc::Line(bn), b[0], b[1], b[2])?;
-                    for _ in 0..ne {
-                        let (n, t) = cur.tokens("element")?;
-                        let tag = int(path, n, t[0], "element tag")?;
-                        let tag = u64::try_from(tag).map_err(|_| cur.err(n, format!("invalid element tag {tag}")))?;
-                        mb.element_tag(Loc::Line(n), tag)?;
-                        let nn = t.len() - 1;
-                        if let Some((name, expect, _)) = block.info
-                            && nn != expect
-                        {
-                            return Err(cur.err(
-                                n,
-                                format!("element {tag}: type {} ({name}) needs {expect} nodes, got {nn}", block.etype),
-                            ));
-                        }
-                        if nn == 0 {
-                            return Err(cur.err(n, format!("element {tag} has no nodes")));
-                        }
-                        let mut nodes = Vec::with_capacity(nn);
-                        for s in &t[1..] {
-                            let id = int(path, n, s, "element node tag")?;
-                            nodes.push(mb.node_ref(Loc::Line(n), tag, id)?);
-                        }
-                        mb.push_element(&block, tag, nodes);
-                    }
-                    seen += ne;
-                }
-                mb.end_elements(Loc::Line(hn), total, seen)?;
-                cur.expect_end("Elements")?;
-            }
-            _ => {
-                // Unknown / irrelevant section ($Comments, $NodeData, $Periodic, ...): skip.
-                let end = format!("$End{section}");
-                loop {
-                    let (_, l) = cur
-                        .next(&end)
-                        .map_err(|_| cur.err(n, format!("section ${section} is not terminated by {end}")))?;
-                    if l == end {
-                        break;
-                    }
-                }
-            }
+            "Nodes" => cur.nodes(n, &mut mb)?,
+            "Elements" => cur.elements(n, &mut mb)?,
+            _ => cur.skip_section(n, section)?,
         }
     }
     if !have_format {

@@ -158,6 +158,141 @@ impl<'a> Bin<'a> {
     }
 }
 
+/// The sections of the file, each read after its header line (at byte `at`).
+impl Bin<'_> {
+    /// `$PhysicalNames`: the names of the physical groups (ASCII lines in a binary file too).
+    fn physical_names(&mut self, mb: &mut MeshBuilder<'_>) -> Res<()> {
+        const S: &str = "PhysicalNames";
+        let (at, l) = self.ascii_line(S, "the number of physical names")?;
+        let t = String::from_utf8_lossy(l);
+        let t: Vec<&str> = t.split_whitespace().collect();
+        let c = ints_of(self.path, Loc::Byte(at), &t, 1, "$PhysicalNames count")?;
+        for _ in 0..count_at(self.path, Loc::Byte(at), c[0], "count")? {
+            let (at, l) = self.ascii_line(S, "a physical name line")?;
+            let (key, name) = physical_name(self.path, Loc::Byte(at), &String::from_utf8_lossy(l))?;
+            mb.physical_names.insert(key, name);
+        }
+        self.expect_end(S)?;
+        Ok(())
+    }
+
+    /// `$Entities`: the physical groups of every point, curve, surface and volume.
+    fn entities(&mut self, mb: &mut MeshBuilder<'_>) -> Res<()> {
+        const S: &str = "Entities";
+        let mut counts = [0usize; 4];
+        for (dim, c) in counts.iter_mut().enumerate() {
+            *c = self.count(S, &format!("the number of {dim}D entities"))?;
+        }
+        for (dim, &c) in (0i64..).zip(&counts) {
+            for _ in 0..c {
+                let tag = self.int(S, &format!("{dim}D entity tag"))?;
+                // point: x y z; others: bounding box
+                self.skip(if dim == 0 { 3 } else { 6 }, 8, S, "entity coordinates")?;
+                let np = self.count(S, "the number of physical tags of an entity")?;
+                let mut phys = Vec::new();
+                for _ in 0..np {
+                    phys.push(i64::from(self.int(S, "physical tag")?).abs());
+                }
+                if dim > 0 {
+                    let nb = self.count(S, "the number of bounding entities")?;
+                    self.skip(nb, 4, S, "bounding entity tags")?;
+                }
+                mb.entity_physicals.insert((dim, i64::from(tag)), phys);
+            }
+        }
+        self.expect_end(S)?;
+        mb.have_entities = true;
+        Ok(())
+    }
+
+    /// `$Nodes`: blocks of node tags, then their coordinates.
+    fn nodes(&mut self, at: usize, mb: &mut MeshBuilder<'_>) -> Res<()> {
+        const S: &str = "Nodes";
+        mb.begin_nodes(Loc::Byte(at))?;
+        let header = Loc::Byte(self.pos);
+        let blocks = self.count(S, "the number of node blocks")?;
+        let total = self.count(S, "the number of nodes")?;
+        self.skip(2, 8, S, "the min/max node tags")?;
+        for _ in 0..blocks {
+            let bat = self.pos;
+            let dim = self.int(S, "node block entity dimension")?;
+            self.int(S, "node block entity tag")?;
+            let parametric = self.int(S, "node block parametric flag")? != 0;
+            let nb = self.count(S, "the number of nodes in a block")?;
+            if !(0..=3).contains(&dim) {
+                return Err(self.err(bat, format!("invalid node block entity dimension {dim}")));
+            }
+            // parametric coordinates: u (curves), u v (surfaces), u v w (volumes)
+            let extra = if parametric { dim as usize } else { 0 };
+            let mut tags = Vec::with_capacity(nb.min(self.b.len() / 8));
+            for _ in 0..nb {
+                let at = self.pos;
+                let tag = self.size(S, "node tag")?;
+                mb.node_tag(Loc::Byte(at), tag)?;
+                tags.push(tag);
+            }
+            for &tag in &tags {
+                let at = self.pos;
+                let mut x = [0.0; 3];
+                for v in &mut x {
+                    *v = self.double(S, "node coordinate")?;
+                }
+                if let Some(v) = x.iter().find(|v| !v.is_finite()) {
+                    return Err(self.err(at, format!("coordinates of node {tag}: {v} is not a finite number")));
+                }
+                self.skip(extra, 8, S, "parametric node coordinates")?;
+                mb.push_node(tag, x);
+            }
+        }
+        mb.end_nodes(header, total)?;
+        self.expect_end(S)?;
+        Ok(())
+    }
+
+    /// `$Elements`: blocks of one element type, each element its tag and node tags.
+    fn elements(&mut self, at: usize, mb: &mut MeshBuilder<'_>) -> Res<()> {
+        const S: &str = "Elements";
+        mb.begin_elements(Loc::Byte(at))?;
+        let header = Loc::Byte(self.pos);
+        let blocks = self.count(S, "the number of element blocks")?;
+        let total = self.count(S, "the number of elements")?;
+        self.skip(2, 8, S, "the min/max element tags")?;
+        let mut seen = 0usize;
+        for _ in 0..blocks {
+            let bat = Loc::Byte(self.pos);
+            let dim = self.int(S, "element block entity dimension")?;
+            let etag = self.int(S, "element block entity tag")?;
+            let etype = self.int(S, "element block element type")?;
+            let ne = self.count(S, "the number of elements in a block")?;
+            let block = mb.element_block(bat, i64::from(dim), i64::from(etag), i64::from(etype))?;
+            let Some((_, nn, _)) = block.info else {
+                return Err(mb.err(
+                    bat,
+                    format!(
+                        "unknown element type {etype} in a {dim}D block: its node count is needed to read a binary file"
+                    ),
+                ));
+            };
+            for _ in 0..ne {
+                let at = self.pos;
+                let tag = self.size(S, "element tag")?;
+                mb.element_tag(Loc::Byte(at), tag)?;
+                let mut nodes = Vec::with_capacity(nn);
+                for _ in 0..nn {
+                    let at = self.pos;
+                    let id = self.size(S, "element node tag")?;
+                    nodes.push(mb.node_ref(Loc::Byte(at), tag, id)?);
+                }
+                mb.push_element(&block, tag, nodes);
+            }
+            seen = seen.saturating_add(ne);
+        }
+        mb.end_elements(header, total, seen)?;
+        self.expect_end(S)?;
+        Ok(())
+    }
+}
+
 /// Parses a binary MSH 4.1 file (see the module documentation).
 pub(super) fn parse_binary(bytes: &[u8], path: &Path) -> Res<ImportedMesh> {
     let mut r = Bin { path, b: bytes, pos: 0 };
@@ -176,129 +311,13 @@ pub(super) fn parse_binary(bytes: &[u8], path: &Path) -> Res<ImportedMesh> {
                 binary_mesh_format(&mut r)?;
                 have_format = true;
             }
-            "PhysicalNames" => {
-                const S: &str = "PhysicalNames";
-                let (at, l) = r.ascii_line(S, "the number of physical names")?;
-                let t = String::from_utf8_lossy(l);
-                let t: Vec<&str> = t.split_whitespace().collect();
-                let c = ints_of(path, Loc::Byte(at), &t, 1, "$PhysicalNames count")?;
-                for _ in 0..count_at(path, Loc::Byte(at), c[0], "count")? {
-                    let (at, l) = r.ascii_line(S, "a physical name line")?;
-                    let (key, name) = physical_name(path, Loc::Byte(at), &String::from_utf8_lossy(l))?;
-                    mb.physical_names.insert(key, name);
-                }
-                r.expect_end(S)?;
-            }
-            "Entities" => {
-                const S: &str = "Entities";
-                let mut counts = [0usize; 4];
-                for (dim, c) in counts.iter_mut().enumerate() {
-                    *c = r.count(S, &format!("the number of {dim}D entities"))?;
-                }
-                for (dim, &c) in (0i64..).zip(&counts) {
-                    for _ in 0..c {
-                        let tag = r.int(S, &format!("{dim}D entity tag"))?;
-                        // point: x y z; others: bounding box
-                        r.skip(if dim == 0 { 3 } else { 6 }, 8, S, "entity coordinates")?;
-                        let np = r.count(S, "the number of physical tags of an entity")?;
-                        let mut phys = Vec::new();
-                        for _ in 0..np {
-                            phys.push(i64::from(r.int(S, "physical tag")?).abs());
-                        }
-                        if dim > 0 {
-                            let nb = r.count(S, "the number of bounding entities")?;
-                            r.skip(nb, 4, S, "bounding entity tags")?;
-                        }
-                        mb.entity_physicals.insert((dim, i64::from(tag)), phys);
-                    }
-                }
-                r.expect_end(S)?;
-                mb.have_entities = true;
-            }
+            "PhysicalNames" => r.physical_names(&mut mb)?,
+            "Entities" => r.entities(&mut mb)?,
             "PartitionedEntities" => {
                 return Err(r.err(at, "partitioned .msh files are not supported"));
             }
-            "Nodes" => {
-                const S: &str = "Nodes";
-                mb.begin_nodes(Loc::Byte(at))?;
-                let header = Loc::Byte(r.pos);
-                let blocks = r.count(S, "the number of node blocks")?;
-                let total = r.count(S, "the number of nodes")?;
-                r.skip(2, 8, S, "the min/max node tags")?;
-                for _ in 0..blocks {
-                    let bat = r.pos;
-                    let dim = r.int(S, "node block entity dimension")?;
-                    r.int(S, "node block entity tag")?;
-                    let parametric = r.int(S, "node block parametric flag")? != 0;
-                    let nb = r.count(S, "the number of nodes in a block")?;
-                    if !(0..=3).contains(&dim) {
-                        return Err(r.err(bat, format!("invalid node block entity dimension {dim}")));
-                    }
-                    // parametric coordinates: u (curves), u v (surfaces), u v w (volumes)
-                    let extra = if parametric { dim as usize } else { 0 };
-                    let mut tags = Vec::with_capacity(nb.min(r.b.len() / 8));
-                    for _ in 0..nb {
-                        let at = r.pos;
-                        let tag = r.size(S, "node tag")?;
-                        mb.node_tag(Loc::Byte(at), tag)?;
-                        tags.push(tag);
-                    }
-                    for &tag in &tags {
-                        let at = r.pos;
-                        let mut x = [0.0; 3];
-                        for v in &mut x {
-                            *v = r.double(S, "node coordinate")?;
-                        }
-                        if let Some(v) = x.iter().find(|v| !v.is_finite()) {
-                            return Err(r.err(at, format!("coordinates of node {tag}: {v} is not a finite number")));
-                        }
-                        r.skip(extra, 8, S, "parametric node coordinates")?;
-                        mb.push_node(tag, x);
-                    }
-                }
-                mb.end_nodes(header, total)?;
-                r.expect_end(S)?;
-            }
-            "Elements" => {
-                const S: &str = "Elements";
-                mb.begin_elements(Loc::Byte(at))?;
-                let header = Loc::Byte(r.pos);
-                let blocks = r.count(S, "the number of element blocks")?;
-                let total = r.count(S, "the number of elements")?;
-                r.skip(2, 8, S, "the min/max element tags")?;
-                let mut seen = 0usize;
-                for _ in 0..blocks {
-                    let bat = Loc::Byte(r.pos);
-                    let dim = r.int(S, "element block entity dimension")?;
-                    let etag = r.int(S, "element block entity tag")?;
-                    let etype = r.int(S, "element block element type")?;
-                    let ne = r.count(S, "the number of elements in a block")?;
-                    let block = mb.element_block(bat, i64::from(dim), i64::from(etag), i64::from(etype))?;
-                    let Some((_, nn, _)) = block.info else {
-                        return Err(mb.err(
-                            bat,
-                            format!(
-                                "unknown element type {etype} in a {dim}D block: its node count is needed to read a binary file"
-                            ),
-                        ));
-                    };
-                    for _ in 0..ne {
-                        let at = r.pos;
-                        let tag = r.size(S, "element tag")?;
-                        mb.element_tag(Loc::Byte(at), tag)?;
-                        let mut nodes = Vec::with_capacity(nn);
-                        for _ in 0..nn {
-                            let at = r.pos;
-                            let id = r.size(S, "element node tag")?;
-                            nodes.push(mb.node_ref(Loc::Byte(at), tag, id)?);
-                        }
-                        mb.push_element(&block, tag, nodes);
-                    }
-                    seen = seen.saturating_add(ne);
-                }
-                mb.end_elements(header, total, seen)?;
-                r.expect_end(S)?;
-            }
+            "Nodes" => r.nodes(at, &mut mb)?,
+            "Elements" => r.elements(at, &mut mb)?,
             _ => r.skip_section(&section, at)?,
         }
     }
