@@ -257,6 +257,17 @@ def test_a_launcher_that_fails_is_reported(tmp_path):
                        "--python", PYTHON])
         assert "the launcher ended (exit status: 3) while the builder waited for the driver to connect" in err, err
         assert "fake launcher: no ranks today" in err, err
+        # quoted words stay whole, as a shell keeps them: a launcher in a folder with a space
+        spaced = tmp_path / "my tools"
+        spaced.mkdir()
+        (spaced / "mpirun").write_text(fake.read_text())
+        (spaced / "mpirun").chmod(0o755)
+        err = refused([EXAMPLES / "beam.json", "-o", out, "--backend", "petsc", "--launcher",
+                       f'"{spaced / "mpirun"}" --mca btl self', "--python", PYTHON])
+        assert "fake launcher: no ranks today" in err, err
+    # a launcher that does not split into words is refused before anything starts
+    err = refused([EXAMPLES / "beam.json", "-o", out, "--backend", "petsc", "--launcher", 'mpirun --hostfile "my hosts'])
+    assert "reduction.backend.launcher (or --launcher)" in err and "unbalanced quote" in err, err
     assert not out.exists()
 
 

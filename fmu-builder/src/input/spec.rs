@@ -6,7 +6,7 @@
 use crate::error::{BuildError, Result};
 use crate::input::element::ElementKind;
 use crate::input::{json_keys, ranges, schema_errors, variable_names};
-use crate::linalg::distributed::{Backend, PetscBackend};
+use crate::linalg::distributed::{Backend, PetscBackend, launcher_words};
 pub use crate::linalg::eigen::MAX_MODES;
 use serde::Deserialize;
 use std::path::Path;
@@ -453,6 +453,18 @@ impl BackendSpec {
         BackendSpec { kind: self.kind, ..Default::default() }
     }
 
+    /// The launcher, where one is named, refused when it does not split into words.
+    pub fn check_launcher(&self, file: &Path) -> Result<()> {
+        match self.launcher.as_deref().map(launcher_words) {
+            Some(Err(why)) => Err(BuildError::input(
+                file,
+                "reduction.backend.launcher (or --launcher)",
+                format!("\"{}\" {why}", self.launcher.as_deref().unwrap_or_default()),
+            )),
+            _ => Ok(()),
+        }
+    }
+
     /// These fields where `over` leaves them unset, `over`'s where it sets them.
     pub fn merged(&self, over: &BackendSpec) -> BackendSpec {
         BackendSpec {
@@ -476,16 +488,13 @@ impl BackendSpec {
         let default = PetscBackend::default();
         Backend::Petsc(PetscBackend {
             ranks: self.ranks.unwrap_or(default.ranks),
-            launcher: self
-                .launcher
-                .as_deref()
-                .map_or(default.launcher, |l| l.split_whitespace().map(str::to_string).collect()),
+            // refused before the build where it does not split (`check_launcher`)
+            launcher: self.launcher.as_deref().and_then(|l| launcher_words(l).ok()).unwrap_or(default.launcher),
             python: self.python.clone().unwrap_or(default.python),
             host: self.host.clone().unwrap_or(default.host),
             job_folder: self.job_folder.as_ref().map(|f| base.join(f)),
             partitioner: self.partitioner.clone().unwrap_or(default.partitioner),
-            // the job's files (matrices, driver, its output) kept for a look at a failure
-            keep_job_folder: std::env::var_os("FMU_BUILDER_KEEP_PETSC_JOB").is_some(),
+            keep_job_folder: default.keep_job_folder,
             connect_timeout_seconds: self.connect_timeout.unwrap_or(default.connect_timeout_seconds),
         })
     }

@@ -52,6 +52,7 @@ pub fn build_from_text(
 
 /// A missing launcher or a Python without petsc4py is found in a second, not after assembly.
 fn preflight_backend(spec: &mut Spec, input: &Path) -> Result<()> {
+    spec.reduction.backend.check_launcher(input)?;
     let Backend::Petsc(petsc) = spec.reduction.backend.backend(input.parent().unwrap_or(Path::new(""))) else {
         return Ok(());
     };

@@ -31,8 +31,8 @@ pub enum Backend {
 pub struct PetscBackend {
     /// MPI ranks.
     pub ranks: usize,
-    /// The launcher and its own options (`mpirun --hostfile hosts`, `srun`), words split at
-    /// white space; `-n <ranks>`, then the Python and the driver follow.
+    /// The launcher and its own options (`mpirun --hostfile hosts`, `srun`), in words
+    /// (`launcher_words`); `-n <ranks>`, then the Python and the driver follow.
     pub launcher: Vec<String>,
     /// The Python with petsc4py and mpi4py on every rank.
     pub python: String,
@@ -57,9 +57,28 @@ impl Default for PetscBackend {
             host: "127.0.0.1".into(),
             job_folder: None,
             partitioner: "current".into(),
-            keep_job_folder: false,
+            keep_job_folder: keep_job_requested(),
             connect_timeout_seconds: 300.0,
         }
+    }
+}
+
+/// `FMU_BUILDER_KEEP_PETSC_JOB`: keep the job's files (matrices, driver, its output) for a look
+/// at a failure. A debugging switch of this back-end, read where the back-end is configured, not
+/// by the input's parser.
+fn keep_job_requested() -> bool {
+    std::env::var_os("FMU_BUILDER_KEEP_PETSC_JOB").is_some()
+}
+
+/// The launcher's words as a POSIX shell splits them: quotes keep a word with spaces whole
+/// (`mpirun --hostfile "my hosts"`), which splitting at white space would cut in two.
+pub fn launcher_words(text: &str) -> Result<Vec<String>, Refusal> {
+    match shlex::split(text) {
+        None => Err(Refusal(
+            "has an unbalanced quote or ends in a backslash: quote its words as a POSIX shell would".into(),
+        )),
+        Some(words) if words.is_empty() => Err(Refusal("names no program".into())),
+        Some(words) => Ok(words),
     }
 }
 
@@ -154,4 +173,19 @@ fn probe_python(python: &str) -> Result<String, Refusal> {
     Err(Refusal(
         stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("failed without a message").trim().to_string(),
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn launcher_words_split_as_a_shell_splits_them() {
+        let words = launcher_words("mpirun --hostfile \"my hosts\" --mca btl self,tcp").unwrap();
+        assert_eq!(words, ["mpirun", "--hostfile", "my hosts", "--mca", "btl", "self,tcp"]);
+        assert_eq!(launcher_words("srun").unwrap(), ["srun"]);
+        let unbalanced = launcher_words("mpirun --hostfile \"my hosts").unwrap_err();
+        assert!(unbalanced.0.contains("unbalanced quote"), "{unbalanced}");
+        assert!(launcher_words("  ").unwrap_err().0.contains("names no program"));
+    }
 }
