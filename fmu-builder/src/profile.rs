@@ -3,10 +3,12 @@
 //! wall time and peak resident memory, for `fmu-builder --timings` and the benchmarks. A user
 //! sizing a machine for a large model, and whoever makes the builder faster, reads it.
 //!
-//! Phases nest (a factorisation inside the Craig-Bampton basis); the recorder is per thread, so
-//! stages need not pass it along. Peak memory per phase: the resident set (VmRSS) read when a
-//! phase starts and ends and, while per-phase memory is asked for (`per_phase_memory(true)`,
-//! `--timings`), every millisecond by a sampler thread, the largest reading going to every phase
+//! The stages emit their phases as `tracing` spans (the `phases` crate); a [`Profile`] is a
+//! recorder whose [`layer`](Profile::layer) listens to them in the subscriber the caller sets
+//! for one build, so two builds, each with its own subscriber, never share or lose phases.
+//! Phases nest (a factorisation inside the Craig-Bampton basis) as their spans do. Peak memory per phase: the resident set (VmRSS) read when a
+//! phase starts and ends and, while per-phase memory is asked for (`Profile::new(true)`,
+//! `--timings`), every millisecond by the profile's sampler thread, the largest reading going to every phase
 //! open then; so each phase's peak is its own, and an enclosing phase's peak covers its
 //! children's. Linux's own high-water mark (VmHWM) is never reset (writing to
 //! /proc/self/clear_refs would): it stays the process's peak for `process_peak_mib`,
@@ -15,41 +17,18 @@
 //! some 10 GB/s, so what a millisecond hides is about 10 MB. Without per-phase memory, a phase
 //! reports the process's peak so far (never less than its own).
 
-use std::cell::RefCell;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
+use tracing::span::{Attributes, Id};
+use tracing::{Event, Subscriber};
+use tracing_subscriber::Layer;
+use tracing_subscriber::layer::Context;
+use tracing_subscriber::registry::LookupSpan;
 
-/// Whether the sampler thread reads the resident set between phase boundaries.
-static PER_PHASE_MEMORY: AtomicBool = AtomicBool::new(false);
-/// Whether the sampler thread has been started (once per process).
-static SAMPLER_STARTED: AtomicBool = AtomicBool::new(false);
-/// The largest resident set read since the last phase boundary [KiB].
-static WINDOW_PEAK_KIB: AtomicU64 = AtomicU64::new(0);
 /// How often the sampler reads the resident set: reading /proc/self/statm costs some
 /// microseconds, so a millisecond keeps the sampler under a percent of a core.
 const SAMPLE_INTERVAL: Duration = Duration::from_millis(1);
-
-/// Ask for each phase's own peak memory (a sampler thread reads the resident set meanwhile).
-pub fn per_phase_memory(on: bool) {
-    PER_PHASE_MEMORY.store(on, Ordering::Relaxed);
-    if on && !SAMPLER_STARTED.swap(true, Ordering::Relaxed) {
-        let started = std::thread::Builder::new().name("rss-sampler".into()).spawn(|| {
-            // the thread lives as long as the process; it only sleeps while not asked for
-            loop {
-                if PER_PHASE_MEMORY.load(Ordering::Relaxed)
-                    && let Some(rss) = resident_kib()
-                {
-                    WINDOW_PEAK_KIB.fetch_max(rss, Ordering::Relaxed);
-                }
-                std::thread::sleep(SAMPLE_INTERVAL);
-            }
-        });
-        // without a thread, phase boundaries still bound each phase's peak from below
-        if started.is_err() {
-            SAMPLER_STARTED.store(false, Ordering::Relaxed);
-        }
-    }
-}
 
 /// Peak resident memory of the whole process so far [MiB] (Linux: VmHWM, never reset).
 pub fn process_peak_mib() -> Option<f64> {
@@ -70,10 +49,21 @@ pub struct Phase {
 }
 
 struct Open {
+    span: Id,
     index: usize,
     start: Instant,
     /// Peak seen so far in this phase, up to the last phase boundary [KiB].
     peak_kib: Option<u64>,
+}
+
+/// The resident-set window the sampler widens between phase boundaries.
+struct Window {
+    /// Whether the sampler reads the resident set (per-phase memory asked for).
+    sampling: bool,
+    /// The largest resident set read since the last phase boundary [KiB].
+    peak_kib: AtomicU64,
+    /// Tells the sampler thread to end (the profile was dropped).
+    ended: AtomicBool,
 }
 
 #[derive(Default)]
@@ -82,8 +72,58 @@ struct Recorder {
     open: Vec<Open>,
 }
 
-thread_local! {
-    static RECORDER: RefCell<Recorder> = RefCell::new(Recorder::default());
+/// The phases of the builds run under its [`layer`](Profile::layer), in the order they started.
+pub struct Profile {
+    recorder: Arc<Mutex<Recorder>>,
+    window: Arc<Window>,
+}
+
+/// Listens to the phase spans for a [`Profile`].
+pub struct ProfileLayer {
+    recorder: Arc<Mutex<Recorder>>,
+    window: Arc<Window>,
+}
+
+impl Profile {
+    /// A recorder; `per_phase_memory` starts a sampler thread that reads the resident set every
+    /// millisecond until the profile is dropped (without one, a phase reports the process's
+    /// peak so far).
+    pub fn new(per_phase_memory: bool) -> Self {
+        let window =
+            Arc::new(Window { sampling: per_phase_memory, peak_kib: AtomicU64::new(0), ended: AtomicBool::new(false) });
+        if per_phase_memory {
+            let sampled = Arc::downgrade(&window);
+            // without a thread, phase boundaries still bound each phase's peak from below
+            let _ = std::thread::Builder::new().name("rss-sampler".into()).spawn(move || {
+                while let Some(window) = sampled.upgrade().filter(|w| !w.ended.load(Ordering::Relaxed)) {
+                    if let Some(rss) = resident_kib() {
+                        window.peak_kib.fetch_max(rss, Ordering::Relaxed);
+                    }
+                    drop(window);
+                    std::thread::sleep(SAMPLE_INTERVAL);
+                }
+            });
+        }
+        Profile { recorder: Arc::default(), window }
+    }
+
+    /// The layer that records into this profile, for the subscriber of a build.
+    pub fn layer(&self) -> ProfileLayer {
+        ProfileLayer { recorder: Arc::clone(&self.recorder), window: Arc::clone(&self.window) }
+    }
+
+    /// The phases finished since the last call, in the order they started (none while a phase
+    /// is still open).
+    pub fn take(&self) -> Vec<Phase> {
+        let mut r = self.recorder.lock().unwrap_or_else(|e| e.into_inner());
+        if r.open.is_empty() { std::mem::take(&mut r.finished) } else { Vec::new() }
+    }
+}
+
+impl Drop for Profile {
+    fn drop(&mut self) {
+        self.window.ended.store(true, Ordering::Relaxed);
+    }
 }
 
 /// Peak resident set of this process [KiB] (Linux: VmHWM).
@@ -103,15 +143,17 @@ fn resident_kib() -> Option<u64> {
     Some(pages * u64::try_from(page).ok().filter(|&p| p > 0)? / 1024)
 }
 
-/// The largest resident set since the last boundary, the present one included; the window then
-/// starts again from the present one. Where per-phase memory is not asked for: the process's
-/// peak so far.
-fn close_window() -> Option<u64> {
-    if !PER_PHASE_MEMORY.load(Ordering::Relaxed) {
-        return high_water_kib();
+impl Window {
+    /// The largest resident set since the last boundary, the present one included; the window
+    /// then starts again from the present one. Where per-phase memory is not asked for: the
+    /// process's peak so far.
+    fn close(&self) -> Option<u64> {
+        if !self.sampling {
+            return high_water_kib();
+        }
+        let now = resident_kib()?;
+        Some(self.peak_kib.swap(now, Ordering::Relaxed).max(now))
     }
-    let now = resident_kib()?;
-    Some(WINDOW_PEAK_KIB.swap(now, Ordering::Relaxed).max(now))
 }
 
 fn max_opt(a: Option<u64>, b: Option<u64>) -> Option<u64> {
@@ -121,57 +163,75 @@ fn max_opt(a: Option<u64>, b: Option<u64>) -> Option<u64> {
     }
 }
 
-/// Run `f` as the phase `name` and record its wall time and peak memory.
-pub fn phase<T>(name: impl Into<String>, f: impl FnOnce() -> T) -> T {
-    let name = name.into();
-    crate::progress::phase(&name);
-    RECORDER.with(|r| {
-        let mut r = r.borrow_mut();
+/// The name of a phase span, read from its fields.
+#[derive(Default)]
+pub(crate) struct SpanText(pub(crate) String);
+
+impl tracing::field::Visit for SpanText {
+    fn record_str(&mut self, field: &tracing::field::Field, value: &str) {
+        if field.name() == phases::NAME || field.name() == phases::MESSAGE {
+            self.0 = value.to_string();
+        }
+    }
+    fn record_debug(&mut self, field: &tracing::field::Field, value: &dyn std::fmt::Debug) {
+        if field.name() == phases::NAME || field.name() == phases::MESSAGE {
+            self.0 = format!("{value:?}");
+        }
+    }
+}
+
+impl ProfileLayer {
+    fn lock(&self) -> std::sync::MutexGuard<'_, Recorder> {
+        self.recorder.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+impl<S: Subscriber + for<'a> LookupSpan<'a>> Layer<S> for ProfileLayer {
+    fn on_new_span(&self, attrs: &Attributes<'_>, id: &Id, _ctx: Context<'_, S>) {
+        if attrs.metadata().name() != phases::PHASE {
+            return;
+        }
+        let mut name = SpanText::default();
+        attrs.record(&mut name);
+        let mut r = self.lock();
         // what the enclosing phases reached before this one starts is theirs
-        let mark = close_window();
+        let mark = self.window.close();
         for open in r.open.iter_mut() {
             open.peak_kib = max_opt(open.peak_kib, mark);
         }
-        let index = r.finished.len();
-        let depth = r.open.len();
+        let (index, depth) = (r.finished.len(), r.open.len());
         // placed now so that phases list in the order they started
-        r.finished.push(Phase { name, depth, seconds: 0.0, peak_mib: None, detail: String::new() });
-        r.open.push(Open { index, start: Instant::now(), peak_kib: None });
-    });
-    let result = f();
-    RECORDER.with(|r| {
-        let mut r = r.borrow_mut();
-        let Some(open) = r.open.pop() else { return };
-        let peak = max_opt(open.peak_kib, close_window());
+        r.finished.push(Phase { name: name.0, depth, seconds: 0.0, peak_mib: None, detail: String::new() });
+        r.open.push(Open { span: id.clone(), index, start: Instant::now(), peak_kib: None });
+    }
+
+    fn on_close(&self, id: Id, _ctx: Context<'_, S>) {
+        let mut r = self.lock();
+        let Some(at) = r.open.iter().rposition(|o| o.span == id) else { return };
+        let open = r.open.remove(at);
+        let peak = max_opt(open.peak_kib, self.window.close());
         for parent in r.open.iter_mut() {
             parent.peak_kib = max_opt(parent.peak_kib, peak);
         }
         let phase = &mut r.finished[open.index];
         phase.seconds = open.start.elapsed().as_secs_f64();
         phase.peak_mib = peak.map(|k| k as f64 / 1024.0);
-    });
-    result
-}
+    }
 
-/// Add a count to the innermost running phase (e.g. "41 Lanczos vectors, 2 restarts").
-pub fn note(detail: impl FnOnce() -> String) {
-    RECORDER.with(|r| {
-        let mut r = r.borrow_mut();
+    fn on_event(&self, event: &Event<'_>, _ctx: Context<'_, S>) {
+        if event.metadata().target() != phases::NOTE_TARGET {
+            return;
+        }
+        let mut note = SpanText::default();
+        event.record(&mut note);
+        let mut r = self.lock();
         let Some(index) = r.open.last().map(|o| o.index) else { return };
         let phase = &mut r.finished[index];
         if !phase.detail.is_empty() {
             phase.detail.push_str("; ");
         }
-        phase.detail.push_str(&detail());
-    });
-}
-
-/// The phases finished on this thread since the last call, in the order they started.
-pub fn take() -> Vec<Phase> {
-    RECORDER.with(|r| {
-        let mut r = r.borrow_mut();
-        if r.open.is_empty() { std::mem::take(&mut r.finished) } else { Vec::new() }
-    })
+        phase.detail.push_str(&note.0);
+    }
 }
 
 /// The profile as a table for the terminal: nested phases indented under their parent.

@@ -2,7 +2,14 @@
 //! is the process's, so nothing else may allocate much meanwhile; the other test here only reads
 //! the sources).
 
-use fmu_builder::profile::{note, per_phase_memory, phase, process_peak_mib, table, take};
+use fmu_builder::profile::{Profile, process_peak_mib, table};
+use phases::{note, phase};
+use tracing_subscriber::layer::SubscriberExt;
+
+/// Run `work` with `profile` listening, as the command line runs a build.
+fn recorded<T>(profile: &Profile, work: impl FnOnce() -> T) -> T {
+    tracing::subscriber::with_default(tracing_subscriber::registry().with(profile.layer()), work)
+}
 
 /// Peak resident set as getrusage reports it (what `/usr/bin/time` shows) [MiB].
 fn rusage_max_rss_mib() -> f64 {
@@ -15,22 +22,23 @@ fn rusage_max_rss_mib() -> f64 {
 
 #[test]
 fn nested_phases_keep_their_order_depth_time_and_own_peaks() {
-    take();
-    per_phase_memory(true);
+    let profile = Profile::new(true);
     const MIB: usize = 1 << 20;
-    let outer = phase("outer", || {
-        note(|| "first".into());
-        let inner = phase("inner", || {
-            // 200 MiB touched and freed inside the phase: only the sampler sees them
-            let v = vec![1u8; 200 * MIB];
-            std::thread::sleep(std::time::Duration::from_millis(20));
-            v.iter().map(|&b| b as usize).sum::<usize>()
-        });
-        note(|| "second".into());
-        phase("small", || std::hint::black_box(vec![1u8; MIB]).len()) + inner
+    let outer = recorded(&profile, || {
+        phase("outer", || {
+            note(|| "first".into());
+            let inner = phase("inner", || {
+                // 200 MiB touched and freed inside the phase: only the sampler sees them
+                let v = vec![1u8; 200 * MIB];
+                std::thread::sleep(std::time::Duration::from_millis(20));
+                v.iter().map(|&b| b as usize).sum::<usize>()
+            });
+            note(|| "second".into());
+            phase("small", || std::hint::black_box(vec![1u8; MIB]).len()) + inner
+        })
     });
     assert_eq!(outer, 201 * MIB);
-    let phases = take();
+    let phases = profile.take();
     let names: Vec<(&str, usize)> = phases.iter().map(|p| (p.name.as_str(), p.depth)).collect();
     assert_eq!(names, [("outer", 0), ("inner", 1), ("small", 1)]);
     assert_eq!(phases[0].detail, "first; second");
@@ -53,8 +61,37 @@ fn nested_phases_keep_their_order_depth_time_and_own_peaks() {
         let rusage = rusage_max_rss_mib();
         assert!(rusage >= inner - COUNTER_SLACK_MIB, "getrusage's peak {rusage} MiB below the inner phase's {inner}");
     }
-    assert!(take().is_empty());
+    assert!(profile.take().is_empty());
     assert!(table(&phases).lines().count() == 4 && table(&phases).contains("  inner"));
+}
+
+/// Two builds at once, each under its own subscriber (as two jobs in one process run): each
+/// profile holds its own phases and notes, none of the other's, and a phase run with nobody
+/// listening goes nowhere.
+#[test]
+fn concurrent_builds_keep_their_own_phases() {
+    let run = |tag: &'static str| {
+        std::thread::spawn(move || {
+            let profile = Profile::new(false);
+            recorded(&profile, || {
+                for i in 0..50 {
+                    phase(format!("{tag} {i}"), || note(|| format!("{tag} note")));
+                }
+            });
+            profile.take()
+        })
+    };
+    let (a, b) = (run("a"), run("b"));
+    phase("unobserved", || note(|| "unobserved".into()));
+    for (tag, phases) in [("a", a.join().expect("thread a")), ("b", b.join().expect("thread b"))] {
+        assert_eq!(phases.len(), 50, "{tag}: {phases:?}");
+        for (i, p) in phases.iter().enumerate() {
+            assert_eq!(
+                (p.name.as_str(), p.depth, p.detail.as_str()),
+                (format!("{tag} {i}").as_str(), 0, format!("{tag} note").as_str())
+            );
+        }
+    }
 }
 
 /// Writing to /proc/self/clear_refs resets the high-water mark that `/usr/bin/time -v`,

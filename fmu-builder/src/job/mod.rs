@@ -11,9 +11,11 @@ use crate::input::spec::{BackendSpec, Spec};
 use crate::output::binaries::{self, PlatformBinary};
 use crate::output::destinations::{self, Destination};
 use crate::pipeline::{self, Built, sweep::SweepRow};
-use crate::{profile, progress};
+use crate::profile::{self, Profile};
+use crate::progress::Progress;
 pub use exports::Exports;
 use std::path::{Path, PathBuf};
+use tracing_subscriber::layer::SubscriberExt;
 
 /// What one run is asked to do.
 #[derive(Debug, Clone, Default)]
@@ -47,7 +49,6 @@ struct Input {
 
 /// Run `job`: every failure comes back as one error, for the caller to print.
 pub fn run(job: &Job) -> Result<()> {
-    profile::per_phase_memory(job.timings);
     let input = read_input(&job.input)?;
     if job.sweep {
         check_destinations(job, &input, None)?;
@@ -148,10 +149,7 @@ fn sweep(job: &Job, input: &Input) -> Result<()> {
         let _ = out.write_all(pipeline::sweep::table_row(row).as_bytes());
         let _ = out.flush();
     };
-    progress::enable(!job.quiet);
-    let rows = pipeline::sweep::sweep(&spec, &input.path, &mut print_row);
-    progress::finish();
-    let rows = rows?;
+    let rows = observed(job, &Profile::new(false), || pipeline::sweep::sweep(&spec, &input.path, &mut print_row))?;
     if let Some(path) = &job.sweep_svg {
         std::fs::write(path, pipeline::sweep::plot(&rows)).map_err(|e| BuildError::CommandLine {
             option: format!("--sweep-svg {}", path.display()),
@@ -163,18 +161,30 @@ fn sweep(job: &Job, input: &Input) -> Result<()> {
 
 /// Build the FMU, write what else was asked for, print the summary.
 fn build(job: &Job, input: &Input, output: &Path, binaries: &[PlatformBinary]) -> Result<()> {
-    progress::enable(!job.quiet);
-    let built = pipeline::build_from_text(&input.text, &input.path, output, binaries, &job.backend);
-    progress::finish();
-    let built = built?;
+    let profile = Profile::new(job.timings);
+    let built = observed(job, &profile, || {
+        pipeline::build_from_text(&input.text, &input.path, output, binaries, &job.backend)
+    })?;
     exports::write(&job.exports, &built, output)?;
     if !job.quiet {
         print_summary(&built, output, binaries);
     }
     if job.timings {
-        print!("{}", profile::table(&built.profile));
+        print!("{}", profile::table(&profile.take()));
     }
     Ok(())
+}
+
+/// Run `work` with its phases recorded into `profile` and, unless quiet, shown as they go (the
+/// subscriber is this thread's for the run only: a library caller's own is left alone).
+fn observed<T>(job: &Job, profile: &Profile, work: impl FnOnce() -> T) -> T {
+    let progress = (!job.quiet).then(Progress::on_stderr);
+    let subscriber = tracing_subscriber::registry().with(profile.layer()).with(progress.clone());
+    let result = tracing::subscriber::with_default(subscriber, work);
+    if let Some(progress) = progress {
+        progress.finish();
+    }
+    result
 }
 
 fn print_summary(built: &Built, output: &Path, binaries: &[PlatformBinary]) {

@@ -17,7 +17,6 @@ use crate::model::rigid_coupling::Assembled;
 use crate::model::stress::Recovery;
 use crate::output::fmu::guid::guid;
 use crate::output::report::{Report, backend_of, report_of};
-use crate::profile;
 use crate::reduce::accuracy::Accuracy;
 use crate::reduce::basis::{Basis, ModeCount};
 use crate::reduce::damping::{modal_damping, with_user_damping};
@@ -96,7 +95,7 @@ pub(super) fn reduce<S: Support>(mut prepared: Prepared) -> Result<Built> {
         reduce_coupled(&body, &solver, support, recovery)?
     };
     let Coupled { spec, part, flanges, model, .. } = body;
-    Ok(Built { spec, part, flanges, model, basis, reduced, report, profile: Vec::new() })
+    Ok(Built { spec, part, flanges, model, basis, reduced, report })
 }
 
 fn reduce_coupled<S: Support>(
@@ -107,7 +106,7 @@ fn reduce_coupled<S: Support>(
 ) -> Result<(Basis, ReducedBody, Report)> {
     let (basis, method) = support.basis(body, solver)?;
     solver.health()?;
-    let inv = profile::phase("invariants", || {
+    let inv = phases::phase("invariants", || {
         invariants::invariants(&body.model, &body.part.mesh.nodes, &body.flanges, body.origin, &basis)
     });
     support.check_invariants(body, &inv)?;
@@ -137,7 +136,7 @@ fn rotation_terms(body: &Coupled, phi_mesh: MatRef<'_, f64>) -> Option<RotationT
     if body.mount.is_some() && !body.spec.rotates() {
         return None;
     }
-    Some(profile::phase("rotation invariants", || {
+    Some(phases::phase("rotation invariants", || {
         let r = inertia::rotation_invariants(&body.model, &body.part.mesh.nodes, body.origin, phi_mesh);
         RotationTerms { g: r.g, o_mat: r.o_mat, o_vec: r.o_vec }
     }))

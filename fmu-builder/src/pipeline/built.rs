@@ -17,6 +17,4 @@ pub struct Built {
     pub basis: Basis,
     pub reduced: ReducedBody,
     pub report: Report,
-    /// Where the build spent its time and memory (filled by `build`; empty from `reduce_spec`).
-    pub profile: Vec<crate::profile::Phase>,
 }

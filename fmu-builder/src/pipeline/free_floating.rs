@@ -12,7 +12,6 @@ use crate::ffrf::invariants::{self, Invariants};
 use crate::linalg::eigen::Deflation;
 use crate::linalg::sparse::SpdSolver;
 use crate::model::rigid_coupling;
-use crate::profile;
 use crate::reduce::accuracy::{enforce, free_free_accuracy};
 use crate::reduce::basis::{self, Basis};
 use crate::reduce::free_body::{rigid_deflation, shifted_stiffness};
@@ -32,7 +31,7 @@ pub(super) struct FreeFloating {
 
 impl Support for FreeFloating {
     fn couple(p: Prepared) -> Result<Coupled> {
-        let mut model = profile::phase("coupling of the flanges", || {
+        let mut model = phases::phase("coupling of the flanges", || {
             rigid_coupling::rigid_coupling(&p.free, &p.part.mesh.nodes, &p.flanges, [0.0; 3])
         })?;
         drop(p.free);
@@ -55,7 +54,7 @@ impl Support for FreeFloating {
     }
 
     fn basis(&mut self, body: &Coupled, solver: &SpdSolver) -> Result<(Basis, String)> {
-        let basis = profile::phase("reduction basis", || {
+        let basis = phases::phase("reduction basis", || {
             basis::free_free(&body.model, solver, self.shift, &self.rigid, body.modes)
         })?;
         Ok((basis, "free-interface modes + inertia-relief attachment shapes".to_string()))
@@ -85,7 +84,7 @@ impl Support for FreeFloating {
     }
 
     fn measure(self, run: &Run<'_>, _: &Recovered) -> Result<Measured> {
-        let accuracy = profile::phase("accuracy comparison with the full model", || {
+        let accuracy = phases::phase("accuracy comparison with the full model", || {
             free_free_accuracy(&run.body.model, run.solver, self.shift, &self.rigid, run.basis)
         })?;
         enforce(&accuracy)?;

@@ -20,14 +20,12 @@ use crate::input::spec::{BackendSpec, Spec};
 use crate::linalg::distributed::Backend;
 use crate::output::binaries::PlatformBinary;
 use crate::output::package;
-use crate::profile;
 use against::Against;
 use std::path::Path;
 
 /// Read `input`, reduce, write the FMU to `output`.
 pub fn build(input: &Path, output: &Path) -> Result<Built> {
-    profile::take();
-    let spec = profile::phase("read and check the input", || Spec::from_file(input))?;
+    let spec = phases::phase("read and check the input", || Spec::from_file(input))?;
     build_spec(spec, input, output, &[])
 }
 
@@ -43,8 +41,7 @@ pub fn build_from_text(
     binaries: &[PlatformBinary],
     backend: &BackendSpec,
 ) -> Result<Built> {
-    profile::take();
-    let mut spec = profile::phase("read and check the input", || Spec::from_str(input, text))?;
+    let mut spec = phases::phase("read and check the input", || Spec::from_str(input, text))?;
     spec.reduction.backend = spec.reduction.backend.merged(backend);
     preflight_backend(&mut spec, input)?;
     build_spec(spec, input, output, binaries)
@@ -56,22 +53,21 @@ fn preflight_backend(spec: &mut Spec, input: &Path) -> Result<()> {
     let Backend::Petsc(petsc) = spec.reduction.backend.backend(input.parent().unwrap_or(Path::new(""))) else {
         return Ok(());
     };
-    let (python, report) = profile::phase("PETSc back-end: launcher and Python checked", || {
+    let (python, report) = phases::phase("PETSc back-end: launcher and Python checked", || {
         petsc.preflight(spec.reduction.backend.python.is_some())
     })?;
-    profile::note(|| format!("{python}: {report}"));
-    crate::progress::step(|| format!("PETSc back-end: the driver runs under {python}"));
+    phases::note(|| format!("{python}: {report}"));
+    phases::step(|| format!("PETSc back-end: the driver runs under {python}"));
     spec.reduction.backend.python = Some(python);
     Ok(())
 }
 
 fn build_spec(spec: Spec, input: &Path, output: &Path, binaries: &[PlatformBinary]) -> Result<Built> {
-    let mut built = reduce_spec(spec, input)?;
-    profile::phase("checks and packaging", || {
+    let built = reduce_spec(spec, input)?;
+    phases::phase("checks and packaging", || {
         package::write_fmu(&built.spec, &built.reduced, &built.report, output, binaries)
     })
     .against(input, InputHint { field: "", hint: "" })?;
-    built.profile = profile::take();
     Ok(built)
 }
 

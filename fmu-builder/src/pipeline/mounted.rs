@@ -16,7 +16,6 @@ use crate::linalg::eigen::Eigenpairs;
 use crate::linalg::sparse::{self, SpdSolve, SpdSolver};
 use crate::model::rigid_coupling;
 use crate::model::stress::nodal_stresses;
-use crate::profile;
 use crate::reduce::accuracy::{self, Accuracy};
 use crate::reduce::band_response::{self, Known};
 use crate::reduce::basis::{self, Basis, ModeCount};
@@ -50,7 +49,7 @@ impl Support for Mounted {
             return Err(internal_check("a mounted body without a mount flange".into()));
         };
         let origin = p.flanges[mount].reference;
-        let mut model = profile::phase("coupling of the flanges", || {
+        let mut model = phases::phase("coupling of the flanges", || {
             rigid_coupling::rigid_coupling(&p.free, &p.part.mesh.nodes, &p.flanges, origin)
         })?;
         drop(p.free);
@@ -78,9 +77,9 @@ impl Support for Mounted {
             solver.solve_refined(u.as_mut());
             u
         });
-        let flange_shapes = profile::phase("flange static shapes", || {
+        let flange_shapes = phases::phase("flange static shapes", || {
             let mut g = basis::flange_unit_loads(&body.model);
-            profile::note(|| format!("{} unit loads", g.ncols()));
+            phases::note(|| format!("{} unit loads", g.ncols()));
             solver.solve_refined(g.as_mut());
             g
         });
@@ -88,9 +87,9 @@ impl Support for Mounted {
     }
 
     fn basis(&mut self, body: &Coupled, solver: &SpdSolver) -> Result<(Basis, String)> {
-        let (basis, method) = profile::phase("reduction basis", || self.method_basis(body, solver))?;
+        let (basis, method) = phases::phase("reduction basis", || self.method_basis(body, solver))?;
         let basis = match body.spec.scene.as_ref().and_then(|s| s.tolerance) {
-            Some(tol) if !body.model.dofs.flange_first.is_empty() => profile::phase("order selection", || {
+            Some(tol) if !body.model.dofs.flange_first.is_empty() => phases::phase("order selection", || {
                 choose_order(&body.spec, &body.model, solver, self.inertial_loads.as_ref(), basis, tol)
             })?,
             _ => basis,
@@ -129,7 +128,7 @@ impl Support for Mounted {
             phi_mesh,
         };
         let translates = spec.declares(SceneLoad::Gravity) || spec.declares(SceneLoad::Acceleration);
-        Ok(Some(profile::phase("geometric stiffening", || prestress.terms(spec.rotates(), translates))?))
+        Ok(Some(phases::phase("geometric stiffening", || prestress.terms(spec.rotates(), translates))?))
     }
 
     /// The flange shapes' unit loads, then the scene's inertial cases.
@@ -149,7 +148,7 @@ impl Support for Mounted {
             .into_iter()
             .map(|k| (body.flanges[k].name.clone(), body.model.dofs.flange_first[k]))
             .collect();
-        let (mut accuracy, full_modes) = profile::phase("accuracy comparison with the full model", || {
+        let (mut accuracy, full_modes) = phases::phase("accuracy comparison with the full model", || {
             let n_full = run.basis.omega.len().max(10);
             accuracy::accuracy(&body.model, run.solver, &self.flange_shapes, run.basis, &force_dofs, n_full, self.whole)
         })?;
@@ -223,7 +222,7 @@ fn frequency_response(
         modes: run.reduced.stress_points.iter().map(|p| p.modes.as_slice()).collect(),
     });
     let cut = if named { band_response::CUT } else { DEFAULT_CUT };
-    let response = profile::phase("frequency-response comparison", || {
+    let response = phases::phase("frequency-response comparison", || {
         let (full_hz, compliance) = (&accuracy.full_hz, &accuracy.compliance_full);
         frf::compare(&body.model, run.solver, run.basis, damping, band, full_hz, compliance, probe.as_ref(), known, cut)
     })?;

@@ -11,7 +11,6 @@ use crate::model::connectivity;
 use crate::model::flange::{self, Flange};
 use crate::model::part::{self, Part};
 use crate::model::stress::{Recovery, requested_points};
-use crate::profile;
 use crate::reduce::basis::ModeCount;
 use std::path::{Path, PathBuf};
 
@@ -28,8 +27,8 @@ pub(super) struct Prepared {
 }
 
 pub(super) fn prepare(spec: Spec, file: &Path) -> Result<Prepared> {
-    let mut part = profile::phase("mesh or import", || part::part_of(&spec, file))?;
-    let flanges = profile::phase("flange selection", || flange::select_flanges(&spec, file, &part))?;
+    let mut part = phases::phase("mesh or import", || part::part_of(&spec, file))?;
+    let flanges = phases::phase("flange selection", || flange::select_flanges(&spec, file, &part))?;
     // recovery points are checked before anything costly: a misspelt node set fails at once
     let recovery = match spec.outputs.as_ref().and_then(|o| o.stress.as_ref()) {
         Some(request) => Some(requested_points(file, request, &part)?),
@@ -37,10 +36,10 @@ pub(super) fn prepare(spec: Spec, file: &Path) -> Result<Prepared> {
     };
     // a part given with its supports (free_free false) is held by them, not only by flanges
     if spec.geometry.matrices.as_ref().is_none_or(|m| m.free_free) {
-        profile::phase("connectivity", || connectivity::check_connected(file, &part, &flanges))?;
+        phases::phase("connectivity", || connectivity::check_connected(file, &part, &flanges))?;
     }
-    let free = profile::phase("assembly (free-free K, M)", || {
-        profile::note(|| format!("{} nodes, {} DoFs", part.mesh.n_nodes(), 3 * part.mesh.n_nodes()));
+    let free = phases::phase("assembly (free-free K, M)", || {
+        phases::note(|| format!("{} nodes, {} DoFs", part.mesh.n_nodes(), 3 * part.mesh.n_nodes()));
         part.free_free()
     })
     .against(file, GEOMETRY)?;

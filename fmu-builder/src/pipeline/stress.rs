@@ -8,7 +8,6 @@ use crate::model::flange::Flange;
 use crate::model::part::Part;
 use crate::model::stress::{Recovery, RecoveryPoint, hot_spots, nodal_stresses};
 use crate::output::report::{StressPointReport, UnitCaseStress};
-use crate::profile;
 use faer::MatRef;
 use fmu_runtime::reduced::StressPoint;
 use std::path::Path;
@@ -69,12 +68,12 @@ pub fn recover(
     phi_mesh: MatRef<'_, f64>,
     unit: &UnitCases<'_>,
 ) -> Result<Recovered> {
-    profile::phase("stress recovery", || {
+    phases::phase("stress recovery", || {
         let mut points = recovery.points;
         if recovery.hot_spots > 0 {
             points.extend(hot_spots_of(file, part, flanges, unit, &points, recovery.hot_spots)?);
         }
-        profile::note(|| format!("{} points, {} unit load cases", points.len(), unit.names.len()));
+        phases::note(|| format!("{} points, {} unit load cases", points.len(), unit.names.len()));
         let nodes: Vec<usize> = points.iter().map(|p| p.node).collect();
         let r = phi_mesh.ncols();
         let modes = nodal_stresses(part, &nodes, phi_mesh)?;

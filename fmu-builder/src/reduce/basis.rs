@@ -63,8 +63,8 @@ pub fn craig_bampton(
     let solver = HeldSolver::with_shapes(mounted, ni, flange_shapes.clone())?;
 
     // constraint modes: [-K_ii^-1 K_ib; I], from the flange shapes
-    let psi = crate::profile::phase("constraint modes", || {
-        crate::profile::note(|| format!("{nb} flange DoFs, from their unit-load shapes (no further solve)"));
+    let psi = phases::phase("constraint modes", || {
+        phases::note(|| format!("{nb} flange DoFs, from their unit-load shapes (no further solve)"));
         solver.constraint_modes()
     });
 

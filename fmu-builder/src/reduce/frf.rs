@@ -307,7 +307,7 @@ pub fn compare(
     };
     let method = method(fast.as_ref(), cut, band);
     for (i, &f) in frequencies.iter().enumerate() {
-        crate::progress::step(|| format!("{} of {} frequencies ({f:.4} Hz)", i + 1, frequencies.len()));
+        phases::step(|| format!("{} of {} frequencies ({f:.4} Hz)", i + 1, frequencies.len()));
         let (full, full_stress) =
             full_response(fast.as_ref(), direct.as_mut(), column_stresses.as_deref(), stress, &rows, damping, f)?;
         if let (Some(probe), Some(fs)) = (stress, &full_stress) {

@@ -152,8 +152,7 @@ impl Session {
     pub fn start(backend: &PetscBackend, k: &Sparse, what: &str) -> Result<Self> {
         let base = backend.job_folder.clone().unwrap_or_else(std::env::temp_dir);
         let folder = job_folder::create(&base)?;
-        let started =
-            crate::profile::phase(format!("PETSc back-end: {what}"), || Self::launch(backend, k, what, &folder));
+        let started = phases::phase(format!("PETSc back-end: {what}"), || Self::launch(backend, k, what, &folder));
         match started {
             Ok(session) => Ok(session),
             Err(e) => {
@@ -168,7 +167,7 @@ impl Session {
     fn launch(backend: &PetscBackend, k: &Sparse, what: &str, folder: &Path) -> Result<Self> {
         let driver = folder.join("driver.py");
         job_folder::write_private(&driver, DRIVER)?;
-        crate::profile::phase("job files written", || petsc_binary::write_symmetric(&folder.join("stiffness.bin"), k))?;
+        phases::phase("job files written", || petsc_binary::write_symmetric(&folder.join("stiffness.bin"), k))?;
         let (listener, port) = listen(backend)?;
         let token = job_folder::random_hex(32)?;
         let job_path = write_job(backend, folder, port, &token)?;
@@ -177,7 +176,7 @@ impl Session {
         let stdout = job_folder::private_file(&folder.join("driver.out"))?;
         let stderr = job_folder::private_file(&stderr_path)?;
         let launched = format!("{program} {}", arguments.join(" "));
-        crate::profile::note(|| format!("launched: {launched}"));
+        phases::note(|| format!("launched: {launched}"));
         let mut command = launcher_command(&program, &arguments, stdout, stderr);
         let child = command.spawn().map_err(|e| {
             BuildError::Backend(format!(
@@ -243,7 +242,7 @@ impl Session {
                 Ok((stream, peer)) => match greeted(stream, token) {
                     Ok(c) => break c,
                     Err(why) => {
-                        crate::profile::note(|| format!("a connection from {peer} was dropped: {why}"));
+                        phases::note(|| format!("a connection from {peer} was dropped: {why}"));
                         refused.push(format!("{peer}: {why}"));
                     }
                 },
@@ -267,7 +266,7 @@ impl Session {
                     tail(&watch.stderr, 12)
                 )));
             }
-            crate::progress::step(|| {
+            phases::step(|| {
                 format!(
                     "waiting for the PETSc driver to connect: {:.0} s of {:.0}",
                     began.elapsed().as_secs_f64(),
@@ -276,7 +275,7 @@ impl Session {
             });
             std::thread::sleep(Duration::from_millis(20));
         };
-        let answer = crate::profile::phase("driver: load, partition and factor", || {
+        let answer = phases::phase("driver: load, partition and factor", || {
             read_line(&mut connection, watch, "the driver's factor")
         })?;
         if answer["ok"] != json!(true) {
@@ -296,7 +295,7 @@ impl Session {
             factor_seconds: number(&answer["seconds"]["factor"]),
         };
         let s = started.clone();
-        crate::profile::note(move || {
+        phases::note(move || {
             format!(
                 "{} ranks, rows per rank {:?}, MUMPS factor {:.3e} entries; load {:.1} s, partition {:.1} s, factor {:.1} s",
                 s.ranks, s.rows_per_rank, s.factor_entries, s.load_seconds, s.partition_seconds, s.factor_seconds

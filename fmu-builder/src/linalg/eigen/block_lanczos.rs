@@ -122,7 +122,7 @@ impl<'a> BlockLanczos<'a> {
         if self.exhausted {
             return Ok(false);
         }
-        crate::progress::step(|| format!("{} Lanczos vectors, block solve {}", self.dim(), self.t.len() + 1));
+        phases::step(|| format!("{} Lanczos vectors, block solve {}", self.dim(), self.t.len() + 1));
         let b = self.t.len();
         // one refinement step: slender parts have cond(K) ~ 1e12, and a plain solve would cost
         // the lowest Ritz values their sixth digit (corrections of 1e-7 .. 1e-6 on the beams).
@@ -321,7 +321,7 @@ impl<'a> BlockLanczos<'a> {
             values.push(1.0 / theta);
             y.as_mut().col_mut(c).copy_from(u.col(idx));
         }
-        crate::progress::step(|| format!("{dim} Lanczos vectors: {settled} of {count} modes converged"));
+        phases::step(|| format!("{dim} Lanczos vectors: {settled} of {count} modes converged"));
         Ok((values, y, converged))
     }
 

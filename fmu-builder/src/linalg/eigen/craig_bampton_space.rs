@@ -38,7 +38,7 @@ pub fn lowest_and_held(
         // nothing to share, a problem too small for it, or too many modes: each on its own
         return separate();
     }
-    let shared = crate::profile::phase("eigen-solve (block shift-invert Lanczos)", || {
+    let shared = phases::phase("eigen-solve (block shift-invert Lanczos)", || {
         SharedSearch::new(k, m, held, count, count_held)?.run(tol)
     });
     distributed_health(k)?;
@@ -157,7 +157,7 @@ impl<'a, 'h> SharedSearch<'a, 'h> {
             if !converged && (refine == 0 || !at_limit) {
                 let worst = worst_whole.max(worst_held);
                 let how = if refine > 0 { "a tighter estimate" } else { "every solve refined" };
-                crate::profile::note(|| format!("{dim} vectors left a residual of {worst:.1e}: again with {how}"));
+                phases::note(|| format!("{dim} vectors left a residual of {worst:.1e}: again with {how}"));
                 if refine > 0 {
                     estimate_tol *= 1e-2;
                 } else {
@@ -166,7 +166,7 @@ impl<'a, 'h> SharedSearch<'a, 'h> {
                 adaptive = false;
                 continue;
             }
-            crate::profile::note(|| {
+            phases::note(|| {
                 format!(
                     "{count} modes of the whole and {count_held} held, in one space: {solves} block solves of {pt} ({dim} Lanczos vectors); {}",
                     clock.describe()
@@ -205,7 +205,7 @@ impl<'a, 'h> SharedSearch<'a, 'h> {
             lanczos.clock.ritz += began.elapsed();
             let estimated = whole_estimated && held_estimated;
             if !estimated && !exhausted && dim >= self.shared_limit {
-                crate::profile::note(|| format!("no shared convergence with {dim} vectors: separate searches"));
+                phases::note(|| format!("no shared convergence with {dim} vectors: separate searches"));
                 return Ok(None);
             }
             let at_limit = exhausted || dim >= self.max_dim;

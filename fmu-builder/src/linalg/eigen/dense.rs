@@ -15,7 +15,7 @@ pub(super) fn dense_search(
     shift: f64,
     deflate: Option<&Deflation>,
 ) -> Result<Option<Eigenpairs>> {
-    crate::profile::phase("eigen-solve (dense, a small model)", || {
+    phases::phase("eigen-solve (dense, a small model)", || {
         let n = k.n();
         let leading;
         let m = if m.nrows() > n {
@@ -44,7 +44,7 @@ pub(super) fn dense_search(
             Eigenpairs { values: all.values[..keep].to_vec(), vectors: all.vectors.subcols(0, keep).to_owned() };
         let (pairs, residuals) = checked(k, m, pairs, shift, true);
         let (worst, at) = residuals.iter().enumerate().fold((0.0f64, 0), worst_of);
-        crate::profile::note(|| format!("{keep} of {available} modes, {n} DoFs"));
+        phases::note(|| format!("{keep} of {available} modes, {n} DoFs"));
         if worst > RESIDUAL_TOL {
             return Err(BuildError::Numerical(format!(
                 "eigensolver: mode {} of the dense solve of this {n}-DoF model has the residual {worst:.1e} \

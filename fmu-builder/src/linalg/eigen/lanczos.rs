@@ -22,9 +22,7 @@ pub(super) fn lanczos_search(
     {
         return Ok(pairs);
     }
-    crate::profile::phase("eigen-solve (block shift-invert Lanczos)", || {
-        block_lanczos_search(k, m, want, tol, shift, deflate)
-    })
+    phases::phase("eigen-solve (block shift-invert Lanczos)", || block_lanczos_search(k, m, want, tol, shift, deflate))
 }
 
 /// `lanczos_search` past the dense path: one space grown until the wanted pairs converge.
@@ -83,7 +81,7 @@ fn block_lanczos_search(
             continue;
         }
         let solves = lanczos.blocks();
-        crate::profile::note(|| {
+        phases::note(|| {
             format!("{count} modes: {solves} block solves of {p} ({dim} Lanczos vectors); {}", lanczos.clock.describe())
         });
         if !converged {

@@ -17,8 +17,8 @@ pub struct LuSolver {
 
 impl LuSolver {
     pub fn new(a: &Sparse, what: &str) -> Result<Self> {
-        let lu = crate::profile::phase(format!("LU factorisation: {what}"), || {
-            crate::profile::note(|| format!("n {}, nnz(A) {}", a.nrows(), a.compute_nnz()));
+        let lu = phases::phase(format!("LU factorisation: {what}"), || {
+            phases::note(|| format!("n {}, nnz(A) {}", a.nrows(), a.compute_nnz()));
             a.sp_lu()
         })
         .map_err(|e| BuildError::Numerical(format!("{what} is {}", faer_error::lu(&e))))?;

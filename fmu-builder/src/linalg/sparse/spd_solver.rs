@@ -51,7 +51,7 @@ fn symbolic_factor(a: &Sparse, what: &str) -> Result<SymbolicCholesky<usize>> {
         None => SymmetricOrdering::Amd,
     };
     let by = if order.is_some() { "METIS nested dissection" } else { "AMD (METIS refused the graph)" };
-    crate::profile::note(|| format!("{by}, n {}, nnz(A) {}", a.nrows(), a.compute_nnz()));
+    phases::note(|| format!("{by}, n {}, nnz(A) {}", a.nrows(), a.compute_nnz()));
     factorize_symbolic_cholesky(a.symbolic(), Side::Lower, ordering, Default::default())
         .map_err(|e| BuildError::Numerical(format!("{what}: its factor {}", faer_error::generic(&e))))
 }
@@ -90,7 +90,7 @@ impl<'m> SpdSolver<'m> {
     /// Factor `a` (both triangles stored); `dof` names a row of `a` for the message when the
     /// factorisation meets a pivot that is not positive (where the mechanism is).
     pub fn new(a: Cow<'m, Sparse>, what: &str, dof: &dyn Fn(usize) -> String) -> Result<Self> {
-        let symbolic = crate::profile::phase(format!("ordering: {what}"), || symbolic_factor(&a, what))?;
+        let symbolic = phases::phase(format!("ordering: {what}"), || symbolic_factor(&a, what))?;
         let entries = symbolic.len_val();
         let mut values = zeroed(entries).ok_or_else(|| {
             BuildError::Numerical(format!(
@@ -100,8 +100,8 @@ impl<'m> SpdSolver<'m> {
         })?;
         huge_pages(&mut values);
         let par = faer::get_global_parallelism();
-        let outcome = crate::profile::phase(format!("Cholesky factorisation: {what}"), || {
-            crate::profile::note(|| {
+        let outcome = phases::phase(format!("Cholesky factorisation: {what}"), || {
+            phases::note(|| {
                 format!(
                     "n {}, nnz(A) {}, nnz(L) {entries} ({:.0} MiB, known before factoring)",
                     a.nrows(),
