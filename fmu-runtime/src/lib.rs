@@ -14,6 +14,7 @@ pub mod kinematics;
 pub mod propagator;
 pub mod reduced;
 pub mod scalar;
+pub mod workspace;
 
 fmi2::export_fmi2!(crate::fmu::BodyFmu);
 

@@ -45,6 +45,8 @@ impl Transition {
     }
 }
 
+/// Needs no workspace, unlike [`crate::coupled_propagator::CoupledPropagator`]: its tables are
+/// its state (the transition of the prepared step), and `advance` works mode by mode in place.
 #[derive(Debug, Default)]
 pub struct ModalPropagator {
     key: Option<(f64, f64, f64)>,

@@ -2,7 +2,8 @@
 //! other threads do not count) around 1000 steps, derivative evaluations and output reads, for a
 //! fixed mount, a spinning one with every coupling and stiffening term present, and a
 //! free-floating body; through the body, through the FMI model trait and through the exported
-//! C functions (the code the FMU's binary runs).
+//! C functions (the code the FMU's binary runs); and the coupled propagator on its own, with the
+//! workspace its caller lends it, which refuses a workspace too small without allocating.
 //!
 //! The bodies are synthetic (consistent shapes, small invariants), sized like a 20-mode model:
 //! allocation does not depend on the numbers. fmu-builder's tests/no_alloc.rs does the same with
@@ -11,9 +12,11 @@
 use fmi2::Model;
 use fmi2::types::*;
 use fmu_runtime::body::FlexibleBody;
+use fmu_runtime::coupled_propagator::CoupledPropagator;
 use fmu_runtime::fmu::BodyFmu;
 use fmu_runtime::interface::VariableTable;
 use fmu_runtime::reduced::{FlangeShapes, ReducedBody, RotationTerms, Stiffening, StressPoint, two_mode_body};
+use fmu_runtime::workspace::{Workspace, WorkspaceReq};
 use std::ffi::CString;
 use std::sync::Arc;
 use test_support::alloc::{Counting, assert_no_allocation};
@@ -198,6 +201,35 @@ fn body_steps_and_derivatives_allocate_nothing() {
         exercise_body("synthetic body (26 modes)", synthetic_body(26, false), motion);
     }
     exercise_body("free-floating body (26 modes)", synthetic_body(26, true), Motion::Fixed);
+}
+
+/// The coupled propagator with a lent workspace: new exponentials (the step size changes every
+/// call) and advances allocate nothing, and a workspace smaller than
+/// `CoupledPropagator::workspace_req` is refused by both, without allocating or panicking.
+#[test]
+fn the_coupled_propagator_works_in_the_lent_workspace_and_refuses_a_small_one() {
+    let n = 26;
+    let mut r = Lcg(3);
+    let omega: Vec<f64> = (0..n).map(|k| 30.0 * (k + 1) as f64).collect();
+    let (c_d, c_k, extra) = (r.vec(n * n, 1.0), r.vec(n * n, 10.0), vec![0.0; n]);
+    let (p0, p1) = (r.vec(n, 1.0), r.vec(n, 0.5));
+    let (mut q, mut qd) = (r.vec(n, 1e-3), r.vec(n, 1e-2));
+    let mut p = CoupledPropagator::with_modes(n);
+    let mut ws = Workspace::new(CoupledPropagator::workspace_req(n));
+    // one value short of what advance needs, far short of the exponential's
+    let mut tiny = Workspace::new(WorkspaceReq::slices(&[4 * n - 1]));
+    let mut refused = 0;
+    assert_no_allocation("coupled propagator: prepare and advance", || {
+        for k in 0..20 {
+            let h = 1e-3 * (1 + k % 3) as f64;
+            p.prepare(&omega, 0.5, 1e-4, &extra, &c_d, &c_k, h, &mut ws).unwrap();
+            p.advance(&omega, &p0, &p1, &mut q, &mut qd, &mut ws).unwrap();
+            refused += p.prepare(&omega, 0.5, 1e-4, &extra, &c_d, &c_k, 2.0 * h, &mut tiny).is_err() as usize;
+            refused += p.advance(&omega, &p0, &p1, &mut q, &mut qd, &mut tiny).is_err() as usize;
+        }
+    });
+    assert_eq!(refused, 40);
+    assert!(q.iter().chain(&qd).all(|v| v.is_finite()));
 }
 
 fn outputs(table: &VariableTable, reduced: &ReducedBody) -> Vec<u32> {

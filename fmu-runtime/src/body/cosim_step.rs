@@ -3,12 +3,11 @@
 //! the coupling's drift from the transition's) and the free body's substeps.
 
 use super::mounted::fill_coupling;
-use super::{
-    CoupledWork, Coupling, FlangeLoad, FlexibleBody, FrameState, FreeWork, HostMount, InputRates, MountMotion,
-    Parameters, REAL_LIMIT, UNSTABLE_STIFFNESS,
-};
+use super::step_workspace::{CoupledWork, FreeWork, StepStart, StepWorkspace};
+use super::{Coupling, FlangeLoad, FlexibleBody, FrameState, InputRates, MountMotion, REAL_LIMIT, UNSTABLE_STIFFNESS};
 use crate::coupled_propagator::Prepared;
 use crate::kinematics::{self as k3, Mat3, Vec3};
+use crate::workspace::WorkspaceTooSmall;
 
 /// Largest h |dC| for which the coupling's difference dC from the exact transition's is
 /// treated as a load (see `step`): the predictor-corrector then gains at most
@@ -98,40 +97,6 @@ impl std::fmt::Display for StepError {
     }
 }
 
-/// What a step changes, kept from its start (preallocated: a step allocates nothing), so that a
-/// step that is not taken leaves the body as it was: the host can read it, save it, or restore
-/// an earlier state and go on.
-#[derive(Debug, Clone, Default)]
-pub(super) struct StepStart {
-    q: Vec<f64>,
-    qd: Vec<f64>,
-    mount: MountMotion,
-    loads: Vec<FlangeLoad>,
-    frame: Option<FrameState>,
-    rate_mount: MountMotion,
-    rate_loads: Vec<FlangeLoad>,
-    rates_any: bool,
-    host_mount: HostMount,
-    stepped_valid: bool,
-    stepped_a: [f64; 3],
-    stepped_z: [f64; 3],
-    stepped_loads: Vec<FlangeLoad>,
-    stepped_params: Option<Parameters>,
-}
-
-impl StepStart {
-    pub(super) fn new(n: usize, flanges: usize) -> Self {
-        Self {
-            q: vec![0.0; n],
-            qd: vec![0.0; n],
-            loads: vec![FlangeLoad::default(); flanges],
-            rate_loads: vec![FlangeLoad::default(); flanges],
-            stepped_loads: vec![FlangeLoad::default(); flanges],
-            ..Self::default()
-        }
-    }
-}
-
 /// The mount as the host set it, and which of its groups moved by their kinematic rates
 /// (position and velocity do not enter the body's equations: they are left alone).
 struct HeldMount {
@@ -175,21 +140,38 @@ impl FlexibleBody {
         if self.frame.is_some() {
             self.free_substeps_within_budget(h)?;
         }
-        self.keep_step_start();
-        let result = self.step_from_start(h).and_then(|()| self.check_step_end(h));
+        // the step's scratch, lent down its functions (taking it out leaves an empty one behind:
+        // no allocation)
+        let mut ws = std::mem::take(&mut self.step_work);
+        let result = self.step_in(&mut ws, h);
+        self.step_work = ws;
+        result
+    }
+
+    /// The step in the scratch `ws` lends: kept at its start, undone if it fails.
+    fn step_in(&mut self, ws: &mut StepWorkspace, h: f64) -> Result<(), StepError> {
+        if !ws.fits(self.q.len(), self.loads.len()) {
+            return Err(StepError::NotTaken(format!(
+                "the step's workspace was not made for this body of {} modes and {} force flanges",
+                self.q.len(),
+                self.loads.len()
+            )));
+        }
+        self.keep_step_start(&mut ws.start);
+        let result = self.step_from_start(ws, h).and_then(|()| self.check_step_end(h));
         if result.is_err() {
-            self.restore_step_start();
+            self.restore_step_start(&ws.start);
         }
         result
     }
 
-    fn step_from_start(&mut self, h: f64) -> Result<(), StepError> {
+    fn step_from_start(&mut self, ws: &mut StepWorkspace, h: f64) -> Result<(), StepError> {
         let not_taken = StepError::NotTaken;
         if self.frame.is_some() {
-            self.follow_input_change().map_err(not_taken)?;
+            self.follow_input_change(&mut ws.jump).map_err(not_taken)?;
             // free bodies hold their flange loads over the step; the inputs still end the step
             // at their interpolated values
-            self.step_free(h).map_err(not_taken)?;
+            self.step_free(&mut ws.free, h).map_err(not_taken)?;
             if self.rates.any {
                 self.extrapolate_inputs(h);
             }
@@ -208,8 +190,8 @@ impl FlexibleBody {
             self.eval.valid = false;
         }
         self.check_inputs().map_err(StepError::Inputs)?;
-        self.follow_input_change().map_err(not_taken)?;
-        self.step_mounted(h).map_err(not_taken)
+        self.follow_input_change(&mut ws.jump).map_err(not_taken)?;
+        self.step_mounted(&mut ws.coupled, h).map_err(not_taken)
     }
 
     /// Substeps of a free body's step of h at its present spin, and Err if more than one call
@@ -237,9 +219,8 @@ impl FlexibleBody {
         (SUBSTEP_WORK / substep_work(self.q.len())) as usize
     }
 
-    /// Everything the step changes, copied into the preallocated [`StepStart`].
-    fn keep_step_start(&mut self) {
-        let s = &mut self.step_start;
+    /// Everything the step changes, copied into the step's preallocated [`StepStart`].
+    fn keep_step_start(&self, s: &mut StepStart) {
         s.q.copy_from_slice(&self.q);
         s.qd.copy_from_slice(&self.qd);
         s.mount = self.mount;
@@ -257,8 +238,7 @@ impl FlexibleBody {
     }
 
     /// The body as [`keep_step_start`](Self::keep_step_start) found it; caches are recomputed.
-    fn restore_step_start(&mut self) {
-        let s = &self.step_start;
+    fn restore_step_start(&mut self, s: &StepStart) {
         self.q.copy_from_slice(&s.q);
         self.qd.copy_from_slice(&s.qd);
         self.mount = s.mount;
@@ -329,7 +309,8 @@ impl FlexibleBody {
         Ok(())
     }
 
-    fn step_mounted(&mut self, h: f64) -> Result<(), String> {
+    /// A mounted body's step, in the scratch `work` lends.
+    fn step_mounted(&mut self, work: &mut CoupledWork, h: f64) -> Result<(), String> {
         // the mount moves within the step as its own inputs say (r' = v, R' = w~ R, v' = a,
         // w' = z) wherever the host gave no rate; the host's next inputs replace that motion
         let held = self.kinematic_mount_rates();
@@ -343,15 +324,14 @@ impl FlexibleBody {
         // body-frame spin and hence the coupling: only the load turns
         let steady = held.steady && self.steady_coupling();
         // inputs that move over the step move the coupling too: its matrices at the step's end
-        let mut work = std::mem::take(&mut self.coupled_work);
         let moving = ramp && !steady;
         if moving {
-            self.coupling_at_step_end(&mut work, h);
+            self.coupling_at_step_end(work, h);
         }
         // a coupling that starts at zero (spin-up from rest) still couples within the step
         let coupled = self.coupling.active || (moving && work.coupling_end.active);
         if coupled {
-            self.advance_coupled(&mut work, ramp, moving, h);
+            self.advance_coupled(work, ramp, moving, h)?;
         } else {
             self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, h);
             if ramp {
@@ -360,7 +340,6 @@ impl FlexibleBody {
                 self.propagator.advance(&self.body.omega, &self.load, &mut self.q, &mut self.qd);
             }
         }
-        self.coupled_work = work;
         if ramp {
             self.extrapolate_inputs(h);
             self.record_stepped_inputs();
@@ -406,8 +385,15 @@ impl FlexibleBody {
     /// only the round-off of a rotating base.R) enters as the small difference dC = C - C_ref,
     /// by a predictor-corrector load on top of the exact coupled transition; the reference is
     /// renewed (one matrix exponential, at the step's midpoint coupling) when h |dC| exceeds
-    /// REFERENCE_DRIFT. A steady spin runs on one exponential.
-    fn advance_coupled(&mut self, work: &mut CoupledWork, ramp: bool, moving: bool, h: f64) {
+    /// REFERENCE_DRIFT. A steady spin runs on one exponential. The propagator's scratch is
+    /// `work.propagator`; Err (before anything moved) if it is too small.
+    fn advance_coupled(
+        &mut self,
+        work: &mut CoupledWork,
+        ramp: bool,
+        moving: bool,
+        h: f64,
+    ) -> Result<(), WorkspaceTooSmall> {
         let prepared = self.coupled.is_prepared(h, self.params.alpha, self.params.beta);
         // a steady spin meets its own transition again: compared first, cheaper than the drift
         let held_exactly =
@@ -416,13 +402,13 @@ impl FlexibleBody {
             |c: &Coupling<f64>| h * coupling_drift(c, self.coupled.reference(), &self.body.omega) <= REFERENCE_DRIFT;
         let current = held_exactly || prepared && drift_ok(&self.coupling) && (!moving || drift_ok(&work.coupling_end));
         if !current {
-            self.renew_reference(work, moving, h);
+            self.renew_reference(work, moving, h)?;
         }
         let rate: &[f64] = if ramp { &self.load_rate } else { &work.zeros };
+        let ws = &mut work.propagator;
         // a transition made for this step (held or midpoint coupling) needs no correction
         if held_exactly || !current {
-            self.coupled.advance(&self.body.omega, &self.load, rate, &mut self.q, &mut self.qd);
-            return;
+            return self.coupled.advance(&self.body.omega, &self.load, rate, &mut self.q, &mut self.qd, ws);
         }
         // Heun: the residual coupling force held at its start value, then ramped to its value at
         // the predicted end
@@ -434,7 +420,7 @@ impl FlexibleBody {
             work.f0[i] = self.load[i]
                 - residual_coupling_force(&self.coupling, self.coupled.reference(), i, &work.q0, &work.qd0);
         }
-        self.coupled.advance(&self.body.omega, &work.f0, rate, &mut self.q, &mut self.qd);
+        self.coupled.advance(&self.body.omega, &work.f0, rate, &mut self.q, &mut self.qd, ws)?;
         for (i, rate) in rate.iter().enumerate() {
             let f_end =
                 self.load[i] + h * rate - residual_coupling_force(end, self.coupled.reference(), i, &self.q, &self.qd);
@@ -442,11 +428,12 @@ impl FlexibleBody {
         }
         self.q.copy_from_slice(&work.q0);
         self.qd.copy_from_slice(&work.qd0);
-        self.coupled.advance(&self.body.omega, &work.f0, &work.f1, &mut self.q, &mut self.qd);
+        self.coupled.advance(&self.body.omega, &work.f0, &work.f1, &mut self.q, &mut self.qd, ws)
     }
 
-    /// A new reference transition, at the step's midpoint coupling where the inputs move.
-    fn renew_reference(&mut self, work: &mut CoupledWork, moving: bool, h: f64) {
+    /// A new reference transition, at the step's midpoint coupling where the inputs move, in the
+    /// propagator's scratch `work.propagator`.
+    fn renew_reference(&mut self, work: &mut CoupledWork, moving: bool, h: f64) -> Result<(), WorkspaceTooSmall> {
         let (c_d, c_k): (&[f64], &[f64]) = if moving {
             for (m, (a, b)) in work.c_d_mid.iter_mut().zip(self.coupling.c_d.iter().zip(&work.coupling_end.c_d)) {
                 *m = 0.5 * (a + b);
@@ -467,10 +454,12 @@ impl FlexibleBody {
             c_d,
             c_k,
             h,
-        );
+            &mut work.propagator,
+        )?;
         if prepared == Prepared::Computed && was_definite && !self.coupled.definite() {
             self.warning = Some(UNSTABLE_STIFFNESS);
         }
+        Ok(())
     }
 
     /// A warning about the last step, once: the FMI layer logs it.
@@ -662,14 +651,11 @@ impl FlexibleBody {
     /// (|W| h_sub <= SUBSTEP_ANGLE) of a second-order (Heun) splitting: the modes propagate exactly under
     /// the coupling load (trapezoidal in time), the rigid motion by the averaged rates, the
     /// attitude by the exact rotation of the mean angular velocity.
-    fn step_free(&mut self, h: f64) -> Result<(), String> {
+    fn step_free(&mut self, work: &mut FreeWork, h: f64) -> Result<(), String> {
         let substeps = self.free_substeps_within_budget(h).map_err(|e| e.reason().to_string())?;
         let hs = h / substeps as f64;
         self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, hs);
-        // the preallocated workspace, taken out for the substeps (leaves an empty Vec: no allocation)
-        let mut work = std::mem::take(&mut self.free_work);
-        let result = self.free_substeps(&mut work, substeps, hs);
-        self.free_work = work;
+        let result = self.free_substeps(work, substeps, hs);
         self.eval.valid = false;
         result
     }

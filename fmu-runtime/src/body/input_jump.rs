@@ -12,11 +12,12 @@
 //! spin is not a jump (comparing it with the step's extrapolation would make every host that
 //! holds w while z is set bounce the modes each step).
 
+use super::step_workspace::JumpWork;
 use super::{FlangeLoad, FlexibleBody, Parameters, SteppedState};
 use crate::kinematics::Vec3;
 
-/// The loads a Co-Simulation step ended with (host-given rates applied), and workspace of the
-/// shift.
+/// The loads a Co-Simulation step ended with (host-given rates applied); the shift's scratch is
+/// the step's [`JumpWork`].
 #[derive(Debug, Clone, Default)]
 pub(super) struct SteppedInputs {
     pub(super) valid: bool,
@@ -25,23 +26,11 @@ pub(super) struct SteppedInputs {
     pub(super) z: Vec3,
     pub(super) loads: Vec<FlangeLoad>,
     pub(super) params: Option<Parameters>,
-    q: Vec<f64>,
-    qd: Vec<f64>,
-    equilibrium: Vec<f64>,
 }
 
 impl SteppedInputs {
-    pub(super) fn new(n: usize, flanges: usize) -> Self {
-        Self {
-            valid: false,
-            a: [0.0; 3],
-            z: [0.0; 3],
-            loads: vec![FlangeLoad::default(); flanges],
-            params: None,
-            q: vec![0.0; n],
-            qd: vec![0.0; n],
-            equilibrium: vec![0.0; n],
-        }
+    pub(super) fn new(flanges: usize) -> Self {
+        Self { valid: false, a: [0.0; 3], z: [0.0; 3], loads: vec![FlangeLoad::default(); flanges], params: None }
     }
 }
 
@@ -95,8 +84,9 @@ impl FlexibleBody {
 
     /// Before a step: if the host changed a load since the last step, move the algebraic modes
     /// by the change of their equilibrium (same dynamic modes and mount pose and spin, old and
-    /// new loads), keeping their deviation from it and every velocity.
-    pub(super) fn follow_input_change(&mut self) -> Result<(), String> {
+    /// new loads), keeping their deviation from it and every velocity; `copies`: the step's scratch
+    /// for the state before the shift and the old equilibrium.
+    pub(super) fn follow_input_change(&mut self, copies: &mut JumpWork) -> Result<(), String> {
         let range = self.algebraic_range();
         if range.is_empty() || !self.stepped.valid {
             return Ok(());
@@ -105,25 +95,25 @@ impl FlexibleBody {
         if s.a == self.mount.a && s.z == self.mount.z && s.loads == self.loads && s.params == Some(self.params) {
             return Ok(());
         }
-        let mut work = std::mem::take(&mut self.stepped);
-        work.q.copy_from_slice(&self.q);
-        work.qd.copy_from_slice(&self.qd);
+        let mut stepped = std::mem::take(&mut self.stepped);
+        copies.q.copy_from_slice(&self.q);
+        copies.qd.copy_from_slice(&self.qd);
         // the equilibrium under the old inputs: swapped in, solved, swapped back
-        self.swap_inputs(&mut work);
+        self.swap_inputs(&mut stepped);
         let old = self.equilibrate_quasi_static(false);
-        work.equilibrium[range.clone()].copy_from_slice(&self.q[range.clone()]);
-        self.swap_inputs(&mut work);
-        self.q.copy_from_slice(&work.q);
+        copies.equilibrium[range.clone()].copy_from_slice(&self.q[range.clone()]);
+        self.swap_inputs(&mut stepped);
+        self.q.copy_from_slice(&copies.q);
         let new = old.and_then(|_| self.equilibrate_quasi_static(false));
         if new.is_ok() {
             for j in range {
-                self.q[j] = work.q[j] + (self.q[j] - work.equilibrium[j]);
+                self.q[j] = copies.q[j] + (self.q[j] - copies.equilibrium[j]);
             }
         } else {
-            self.q.copy_from_slice(&work.q);
+            self.q.copy_from_slice(&copies.q);
         }
-        self.qd.copy_from_slice(&work.qd);
-        self.stepped = work;
+        self.qd.copy_from_slice(&copies.qd);
+        self.stepped = stepped;
         self.eval.valid = false;
         new
     }
@@ -143,6 +133,7 @@ impl FlexibleBody {
 #[cfg(test)]
 mod tests {
     use super::super::FlexibleBody;
+    use super::JumpWork;
     use crate::reduced::two_mode_body;
     use std::sync::Arc;
 
@@ -163,10 +154,10 @@ mod tests {
         b.q_mut()[1] += 1e-9;
         b.qd_mut()[1] = 2e-6;
         let (q_before, qd_before) = (b.q()[1], b.qd()[1]);
-        b.follow_input_change().unwrap();
+        b.follow_input_change(&mut JumpWork::new(2)).unwrap();
         assert_eq!((b.q()[1], b.qd()[1]), (q_before, qd_before), "held loads move nothing");
         b.load_mut(0).f = [0.0, -2.0, 0.5];
-        b.follow_input_change().unwrap();
+        b.follow_input_change(&mut JumpWork::new(2)).unwrap();
         let p_new = b.qdd().unwrap()[1] + 4.0e6 * b.q()[1];
         // equal up to the round-off of the quotients (no coupling: the equilibrium is p / omega^2)
         let expected = q_before + (p_new - p_old) / 4.0e6;

@@ -13,9 +13,10 @@
 //! a body on a prescribed mount (input check, modal load, coupling terms); `reaction` the mount
 //! reaction; `free_floating` the free body's accelerations and invariants; `cosim_step`
 //! Co-Simulation stepping (input rates, exact and predictor-corrector steps, the free body's
-//! substeps); `input_jump` Co-Simulation's quasi-static modes across load changes; `quasi_static`
-//! Model Exchange's solve of the modes above the cutoff; `statics` the static start; `dense` the
-//! dense kernels (dot products and the small in-place solver).
+//! substeps); `step_workspace` the step's scratch, lent down its functions; `input_jump`
+//! Co-Simulation's quasi-static modes across load changes; `quasi_static` Model Exchange's solve
+//! of the modes above the cutoff; `statics` the static start; `dense` the dense kernels (dot
+//! products and the small in-place solver).
 
 mod cosim_step;
 pub use cosim_step::{SUBSTEP_ANGLE, StepError};
@@ -26,6 +27,7 @@ mod mounted;
 mod quasi_static;
 mod reaction;
 mod statics;
+mod step_workspace;
 mod stress;
 
 use crate::coupled_propagator::CoupledPropagator;
@@ -33,11 +35,11 @@ use crate::kinematics::{self as k3, Mat3, Vec3};
 use crate::propagator::ModalPropagator;
 use crate::reduced::ReducedBody;
 use crate::scalar::{Dual, Scalar, c};
-use cosim_step::StepStart;
 use dense::shape_dot;
 use input_jump::SteppedInputs;
 use quasi_static::QuasiStaticWork;
 use std::sync::Arc;
+use step_workspace::StepWorkspace;
 
 /// Prescribed motion of the mount flange, resolved in the world frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -157,33 +159,6 @@ pub struct Invariants<T = f64> {
     pub angular_momentum: Vec3<T>,
 }
 
-/// Workspace of a mounted body's step with coupling terms: the inputs and coupling at the
-/// step's end and their midpoint.
-#[derive(Debug, Clone, Default)]
-struct CoupledWork {
-    /// The substep's start state and the predictor-corrector's loads.
-    q0: Vec<f64>,
-    qd0: Vec<f64>,
-    f0: Vec<f64>,
-    f1: Vec<f64>,
-    /// The coupling at the step's midpoint (ramped inputs) and a zero load rate (held inputs).
-    c_d_mid: Vec<f64>,
-    c_k_mid: Vec<f64>,
-    zeros: Vec<f64>,
-    loads_end: Vec<FlangeLoad>,
-    coupling_end: Coupling<f64>,
-}
-
-/// Workspace of a free-floating body's step: the substep's start state and its two coupling
-/// loads (empty for a mounted body).
-#[derive(Debug, Clone, Default)]
-struct FreeWork {
-    q0: Vec<f64>,
-    qd0: Vec<f64>,
-    load0: Vec<f64>,
-    load1: Vec<f64>,
-}
-
 /// Everything of a [`FlexibleBody`] that evolves or can be set: what a saved state holds. The
 /// rest is the immutable reduced body and caches that are functions of these (recomputed on
 /// demand, so a body rebuilt from its state continues bit-identically).
@@ -262,8 +237,6 @@ pub struct FlexibleBody<T = f64> {
     frame_rate: FrameState<T>,
     /// 3 x n workspace: C_r(q) = C_r + [G_a q]^T
     cr_q: Vec<T>,
-    free_work: FreeWork,
-    coupled_work: CoupledWork,
     propagator: ModalPropagator,
     /// Exact transition of the coupled modes (mounted bodies with rotation or stiffening terms).
     coupled: CoupledPropagator,
@@ -288,8 +261,9 @@ pub struct FlexibleBody<T = f64> {
     /// Co-Simulation: the host's view of the mount's orientation and spin where the last step
     /// moved them by their kinematics (see `cosim_step`), and which of them the host drives.
     host_mount: HostMount,
-    /// Co-Simulation: what the step in progress changes, as it was at its start.
-    step_start: StepStart,
+    /// Co-Simulation: the step's scratch (its start, to undo it; the coupled propagator's
+    /// workspace; ...), allocated here once and lent to the step's functions. Not state.
+    step_work: StepWorkspace,
 }
 
 /// Largest magnitude of a Real the host sets (and of a rate it gives, and of a state a step may
@@ -353,26 +327,6 @@ impl FlexibleBody {
             initial_frame: InitialFrame::default(),
             frame_rate: FrameState::default(),
             cr_q: vec![0.0; 3 * n],
-            coupled_work: if body.free_floating {
-                CoupledWork::default()
-            } else {
-                CoupledWork {
-                    q0: vec![0.0; n],
-                    qd0: vec![0.0; n],
-                    f0: vec![0.0; n],
-                    f1: vec![0.0; n],
-                    c_d_mid: vec![0.0; n * n],
-                    c_k_mid: vec![0.0; n * n],
-                    zeros: vec![0.0; n],
-                    loads_end: vec![FlangeLoad::default(); nf],
-                    coupling_end: Coupling { c_d: vec![0.0; n * n], c_k: vec![0.0; n * n], ..Coupling::default() },
-                }
-            },
-            free_work: if body.free_floating {
-                FreeWork { q0: vec![0.0; n], qd0: vec![0.0; n], load0: vec![0.0; n], load1: vec![0.0; n] }
-            } else {
-                FreeWork::default()
-            },
             propagator: ModalPropagator::with_modes(n),
             coupled: if body.free_floating || (body.rotation.is_none() && body.stiffening.is_none()) {
                 CoupledPropagator::default()
@@ -391,9 +345,9 @@ impl FlexibleBody {
             quasi_static: false,
             settling: false,
             qs_work: QuasiStaticWork::new(n, body.n_dynamic(), body.free_floating),
-            stepped: SteppedInputs::new(n, nf),
+            stepped: SteppedInputs::new(nf),
             host_mount: HostMount::default(),
-            step_start: StepStart::new(n, nf),
+            step_work: StepWorkspace::for_body(&body),
             body,
         }
     }
@@ -428,9 +382,6 @@ impl FlexibleBody {
             initial_frame: self.initial_frame,
             frame_rate: FrameState::default(),
             cr_q: zeros(3 * n),
-            // stepping is f64 only
-            free_work: FreeWork::default(),
-            coupled_work: CoupledWork::default(),
             propagator: ModalPropagator::with_modes(0),
             coupled: CoupledPropagator::default(),
             warning: None,
@@ -444,7 +395,7 @@ impl FlexibleBody {
             // stepping is f64 only
             stepped: SteppedInputs::default(),
             host_mount: HostMount::default(),
-            step_start: StepStart::default(),
+            step_work: StepWorkspace::default(),
         }
     }
 
@@ -520,7 +471,8 @@ impl FlexibleBody {
                 return Err("the state's coupling reference has non-finite values".into());
             }
             let body = Arc::clone(&b.body);
-            b.coupled.prepare(&body.omega, r.alpha, r.beta, &body.modal_damping, &r.c_d, &r.c_k, r.h);
+            let ws = &mut b.step_work.coupled.propagator;
+            b.coupled.prepare(&body.omega, r.alpha, r.beta, &body.modal_damping, &r.c_d, &r.c_k, r.h, ws)?;
         }
         Ok(b)
     }
