@@ -4,13 +4,20 @@
 use std::fmt;
 use std::path::PathBuf;
 
+pub use fe_input::error::{InputError, Refusal};
+pub use fe_linalg::error::LinalgError;
+pub use petsc_backend::BackendError;
+
 #[derive(Debug, thiserror::Error)]
 pub enum BuildError {
-    /// Something in the input file: `field` is a path like `flanges[1].nodes`, or empty when the
-    /// whole file is meant.
-    #[error("{}: {}{message}", .file.display(), field_prefix(.field))]
-    Input { file: PathBuf, field: String, message: String },
-    /// A numerical step failed (a singular stiffness, an eigensolver that did not converge).
+    /// Something in the input file, named by its field (the input stage's error).
+    #[error(transparent)]
+    Input(#[from] InputError),
+    /// The linear algebra failed: a factor, an eigen-solve, the distributed back-end.
+    #[error(transparent)]
+    Linalg(#[from] LinalgError),
+    /// A numerical step of the model, the reduction or the output failed (a coupling that
+    /// names a DoF beyond the model, a basis that loses rank, a non-finite array).
     #[error("{0}")]
     Numerical(String),
     /// A numerical failure put against the part of the input that drives the stage it happened
@@ -41,13 +48,6 @@ pub enum BuildError {
         #[source]
         reason: Refusal,
     },
-    /// The input file itself cannot be read.
-    #[error("{}: cannot read the input: it {source}", .path.display())]
-    UnreadableInput {
-        path: PathBuf,
-        #[source]
-        source: Refusal,
-    },
     /// A command-line option's value refused before the build.
     #[error("{option}: {message}")]
     CommandLine { option: String, message: String },
@@ -63,10 +63,6 @@ pub enum BuildError {
         #[source]
         source: Box<BuildError>,
     },
-    /// The distributed back-end could not be started or reached (launcher, Python packages,
-    /// network): nothing in the input's model to change.
-    #[error("the PETSc back-end: {0}")]
-    Backend(String),
 }
 
 /// Where in the input a numerical failure is put, and what to change there.
@@ -78,9 +74,7 @@ pub struct InputHint {
     pub hint: &'static str,
 }
 
-fn field_prefix(field: &str) -> String {
-    if field.is_empty() { String::new() } else { format!("{field}: ") }
-}
+use fe_input::error::field_prefix;
 
 fn hint_suffix(hint: &str) -> String {
     if hint.is_empty() { String::new() } else { format!("; {hint}") }
@@ -88,15 +82,26 @@ fn hint_suffix(hint: &str) -> String {
 
 impl BuildError {
     pub fn input(file: &std::path::Path, field: impl Into<String>, message: impl Into<String>) -> Self {
-        BuildError::Input { file: file.to_owned(), field: field.into(), message: message.into() }
+        BuildError::Input(InputError::field(file, field, message))
     }
     /// A numerical failure as one of the input's `place`; any other error is already the
-    /// input's, the back-end's or a file's, and stays as it is.
+    /// input's, the back-end's (it could not be started or reached) or a file's, and stays as
+    /// it is.
     pub fn in_input(self, file: &std::path::Path, place: InputHint) -> Self {
         match self {
             BuildError::Numerical(_) => BuildError::InInput { file: file.to_owned(), place, source: Box::new(self) },
+            BuildError::Linalg(LinalgError::Backend(BackendError::Unavailable(_))) => self,
+            BuildError::Linalg(_) => BuildError::InInput { file: file.to_owned(), place, source: Box::new(self) },
             other => other,
         }
+    }
+    /// A factor that could not be made because its matrix is singular or not positive definite:
+    /// in a model, a mechanism or a mount that does not hold the part.
+    pub fn is_singular(&self) -> bool {
+        matches!(
+            self,
+            BuildError::Linalg(LinalgError::Singular(_) | LinalgError::Backend(BackendError::NotFactored { .. }))
+        )
     }
     pub fn io(path: &std::path::Path, source: std::io::Error) -> Self {
         BuildError::Io { path: path.to_owned(), source }
@@ -106,22 +111,10 @@ impl BuildError {
     }
 }
 
-/// Why a file is refused: a sentence without the path (callers name the path and the field or
-/// option the way their messages do).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Refusal(pub String);
-
-impl std::error::Error for Refusal {}
-
-impl From<&str> for Refusal {
-    fn from(reason: &str) -> Self {
-        Refusal(reason.to_string())
-    }
-}
-
-impl std::fmt::Display for Refusal {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
+/// The back-end's failures reach the build as the linear algebra's, whose solves run there.
+impl From<BackendError> for BuildError {
+    fn from(e: BackendError) -> Self {
+        BuildError::Linalg(LinalgError::Backend(e))
     }
 }
 
@@ -166,12 +159,15 @@ mod tests {
     /// the ones the command line has always printed.
     #[test]
     fn every_failure_class_keeps_its_message() {
-        use super::Refusal;
+        use super::{BackendError, InputError, LinalgError, Refusal};
         use std::path::PathBuf;
         let cases: Vec<(BuildError, &str)> = vec![
             (BuildError::file(Path::new("a.vtk"), "needs a part with elements"), "a.vtk: needs a part with elements"),
             (
-                BuildError::UnreadableInput { path: PathBuf::from("b.json"), source: Refusal("is a folder".into()) },
+                BuildError::Input(InputError::Unreadable {
+                    path: PathBuf::from("b.json"),
+                    source: Refusal("is a folder".into()),
+                }),
                 "b.json: cannot read the input: it is a folder",
             ),
             (
@@ -201,9 +197,17 @@ mod tests {
                 },
                 "f.dll: refused as the FMU's win64 binary (--platform-binary win64=...): it is empty",
             ),
-            (BuildError::Backend("mpirun not found".into()), "the PETSc back-end: mpirun not found"),
+            (BackendError::Unavailable("mpirun not found".into()).into(), "the PETSc back-end: mpirun not found"),
+            (
+                BackendError::NotFactored { what: "the stiffness".into(), reason: "singular".into() }.into(),
+                "the stiffness could not be factored by MUMPS: singular",
+            ),
+            (
+                LinalgError::Singular("the stiffness is not positive definite".into()).into(),
+                "the stiffness is not positive definite",
+            ),
         ];
-        assert_eq!(cases.len(), 7);
+        assert_eq!(cases.len(), 9);
         for (error, words) in cases {
             assert_eq!(error.to_string(), words);
         }

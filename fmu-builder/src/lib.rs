@@ -20,13 +20,16 @@
 //! line asks for it (destinations checked first, exports, summary).
 
 pub mod error;
-pub mod linalg;
-pub mod out_of_memory;
 pub mod profile;
 pub mod progress;
 
+/// The stages below the builder's own, crates of their own so that Cargo keeps them below:
+/// they cannot name the stages that use them.
+pub use fe_input as input;
+pub use fe_input::out_of_memory;
+pub use fe_linalg as linalg;
+
 pub mod ffrf;
-pub mod input;
 pub mod model;
 pub mod output;
 pub mod reduce;

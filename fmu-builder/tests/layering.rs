@@ -1,8 +1,11 @@
-//! The builder's layout, checked on its sources where Cargo cannot see it: a stage uses only the
-//! stages before it (input, model, reduce, ffrf, output, then the driver `pipeline` and the
-//! command-line `job`; `error`, `linalg`, `profile`, `out_of_memory` and `progress` serve all),
-//! no module imports a module that imports it back, every top-level module has a stage, and the
-//! binary only parses its arguments and runs a job. The runtime's model layer (mechanics)
+//! The builder's layout. The stages below the builder's own are crates, so Cargo keeps them
+//! below: `petsc-backend`, then `fe-linalg`, then `fe-input`, each depending only on those before
+//! it (checked here on the manifests; a planted import upward fails to compile, as each crate's
+//! `compile_fail` doc test shows). Within the fmu-builder crate, where Cargo cannot see it, this
+//! checks on the sources: a stage uses only the stages before it (model, reduce, ffrf, output,
+//! then the driver `pipeline` and the command-line `job`; `error`, `profile` and `progress`
+//! serve all), no module imports a module that imports it back, every top-level module has a
+//! stage, and the binary only parses its arguments and runs a job. The runtime's model layer (mechanics)
 //! knows nothing of FMI or C; only its adapter does. docs/ARCHITECTURE.md describes the stages.
 //!
 //! Paths are read from the code with comments, strings and character literals removed, and
@@ -12,13 +15,10 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// Top-level modules and their place in the data flow.
-const STAGES: [(&str, usize); 12] = [
+const STAGES: [(&str, usize); 9] = [
     ("error", 0),
-    ("linalg", 0),
     ("profile", 0),
-    ("out_of_memory", 0),
     ("progress", 0),
-    ("input", 1),
     ("model", 2),
     ("reduce", 3),
     ("ffrf", 4),
@@ -376,9 +376,9 @@ fn planted_imports_are_caught() {
     let dir = std::env::temp_dir().join(format!("layering-planted-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     for (file, text) in [
-        ("input/mod.rs", "pub mod spec;"),
-        ("input/spec.rs", "fn f() { let s = \"http://x\"; crate::reduce::basis::g(); }"),
-        ("input/mesh.rs", "use super::super::reduce::basis;"),
+        ("model/mod.rs", "pub mod part;"),
+        ("model/part.rs", "fn f() { let s = \"http://x\"; crate::reduce::basis::g(); }"),
+        ("model/flange.rs", "use super::super::reduce::basis;"),
         ("reduce/mod.rs", "pub mod basis; pub mod order;"),
         ("reduce/basis.rs", "use super::order::x;"),
         ("reduce/order.rs", "use super::basis::y;"),
@@ -390,11 +390,65 @@ fn planted_imports_are_caught() {
     let planted = scan(&dir, &[]);
     let mut upstream = later_stage_imports(&planted.edges);
     upstream.sort();
-    assert_eq!(upstream, ["input/mesh.rs -> reduce/basis.rs", "input/spec.rs -> reduce/basis.rs"]);
+    assert_eq!(upstream, ["model/flange.rs -> reduce/basis.rs", "model/part.rs -> reduce/basis.rs"]);
     let found = circles(&planted.edges);
     assert_eq!(found.len(), 1, "{found:?}");
     assert!(found[0].contains("reduce/basis.rs") && found[0].contains("reduce/order.rs"), "{found:?}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The workspace's crates in the order of the data flow: a crate may depend on those before it
+/// only. `fmi2` and `fmu-runtime` (the FMU's side) come before the builder, which shares the
+/// runtime's reduced-body format; `test-support` serves the tests and the bench.
+const CRATE_ORDER: [&str; 9] =
+    ["phases", "fmi2", "fmu-runtime", "petsc-backend", "fe-linalg", "fe-input", "fmu-builder", "test-support", "bench"];
+
+/// The workspace crates a manifest's `[dependencies]` name by path (dev-dependencies are the
+/// tests', which may use anything).
+fn path_dependencies(manifest: &str) -> Vec<String> {
+    let mut in_dependencies = false;
+    let mut found = Vec::new();
+    for line in manifest.lines().map(str::trim) {
+        if line.starts_with('[') {
+            in_dependencies = line == "[dependencies]";
+        } else if in_dependencies && line.contains("path = \"../") {
+            found.push(line.split(['=', ' ']).next().unwrap_or_default().to_string());
+        }
+    }
+    found
+}
+
+#[test]
+fn the_crates_depend_only_on_the_crates_before_them() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut upward = Vec::new();
+    let mut edges = 0;
+    for (at, name) in CRATE_ORDER.iter().enumerate() {
+        let manifest = std::fs::read_to_string(root.join(name).join("Cargo.toml")).unwrap();
+        for dependency in path_dependencies(&manifest) {
+            edges += 1;
+            match CRATE_ORDER.iter().position(|c| *c == dependency) {
+                Some(d) if d < at => {}
+                _ => upward.push(format!("{name} -> {dependency}")),
+            }
+        }
+    }
+    let workspace = std::fs::read_to_string(root.join("Cargo.toml")).unwrap();
+    let members = workspace.lines().find(|l| l.starts_with("members")).expect("the workspace's members");
+    let mut listed: Vec<&str> = members.split('"').skip(1).step_by(2).collect();
+    listed.sort();
+    let mut ordered = CRATE_ORDER.to_vec();
+    ordered.sort();
+    assert_eq!(listed, ordered, "every workspace member has its place in CRATE_ORDER");
+    // the check must read the manifests, not pass on none
+    assert!(edges >= 10, "{edges} path dependencies read");
+    assert!(upward.is_empty(), "crates depending on a later stage (or one not in CRATE_ORDER):\n{}", upward.join("\n"));
+    assert_eq!(
+        path_dependencies(
+            "[dependencies]\nfe-input = { path = \"../fe-input\" }\n[dev-dependencies]\nx = { path = \"../x\" }"
+        ),
+        ["fe-input"]
+    );
 }
 
 #[test]

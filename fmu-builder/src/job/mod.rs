@@ -4,7 +4,7 @@
 
 mod exports;
 
-use crate::error::{BuildError, Result};
+use crate::error::{BuildError, InputError, Result};
 use crate::input::file_read::{self, FileKind};
 use crate::input::size::Memory;
 use crate::input::spec::{BackendSpec, Spec};
@@ -68,7 +68,7 @@ fn read_input(path: &Path) -> Result<Input> {
         return Ok(Input { path: PathBuf::from("<stdin>"), text });
     }
     let text = file_read::read_text(path, FileKind::Input, Memory::of_this_machine().bytes)
-        .map_err(|source| BuildError::UnreadableInput { path: path.to_path_buf(), source })?;
+        .map_err(|source| InputError::Unreadable { path: path.to_path_buf(), source })?;
     Ok(Input { path: path.to_path_buf(), text })
 }
 

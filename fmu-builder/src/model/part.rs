@@ -48,7 +48,7 @@ pub struct Part {
 impl From<ImportError> for BuildError {
     fn from(e: ImportError) -> Self {
         let field = if e.line > 0 { format!("line {}", e.line) } else { String::new() };
-        BuildError::Input { file: e.file, field, message: e.message }
+        BuildError::input(&e.file, field, e.message)
     }
 }
 

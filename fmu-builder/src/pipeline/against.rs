@@ -1,7 +1,7 @@
 //! A numerical failure deep in a stage, put against the input that drives that stage, with what
 //! to change: the user fixes their input, not our code. The failure stays the error's source.
 
-use crate::error::{BuildError, InputHint, Result};
+use crate::error::{InputHint, Result};
 use std::path::Path;
 
 /// The mesh and material, when assembling them fails.
@@ -38,7 +38,7 @@ impl<T> Against<T> for Result<T> {
     fn against_stage(self, file: &Path) -> Result<T> {
         self.map_err(|e| {
             let place = match &e {
-                BuildError::Numerical(m) if m.contains("positive definite") || m.contains("singular") => MODEL,
+                e if e.is_singular() => MODEL,
                 _ => REDUCTION,
             };
             e.in_input(file, place)

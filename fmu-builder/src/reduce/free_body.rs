@@ -1,7 +1,7 @@
 //! What a free-floating body's reduction needs before its basis: a definite matrix to factor
 //! (its stiffness is singular in the six rigid motions) and those rigid motions to deflate.
 
-use crate::error::{BuildError, Result};
+use crate::error::Result;
 use crate::linalg::eigen::Deflation;
 use crate::linalg::sparse::{Sparse, add_scaled, mul_new};
 use faer::{Mat, Side};
@@ -26,7 +26,7 @@ pub fn rigid_deflation(mass: &Sparse, r: Mat<f64>) -> Result<Deflation> {
     let gram = r.transpose() * &mr;
     let l = gram
         .llt(Side::Lower)
-        .map_err(|e| BuildError::Numerical(format!("the rigid-body mass matrix is singular ({e}): the part has no mass in some direction; check material.rho")))?
+        .map_err(|e| crate::error::LinalgError::Singular(format!("the rigid-body mass matrix is singular ({e}): the part has no mass in some direction; check material.rho")))?
         .L()
         .to_owned();
     let mut yt = r.transpose().to_owned();

@@ -92,12 +92,12 @@ fn full_reference(spec: &Spec, model: &Assembled, solver: &SpdSolver, damping: C
 }
 
 fn not_met(spec: &Spec, tol: f64, band: [f64; 2], candidates: usize, best: f64) -> BuildError {
-    BuildError::Input {
-        file: std::path::PathBuf::from(&spec.name),
-        field: "scene.tolerance".into(),
-        message: format!(
+    BuildError::input(
+        std::path::Path::new(&spec.name),
+        "scene.tolerance",
+        format!(
             "the tolerance {tol:e} is not met over {:.4}..{:.4} Hz even with all {candidates} modes of the candidate model (best {best:.2e}): give the reduction more modes or expansion points",
             band[0], band[1],
         ),
-    }
+    )
 }
