@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The project's test command: the Python environment and the portable-build tools first, then
-# formatting and lints, Rust tests, the benchmark's targets (short mode), the release builder,
-# and the end-to-end tests with FMPy in the virtual environment this script creates
+# formatting, the FMU's runtime (cargo xtask runtime), lints, Rust tests, the benchmark's targets
+# (short mode), the release builder, and the end-to-end tests with FMPy in the virtual environment this script creates
 # (tests/.venv).
 #
 #   bash tests/run.sh                 set up, then every test but the slow ones (pytest -m "not slow")
@@ -20,11 +20,12 @@ if [ "${1:-}" = "--setup-only" ]; then
     setup_only=1
     shift
 fi
-# Before any cargo command: every one of them runs fmu-builder/build.rs, which links the FMU's
-# linux64 runtime with zig against glibc 2.17 when it finds zig (the ziglang package of
-# tests/.venv, pinned in requirements.txt) and cargo-zigbuild, so that every test below runs on
-# the portable binary. In CI a missing tool fails the build (FMU_RUNTIME_PORTABLE=require)
-# instead of falling back to a native binary.
+# Before any build: `cargo xtask runtime` (below) links the FMU's linux64 runtime once, with zig
+# against glibc 2.17 when it finds zig (the ziglang package of tests/.venv, pinned in
+# requirements.txt) and cargo-zigbuild, and every cargo build after it (clippy, the tests, the
+# bench, the release builder) embeds that one binary, so that every test below runs on the
+# portable binary. In CI a missing tool fails the build (FMU_RUNTIME_PORTABLE=require) instead of
+# falling back to a native binary.
 setup_start=$SECONDS
 if [ ! -x tests/.venv/bin/python ]; then
     python3 -m venv tests/.venv
@@ -79,12 +80,15 @@ if ! dpkg -s $petsc_packages >/dev/null 2>&1; then
 fi
 echo "Python environment and portable-build tools ready in $((SECONDS - setup_start)) s ($(tests/.venv/bin/python -m ziglang version | sed 's/^/zig /'), $(cargo-zigbuild --version 2>/dev/null || echo cargo-zigbuild))"
 if [ -n "$setup_only" ]; then
-    # the next cargo build links the FMU's runtime with zig (build.rs watches for the tools)
-    echo "Set-up done; cargo build --release -p fmu-builder now builds the portable runtime"
+    # the next `cargo xtask runtime` links the FMU's runtime with zig (it looks for the tools each time)
+    echo "Set-up done; cargo xtask runtime (or cargo xtask build) now builds the portable runtime"
     exit 0
 fi
 # formatting and lints first: cheap, and the code base must be clean under both
 cargo fmt --all -- --check
+# the FMU's runtime, built once (release profile, portable): fmu-builder/build.rs embeds it into
+# every build below, and refuses it once fmu-runtime's sources change
+cargo xtask runtime
 cargo clippy --workspace --all-targets -- -D warnings
 cargo test --workspace --release
 # the benchmark's targets (ratios to the full model, no allocation per step, hard cases) in

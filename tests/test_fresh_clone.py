@@ -1,9 +1,10 @@
 """A fresh clone, built in the README's order, packages the portable linux64 binary.
 
-The README's first command builds the builder before its second (`bash tests/run.sh`) has set up
-zig (the ziglang package in tests/.venv) and cargo-zigbuild, so the first build links the FMU's
-runtime natively; fmu-builder/build.rs must notice the tools when they appear and link it with
-zig against glibc 2.17 at the next build, without anyone touching a file. This follows a user:
+The README's first command (`cargo xtask run -- ...`: the runtime, the builder, then the builder
+run) builds before its second (`bash tests/run.sh`) has set up zig (the ziglang package in
+tests/.venv) and cargo-zigbuild, so the first build links the FMU's runtime natively; `cargo
+xtask runtime` looks for the tools on every run and must link it with zig against glibc 2.17 at
+the next build, without anyone touching a file, and the builder must then embed the new one. This follows a user:
 `git clone` of the committed HEAD into a temporary folder, the README's first command exactly as
 its first code block writes it, the set-up part of the second (`bash tests/run.sh
 --setup-only`), then the first command again; the FMU it writes must need at most GLIBC_2.17
@@ -75,7 +76,7 @@ def run(argv, clone, env, log):
 
 def test_fresh_clone_in_readme_order_packages_portable_binary(tmp_path):
     commands = readme_commands()
-    assert len(commands) >= 2 and commands[0][:2] == ["cargo", "run"], commands
+    assert len(commands) >= 2 and commands[0][:3] == ["cargo", "xtask", "run"], commands
     first = commands[0]
     setup = next((c for c in commands if c[:2] == ["bash", "tests/run.sh"]), None)
     assert setup is not None, f"README's first two blocks have no `bash tests/run.sh`: {commands}"
@@ -107,7 +108,7 @@ def test_fresh_clone_in_readme_order_packages_portable_binary(tmp_path):
     t_setup = run([*setup, "--setup-only"], clone, env, log)
     assert (clone / "tests" / ".venv" / "bin" / "python").is_file()
 
-    # 3. the first command again, as the user rebuilds: build.rs must see the tools now
+    # 3. the first command again, as the user rebuilds: `cargo xtask runtime` must see the tools now
     t_again = run(first, clone, env, log)
     kind = subprocess.run([str(builder), "--version"], capture_output=True, text=True, check=True).stdout
     print(f"after the set-up: {kind.strip()}")

@@ -1,6 +1,7 @@
 """The FMU's linux64 binary loads on old Linux distributions: every glibc symbol version the
-packaged .so needs is at most GLIBC_2.17 (fmu-builder/build.rs links fmu-runtime with zig against
-glibc 2.17 when zig and cargo-zigbuild are there; tests/run.sh sets both up). Read with binutils
+packaged .so needs is at most GLIBC_2.17 (`cargo xtask runtime` links fmu-runtime with zig against
+glibc 2.17 when zig and cargo-zigbuild are there, and fmu-builder embeds it; tests/run.sh sets both
+up and runs it before its first cargo build). Read with binutils
 (`readelf --version-info`, `objdump -T`), independently of the builder. In CI (CI set) a native
 binary fails the test; elsewhere it is skipped with the reason."""
 
@@ -47,7 +48,8 @@ def glibc_versions_objdump(so):
 
 
 def builder_kind():
-    """What the builder says of its linux64 runtime (`--version`, from build.rs)."""
+    """What the builder says of its linux64 runtime (`--version`: the kind `cargo xtask runtime`
+    recorded, passed on by fmu-builder/build.rs)."""
     return subprocess.run([str(BUILDER), "--version"], capture_output=True, text=True, check=True).stdout.strip()
 
 

@@ -38,8 +38,8 @@ pub fn native_runtime_warning(others: &[PlatformBinary]) -> Option<String> {
         "the FMU's linux64 binary is linked natively and needs {needs}: it does not load where glibc is older \
          (RHEL/Rocky 8: 2.28, Ubuntu 20.04 and Debian 11: 2.31). For one that loads on glibc 2.17 or newer, set up \
          zig and cargo-zigbuild (`bash tests/run.sh --setup-only` in the source tree, or `pip install ziglang` and \
-         `cargo install --locked cargo-zigbuild`), then rebuild the builder (`cargo build --release -p fmu-builder`, \
-         or `cargo install` again): it is linked portable from then on"
+         `cargo install --locked cargo-zigbuild`), then rebuild the builder (`cargo xtask build`, \
+         or `cargo xtask runtime` and `cargo install` again): it is linked portable from then on"
     ))
 }
 
