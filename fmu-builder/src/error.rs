@@ -16,10 +16,25 @@ pub enum BuildError {
     /// The linear algebra failed: a factor, an eigen-solve, the distributed back-end.
     #[error(transparent)]
     Linalg(#[from] LinalgError),
-    /// A numerical step of the model, the reduction or the output failed (a coupling that
-    /// names a DoF beyond the model, a basis that loses rank, a non-finite array).
+    /// A numerical step of the model or the reduction failed (a dynamic stiffness that cannot
+    /// be factored at a frequency, a sparse pattern that cannot be built).
     #[error("{0}")]
     Numerical(String),
+    /// The part can move without deforming, or a flange's coupling has no unique solution: a
+    /// mechanism, a mount that does not hold the part, a part without mass in some direction.
+    #[error("{0}")]
+    Singular(String),
+    /// The reduced model fails the checks every build must pass against the full model.
+    #[error("{0}")]
+    Inaccurate(String),
+    /// A result (the report, the reduced body's arrays, the FMU's first steps) is NaN or
+    /// infinite.
+    #[error("{0}")]
+    NotFinite(String),
+    /// A check of the builder's own work failed (sizes that must agree, what it serialises): a
+    /// defect to report, not an input to change.
+    #[error("{0}")]
+    Internal(String),
     /// A numerical failure put against the part of the input that drives the stage it happened
     /// in, with what to change there: the user fixes their input, not our code.
     #[error("{}: {}{source}{}", .file.display(), field_prefix(.place.field), hint_suffix(.place.hint))]
@@ -89,7 +104,11 @@ impl BuildError {
     /// it is.
     pub fn in_input(self, file: &std::path::Path, place: InputHint) -> Self {
         match self {
-            BuildError::Numerical(_) => BuildError::InInput { file: file.to_owned(), place, source: Box::new(self) },
+            BuildError::Numerical(_)
+            | BuildError::Singular(_)
+            | BuildError::Inaccurate(_)
+            | BuildError::NotFinite(_)
+            | BuildError::Internal(_) => BuildError::InInput { file: file.to_owned(), place, source: Box::new(self) },
             BuildError::Linalg(LinalgError::Backend(BackendError::Unavailable(_))) => self,
             BuildError::Linalg(_) => BuildError::InInput { file: file.to_owned(), place, source: Box::new(self) },
             other => other,
@@ -100,7 +119,8 @@ impl BuildError {
     pub fn is_singular(&self) -> bool {
         matches!(
             self,
-            BuildError::Linalg(LinalgError::Singular(_) | LinalgError::Backend(BackendError::NotFactored { .. }))
+            BuildError::Singular(_)
+                | BuildError::Linalg(LinalgError::Singular(_) | LinalgError::Backend(BackendError::NotFactored { .. }))
         )
     }
     pub fn io(path: &std::path::Path, source: std::io::Error) -> Self {
@@ -155,6 +175,33 @@ mod tests {
         assert_eq!(input.in_input(Path::new("q.json"), place).to_string(), "p.json: flanges: none");
     }
 
+    /// A failure that means the part can move without deforming is told from the others by
+    /// its class, not its words: it is put against the mesh and the mount, not the reduction.
+    #[test]
+    fn singular_failures_are_known_by_their_class() {
+        use super::{BackendError, LinalgError};
+        let singular: Vec<BuildError> = vec![
+            BuildError::Singular("x".into()),
+            LinalgError::Singular("x".into()).into(),
+            BackendError::NotFactored { what: "K".into(), reason: "x".into() }.into(),
+        ];
+        let other: Vec<BuildError> = vec![
+            BuildError::Numerical("the stiffness is singular".into()),
+            LinalgError::NotConverged("x".into()).into(),
+            BackendError::Unavailable("x".into()).into(),
+        ];
+        assert_eq!((singular.len(), other.len()), (3, 3));
+        assert!(singular.iter().all(BuildError::is_singular));
+        assert!(!other.iter().any(BuildError::is_singular));
+        // the back-end that cannot be reached is not the input's to change
+        let unreachable = BuildError::from(BackendError::Unavailable("mpirun not found".into()));
+        let place = super::InputHint { field: "geometry", hint: "h" };
+        assert_eq!(
+            unreachable.in_input(Path::new("p.json"), place).to_string(),
+            "the PETSc back-end: mpirun not found"
+        );
+    }
+
     /// The words users read for each failure class: the variants are typed, the messages are
     /// the ones the command line has always printed.
     #[test]
@@ -206,8 +253,16 @@ mod tests {
                 LinalgError::Singular("the stiffness is not positive definite".into()).into(),
                 "the stiffness is not positive definite",
             ),
+            (
+                BuildError::Singular("the reduced stiffness is not positive definite".into()),
+                "the reduced stiffness is not positive definite",
+            ),
+            (
+                BuildError::NotFinite("the report's x is not a finite number".into()),
+                "the report's x is not a finite number",
+            ),
         ];
-        assert_eq!(cases.len(), 9);
+        assert_eq!(cases.len(), 11);
         for (error, words) in cases {
             assert_eq!(error.to_string(), words);
         }

@@ -401,8 +401,18 @@ fn planted_imports_are_caught() {
 /// only. `fmi2` and `fmu-runtime` (the FMU's side) come before the builder, which shares the
 /// runtime's reduced-body format; `test-support` serves the tests and the bench; `xtask` builds
 /// the runtime and names no crate.
-const CRATE_ORDER: [&str; 10] =
-    ["phases", "fmi2", "fmu-runtime", "petsc-backend", "fe-linalg", "fe-input", "fmu-builder", "test-support", "bench", "xtask"];
+const CRATE_ORDER: [&str; 10] = [
+    "phases",
+    "fmi2",
+    "fmu-runtime",
+    "petsc-backend",
+    "fe-linalg",
+    "fe-input",
+    "fmu-builder",
+    "test-support",
+    "bench",
+    "xtask",
+];
 
 /// The workspace crates a manifest's `[dependencies]` name by path (dev-dependencies are the
 /// tests', which may use anything).

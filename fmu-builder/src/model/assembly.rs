@@ -230,7 +230,7 @@ impl<'a> ColumnShare<'a> {
                 let slot = slots[a * nen + b];
                 if slot == NOT_IN_PATTERN {
                     let node_a = nodes[a];
-                    return Err(BuildError::Numerical(format!(
+                    return Err(BuildError::Internal(format!(
                         "nodes {node_a} and {node_b} share an element but not the pattern"
                     )));
                 }
@@ -254,7 +254,7 @@ impl<'a> ColumnShare<'a> {
 pub fn isotropic_mass(nodal: &SparseColMat<usize, f64>) -> Result<SparseColMat<usize, f64>> {
     let nn = nodal.ncols();
     if nodal.nrows() != nn {
-        return Err(BuildError::Numerical(format!("the nodal mass is {} x {nn}, not square", nodal.nrows())));
+        return Err(BuildError::Internal(format!("the nodal mass is {} x {nn}, not square", nodal.nrows())));
     }
     let entries: usize = (0..nn).map(|b| nodal.row_idx_of_col_raw(b).len()).sum();
     let mut col_ptr = Vec::with_capacity(3 * nn + 1);

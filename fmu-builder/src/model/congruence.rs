@@ -61,7 +61,7 @@ pub(crate) fn symmetric_congruence(
     what: &str,
 ) -> Result<SparseColMat<usize, f64>> {
     if a.nrows() != images.len() || a.ncols() != images.len() {
-        return Err(BuildError::Numerical(format!(
+        return Err(BuildError::Internal(format!(
             "coupling the {what}: the matrix is {} x {} but the coupling maps {} DoFs",
             a.nrows(),
             a.ncols(),
@@ -69,7 +69,7 @@ pub(crate) fn symmetric_congruence(
         )));
     }
     if let Some(&(g, _)) = images.all_terms().iter().find(|(g, _)| *g >= n) {
-        return Err(BuildError::Numerical(format!("coupling the {what}: DoF {g} beyond the {n} coupled DoFs")));
+        return Err(BuildError::Internal(format!("coupling the {what}: DoF {g} beyond the {n} coupled DoFs")));
     }
     let preimages = Preimages::of(images, n);
     let product = Product { a, images, sole: sole_images(images, &preimages), preimages: &preimages };

@@ -153,7 +153,7 @@ fn couplings(nodes: &[[f64; 3]], flanges: &[Flange], node: &mut [NodeDofs]) -> R
             FlangeCoupling::Distributing { weights } => {
                 let points: Vec<[f64; 3]> = f.slaves.iter().map(|&s| nodes[s]).collect();
                 let refused = |why| {
-                    BuildError::Numerical(format!(
+                    BuildError::Singular(format!(
                         "the distributing coupling of flange \"{}\" is singular ({why:?})",
                         f.name
                     ))

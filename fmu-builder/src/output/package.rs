@@ -85,9 +85,9 @@ pub fn write_fmu(
     let mut listed = spec.clone();
     listed.reduction.backend = listed.reduction.backend.packaged();
     let input = documentation::input_listing(&listed)
-        .map_err(|e| BuildError::Numerical(format!("serialising the input: {e}")))?;
+        .map_err(|e| BuildError::Internal(format!("serialising the input: {e}")))?;
     let report_json = serde_json::to_vec_pretty(&report.as_packaged())
-        .map_err(|e| BuildError::Numerical(format!("serialising the report: {e}")))?;
+        .map_err(|e| BuildError::Internal(format!("serialising the report: {e}")))?;
     let required = fmi2_functions::required(&xml);
     for binary in others {
         binary.check(&required)?;

@@ -207,7 +207,7 @@ fn rayleigh_ritz(model: &Assembled, mut w: Mat<f64>, kept: usize) -> Result<(Mat
     let kr = w.transpose() * &kw;
     let c = Mat::<f64>::from_fn(r, r, |i, j| 0.5 * (kr[(i, j)] + kr[(j, i)]));
     let evd = graded_spd_eigen(&c, "the reduced stiffness").map_err(|_| {
-        BuildError::Numerical(
+        BuildError::Singular(
             "the reduced stiffness is not positive definite: the part can move without deforming (a mounted part not held \
              by its mount, or a mechanism: pieces joined only at a node or an edge)"
                 .into(),
@@ -218,7 +218,7 @@ fn rayleigh_ritz(model: &Assembled, mut w: Mat<f64>, kept: usize) -> Result<(Mat
     for i in 0..r {
         let lambda = s[i];
         if !(lambda > 0.0) {
-            return Err(BuildError::Numerical(format!(
+            return Err(BuildError::Singular(format!(
                 "reduced stiffness has a non-positive eigenvalue {lambda:e}: the part can move without deforming (a mounted \
                  part not held by its mount, or a mechanism: pieces joined only at a node or an edge)"
             )));

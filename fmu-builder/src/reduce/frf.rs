@@ -169,7 +169,7 @@ impl FullResponse {
                     .map_err(|e| BuildError::Numerical(format!("symbolic LU: {}", faer_error::generic(&e))))?,
             );
         }
-        let symbolic = self.symbolic.clone().ok_or_else(|| BuildError::Numerical("symbolic LU missing".into()))?;
+        let symbolic = self.symbolic.clone().ok_or_else(|| BuildError::Internal("symbolic LU missing".into()))?;
         let lu = faer::sparse::linalg::solvers::Lu::try_new_with_symbolic(symbolic, z.as_ref())
             .map_err(|e| BuildError::Numerical(format!("dynamic stiffness at {hz} Hz is {}", faer_error::lu(&e))))?;
         // Z = S^-1 Zs S^-1: x = S Zs^-1 S b

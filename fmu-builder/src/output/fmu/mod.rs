@@ -29,7 +29,7 @@ pub enum FmuError {
 impl From<FmuError> for BuildError {
     fn from(e: FmuError) -> Self {
         match e {
-            FmuError::Description(_) => BuildError::Numerical(e.to_string()),
+            FmuError::Description(_) => BuildError::Internal(e.to_string()),
             FmuError::Archive { path, message } => BuildError::File { path, message },
         }
     }
