@@ -29,7 +29,7 @@ from fmpy import read_model_description, simulate_fmu
 from conftest import BUILDER, EXAMPLES, ROOT, run_builder
 
 PYTHON = "/usr/bin/python3"
-DRIVER = ROOT / "fmu-builder" / "src" / "linalg" / "distributed" / "driver.py"
+DRIVER = ROOT / "petsc-backend" / "src" / "driver.py"
 # mpirun refuses root without these (CI machines run as root); --oversubscribe lets two ranks
 # start on a machine whose slots mpirun counts differently
 os.environ.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
