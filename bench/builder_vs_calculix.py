@@ -169,7 +169,7 @@ class BuilderResult:
 def builder_binary() -> Path:
     """The release builder (CARGO_TARGET_DIR respected), built if missing."""
     if not BUILDER.exists():
-        print(f"{BUILDER} missing: cargo build --release -p fmu-builder", flush=True)
+        print(f"{BUILDER} missing: cargo xtask build", flush=True)
         subprocess.run(["cargo", "build", "--release", "-p", "fmu-builder"], cwd=ROOT, check=True)
     return BUILDER
 

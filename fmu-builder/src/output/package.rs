@@ -12,7 +12,7 @@ use fmu_runtime::interface::VariableTable;
 use fmu_runtime::reduced::ReducedBody;
 use std::path::Path;
 
-/// The runtime cdylib, built by build.rs: the FMU's binaries/linux64/<id>.so.
+/// The runtime cdylib (built once by `cargo xtask runtime`, embedded by build.rs): the FMU's binaries/linux64/<id>.so.
 pub const RUNTIME_SO: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/fmu_runtime.so"));
 /// Which kind of binary `RUNTIME_SO` is ("portable, ...", "native, ...", "prebuilt, ..."; build.rs).
 pub const RUNTIME_KIND: &str = env!("FMU_RUNTIME_LINUX64");
