@@ -6,6 +6,9 @@
 //! The stages emit their phases as `tracing` spans (the `phases` crate); a [`Profile`] is a
 //! recorder whose [`layer`](Profile::layer) listens to them in the subscriber the caller sets
 //! for one build, so two builds, each with its own subscriber, never share or lose phases.
+//! (tracing caches whether anyone listens to a call site when it is first reached: a phase first
+//! reached while no subscriber exists anywhere in the process stays unheard until the next
+//! subscriber is made. A build sets its subscriber before its first phase, so it hears all.)
 //! Phases nest (a factorisation inside the Craig-Bampton basis) as their spans do. Peak memory per phase: the resident set (VmRSS) read when a
 //! phase starts and ends and, while per-phase memory is asked for (`Profile::new(true)`,
 //! `--timings`), every millisecond by the profile's sampler thread, the largest reading going to every phase

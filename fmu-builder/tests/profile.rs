@@ -82,8 +82,12 @@ fn concurrent_builds_keep_their_own_phases() {
         })
     };
     let (a, b) = (run("a"), run("b"));
+    let done = [("a", a.join().expect("thread a")), ("b", b.join().expect("thread b"))];
+    // after the threads: tracing caches a call site's interest when it is first reached, and one
+    // first reached while no subscriber exists anywhere would stay silent until the next
+    // subscriber is made (the command line makes its subscriber before any phase runs)
     phase("unobserved", || note(|| "unobserved".into()));
-    for (tag, phases) in [("a", a.join().expect("thread a")), ("b", b.join().expect("thread b"))] {
+    for (tag, phases) in done {
         assert_eq!(phases.len(), 50, "{tag}: {phases:?}");
         for (i, p) in phases.iter().enumerate() {
             assert_eq!(
