@@ -38,7 +38,7 @@ fn rotating_frame_energy(body: &FlexibleBody, q: &[f64], qd: &[f64], p: &[f64]) 
     let mut probe = body.clone();
     let zeros = vec![0.0; q.len()];
     probe.set_state(q, &zeros);
-    let a = probe.qdd()?.to_vec();
+    let a = probe.qdd().map_err(|e| e.to_string())?.to_vec();
     let mut kinetic = 0.0;
     let mut elastic = 0.0;
     let mut work = 0.0;
@@ -104,7 +104,7 @@ pub fn run(short: bool) -> Result<bool, String> {
             for h in [1e-3, 1e-4] {
                 let mut body = FlexibleBody::new(Arc::clone(&reduced));
                 body.mount_mut().w[axis] = w;
-                let p = body.qdd()?.to_vec();
+                let p = body.qdd().map_err(|e| e.to_string())?.to_vec();
                 let steps = (20.0 / h) as usize;
                 let every = (1e-2 / h) as usize;
                 let (mut h0, mut scale, mut drift, mut q_max) = (0.0, 0.0f64, 0.0f64, 0.0f64);
@@ -121,7 +121,7 @@ pub fn run(short: bool) -> Result<bool, String> {
                     }
                     if k < steps {
                         let start = Instant::now();
-                        body.step(h)?;
+                        body.step(h).map_err(|e| e.to_string())?;
                         stepping += start.elapsed().as_secs_f64();
                     }
                 }

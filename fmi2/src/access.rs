@@ -18,8 +18,31 @@ pub fn effective_initial(info: &VarInfo) -> Option<Initial> {
     }
 }
 
+/// A variable that may not be set in the instance's present state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NotSettable {
+    pub causality: Causality,
+    pub variability: Variability,
+    /// The `initial` in effect (the default where modelDescription.xml omits it).
+    pub initial: Option<Initial>,
+    pub state: ModelState,
+}
+
+impl std::fmt::Display for NotSettable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "a variable with causality {:?}, variability {:?}, initial ", self.causality, self.variability)?;
+        match self.initial {
+            Some(i) => write!(f, "{i:?}")?,
+            None => f.write_str("none")?,
+        }
+        write!(f, " cannot be set in state {:?}", self.state)
+    }
+}
+
+impl std::error::Error for NotSettable {}
+
 /// `Ok` if the variable may be set in `state`; `Err` explains why not.
-pub fn check_settable(info: &VarInfo, state: ModelState) -> Result<(), String> {
+pub fn check_settable(info: &VarInfo, state: ModelState) -> Result<(), NotSettable> {
     let initial = effective_initial(info);
     let is_input = info.causality == Causality::Input;
     let allowed = info.variability != Variability::Constant
@@ -39,12 +62,7 @@ pub fn check_settable(info: &VarInfo, state: ModelState) -> Result<(), String> {
     if allowed {
         Ok(())
     } else {
-        Err(format!(
-            "a variable with causality {:?}, variability {:?}, initial {} cannot be set in state {state:?}",
-            info.causality,
-            info.variability,
-            initial.map_or("none".to_string(), |i| format!("{i:?}")),
-        ))
+        Err(NotSettable { causality: info.causality, variability: info.variability, initial, state })
     }
 }
 

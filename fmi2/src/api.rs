@@ -17,7 +17,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use super::access::check_settable;
 use super::instance::{Instance, SNAPSHOT_MAGIC, Snapshot};
 use super::logger::{Category, Logger};
-use super::resource::parse_resource_location;
+use super::resource::{ResourceError, parse_resource_location};
 use super::serial;
 use super::state::{self as spec, FnSpec, ModelState};
 use super::types::fmi2Status::{fmi2Discard, fmi2Error, fmi2Fatal, fmi2OK, fmi2Warning};
@@ -39,6 +39,47 @@ pub enum Failure {
 }
 
 type Outcome = Result<fmi2Status, Failure>;
+
+/// Why fmi2Instantiate made no instance (logged after "fmi2Instantiate: ").
+#[derive(Debug)]
+pub enum InstantiateError {
+    MissingName,
+    InvalidType(fmi2Type),
+    ResourceNotUtf8,
+    Resource(ResourceError),
+    /// The model could not be loaded ([`Model::instantiate`]).
+    Model(ModelError),
+    /// The host's fmuGUID (None: NULL) is not the model's.
+    GuidMismatch {
+        expected: String,
+        got: Option<String>,
+    },
+}
+
+impl std::fmt::Display for InstantiateError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            InstantiateError::MissingName => f.write_str("missing instance name"),
+            InstantiateError::InvalidType(t) => write!(f, "invalid fmuType {t}"),
+            InstantiateError::ResourceNotUtf8 => f.write_str("fmuResourceLocation is not valid UTF-8"),
+            InstantiateError::Resource(e) => std::fmt::Display::fmt(e, f),
+            InstantiateError::Model(e) => std::fmt::Display::fmt(e, f),
+            InstantiateError::GuidMismatch { expected, got } => {
+                write!(f, "GUID mismatch: expected {expected} got {}", got.as_deref().unwrap_or("NULL"))
+            }
+        }
+    }
+}
+
+impl std::error::Error for InstantiateError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            InstantiateError::Resource(e) => e.source(),
+            InstantiateError::Model(e) => e.source(),
+            _ => None,
+        }
+    }
+}
 
 fn usage(msg: impl Into<String>) -> Failure {
     Failure::Usage(msg.into())
@@ -166,28 +207,31 @@ fn settable<M: Model>(inst: &Instance<M>, vr: u32, expected: VarType) -> Result<
     check_settable(&info, inst.state).map_err(|e| usage(format!("{}: {e}", describe(&inst.model, vr))))
 }
 
-fn model_err(vr: u32) -> impl FnOnce(String) -> Failure {
-    move |e| Failure::Model(format!("value reference {vr}: {e}"))
-}
-
-/// A model's failure as the layer answers it: unknown state (Error), nothing changed and the
-/// host may retry (Discard), or inputs refused like a value out of range (a usage error).
-fn model_failure(e: ModelError) -> Failure {
+/// A model's failure as the layer answers it, as the model classified it: unknown state (Error),
+/// nothing changed and the host may retry (Discard), or inputs refused like a value out of range
+/// (a usage error). `say` words the message from the model's.
+fn model_failure(e: ModelError, say: impl FnOnce(&ModelError) -> String) -> Failure {
+    let msg = say(&e);
     match e {
-        ModelError::Failed(msg) => Failure::Model(msg),
-        ModelError::Discard(msg) => Failure::Discard(msg),
-        ModelError::Refused(msg) => Failure::Usage(msg),
+        ModelError::Failed(_) => Failure::Model(msg),
+        ModelError::Discard(_) => Failure::Discard(msg),
+        ModelError::Refused(_) => Failure::Usage(msg),
     }
 }
 
-/// An evaluation's failure as the model classifies it (`Model::evaluation_failure`).
-fn evaluation_failed<M: Model>(model: &M) -> impl FnOnce(String) -> Failure {
-    |e| model_failure(model.evaluation_failure(e))
+/// [`model_failure`] with the model's message as it is.
+fn failure(e: ModelError) -> Failure {
+    model_failure(e, ToString::to_string)
 }
 
-/// [`evaluation_failed`] of a call about one variable, naming it.
-fn evaluation_failed_at<M: Model>(model: &M, vr: u32) -> impl FnOnce(String) -> Failure {
-    move |e| model_failure(model.evaluation_failure(format!("{}: {e}", describe(model, vr))))
+/// [`model_failure`] of a call about value reference `vr`, named by its number.
+fn failure_of(vr: u32) -> impl FnOnce(ModelError) -> Failure {
+    move |e| model_failure(e, |e| format!("value reference {vr}: {e}"))
+}
+
+/// [`model_failure`] of a call about one variable, named as [`describe`] does.
+fn failure_at<M: Model>(model: &M, vr: u32) -> impl FnOnce(ModelError) -> Failure + '_ {
+    move |e| model_failure(e, |e| format!("{}: {e}", describe(model, vr)))
 }
 
 /// A non-finite number the model computed is never handed out with fmi2OK. In Model Exchange
@@ -214,7 +258,7 @@ fn admissible<M: Model>(model: &M, vr: u32, value: f64) -> Result<(), Failure> {
     if !value.is_finite() {
         return Err(usage(format!("{}: {value} is not a finite number", describe(model, vr))));
     }
-    model.admissible_real(vr, value).map_err(|e| usage(format!("{}: {e}", describe(model, vr))))
+    model.admissible_real(vr, value).map_err(failure_at(model, vr))
 }
 
 fn to_bool(b: fmi2Boolean) -> bool {
@@ -252,30 +296,33 @@ pub unsafe fn fmi2Instantiate<M: Model>(
         if instanceName.is_null() { CString::default() } else { unsafe { CStr::from_ptr(instanceName) }.to_owned() };
     let logger = Logger::new(name, callbacks.logger, callbacks.componentEnvironment, to_bool(loggingOn));
 
-    let result = catch_unwind(AssertUnwindSafe(|| -> Result<(M, Interface), String> {
+    let result = catch_unwind(AssertUnwindSafe(|| -> Result<(M, Interface), InstantiateError> {
         if logger.instance_name().is_empty() {
-            return Err("missing instance name".into());
+            return Err(InstantiateError::MissingName);
         }
         let interface = match fmuType {
             fmi2ModelExchange => Interface::ModelExchange,
             fmi2CoSimulation => Interface::CoSimulation,
-            other => return Err(format!("invalid fmuType {other}")),
+            other => return Err(InstantiateError::InvalidType(other)),
         };
         let resources = if fmuResourceLocation.is_null() {
             None
         } else {
             let uri = unsafe { CStr::from_ptr(fmuResourceLocation) };
-            let uri = uri.to_str().map_err(|_| "fmuResourceLocation is not valid UTF-8".to_string())?;
-            Some(parse_resource_location(uri)?)
+            let uri = uri.to_str().map_err(|_| InstantiateError::ResourceNotUtf8)?;
+            Some(parse_resource_location(uri).map_err(InstantiateError::Resource)?)
         };
         logger.trace(|| {
             let dir = resources.as_deref().map_or("none".into(), |p| p.display().to_string());
             format!("fmi2Instantiate: {interface:?}, resources {dir}")
         });
-        let model = M::instantiate(resources.as_deref(), interface)?;
+        let model = M::instantiate(resources.as_deref(), interface).map_err(InstantiateError::Model)?;
         let guid = if fmuGUID.is_null() { None } else { Some(unsafe { CStr::from_ptr(fmuGUID) }.to_string_lossy()) };
         if guid.as_deref() != Some(model.guid()) {
-            return Err(format!("GUID mismatch: expected {} got {}", model.guid(), guid.as_deref().unwrap_or("NULL")));
+            return Err(InstantiateError::GuidMismatch {
+                expected: model.guid().to_owned(),
+                got: guid.map(|g| g.into_owned()),
+            });
         }
         Ok((model, interface))
     }));
@@ -283,8 +330,8 @@ pub unsafe fn fmi2Instantiate<M: Model>(
         Ok(Ok((model, interface))) => {
             Box::into_raw(Box::new(Instance::new(model, interface, logger, callbacks))).cast()
         }
-        Ok(Err(msg)) => {
-            logger.error(&format!("fmi2Instantiate: {msg}"));
+        Ok(Err(e)) => {
+            logger.error(&format!("fmi2Instantiate: {e}"));
             std::ptr::null_mut()
         }
         Err(payload) => {
@@ -371,7 +418,7 @@ pub unsafe fn fmi2EnterInitializationMode<M: Model>(c: fmi2Component) -> fmi2Sta
     unsafe {
         guarded::<M>(c, &spec::fmi2EnterInitializationMode, |inst| {
             inst.logger.trace(|| "fmi2EnterInitializationMode".into());
-            inst.model.enter_initialization(inst.start_time).map_err(Failure::Model)?;
+            inst.model.enter_initialization(inst.start_time).map_err(failure)?;
             inst.state = ModelState::InitializationMode;
             Ok(fmi2OK)
         })
@@ -382,7 +429,7 @@ pub unsafe fn fmi2ExitInitializationMode<M: Model>(c: fmi2Component) -> fmi2Stat
     unsafe {
         guarded::<M>(c, &spec::fmi2ExitInitializationMode, |inst| {
             inst.logger.trace(|| "fmi2ExitInitializationMode".into());
-            inst.model.exit_initialization().map_err(Failure::Model)?;
+            inst.model.exit_initialization().map_err(failure)?;
             inst.state = match inst.interface {
                 Interface::ModelExchange => ModelState::EventMode,
                 Interface::CoSimulation => ModelState::StepComplete,
@@ -406,7 +453,7 @@ pub unsafe fn fmi2Reset<M: Model>(c: fmi2Component) -> fmi2Status {
     unsafe {
         guarded::<M>(c, &spec::fmi2Reset, |inst| {
             inst.logger.trace(|| "fmi2Reset".into());
-            inst.model.reset().map_err(Failure::Model)?;
+            inst.model.reset().map_err(failure)?;
             inst.reset_experiment();
             Ok(fmi2OK)
         })
@@ -429,7 +476,7 @@ pub unsafe fn fmi2GetReal<M: Model>(
             let values = out_slice(value, nvr, "value[]")?;
             for (&r, v) in vrs.iter().zip(values) {
                 var_of_type(&inst.model, r, VarType::Real)?;
-                let x = inst.model.get_real(r).map_err(evaluation_failed_at(&inst.model, r))?;
+                let x = inst.model.get_real(r).map_err(failure_at(&inst.model, r))?;
                 if !x.is_finite() {
                     return Err(non_finite(inst, describe(&inst.model, r), x));
                 }
@@ -452,7 +499,7 @@ pub unsafe fn fmi2GetInteger<M: Model>(
             let values = out_slice(value, nvr, "value[]")?;
             for (&r, v) in vrs.iter().zip(values) {
                 var_of_type(&inst.model, r, VarType::Integer)?;
-                *v = inst.model.get_integer(r).map_err(model_err(r))?;
+                *v = inst.model.get_integer(r).map_err(failure_of(r))?;
             }
             Ok(fmi2OK)
         })
@@ -471,7 +518,7 @@ pub unsafe fn fmi2GetBoolean<M: Model>(
             let values = out_slice(value, nvr, "value[]")?;
             for (&r, v) in vrs.iter().zip(values) {
                 var_of_type(&inst.model, r, VarType::Boolean)?;
-                *v = from_bool(inst.model.get_boolean(r).map_err(model_err(r))?);
+                *v = from_bool(inst.model.get_boolean(r).map_err(failure_of(r))?);
             }
             Ok(fmi2OK)
         })
@@ -492,7 +539,7 @@ pub unsafe fn fmi2GetString<M: Model>(
             inst.string_buffer.clear();
             for (&r, v) in vrs.iter().zip(values) {
                 var_of_type(&inst.model, r, VarType::String)?;
-                let s = inst.model.get_string(r).map_err(model_err(r))?;
+                let s = inst.model.get_string(r).map_err(failure_of(r))?;
                 let s =
                     CString::new(s).map_err(|_| Failure::Model(format!("value reference {r}: string contains NUL")))?;
                 // The CString's heap buffer does not move when the Vec grows.
@@ -520,9 +567,9 @@ pub unsafe fn fmi2SetReal<M: Model>(
                 admissible(&inst.model, r, v)?;
             }
             // values that only make sense together (a rotation matrix's nine entries)
-            inst.model.admissible_reals(vrs, values).map_err(usage)?;
+            inst.model.admissible_reals(vrs, values).map_err(failure)?;
             for (&r, &v) in vrs.iter().zip(values) {
-                inst.model.set_real(r, v).map_err(model_err(r))?;
+                inst.model.set_real(r, v).map_err(failure_of(r))?;
             }
             Ok(fmi2OK)
         })
@@ -541,7 +588,7 @@ pub unsafe fn fmi2SetInteger<M: Model>(
             let values = in_slice(value, nvr, "value[]")?;
             for (&r, &v) in vrs.iter().zip(values) {
                 settable(inst, r, VarType::Integer)?;
-                inst.model.set_integer(r, v).map_err(model_err(r))?;
+                inst.model.set_integer(r, v).map_err(failure_of(r))?;
             }
             Ok(fmi2OK)
         })
@@ -560,7 +607,7 @@ pub unsafe fn fmi2SetBoolean<M: Model>(
             let values = in_slice(value, nvr, "value[]")?;
             for (&r, &v) in vrs.iter().zip(values) {
                 settable(inst, r, VarType::Boolean)?;
-                inst.model.set_boolean(r, to_bool(v)).map_err(model_err(r))?;
+                inst.model.set_boolean(r, to_bool(v)).map_err(failure_of(r))?;
             }
             Ok(fmi2OK)
         })
@@ -585,7 +632,7 @@ pub unsafe fn fmi2SetString<M: Model>(
                 let s = CStr::from_ptr(v)
                     .to_str()
                     .map_err(|_| usage(format!("value for value reference {r} is not valid UTF-8")))?;
-                inst.model.set_string(r, s).map_err(model_err(r))?;
+                inst.model.set_string(r, s).map_err(failure_of(r))?;
             }
             Ok(fmi2OK)
         })
@@ -723,7 +770,7 @@ pub unsafe fn fmi2DeSerializeFMUstate<M: Model>(
         guarded::<M>(c, &spec::fmi2DeSerializeFMUstate, |inst| {
             let bytes = in_slice(serializedState.cast::<u8>(), size, "serializedState[]")?;
             let slot = out_ref(FMUstate, "FMUstate")?;
-            let snapshot = serial::deserialize(bytes, &inst.model, inst.interface).map_err(usage)?;
+            let snapshot = serial::deserialize(bytes, &inst.model, inst.interface).map_err(|e| usage(e.to_string()))?;
             inst.logger.trace(|| format!("fmi2DeSerializeFMUstate: {size} bytes, time {}", snapshot.time));
             if slot.is_null() {
                 *slot = Box::into_raw(Box::new(snapshot)).cast();
@@ -824,13 +871,13 @@ pub unsafe fn fmi2GetDirectionalDerivative<M: Model>(
                     )));
                 }
                 // the seed is a rate along the known: the range fmi2SetRealInputDerivatives has
-                inst.model
-                    .admissible_direction(r, dv)
-                    .map_err(|e| usage(format!("dvKnown[{i}] = {dv:e} for known {}: {e}", describe(&inst.model, r))))?;
+                inst.model.admissible_direction(r, dv).map_err(|e| {
+                    model_failure(e, |e| format!("dvKnown[{i}] = {dv:e} for known {}: {e}", describe(&inst.model, r)))
+                })?;
             }
             inst.logger.trace(|| format!("fmi2GetDirectionalDerivative: {nUnknown} unknowns, {nKnown} knowns"));
             let computed = inst.model.directional_derivative(unknowns, knowns, seed, result);
-            computed.map_err(evaluation_failed(&inst.model))?;
+            computed.map_err(failure)?;
             check_finite(inst, result, "dvUnknown")?;
             Ok(fmi2OK)
         })
@@ -930,7 +977,7 @@ pub unsafe fn fmi2GetDerivatives<M: Model>(c: fmi2Component, derivatives: *mut f
             check_len(nx, inst.model.n_states(), "nx")?;
             let dx = out_slice(derivatives, nx, "derivatives[]")?;
             let computed = inst.model.get_derivatives(dx);
-            computed.map_err(evaluation_failed(&inst.model))?;
+            computed.map_err(failure)?;
             check_finite(inst, dx, "derivatives")?;
             Ok(fmi2OK)
         })
@@ -946,7 +993,7 @@ pub unsafe fn fmi2GetEventIndicators<M: Model>(
         guarded::<M>(c, &spec::fmi2GetEventIndicators, |inst| {
             check_len(ni, inst.model.n_event_indicators(), "ni")?;
             let z = out_slice(eventIndicators, ni, "eventIndicators[]")?;
-            inst.model.get_event_indicators(z).map_err(Failure::Model)?;
+            inst.model.get_event_indicators(z).map_err(failure)?;
             check_finite(inst, z, "eventIndicators")?;
             Ok(fmi2OK)
         })
@@ -1016,12 +1063,12 @@ pub unsafe fn fmi2SetRealInputDerivatives<M: Model>(
                 if !v.is_finite() {
                     return Err(usage(format!("{}: input derivative {v} is not finite", describe(&inst.model, r))));
                 }
-                inst.model
-                    .admissible_direction(r, v)
-                    .map_err(|e| usage(format!("{}: input derivative {v:e}: {e}", describe(&inst.model, r))))?;
+                inst.model.admissible_direction(r, v).map_err(|e| {
+                    model_failure(e, |e| format!("{}: input derivative {v:e}: {e}", describe(&inst.model, r)))
+                })?;
             }
             for (&r, &v) in vrs.iter().zip(values) {
-                inst.model.set_real_input_derivative(r, v).map_err(model_err(r))?;
+                inst.model.set_real_input_derivative(r, v).map_err(failure_of(r))?;
             }
             Ok(fmi2OK)
         })
@@ -1065,7 +1112,7 @@ pub unsafe fn fmi2GetRealOutputDerivatives<M: Model>(
             }
             inst.logger.trace(|| format!("fmi2GetRealOutputDerivatives: {nvr} values"));
             for ((&r, &k), v) in vrs.iter().zip(orders).zip(values) {
-                let x = inst.model.get_real_output_derivative(r, k).map_err(evaluation_failed_at(&inst.model, r))?;
+                let x = inst.model.get_real_output_derivative(r, k).map_err(failure_at(&inst.model, r))?;
                 if !x.is_finite() {
                     return Err(non_finite(inst, format!("derivative {k} of {}", describe(&inst.model, r)), x));
                 }
@@ -1105,26 +1152,26 @@ pub unsafe fn fmi2DoStep<M: Model>(
                 )));
             }
             inst.logger.trace(|| format!("fmi2DoStep: t = {t}, h = {h}"));
-            match inst.model.try_step(inst.time, h) {
+            match inst.model.do_step(inst.time, h) {
                 Ok(()) => {}
                 // Not taken, the model as before the step: the standard's stepFailed, from which
                 // the master restores a saved FMU state and retries with a shorter step (FMI 2.0.x
                 // section 4.2.2); fmi2LastSuccessfulTime stays at the step's start
-                Err(ModelError::Discard(msg)) => {
+                Err(ModelError::Discard(reason)) => {
                     inst.state = ModelState::StepFailed;
                     inst.last_do_step_status = fmi2Discard;
-                    return Err(Failure::Discard(format!("step from t = {t} by h = {h} not taken: {msg}")));
+                    return Err(Failure::Discard(format!("step from t = {t} by h = {h} not taken: {reason}")));
                 }
                 // refused before anything was done, as fmi2SetReal refuses a value: same state
-                Err(ModelError::Refused(msg)) => {
+                Err(ModelError::Refused(reason)) => {
                     return Err(usage(format!(
-                        "{msg}; the step is refused with fmi2Error before anything was done, the instance \
+                        "{reason}; the step is refused with fmi2Error before anything was done, the instance \
                          unchanged: set valid inputs and step again"
                     )));
                 }
-                Err(ModelError::Failed(msg)) => {
+                Err(ModelError::Failed(reason)) => {
                     inst.last_do_step_status = fmi2Error;
-                    return Err(Failure::Model(msg));
+                    return Err(Failure::Model(reason.to_string()));
                 }
             }
             inst.last_do_step_status = fmi2OK;

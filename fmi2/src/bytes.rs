@@ -50,8 +50,69 @@ impl<'a> Writer<'a> {
     }
 }
 
-fn finite(v: f64, what: &str) -> Result<f64, String> {
-    if v.is_finite() { Ok(v) } else { Err(format!("{what} = {v} is not a finite number")) }
+/// A model's own reason to refuse what well-formed bytes hold (a version it does not read, sizes
+/// of another body): its typed error, kept as the source.
+pub type Refusal = Box<dyn std::error::Error + Send + Sync + 'static>;
+
+/// Why bytes of a saved state could not be read; every variant names the field (`what`).
+#[derive(Debug)]
+pub enum DecodeError {
+    /// Fewer bytes remain than the field needs.
+    Truncated { what: String, needed: usize, at: usize, remaining: usize },
+    /// A real that no saved state holds (every value a state holds is finite).
+    NotFinite { what: String, value: f64 },
+    /// A byte other than 0 and 1 where a boolean is.
+    NotBoolean { what: String, value: u8 },
+    /// The byte count of an array does not fit in a usize.
+    SizeOverflow { what: String },
+    /// A length read from the bytes that exceeds the bytes that remain.
+    LengthBeyondBytes { what: String, length: u64, at: usize, remaining: usize },
+    /// A string that is not UTF-8.
+    NotUtf8 { what: String },
+    /// Bytes left over after everything was read.
+    Trailing { what: String, count: usize },
+    /// The bytes read well but the model refuses what they hold (its error says why).
+    Invalid(Refusal),
+}
+
+impl DecodeError {
+    /// The model's refusal of what the bytes hold.
+    pub fn invalid(reason: impl std::error::Error + Send + Sync + 'static) -> Self {
+        DecodeError::Invalid(Box::new(reason))
+    }
+}
+
+impl std::fmt::Display for DecodeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            DecodeError::Truncated { what, needed, at, remaining } => {
+                write!(f, "truncated: {what} needs {needed} bytes at offset {at} but only {remaining} remain")
+            }
+            DecodeError::NotFinite { what, value } => write!(f, "{what} = {value} is not a finite number"),
+            DecodeError::NotBoolean { what, value } => write!(f, "{what} is {value}, not a boolean (0 or 1)"),
+            DecodeError::SizeOverflow { what } => write!(f, "{what}: size overflows"),
+            DecodeError::LengthBeyondBytes { what, length, at, remaining } => {
+                write!(f, "{what} = {length} at offset {at} exceeds the {remaining} bytes that remain")
+            }
+            DecodeError::NotUtf8 { what } => write!(f, "{what} is not valid UTF-8"),
+            DecodeError::Trailing { what, count } => write!(f, "{count} unexpected bytes after the {what}"),
+            DecodeError::Invalid(reason) => std::fmt::Display::fmt(reason, f),
+        }
+    }
+}
+
+impl std::error::Error for DecodeError {
+    /// The model's refusal is shown as it is: its own source comes next.
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            DecodeError::Invalid(reason) => reason.source(),
+            _ => None,
+        }
+    }
+}
+
+fn finite(v: f64, what: &str) -> Result<f64, DecodeError> {
+    if v.is_finite() { Ok(v) } else { Err(DecodeError::NotFinite { what: what.to_owned(), value: v }) }
 }
 
 /// Reads what [`Writer`] wrote; every method names the field in its error.
@@ -70,48 +131,49 @@ impl<'a> Reader<'a> {
     pub fn remaining(&self) -> usize {
         self.bytes.len() - self.pos
     }
-    pub fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
+    pub fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], DecodeError> {
         if n > self.remaining() {
-            return Err(format!(
-                "truncated: {what} needs {n} bytes at offset {} but only {} remain",
-                self.pos,
-                self.remaining()
-            ));
+            return Err(DecodeError::Truncated {
+                what: what.to_owned(),
+                needed: n,
+                at: self.pos,
+                remaining: self.remaining(),
+            });
         }
         let s = &self.bytes[self.pos..self.pos + n];
         self.pos += n;
         Ok(s)
     }
-    fn array<const N: usize>(&mut self, what: &str) -> Result<[u8; N], String> {
+    fn array<const N: usize>(&mut self, what: &str) -> Result<[u8; N], DecodeError> {
         let mut a = [0u8; N];
         a.copy_from_slice(self.take(N, what)?);
         Ok(a)
     }
-    pub fn u8(&mut self, what: &str) -> Result<u8, String> {
+    pub fn u8(&mut self, what: &str) -> Result<u8, DecodeError> {
         Ok(self.array::<1>(what)?[0])
     }
     /// Only 0 and 1 are booleans.
-    pub fn bool(&mut self, what: &str) -> Result<bool, String> {
+    pub fn bool(&mut self, what: &str) -> Result<bool, DecodeError> {
         match self.u8(what)? {
             0 => Ok(false),
             1 => Ok(true),
-            v => Err(format!("{what} is {v}, not a boolean (0 or 1)")),
+            v => Err(DecodeError::NotBoolean { what: what.to_owned(), value: v }),
         }
     }
-    pub fn u32(&mut self, what: &str) -> Result<u32, String> {
+    pub fn u32(&mut self, what: &str) -> Result<u32, DecodeError> {
         Ok(u32::from_le_bytes(self.array(what)?))
     }
-    pub fn u64(&mut self, what: &str) -> Result<u64, String> {
+    pub fn u64(&mut self, what: &str) -> Result<u64, DecodeError> {
         Ok(u64::from_le_bytes(self.array(what)?))
     }
     /// A real of a saved state: a non-finite one was never written (every value a state holds
     /// is finite), so it is crafted or corrupt bytes and refused.
-    pub fn f64(&mut self, what: &str) -> Result<f64, String> {
+    pub fn f64(&mut self, what: &str) -> Result<f64, DecodeError> {
         finite(f64::from_le_bytes(self.array(what)?), what)
     }
     /// Fills `out` (its length is the count: sizes come from the reader's side, never the bytes).
-    pub fn f64s_into(&mut self, out: &mut [f64], what: &str) -> Result<(), String> {
-        let n = out.len().checked_mul(8).ok_or_else(|| format!("{what}: size overflows"))?;
+    pub fn f64s_into(&mut self, out: &mut [f64], what: &str) -> Result<(), DecodeError> {
+        let n = out.len().checked_mul(8).ok_or_else(|| DecodeError::SizeOverflow { what: what.to_owned() })?;
         let raw = self.take(n, what)?;
         for (x, c) in out.iter_mut().zip(raw.chunks_exact(8)) {
             let mut a = [0u8; 8];
@@ -120,37 +182,38 @@ impl<'a> Reader<'a> {
         }
         Ok(())
     }
-    pub fn f64_array<const N: usize>(&mut self, what: &str) -> Result<[f64; N], String> {
+    pub fn f64_array<const N: usize>(&mut self, what: &str) -> Result<[f64; N], DecodeError> {
         let mut a = [0.0; N];
         self.f64s_into(&mut a, what)?;
         Ok(a)
     }
     /// A length written by [`Writer::len`], checked to fit in what is left (at `unit` bytes each).
-    pub fn len(&mut self, unit: usize, what: &str) -> Result<usize, String> {
+    pub fn len(&mut self, unit: usize, what: &str) -> Result<usize, DecodeError> {
         let n = self.u64(what)?;
         let fits = usize::try_from(n)
             .ok()
             .and_then(|n| n.checked_mul(unit.max(1)))
             .is_some_and(|bytes| bytes <= self.remaining());
         if !fits {
-            return Err(format!(
-                "{what} = {n} at offset {} exceeds the {} bytes that remain",
-                self.pos - 8,
-                self.remaining()
-            ));
+            return Err(DecodeError::LengthBeyondBytes {
+                what: what.to_owned(),
+                length: n,
+                at: self.pos - 8,
+                remaining: self.remaining(),
+            });
         }
         Ok(n as usize)
     }
-    pub fn str(&mut self, what: &str) -> Result<&'a str, String> {
+    pub fn str(&mut self, what: &str) -> Result<&'a str, DecodeError> {
         let n = self.u32(what)? as usize;
         let raw = self.take(n, what)?;
-        std::str::from_utf8(raw).map_err(|_| format!("{what} is not valid UTF-8"))
+        std::str::from_utf8(raw).map_err(|_| DecodeError::NotUtf8 { what: what.to_owned() })
     }
     /// Everything must have been read.
-    pub fn finish(&self, what: &str) -> Result<(), String> {
+    pub fn finish(&self, what: &str) -> Result<(), DecodeError> {
         match self.remaining() {
             0 => Ok(()),
-            n => Err(format!("{n} unexpected bytes after the {what}")),
+            n => Err(DecodeError::Trailing { what: what.to_owned(), count: n }),
         }
     }
 }
@@ -172,7 +235,7 @@ mod tests {
         w.len(2);
         w.bytes(&[1, 2]);
         type Fields = (u8, bool, u32, u64, [f64; 2], String, usize);
-        let read = |bytes: &[u8]| -> Result<Fields, String> {
+        let read = |bytes: &[u8]| -> Result<Fields, DecodeError> {
             let mut r = Reader::new(bytes);
             let v = (
                 r.u8("a")?,
@@ -195,23 +258,41 @@ mod tests {
         }
         let mut bad = out.clone();
         bad[1] = 2;
-        assert_eq!(read(&bad).unwrap_err(), "b is 2, not a boolean (0 or 1)");
+        let e = read(&bad).unwrap_err();
+        assert!(matches!(&e, DecodeError::NotBoolean { what, value: 2 } if what == "b"), "{e:?}");
+        assert_eq!(e.to_string(), "b is 2, not a boolean (0 or 1)");
         // a saved state never holds a non-finite real: such bytes are crafted and refused
         for nan in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
             let mut bad = out.clone();
             bad[6..14].copy_from_slice(&nan.to_le_bytes());
-            assert_eq!(read(&bad).unwrap_err(), format!("d = {nan} is not a finite number"));
+            assert_eq!(read(&bad).unwrap_err().to_string(), format!("d = {nan} is not a finite number"));
         }
+    }
+
+    /// A model's refusal of what the bytes hold keeps its type (and its message).
+    #[test]
+    fn a_models_refusal_is_kept_as_it_is() {
+        #[derive(Debug)]
+        struct Version(u32);
+        impl std::fmt::Display for Version {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                write!(f, "state version {} is not 1", self.0)
+            }
+        }
+        impl std::error::Error for Version {}
+        let e = DecodeError::invalid(Version(7));
+        assert_eq!(e.to_string(), "state version 7 is not 1");
+        assert!(matches!(&e, DecodeError::Invalid(r) if r.downcast_ref::<Version>().is_some_and(|v| v.0 == 7)));
     }
 
     #[test]
     fn lengths_beyond_the_bytes_are_refused_before_allocating() {
         let mut out = Vec::new();
         Writer::new(&mut out).u64(u64::MAX);
-        let e = Reader::new(&out).len(8, "n").unwrap_err();
+        let e = Reader::new(&out).len(8, "n").unwrap_err().to_string();
         assert!(e.contains("exceeds"), "{e}");
         let mut out = Vec::new();
         Writer::new(&mut out).u32(1 << 30);
-        assert!(Reader::new(&out).str("s").unwrap_err().starts_with("truncated"));
+        assert!(Reader::new(&out).str("s").unwrap_err().to_string().starts_with("truncated"));
     }
 }

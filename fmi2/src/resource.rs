@@ -8,12 +8,42 @@ use std::path::PathBuf;
 
 use percent_encoding::percent_decode_str;
 
-pub fn parse_resource_location(uri: &str) -> Result<PathBuf, String> {
-    let refuse = |why: &str| format!("fmuResourceLocation \"{uri}\" is not usable: {why}");
+/// What makes an fmuResourceLocation unusable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Unusable {
+    NotFileUri,
+    RemoteHost,
+    RelativePath,
+    NotUtf8,
+}
+
+/// An fmuResourceLocation that names no local folder.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ResourceError {
+    pub uri: String,
+    pub why: Unusable,
+}
+
+impl std::fmt::Display for ResourceError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let why = match self.why {
+            Unusable::NotFileUri => "only file: URIs are supported",
+            Unusable::RemoteHost => "the host must be empty or localhost",
+            Unusable::RelativePath => "the path must be absolute",
+            Unusable::NotUtf8 => "the decoded path is not valid UTF-8",
+        };
+        write!(f, "fmuResourceLocation \"{}\" is not usable: {why}", self.uri)
+    }
+}
+
+impl std::error::Error for ResourceError {}
+
+pub fn parse_resource_location(uri: &str) -> Result<PathBuf, ResourceError> {
+    let refuse = |why: Unusable| ResourceError { uri: uri.to_owned(), why };
 
     let rest = match uri.get(..5) {
         Some(scheme) if scheme.eq_ignore_ascii_case("file:") => &uri[5..],
-        _ => return Err(refuse("only file: URIs are supported")),
+        _ => return Err(refuse(Unusable::NotFileUri)),
     };
     // "//authority/path": only the local host can be meant.
     let path = match rest.strip_prefix("//") {
@@ -21,14 +51,14 @@ pub fn parse_resource_location(uri: &str) -> Result<PathBuf, String> {
         Some(after) => {
             let end = after.find('/').unwrap_or(after.len());
             if !after[..end].eq_ignore_ascii_case("localhost") {
-                return Err(refuse("the host must be empty or localhost"));
+                return Err(refuse(Unusable::RemoteHost));
             }
             &after[end..]
         }
         None => rest,
     };
     if !path.starts_with('/') {
-        return Err(refuse("the path must be absolute"));
+        return Err(refuse(Unusable::RelativePath));
     }
 
     let mut bytes: Vec<u8> = percent_decode_str(path).collect();
@@ -46,7 +76,7 @@ pub fn parse_resource_location(uri: &str) -> Result<PathBuf, String> {
     while bytes.len() > 1 && bytes.ends_with(b"/") {
         bytes.pop();
     }
-    bytes_to_path(bytes).map_err(|()| refuse("the decoded path is not valid UTF-8"))
+    bytes_to_path(bytes).map_err(|()| refuse(Unusable::NotUtf8))
 }
 
 #[cfg(unix)]

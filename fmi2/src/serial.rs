@@ -26,7 +26,7 @@
 //! magic, version, length, CRC, then every field; the first failure is the message, and
 //! nothing is built from bytes that fail any check.
 
-use super::bytes::{Reader, Writer};
+use super::bytes::{DecodeError, Reader, Writer};
 use super::instance::Snapshot;
 use super::state::ModelState;
 use super::types::fmi2Status;
@@ -100,38 +100,146 @@ pub fn serialize<M: Model>(s: &Snapshot<M>) -> Vec<u8> {
     out
 }
 
+/// Why serialized FMU state bytes were refused (fmi2DeSerializeFMUstate); checked in the order
+/// of the variants, the first failure is the message.
+#[derive(Debug)]
+pub enum StateError {
+    /// Fewer bytes than a header and a CRC, beginning as a state does.
+    Truncated {
+        len: usize,
+    },
+    /// Not beginning with [`MAGIC`].
+    NotAState,
+    /// A format version above [`VERSION`].
+    NewerVersion(u32),
+    VersionZero,
+    /// A payload length no byte count can have.
+    ImpossibleLength(u64),
+    /// Fewer bytes than the header says.
+    ShorterThanHeader {
+        len: usize,
+        expected: usize,
+    },
+    /// More bytes than the header says.
+    LongerThanHeader {
+        len: usize,
+        expected: usize,
+    },
+    /// The CRC-32 stored differs from the bytes'.
+    Corrupt {
+        stored: u32,
+        computed: u32,
+    },
+    InvalidInterface(u8),
+    /// A state of an instance of the other interface.
+    OtherInterface {
+        saved: Interface,
+        current: Interface,
+    },
+    InvalidModelState {
+        code: u8,
+        interface: Interface,
+    },
+    InvalidStatus(u8),
+    /// A state of another model (its GUID).
+    OtherModel {
+        guid: String,
+        current: String,
+    },
+    /// A field of the layer's part unreadable.
+    Field(DecodeError),
+    /// The model's section refused by [`Model::load_state`].
+    ModelSection(DecodeError),
+}
+
+impl std::fmt::Display for StateError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StateError::Truncated { len } => write!(f, "the serialized FMU state is truncated: {len} bytes"),
+            StateError::NotAState => {
+                f.write_str("not a serialized FMU state of this runtime (the first 8 bytes are not 'FLEXSTAT')")
+            }
+            StateError::NewerVersion(version) => write!(
+                f,
+                "the serialized FMU state was written by a newer runtime (format version {version}; this runtime reads up to {VERSION})"
+            ),
+            StateError::VersionZero => {
+                f.write_str("the serialized FMU state has format version 0, which no runtime writes")
+            }
+            StateError::ImpossibleLength(payload) => {
+                write!(f, "the serialized FMU state claims an impossible payload length {payload}")
+            }
+            StateError::ShorterThanHeader { len, expected } => {
+                write!(f, "the serialized FMU state is truncated: {len} bytes, its header says {expected}")
+            }
+            StateError::LongerThanHeader { len, expected } => {
+                write!(f, "the serialized FMU state has {len} bytes but its header says {expected}")
+            }
+            StateError::Corrupt { stored, computed } => write!(
+                f,
+                "the serialized FMU state is corrupt: CRC-32 stored {stored:#010x}, computed {computed:#010x}"
+            ),
+            StateError::InvalidInterface(code) => write!(f, "invalid interface code {code}"),
+            StateError::OtherInterface { saved, current } => write!(
+                f,
+                "the serialized FMU state is of a {saved:?} instance; this instance was instantiated for {current:?}"
+            ),
+            StateError::InvalidModelState { code, interface } => {
+                write!(f, "invalid model state code {code} for {interface:?}")
+            }
+            StateError::InvalidStatus(code) => write!(f, "invalid fmi2DoStep status code {code}"),
+            StateError::OtherModel { guid, current } => {
+                write!(f, "the serialized FMU state belongs to the model with GUID {guid}, not this FMU's {current}")
+            }
+            StateError::Field(e) => std::fmt::Display::fmt(e, f),
+            StateError::ModelSection(e) => write!(f, "model state: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for StateError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            StateError::Field(e) => e.source(),
+            StateError::ModelSection(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+impl From<DecodeError> for StateError {
+    fn from(e: DecodeError) -> Self {
+        StateError::Field(e)
+    }
+}
+
 /// A snapshot from `bytes` for an instance of `interface` whose model is `current`: the
 /// model part is loaded into a clone of it, so a failure leaves nothing half-built.
-pub fn deserialize<M: Model>(bytes: &[u8], current: &M, interface: Interface) -> Result<Snapshot<M>, String> {
+pub fn deserialize<M: Model>(bytes: &[u8], current: &M, interface: Interface) -> Result<Snapshot<M>, StateError> {
     if bytes.len() < HEADER + CRC && MAGIC.starts_with(&bytes[..bytes.len().min(8)]) {
-        return Err(format!("the serialized FMU state is truncated: {} bytes", bytes.len()));
+        return Err(StateError::Truncated { len: bytes.len() });
     }
     let mut r = Reader::new(bytes);
     if r.take(8, "magic").ok() != Some(MAGIC.as_slice()) {
-        return Err("not a serialized FMU state of this runtime (the first 8 bytes are not 'FLEXSTAT')".into());
+        return Err(StateError::NotAState);
     }
     let version = r.u32("format version")?;
     if version > VERSION {
-        return Err(format!(
-            "the serialized FMU state was written by a newer runtime (format version {version}; this runtime reads up to {VERSION})"
-        ));
+        return Err(StateError::NewerVersion(version));
     }
     if version == 0 {
-        return Err("the serialized FMU state has format version 0, which no runtime writes".into());
+        return Err(StateError::VersionZero);
     }
     let payload = r.u64("payload length")?;
     let expected = usize::try_from(payload)
         .ok()
         .and_then(|p| p.checked_add(HEADER + CRC))
-        .ok_or_else(|| format!("the serialized FMU state claims an impossible payload length {payload}"))?;
+        .ok_or(StateError::ImpossibleLength(payload))?;
     if bytes.len() < expected {
-        return Err(format!(
-            "the serialized FMU state is truncated: {} bytes, its header says {expected}",
-            bytes.len()
-        ));
+        return Err(StateError::ShorterThanHeader { len: bytes.len(), expected });
     }
     if bytes.len() > expected {
-        return Err(format!("the serialized FMU state has {} bytes but its header says {expected}", bytes.len()));
+        return Err(StateError::LongerThanHeader { len: bytes.len(), expected });
     }
     let end = expected - CRC;
     let mut stored = [0u8; 4];
@@ -139,41 +247,34 @@ pub fn deserialize<M: Model>(bytes: &[u8], current: &M, interface: Interface) ->
     let stored = u32::from_le_bytes(stored);
     let computed = crc32fast::hash(&bytes[..end]);
     if stored != computed {
-        return Err(format!(
-            "the serialized FMU state is corrupt: CRC-32 stored {stored:#010x}, computed {computed:#010x}"
-        ));
+        return Err(StateError::Corrupt { stored, computed });
     }
 
     let mut r = Reader::new(&bytes[HEADER..end]);
     let code = r.u8("interface")?;
-    let saved_interface = interface_of(code).ok_or_else(|| format!("invalid interface code {code}"))?;
+    let saved_interface = interface_of(code).ok_or(StateError::InvalidInterface(code))?;
     if saved_interface != interface {
-        return Err(format!(
-            "the serialized FMU state is of a {saved_interface:?} instance; this instance was instantiated for {interface:?}"
-        ));
+        return Err(StateError::OtherInterface { saved: saved_interface, current: interface });
     }
     let code = r.u8("model state")?;
     let state = ModelState::from_code(code)
         .filter(|s| s.can_be_saved_in(interface))
-        .ok_or_else(|| format!("invalid model state code {code} for {interface:?}"))?;
+        .ok_or(StateError::InvalidModelState { code, interface })?;
     let code = r.u8("fmi2DoStep status")?;
-    let last_do_step_status = status_of(code).ok_or_else(|| format!("invalid fmi2DoStep status code {code}"))?;
+    let last_do_step_status = status_of(code).ok_or(StateError::InvalidStatus(code))?;
     let stop_defined = r.bool("stop time defined")?;
     let time = r.f64("time")?;
     let start_time = r.f64("start time")?;
     let stop = r.f64("stop time")?;
     let guid = r.str("GUID")?;
     if guid != current.guid() {
-        return Err(format!(
-            "the serialized FMU state belongs to the model with GUID {guid}, not this FMU's {}",
-            current.guid()
-        ));
+        return Err(StateError::OtherModel { guid: guid.to_owned(), current: current.guid().to_owned() });
     }
     let n = r.len(1, "model section length")?;
     let section = r.take(n, "model section")?;
     r.finish("model section")?;
     let mut model = current.clone();
-    model.load_state(section).map_err(|e| format!("model state: {e}"))?;
+    model.load_state(section).map_err(StateError::ModelSection)?;
     Ok(Snapshot {
         magic: super::instance::SNAPSHOT_MAGIC,
         model,

@@ -39,7 +39,7 @@ pub enum Entry {
     Text(String),
 }
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Clone, PartialEq)]
 pub enum FormatError {
     Truncated { at: usize, needed: usize },
     BadMagic,
@@ -78,6 +78,13 @@ impl fmt::Display for FormatError {
 }
 
 impl std::error::Error for FormatError {}
+
+/// The message, as the FMU logs it (see `body::BodyError`: no derived dump in the binary).
+impl fmt::Debug for FormatError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Display::fmt(self, f)
+    }
+}
 
 /// An ordered set of named entries: the container without any physics.
 #[derive(Debug, Clone, Default, PartialEq)]

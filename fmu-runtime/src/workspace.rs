@@ -70,11 +70,7 @@ impl std::fmt::Display for WorkspaceTooSmall {
     }
 }
 
-impl From<WorkspaceTooSmall> for String {
-    fn from(e: WorkspaceTooSmall) -> String {
-        e.to_string()
-    }
-}
+impl std::error::Error for WorkspaceTooSmall {}
 
 /// Scratch values of the size a [`WorkspaceReq`] asked for, allocated once; calls carve it into
 /// the slices they document.
@@ -144,7 +140,7 @@ mod tests {
         assert!(ws.carve([1, 1]).is_ok());
         let refused = ws.carve([4, 2]).unwrap_err();
         assert_eq!(refused, WorkspaceTooSmall { needed: 6, available: 5 });
-        assert!(String::from(refused).contains("holds 5 values, the computation needs 6"));
+        assert!(refused.to_string().contains("holds 5 values, the computation needs 6"));
         assert_eq!(ws.values, [1.0, 1.0, 2.0, 2.0, 2.0]);
     }
 }

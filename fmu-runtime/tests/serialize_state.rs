@@ -8,13 +8,14 @@ use std::ptr::{null, null_mut};
 use test_support::scratch::{Scratch, file_uri};
 
 use fmi2::api;
+use fmi2::bytes::DecodeError;
 use fmi2::instance::Snapshot;
 use fmi2::serial;
 use fmi2::state::ModelState;
 use fmi2::types::fmi2Status::{fmi2Error, fmi2OK};
 use fmi2::types::*;
 use fmi2::{Causality, Interface, Model, VarType};
-use fmu_runtime::fmu::BodyFmu;
+use fmu_runtime::fmu::{BodyFmu, BodyStateError};
 use fmu_runtime::format::RESOURCE_FILE;
 use fmu_runtime::interface::VariableTable;
 use fmu_runtime::reduced::{ReducedBody, free_two_mode_body, rotating_two_mode_body, two_mode_body};
@@ -324,7 +325,9 @@ fn damaged_and_foreign_states_are_refused_with_a_reason() {
     for case in &cases {
         let model = BodyFmu::from_reduced(case.body.clone());
         let bytes = serial::serialize(&snapshot(case, model.clone()));
-        let load = |b: &[u8]| serial::deserialize(b, &model, Interface::CoSimulation).map(|s| s.time);
+        let load = |b: &[u8]| {
+            serial::deserialize(b, &model, Interface::CoSimulation).map(|s| s.time).map_err(|e| e.to_string())
+        };
         assert_eq!(load(&bytes), Ok(0.5));
         for cut in 0..bytes.len() {
             let e = load(&bytes[..cut]).unwrap_err();
@@ -370,6 +373,13 @@ fn damaged_and_foreign_states_are_refused_with_a_reason() {
     three.flanges[0].shapes = vec![0.0; 18];
     let bytes = serial::serialize(&snapshot(case, BodyFmu::from_reduced(three)));
     let e = serial::deserialize(&bytes, &model, Interface::CoSimulation).map(|s| s.time).unwrap_err();
+    // the body's refusal is kept as the source, typed
+    let refusal = match &e {
+        serial::StateError::ModelSection(DecodeError::Invalid(refusal)) => refusal.downcast_ref::<BodyStateError>(),
+        _ => None,
+    };
+    assert!(matches!(refusal, Some(BodyStateError::OtherBody { n: 3, n_body: 2, .. })), "{e:?}");
+    let e = e.to_string();
     assert!(e.contains("the state is of a body with 3 modes, 1 force flanges; this one has 2, 1"), "{e}");
     // mounted bytes into the free body's model of the same GUID
     let mut free_same_guid = cases[2].body.clone();
@@ -377,7 +387,8 @@ fn damaged_and_foreign_states_are_refused_with_a_reason() {
     let free_model = BodyFmu::from_reduced(free_same_guid);
     let e = serial::deserialize(&serial::serialize(&snapshot(case, model)), &free_model, Interface::CoSimulation)
         .map(|s| s.time)
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("free-floating"), "{e}");
 
     // Through the C API: refused, and the instance carries on. The reasons are asserted above at

@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use crate::bytes::{Reader, Writer};
+use crate::bytes::{DecodeError, Reader, Writer};
 use crate::{Causality as C, Initial as I, Interface, Model, ModelError, VarInfo, VarType as T, Variability as V};
 
 pub const GUID: &str = "{8c4e810f-3df3-4a00-8276-176fa3c9f000}";
@@ -47,6 +47,40 @@ const VARS: [VarInfo; 12] = [
     VarInfo { var_type: T::String, causality: C::CalculatedParameter, variability: V::Fixed, initial: None },
     VarInfo { var_type: T::Real, causality: C::Output, variability: V::Continuous, initial: Some(I::Calculated) },
 ];
+
+/// Why the spring fails, each as the layer's tests expect it logged.
+#[derive(Debug)]
+pub enum SpringError {
+    CannotLoad(String),
+    InputRange(f64),
+    RateRange,
+    NonPositiveK(f64),
+    NoSettableIntegers,
+    Jacobian,
+    NoDerivative,
+    StepTooLong(f64),
+    Solver(f64),
+    Version(u32),
+}
+
+impl std::fmt::Display for SpringError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SpringError::CannotLoad(resources) => write!(f, "cannot load {resources}"),
+            SpringError::InputRange(value) => write!(f, "|u| = {value:e} is beyond the input's range {U_LIMIT:e}"),
+            SpringError::RateRange => write!(f, "beyond the input's range of rates {U_LIMIT:e}"),
+            SpringError::NonPositiveK(value) => write!(f, "k must be > 0, got {value}"),
+            SpringError::NoSettableIntegers => f.write_str("no settable integers"),
+            SpringError::Jacobian => f.write_str("Jacobian failed"),
+            SpringError::NoDerivative => f.write_str("no derivative after a failure"),
+            SpringError::StepTooLong(h) => write!(f, "h = {h} needs more than {MAX_STEP} s of RK4 substeps"),
+            SpringError::Solver(t) => write!(f, "solver failed at 50% of the step #r{X}# t = {t}"),
+            SpringError::Version(version) => write!(f, "spring state version {version} is not 1"),
+        }
+    }
+}
+
+impl std::error::Error for SpringError {}
 
 #[derive(Clone, Debug)]
 pub struct Spring {
@@ -107,25 +141,25 @@ impl Spring {
 }
 
 impl Model for Spring {
-    fn instantiate(resources: Option<&Path>, _interface: Interface) -> Result<Self, String> {
+    fn instantiate(resources: Option<&Path>, _interface: Interface) -> Result<Self, ModelError> {
         let resources = resources.map_or("none".to_string(), |p| p.display().to_string());
         if resources.contains("refuse") {
-            return Err(format!("cannot load {resources}"));
+            return Err(ModelError::failed(SpringError::CannotLoad(resources)));
         }
         Ok(Spring::start(resources))
     }
     fn guid(&self) -> &str {
         if self.resources.contains("other-model") { OTHER_GUID } else { GUID }
     }
-    fn admissible_real(&self, vr: u32, value: f64) -> Result<(), String> {
+    fn admissible_real(&self, vr: u32, value: f64) -> Result<(), ModelError> {
         if vr == U && value.abs() > U_LIMIT {
-            return Err(format!("|u| = {value:e} is beyond the input's range {U_LIMIT:e}"));
+            return Err(ModelError::refused(SpringError::InputRange(value)));
         }
         Ok(())
     }
-    fn admissible_direction(&self, vr: u32, value: f64) -> Result<(), String> {
+    fn admissible_direction(&self, vr: u32, value: f64) -> Result<(), ModelError> {
         if vr == U && value.abs() > U_LIMIT {
-            return Err(format!("beyond the input's range of rates {U_LIMIT:e}"));
+            return Err(ModelError::refused(SpringError::RateRange));
         }
         Ok(())
     }
@@ -135,7 +169,7 @@ impl Model for Spring {
     fn var_name(&self, vr: u32) -> Option<&str> {
         NAMES.get(vr as usize).copied()
     }
-    fn get_real(&mut self, vr: u32) -> Result<f64, String> {
+    fn get_real(&mut self, vr: u32) -> Result<f64, ModelError> {
         Ok(match vr {
             X => self.x,
             V_ => self.v,
@@ -146,11 +180,11 @@ impl Model for Spring {
             _ => unreachable!("the layer checks value references"),
         })
     }
-    fn set_real(&mut self, vr: u32, value: f64) -> Result<(), String> {
+    fn set_real(&mut self, vr: u32, value: f64) -> Result<(), ModelError> {
         match vr {
             X => self.x = value,
             V_ => self.v = value,
-            K if value <= 0.0 => return Err(format!("k must be > 0, got {value}")),
+            K if value <= 0.0 => return Err(ModelError::failed(SpringError::NonPositiveK(value))),
             K => self.k = value,
             U => self.u = value,
             D => self.d = value,
@@ -158,16 +192,16 @@ impl Model for Spring {
         }
         Ok(())
     }
-    fn get_integer(&mut self, _vr: u32) -> Result<i32, String> {
+    fn get_integer(&mut self, _vr: u32) -> Result<i32, ModelError> {
         Ok(self.steps)
     }
-    fn set_integer(&mut self, _vr: u32, _value: i32) -> Result<(), String> {
-        Err("no settable integers".into())
+    fn set_integer(&mut self, _vr: u32, _value: i32) -> Result<(), ModelError> {
+        Err(ModelError::failed(SpringError::NoSettableIntegers))
     }
-    fn get_boolean(&mut self, vr: u32) -> Result<bool, String> {
+    fn get_boolean(&mut self, vr: u32) -> Result<bool, ModelError> {
         Ok(if vr == CRASH { self.crash } else { self.fail })
     }
-    fn set_boolean(&mut self, vr: u32, value: bool) -> Result<(), String> {
+    fn set_boolean(&mut self, vr: u32, value: bool) -> Result<(), ModelError> {
         if vr == CRASH {
             self.crash = value
         } else {
@@ -175,10 +209,10 @@ impl Model for Spring {
         }
         Ok(())
     }
-    fn get_string(&mut self, vr: u32) -> Result<String, String> {
+    fn get_string(&mut self, vr: u32) -> Result<String, ModelError> {
         Ok(if vr == LABEL { self.label.clone() } else { self.resources.clone() })
     }
-    fn set_string(&mut self, _vr: u32, value: &str) -> Result<(), String> {
+    fn set_string(&mut self, _vr: u32, value: &str) -> Result<(), ModelError> {
         self.label = value.to_owned();
         Ok(())
     }
@@ -197,22 +231,22 @@ impl Model for Spring {
     fn set_continuous_states(&mut self, x: &[f64]) {
         (self.x, self.v) = (x[0], x[1]);
     }
-    fn get_derivatives(&mut self, dx: &mut [f64]) -> Result<(), String> {
+    fn get_derivatives(&mut self, dx: &mut [f64]) -> Result<(), ModelError> {
         dx.copy_from_slice(&[self.v, self.accel(self.x, self.v)]);
         Ok(())
     }
     fn get_nominals(&self, nominals: &mut [f64]) {
         nominals.fill(1.0);
     }
-    fn get_event_indicators(&mut self, z: &mut [f64]) -> Result<(), String> {
+    fn get_event_indicators(&mut self, z: &mut [f64]) -> Result<(), ModelError> {
         z[0] = self.x;
         Ok(())
     }
-    fn enter_initialization(&mut self, start_time: f64) -> Result<(), String> {
+    fn enter_initialization(&mut self, start_time: f64) -> Result<(), ModelError> {
         self.time = start_time;
         Ok(())
     }
-    fn exit_initialization(&mut self) -> Result<(), String> {
+    fn exit_initialization(&mut self) -> Result<(), ModelError> {
         Ok(())
     }
     fn provides_directional_derivative(&self) -> bool {
@@ -230,9 +264,9 @@ impl Model for Spring {
         knowns: &[u32],
         dv_known: &[f64],
         dv_unknown: &mut [f64],
-    ) -> Result<(), String> {
+    ) -> Result<(), ModelError> {
         if self.fail {
-            return Err("Jacobian failed".into());
+            return Err(ModelError::failed(SpringError::Jacobian));
         }
         for (&unknown, dv) in unknowns.iter().zip(dv_unknown) {
             *dv = knowns.iter().zip(dv_known).map(|(&known, &seed)| self.partial(unknown, known) * seed).sum();
@@ -243,10 +277,10 @@ impl Model for Spring {
         if self.has_derivatives() { 1 } else { 0 }
     }
     /// do_step holds u over a step, so d acc/dt = -k v - d a.
-    fn get_real_output_derivative(&mut self, vr: u32, order: i32) -> Result<f64, String> {
+    fn get_real_output_derivative(&mut self, vr: u32, order: i32) -> Result<f64, ModelError> {
         assert_eq!(order, 1, "the layer checks the order");
         if self.fail {
-            return Err("no derivative after a failure".into());
+            return Err(ModelError::failed(SpringError::NoDerivative));
         }
         Ok(match vr {
             X => self.v,
@@ -254,15 +288,12 @@ impl Model for Spring {
             _ => unreachable!("the layer checks for outputs"),
         })
     }
-    fn try_step(&mut self, t: f64, h: f64) -> Result<(), ModelError> {
+    fn do_step(&mut self, t: f64, h: f64) -> Result<(), ModelError> {
         if h > MAX_STEP {
-            return Err(ModelError::Discard(format!("h = {h} needs more than {MAX_STEP} s of RK4 substeps")));
+            return Err(ModelError::discard(SpringError::StepTooLong(h)));
         }
-        self.do_step(t, h).map_err(ModelError::Failed)
-    }
-    fn do_step(&mut self, t: f64, h: f64) -> Result<(), String> {
         if self.fail {
-            return Err(format!("solver failed at 50% of the step #r{X}# t = {t}"));
+            return Err(ModelError::failed(SpringError::Solver(t)));
         }
         // Classical RK4 with sub-steps of at most 1 ms.
         let n = (h / 1e-3).ceil().max(1.0) as usize;
@@ -281,7 +312,7 @@ impl Model for Spring {
         self.steps += 1;
         Ok(())
     }
-    fn reset(&mut self) -> Result<(), String> {
+    fn reset(&mut self) -> Result<(), ModelError> {
         *self = Spring::start(std::mem::take(&mut self.resources));
         Ok(())
     }
@@ -297,11 +328,11 @@ impl Model for Spring {
         w.bool(self.fail);
         w.str(&self.label);
     }
-    fn load_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+    fn load_state(&mut self, bytes: &[u8]) -> Result<(), DecodeError> {
         let mut r = Reader::new(bytes);
         let version = r.u32("spring state version")?;
         if version != 1 {
-            return Err(format!("spring state version {version} is not 1"));
+            return Err(DecodeError::invalid(SpringError::Version(version)));
         }
         let [time, x, v, k, d, u] = r.f64_array::<6>("spring reals")?;
         let steps = r.u32("steps")? as i32;

@@ -104,7 +104,7 @@ pub fn smoke_step(body: &ReducedBody) -> Result<()> {
         .map(|v| (v.vr, v.name.as_str()))
         .collect();
     let mut fmu = BodyFmu::from_reduced(body.clone());
-    let failed = |what: &str, e: String| {
+    let failed = |what: &str, e: fmi2::ModelError| {
         BuildError::NotFinite(format!("the FMU's first steps fail ({what}): {e}; {LIKELY_CAUSES}"))
     };
     fmu.enter_initialization(0.0).map_err(|e| failed("initialisation", e))?;

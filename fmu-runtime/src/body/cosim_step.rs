@@ -4,7 +4,10 @@
 
 use super::mounted::fill_coupling;
 use super::step_workspace::{CoupledWork, FreeWork, StepStart, StepWorkspace};
-use super::{Coupling, FlangeLoad, FlexibleBody, FrameState, InputRates, MountMotion, REAL_LIMIT, UNSTABLE_STIFFNESS};
+use super::{
+    BodyError, Coupling, FlangeLoad, FlexibleBody, FrameState, InputRates, MountMotion, REAL_LIMIT, StepError,
+    UNSTABLE_STIFFNESS,
+};
 use crate::coupled_propagator::Prepared;
 use crate::kinematics::{self as k3, Mat3, Vec3};
 use crate::workspace::WorkspaceTooSmall;
@@ -65,38 +68,6 @@ fn substep_work(n: usize) -> f64 {
     (n * n) as f64 + 60.0
 }
 
-/// Why a Co-Simulation step was not taken; the body is as it was before the step either way.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum StepError {
-    /// The inputs are none the body can be stepped with (a mount orientation off the rotations,
-    /// a spin the body was not built for): the host sets valid ones and steps again.
-    Inputs(String),
-    /// The step would cost more than one call may take, or its result would not have been
-    /// finite and in range: a shorter step (or other inputs) may be taken.
-    NotTaken(String),
-}
-
-impl StepError {
-    pub fn reason(&self) -> &str {
-        match self {
-            StepError::Inputs(r) | StepError::NotTaken(r) => r,
-        }
-    }
-}
-
-/// For callers that report a step's failure as text (the builder's checks, the benchmarks).
-impl From<StepError> for String {
-    fn from(e: StepError) -> String {
-        e.reason().to_string()
-    }
-}
-
-impl std::fmt::Display for StepError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.reason())
-    }
-}
-
 /// The mount as the host set it, and which of its groups moved by their kinematic rates
 /// (position and velocity do not enter the body's equations: they are left alone).
 struct HeldMount {
@@ -135,7 +106,7 @@ impl FlexibleBody {
     /// Either way the body is as before the step, with the reason in the error.
     pub fn step(&mut self, h: f64) -> Result<(), StepError> {
         if !(h > 0.0 && h.is_finite()) {
-            return Err(StepError::Inputs(format!("step size {h} must be positive and finite")));
+            return Err(StepError::Inputs(BodyError::StepSize(h)));
         }
         if self.frame.is_some() {
             self.free_substeps_within_budget(h)?;
@@ -151,11 +122,10 @@ impl FlexibleBody {
     /// The step in the scratch `ws` lends: kept at its start, undone if it fails.
     fn step_in(&mut self, ws: &mut StepWorkspace, h: f64) -> Result<(), StepError> {
         if !ws.fits(self.q.len(), self.loads.len()) {
-            return Err(StepError::NotTaken(format!(
-                "the step's workspace was not made for this body of {} modes and {} force flanges",
-                self.q.len(),
-                self.loads.len()
-            )));
+            return Err(StepError::NotTaken(BodyError::WorkspaceMismatch {
+                modes: self.q.len(),
+                flanges: self.loads.len(),
+            }));
         }
         self.keep_step_start(&mut ws.start);
         let result = self.step_from_start(ws, h).and_then(|()| self.check_step_end(h));
@@ -205,11 +175,7 @@ impl FlexibleBody {
             let longest = most as f64 * SUBSTEP_ANGLE / spin;
             let unit = 10f64.powi(longest.log10().floor() as i32 - 3);
             let longest = (longest / unit).floor() * unit;
-            return Err(StepError::NotTaken(format!(
-                "a step of h = {h} s of this free-floating body spinning at |W| = {spin:.3} rad/s needs \
-                 {needed:.0} substeps of at most {SUBSTEP_ANGLE} rad, more than the {most} one call takes; \
-                 the largest step at this spin is h = {longest:.3e} s (substeps = |W| h / {SUBSTEP_ANGLE} rad)"
-            )));
+            return Err(StepError::NotTaken(BodyError::TooManySubsteps { h, spin, needed, most, longest }));
         }
         Ok((needed as usize).max(1))
     }
@@ -265,16 +231,8 @@ impl FlexibleBody {
         let out_of_range = |v: f64| !(v.abs() <= REAL_LIMIT);
         // a spin above a critical speed makes the deformation grow without bound: say so
         let unstable = self.frame.is_none() && self.coupled.has_storage() && !self.coupled.definite();
-        let fail = |what: String, v: f64| {
-            Err(StepError::NotTaken(format!(
-                "{what} would be {v:e} after this step of h = {h:e} s, {}: {}; the state before the step is kept",
-                if v.is_finite() { format!("beyond {REAL_LIMIT:e}") } else { "not finite".to_string() },
-                if unstable {
-                    format!("the deformation grew without bound: {UNSTABLE_STIFFNESS}")
-                } else {
-                    "a step, load or input rate far beyond the body's range".to_string()
-                }
-            )))
+        let fail = |what: String, value: f64| {
+            Err(StepError::NotTaken(BodyError::StepEndOutOfRange { what, value, h, unstable }))
         };
         // a free body's mount is its frame's motion, no input
         let m = &self.mount;
@@ -310,7 +268,7 @@ impl FlexibleBody {
     }
 
     /// A mounted body's step, in the scratch `work` lends.
-    fn step_mounted(&mut self, work: &mut CoupledWork, h: f64) -> Result<(), String> {
+    fn step_mounted(&mut self, work: &mut CoupledWork, h: f64) -> Result<(), BodyError> {
         // the mount moves within the step as its own inputs say (r' = v, R' = w~ R, v' = a,
         // w' = z) wherever the host gave no rate; the host's next inputs replace that motion
         let held = self.kinematic_mount_rates();
@@ -349,13 +307,7 @@ impl FlexibleBody {
         }
         self.eval.valid = false;
         if coupled && !(self.q.iter().chain(&self.qd).all(|v| v.is_finite())) {
-            return Err(if self.coupled.definite() {
-                format!(
-                    "the modal state became non-finite in this step of h = {h} s (a step or load beyond the body's range)"
-                )
-            } else {
-                format!("the deformation grew without bound: {UNSTABLE_STIFFNESS}")
-            });
+            return Err(if self.coupled.definite() { BodyError::StepNotFinite { h } } else { BodyError::Unstable });
         }
         Ok(())
     }
@@ -651,8 +603,8 @@ impl FlexibleBody {
     /// (|W| h_sub <= SUBSTEP_ANGLE) of a second-order (Heun) splitting: the modes propagate exactly under
     /// the coupling load (trapezoidal in time), the rigid motion by the averaged rates, the
     /// attitude by the exact rotation of the mean angular velocity.
-    fn step_free(&mut self, work: &mut FreeWork, h: f64) -> Result<(), String> {
-        let substeps = self.free_substeps_within_budget(h).map_err(|e| e.reason().to_string())?;
+    fn step_free(&mut self, work: &mut FreeWork, h: f64) -> Result<(), BodyError> {
+        let substeps = self.free_substeps_within_budget(h).map_err(StepError::into_error)?;
         let hs = h / substeps as f64;
         self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, hs);
         let result = self.free_substeps(work, substeps, hs);
@@ -660,10 +612,10 @@ impl FlexibleBody {
         result
     }
 
-    fn free_substeps(&mut self, w: &mut FreeWork, substeps: usize, hs: f64) -> Result<(), String> {
+    fn free_substeps(&mut self, w: &mut FreeWork, substeps: usize, hs: f64) -> Result<(), BodyError> {
         let n = self.q.len();
         for _ in 0..substeps {
-            let start = self.frame.ok_or("not a free-floating body")?;
+            let start = self.frame.ok_or(BodyError::NotFreeFloating)?;
             w.q0.copy_from_slice(&self.q);
             w.qd0.copy_from_slice(&self.qd);
             // rates at the start, then at the predicted end
@@ -704,11 +656,11 @@ impl FlexibleBody {
         b: &FrameState,
         load: &[f64],
         hs: f64,
-    ) -> Result<(), String> {
+    ) -> Result<(), BodyError> {
         self.propagator.advance(&self.body.omega, load, &mut self.q, &mut self.qd);
         let w_dot = k3::scale(0.5, k3::add(a.w_body, b.w_body));
         let accel = k3::scale(0.5, k3::add(a.v, b.v));
-        let f = self.frame.as_mut().ok_or("not a free-floating body")?;
+        let f = self.frame.as_mut().ok_or(BodyError::NotFreeFloating)?;
         let w_mid = k3::add(start.w_body, k3::scale(0.5 * hs, w_dot));
         f.w_body = k3::add(start.w_body, k3::scale(hs, w_dot));
         f.v = k3::add(start.v, k3::scale(hs, accel));
@@ -768,6 +720,6 @@ mod tests {
         let mut b = FlexibleBody::new(Arc::new(two_mode_body()));
         b.mount_mut().rot = [1.1, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
         let e = b.step(0.1).unwrap_err();
-        assert!(matches!(&e, super::StepError::Inputs(r) if r.contains("base.R")), "{e}");
+        assert!(matches!(&e, super::StepError::Inputs(r) if r.to_string().contains("base.R")), "{e}");
     }
 }

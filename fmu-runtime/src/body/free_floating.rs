@@ -2,7 +2,7 @@
 //! through the inertia J(q) and C_r(q), and its energy and momenta.
 
 use super::dense::{dot, shape_dot, solve_dense};
-use super::{FlexibleBody, FrameState, Invariants, MountMotion};
+use super::{BodyError, FlexibleBody, FrameState, Invariants, MountMotion};
 use crate::kinematics::{self as k3, Mat3, Vec3};
 use crate::reduced::RotationTerms;
 use crate::scalar::{Scalar, c};
@@ -21,7 +21,7 @@ impl FlexibleBody {
 
 impl<T: Scalar> FlexibleBody<T> {
     /// Rates of the frame state (d/dt r, quaternion, v, body angular velocity).
-    pub fn frame_rate(&mut self) -> Result<FrameState<T>, String> {
+    pub fn frame_rate(&mut self) -> Result<FrameState<T>, BodyError> {
         self.evaluate()?;
         Ok(self.frame_rate)
     }
@@ -31,11 +31,11 @@ impl<T: Scalar> FlexibleBody<T> {
     ///   [J(q)  C_r(q)] [W']   [tau - W x h - J'(q) W                                   ]
     ///   [C_r^T   I   ] [q''] = [p - D q' - K q - 2 sum W_a G_a q' - sum W_a W_b (O_ab q + o_ab)]
     /// with h = J W + C_r q' (floating-frame invariants, exact in q to second order).
-    pub(super) fn free_accelerations(&mut self) -> Result<(), String> {
-        let frame = self.frame.ok_or("not a free-floating body")?;
+    pub(super) fn free_accelerations(&mut self) -> Result<(), BodyError> {
+        let frame = self.frame.ok_or(BodyError::NotFreeFloating)?;
         let n = self.q.len();
         let b = self.body.clone();
-        let rot_terms = b.rotation.as_ref().ok_or("a free-floating body needs its rotation invariants")?;
+        let rot_terms = b.rotation.as_ref().ok_or(BodyError::RotationInvariantsNeeded)?;
         let a = k3::rotation_of_quaternion(unit_quaternion(frame.quat)?);
         let w = frame.w_body;
         let total_force: Vec3<T> = self.loads.iter().fold([T::zero(); 3], |acc, l| k3::add(acc, l.f));
@@ -69,7 +69,7 @@ impl<T: Scalar> FlexibleBody<T> {
             }
         }
         let mut w_dot = rhs;
-        solve_dense(&mut s, &mut w_dot, 3).map_err(|_| "the body's inertia matrix became singular".to_string())?;
+        solve_dense(&mut s, &mut w_dot, 3).map_err(|()| BodyError::SingularInertia)?;
         for r in 0..nd {
             let f = self.cr_q[r] * w_dot[0] + self.cr_q[n + r] * w_dot[1] + self.cr_q[2 * n + r] * w_dot[2];
             self.eval.qdd[r] -= f;
@@ -167,14 +167,14 @@ impl<T: Scalar> FlexibleBody<T> {
     /// frame's spin W (C_k = sum W_a W_b O_ab, C_d = 2 sum W_a G_a). The load of the frame's own
     /// angular acceleration through the deformation, (G_a q)_s W'_a, is of second order and left
     /// out: W' is solved after q_s and depends on it.
-    fn free_quasi_static(&mut self, w: Vec3<T>) -> Result<(), String> {
+    fn free_quasi_static(&mut self, w: Vec3<T>) -> Result<(), BodyError> {
         if w.iter().all(|x| x.is_zero()) {
             return self.solve_quasi_static(None);
         }
         let (n, nd) = (self.q.len(), self.n_dynamic);
         let nn = n * n;
         let b = self.body.clone();
-        let rot_terms = b.rotation.as_ref().ok_or("a free-floating body needs its rotation invariants")?;
+        let rot_terms = b.rotation.as_ref().ok_or(BodyError::RotationInvariantsNeeded)?;
         let mut c_k = std::mem::take(&mut self.qs_work.c_k);
         let mut c_d = std::mem::take(&mut self.qs_work.c_d);
         c_k.fill(T::zero());
@@ -199,12 +199,12 @@ impl<T: Scalar> FlexibleBody<T> {
     }
 
     /// Energy and momenta of a free-floating body (gravity's potential included).
-    pub fn invariants(&mut self) -> Result<Invariants<T>, String> {
+    pub fn invariants(&mut self) -> Result<Invariants<T>, BodyError> {
         self.evaluate()?;
-        let frame = self.frame.ok_or("energy and momenta are outputs of free-floating bodies")?;
+        let frame = self.frame.ok_or(BodyError::InvariantsOfMountedBody)?;
         let n = self.q.len();
         let b = &self.body;
-        let rot_terms = b.rotation.as_ref().ok_or("missing rotation invariants")?;
+        let rot_terms = b.rotation.as_ref().ok_or(BodyError::RotationInvariantsMissing)?;
         let nn = n * n;
         let mut j: Mat3<T> = b.inertia.map(c);
         for p in 0..3 {
@@ -239,17 +239,11 @@ impl<T: Scalar> FlexibleBody<T> {
 /// The state's quaternion normalised. The state holds an orientation only near the unit sphere
 /// (a host's integrator keeps it there to its tolerance); the rates keep the norm, so a state off
 /// it is the host's.
-fn unit_quaternion<T: Scalar>(quat: [T; 4]) -> Result<[T; 4], String> {
+fn unit_quaternion<T: Scalar>(quat: [T; 4]) -> Result<[T; 4], BodyError> {
     let [q0, q1, q2, q3] = quat;
     let norm = (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3).sqrt();
     if !(norm.value() > 0.5 && norm.value() < 2.0) {
-        return Err(format!(
-            "the orientation quaternion frame.Q = {:?} has norm {:e}, which is no orientation \
-             (a state of norm between 0.5 and 2 is normalised; retry with states nearer the last \
-             accepted ones)",
-            quat.map(|x| x.value()),
-            norm.value()
-        ));
+        return Err(BodyError::Orientation { quat: quat.map(|x| x.value()), norm: norm.value() });
     }
     Ok(quat.map(|x| x / norm))
 }

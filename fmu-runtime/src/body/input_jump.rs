@@ -13,7 +13,7 @@
 //! holds w while z is set bounce the modes each step).
 
 use super::step_workspace::JumpWork;
-use super::{FlangeLoad, FlexibleBody, Parameters, SteppedState};
+use super::{BodyError, FlangeLoad, FlexibleBody, Parameters, StateMismatch, SteppedState};
 use crate::kinematics::Vec3;
 
 /// The loads a Co-Simulation step ended with (host-given rates applied); the shift's scratch is
@@ -39,7 +39,7 @@ impl FlexibleBody {
     /// rest: how both interfaces start, so that Co-Simulation begins where Model Exchange does
     /// (their start values are calculated, not set). Co-Simulation's steps start from these
     /// inputs.
-    pub fn settle_quasi_static(&mut self) -> Result<(), String> {
+    pub fn settle_quasi_static(&mut self) -> Result<(), BodyError> {
         self.equilibrate_quasi_static(true)?;
         self.record_stepped_inputs();
         Ok(())
@@ -65,13 +65,9 @@ impl FlexibleBody {
     }
 
     /// Restore the loads last stepped with (a loaded state); their sizes are checked.
-    pub fn set_stepped_inputs(&mut self, state: &SteppedState) -> Result<(), String> {
+    pub fn set_stepped_inputs(&mut self, state: &SteppedState) -> Result<(), BodyError> {
         if state.loads.len() != self.loads.len() {
-            return Err(format!(
-                "the state has stepped loads on {} flanges, the body {}",
-                state.loads.len(),
-                self.loads.len()
-            ));
+            return Err(StateMismatch::SteppedLoads { found: state.loads.len(), n: self.loads.len() }.into());
         }
         let s = &mut self.stepped;
         s.a = state.a;
@@ -86,7 +82,7 @@ impl FlexibleBody {
     /// by the change of their equilibrium (same dynamic modes and mount pose and spin, old and
     /// new loads), keeping their deviation from it and every velocity; `copies`: the step's scratch
     /// for the state before the shift and the old equilibrium.
-    pub(super) fn follow_input_change(&mut self, copies: &mut JumpWork) -> Result<(), String> {
+    pub(super) fn follow_input_change(&mut self, copies: &mut JumpWork) -> Result<(), BodyError> {
         let range = self.algebraic_range();
         if range.is_empty() || !self.stepped.valid {
             return Ok(());

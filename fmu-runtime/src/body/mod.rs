@@ -16,11 +16,13 @@
 //! substeps); `step_workspace` the step's scratch, lent down its functions; `input_jump`
 //! Co-Simulation's quasi-static modes across load changes; `quasi_static` Model Exchange's solve
 //! of the modes above the cutoff; `statics` the static start; `dense` the dense kernels (dot
-//! products and the small in-place solver).
+//! products and the small in-place solver); `error` why the equations fail, by failure class.
 
 mod cosim_step;
-pub use cosim_step::{SUBSTEP_ANGLE, StepError};
+pub use cosim_step::SUBSTEP_ANGLE;
 mod dense;
+mod error;
+pub use error::{BodyError, OutOfRange, StateMismatch, StepError};
 mod free_floating;
 mod input_jump;
 mod mounted;
@@ -424,25 +426,16 @@ impl FlexibleBody {
 
     /// A new body of the same reduced body in `state`, its caches empty; Err if the state's
     /// sizes do not fit this body.
-    pub fn with_state(&self, state: BodyState) -> Result<Self, String> {
+    pub fn with_state(&self, state: BodyState) -> Result<Self, BodyError> {
         let (n, nf) = (self.n_modes(), self.loads.len());
         if state.q.len() != n || state.qd.len() != n {
-            return Err(format!(
-                "the state has {} and {} modal coordinates and velocities, the body {n} modes",
-                state.q.len(),
-                state.qd.len()
-            ));
+            return Err(StateMismatch::Modes { q: state.q.len(), qd: state.qd.len(), n }.into());
         }
         if state.loads.len() != nf || state.rates.loads.len() != nf {
-            return Err(format!("the state has loads on {} flanges, the body {nf} force flanges", state.loads.len()));
+            return Err(StateMismatch::Flanges { found: state.loads.len(), n: nf }.into());
         }
         if state.frame.is_some() != self.frame.is_some() {
-            let kind = |free: bool| if free { "free-floating" } else { "mounted" };
-            return Err(format!(
-                "the state is of a {} body, this body is {}",
-                kind(state.frame.is_some()),
-                kind(self.frame.is_some())
-            ));
+            return Err(StateMismatch::Kind { free: state.frame.is_some(), body_free: self.frame.is_some() }.into());
         }
         let mut b = FlexibleBody::new(Arc::clone(&self.body));
         b.quasi_static = self.quasi_static;
@@ -461,14 +454,10 @@ impl FlexibleBody {
             let nn = n * n;
             let valid = r.c_d.len() == nn && r.c_k.len() == nn && r.h > 0.0 && r.h.is_finite();
             if !valid || !b.coupled.has_storage() {
-                return Err(format!(
-                    "the state's coupling reference does not fit this body ({} x {} values for {n} modes)",
-                    r.c_d.len(),
-                    r.c_k.len()
-                ));
+                return Err(StateMismatch::CouplingReference { c_d: r.c_d.len(), c_k: r.c_k.len(), n }.into());
             }
             if !(r.c_d.iter().chain(&r.c_k).chain([&r.alpha, &r.beta]).all(|v| v.is_finite())) {
-                return Err("the state's coupling reference has non-finite values".into());
+                return Err(StateMismatch::CouplingReferenceNotFinite.into());
             }
             let body = Arc::clone(&b.body);
             let ws = &mut b.step_work.coupled.propagator;
@@ -566,7 +555,7 @@ impl<T: Scalar> FlexibleBody<T> {
     }
 
     /// Everything that follows from the state and inputs (q'', flange motion), once per change.
-    fn evaluate(&mut self) -> Result<(), String> {
+    fn evaluate(&mut self) -> Result<(), BodyError> {
         if self.eval.valid {
             return Ok(());
         }
@@ -618,19 +607,19 @@ impl<T: Scalar> FlexibleBody<T> {
     }
 
     /// d/dt (q, q') of the leading modes (as many as `dq` holds) into `dq`, `dqd`.
-    pub fn derivatives(&mut self, dq: &mut [T], dqd: &mut [T]) -> Result<(), String> {
+    pub fn derivatives(&mut self, dq: &mut [T], dqd: &mut [T]) -> Result<(), BodyError> {
         self.evaluate()?;
         dq.copy_from_slice(&self.qd[..dq.len()]);
         dqd.copy_from_slice(&self.eval.qdd[..dqd.len()]);
         Ok(())
     }
 
-    pub fn qdd(&mut self) -> Result<&[T], String> {
+    pub fn qdd(&mut self) -> Result<&[T], BodyError> {
         self.evaluate()?;
         Ok(&self.eval.qdd)
     }
 
-    pub fn flange_motion(&mut self, flange: usize) -> Result<&FlangeMotion<T>, String> {
+    pub fn flange_motion(&mut self, flange: usize) -> Result<&FlangeMotion<T>, BodyError> {
         self.evaluate()?;
         Ok(&self.eval.flanges[flange])
     }

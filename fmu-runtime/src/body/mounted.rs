@@ -1,7 +1,7 @@
 //! The equations of a body on a prescribed mount: the mount inputs' check, the modal load p, the
 //! coupling terms C_d, C_k of rotation and stiffening, and q''.
 
-use super::{Coupling, FlangeLoad, FlexibleBody, MountMotion};
+use super::{BodyError, Coupling, FlangeLoad, FlexibleBody, MountMotion};
 use crate::kinematics::{self as k3, Mat3, Vec3};
 use crate::reduced::ReducedBody;
 use crate::scalar::{Scalar, c};
@@ -21,23 +21,15 @@ impl FlexibleBody {
     }
 
     /// Err with the reason unless `rot` is a rotation within [`ROTATION_TOLERANCE`].
-    pub fn check_rotation(&self, rot: &[f64; 9]) -> Result<(), String> {
+    pub fn check_rotation(&self, rot: &[f64; 9]) -> Result<(), BodyError> {
         rotation_refusal(&self.body.mount, k3::rotation_defect(rot))
     }
 }
 
-fn rotation_refusal(mount: &str, defect: f64) -> Result<(), String> {
+fn rotation_refusal(mount: &str, defect: f64) -> Result<(), BodyError> {
     // a NaN defect (non-finite entries) is refused too
     if defect.is_nan() || defect > ROTATION_TOLERANCE {
-        let found = if defect.is_infinite() {
-            "its determinant is not positive".to_string()
-        } else {
-            format!("|R^T R - I| = {defect:.3e}")
-        };
-        return Err(format!(
-            "{mount}.R is not a proper rotation matrix ({found}; a rotation has R^T R = I within \
-             {ROTATION_TOLERANCE:e} per entry and det R = +1)"
-        ));
+        return Err(BodyError::NotARotation { mount: mount.to_owned(), defect });
     }
     Ok(())
 }
@@ -45,7 +37,7 @@ fn rotation_refusal(mount: &str, defect: f64) -> Result<(), String> {
 impl<T: Scalar> FlexibleBody<T> {
     /// Refuse a mount orientation off the rotations or a spin the body was not built for; set
     /// the orientation in use.
-    pub(super) fn check_inputs(&mut self) -> Result<(), String> {
+    pub(super) fn check_inputs(&mut self) -> Result<(), BodyError> {
         let defect = k3::rotation_defect(&self.mount.rot.map(T::value));
         rotation_refusal(&self.body.mount, defect)?;
         // a derivative goes through the projection even at an exact rotation: a change of R
@@ -57,11 +49,7 @@ impl<T: Scalar> FlexibleBody<T> {
         };
         let spinning = self.mount.w.iter().chain(&self.mount.z).any(|x| x.value() != 0.0);
         if self.body.rotation.is_none() && spinning {
-            return Err(format!(
-                "{m}.w and {m}.z must be zero: this FMU was built for a scene without rotation \
-                 (declare \"rotation\" in the input's scene.loads to model a rotating mount)",
-                m = self.body.mount
-            ));
+            return Err(BodyError::SpinWithoutRotation { mount: self.body.mount.clone() });
         }
         Ok(())
     }
@@ -125,7 +113,7 @@ impl<T: Scalar> FlexibleBody<T> {
     }
 
     /// q'' of a body on a prescribed mount: the modal diagonal, then the coupling terms.
-    pub(super) fn mounted_accelerations(&mut self) -> Result<(), String> {
+    pub(super) fn mounted_accelerations(&mut self) -> Result<(), BodyError> {
         self.check_inputs()?;
         self.modal_load();
         self.prepare_coupling();

@@ -5,8 +5,8 @@
 //! (rotating mounts, gravity and geometric stiffening included), while the host's integrator sees
 //! no frequency above the cutoff. Without coupling terms the solve is diagonal.
 
-use super::FlexibleBody;
 use super::dense::solve_dense;
+use super::{BodyError, FlexibleBody};
 use crate::scalar::{Scalar, c};
 
 /// Workspace of the quasi-static solve, allocated once with the body.
@@ -46,7 +46,7 @@ impl<T: Scalar> FlexibleBody<T> {
 
     /// The quasi-static solve of Model Exchange applied to the body's own state; `settling`: the
     /// relaxing modes are put in equilibrium too instead of keeping their q.
-    pub(super) fn equilibrate_quasi_static(&mut self, settling: bool) -> Result<(), String> {
+    pub(super) fn equilibrate_quasi_static(&mut self, settling: bool) -> Result<(), BodyError> {
         if self.n_dynamic == self.q.len() {
             return Ok(());
         }
@@ -73,7 +73,7 @@ impl<T: Scalar> FlexibleBody<T> {
     /// inertia, d_r q'_r = p_r - omega_r^2 q_r - (C_k q)_r - (C_d q'_d)_r. The spin's
     /// gyroscopic coupling among the quasi-static modes' own rates is left out (their creep is
     /// slow, the spin's coupling of it second order); statics are exact.
-    pub(super) fn solve_quasi_static(&mut self, rows: Option<(&[T], &[T])>) -> Result<(), String> {
+    pub(super) fn solve_quasi_static(&mut self, rows: Option<(&[T], &[T])>) -> Result<(), BodyError> {
         let (n, nd) = (self.q.len(), self.n_dynamic);
         if nd == n {
             return Ok(());
@@ -106,12 +106,8 @@ impl<T: Scalar> FlexibleBody<T> {
                     a[i * na..(i + 1) * na].copy_from_slice(&rk[known..]);
                     a[i * na + i] += c(omega[known + i] * omega[known + i]);
                 }
-                solve_dense(&mut a[..na * na], &mut self.q[known..], na).map_err(|_| {
-                    "the quasi-static modes have no equilibrium: the effective stiffness above the dynamic cutoff is \
-                     singular at the present spin and loads (raise reduction.dynamic_cutoff so that these modes are \
-                     integrated)"
-                        .to_string()
-                })?;
+                solve_dense(&mut a[..na * na], &mut self.q[known..], na)
+                    .map_err(|()| BodyError::NoQuasiStaticEquilibrium)?;
             }
             Some(_) => {}
         }

@@ -1,14 +1,14 @@
 //! The mount reaction: the force and torque the mount applies to the body, from the momentum
 //! balance of the whole body, evaluated on demand.
 
-use super::FlexibleBody;
 use super::dense::shape_dot;
+use super::{BodyError, FlexibleBody};
 use crate::kinematics::{self as k3, Mat3, Vec3};
 use crate::scalar::{Scalar, c};
 
 impl<T: Scalar> FlexibleBody<T> {
     /// Force and torque (about the mount point) the mount applies to the body, world frame.
-    pub fn mount_reaction(&mut self) -> Result<(Vec3<T>, Vec3<T>), String> {
+    pub fn mount_reaction(&mut self) -> Result<(Vec3<T>, Vec3<T>), BodyError> {
         self.evaluate()?;
         self.evaluate_reaction();
         Ok((self.eval.mount_force, self.eval.mount_torque))

@@ -1,15 +1,15 @@
 //! The static start: the body at rest in the equilibrium of the present inputs.
 
-use super::FlexibleBody;
 use super::dense::solve_dense;
+use super::{BodyError, FlexibleBody};
 use crate::scalar::{Scalar, c};
 
 impl<T: Scalar> FlexibleBody<T> {
     /// Put the body at rest in the static equilibrium of the present inputs: q' = 0 and
     /// (K + C_k) q = p, which for a spinning body includes centrifugal softening and stiffening.
-    pub fn settle_static(&mut self) -> Result<(), String> {
+    pub fn settle_static(&mut self) -> Result<(), BodyError> {
         if self.frame.is_some() {
-            return Err("a free-floating body has no static equilibrium to start in".into());
+            return Err(BodyError::StaticStartOfFreeBody);
         }
         self.check_inputs()?;
         self.modal_load();
@@ -21,9 +21,7 @@ impl<T: Scalar> FlexibleBody<T> {
                 a[j * n + j] += c(self.body.omega[j] * self.body.omega[j]);
             }
             let mut x = self.load.clone();
-            solve_dense(&mut a, &mut x, n).map_err(|_| {
-                "no static equilibrium: the body is unstable under the present loads (centrifugal softening beyond the elastic stiffness; enable geometric stiffening?)".to_string()
-            })?;
+            solve_dense(&mut a, &mut x, n).map_err(|()| BodyError::NoStaticEquilibrium)?;
             self.q.copy_from_slice(&x);
         } else {
             for j in 0..n {

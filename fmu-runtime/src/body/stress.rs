@@ -1,13 +1,13 @@
 //! Stresses at the recovery points: linear in q (each point's stress modes, 6 x n), with the von
 //! Mises stress of the six components, evaluated on demand.
 
-use super::FlexibleBody;
+use super::{BodyError, FlexibleBody};
 use crate::scalar::Scalar;
 
 impl<T: Scalar> FlexibleBody<T> {
     /// Component `component` of the stress at recovery point `point` from the present q: xx,
     /// yy, zz, xy, yz, zx in the body frame (0..6), the von Mises stress (6).
-    pub fn stress(&mut self, point: usize, component: usize) -> Result<T, String> {
+    pub fn stress(&mut self, point: usize, component: usize) -> Result<T, BodyError> {
         self.evaluate()?;
         let generation = self.eval.generation;
         if self.eval.stresses[point].1 != generation {

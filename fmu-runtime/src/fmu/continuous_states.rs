@@ -2,7 +2,7 @@
 //! body's frame, and its time derivative.
 
 use super::BodyFmu;
-use crate::body::FrameState;
+use crate::body::{BodyError, FrameState};
 
 impl BodyFmu {
     /// Model Exchange's modal states: q, q' of the dynamic modes and q of the relaxing ones.
@@ -12,7 +12,7 @@ impl BodyFmu {
 
     /// d/dt of Model Exchange's states: q, q' of the dynamic modes, q of the relaxing ones, a
     /// free body's frame.
-    pub(super) fn state_derivatives(&mut self, dx: &mut [f64]) -> Result<(), String> {
+    pub(super) fn state_derivatives(&mut self, dx: &mut [f64]) -> Result<(), BodyError> {
         let (n, nr) = (self.body.n_dynamic(), self.body.n_relaxing());
         let (modal, frame_part) = dx.split_at_mut(2 * n + nr);
         let (dq, rest) = modal.split_at_mut(n);

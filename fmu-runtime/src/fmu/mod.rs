@@ -1,15 +1,19 @@
 //! The body as an FMI model: maps value references onto the mechanics layer and the FMI calls
 //! (initialise, step, derivatives) onto its equations. Knows the `fmi2::Model` trait, not C.
 //! `model` answers each call, `values` the variables' values through their families,
-//! `continuous_states` Model Exchange's state vector, `state_serialization` the saved states.
+//! `continuous_states` Model Exchange's state vector, `state_serialization` the saved states,
+//! `resource` the reduced-model file, `error` why a variable's access fails.
 
 mod continuous_states;
+mod error;
 mod model;
 mod resource;
 mod state_serialization;
 mod values;
 
-pub use state_serialization::BODY_STATE_VERSION;
+pub use error::VariableError;
+pub use resource::LoadError;
+pub use state_serialization::{BODY_STATE_VERSION, BodyStateError};
 
 use crate::body::FlexibleBody;
 use crate::interface::{Quantity, VariableTable};
@@ -69,7 +73,7 @@ impl BodyFmu {
         self.table.get(vr).map_or_else(|| format!("value reference {vr}"), |v| v.name.clone())
     }
 
-    fn quantity(&self, vr: u32) -> Result<Quantity, String> {
-        self.table.get(vr).map(|v| v.quantity).ok_or_else(|| format!("unknown value reference {vr}"))
+    fn quantity(&self, vr: u32) -> Result<Quantity, VariableError> {
+        self.table.get(vr).map(|v| v.quantity).ok_or(VariableError::Unknown(vr))
     }
 }

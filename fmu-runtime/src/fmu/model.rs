@@ -1,22 +1,35 @@
-//! `fmi2::Model` for the body: each FMI call onto the part of `BodyFmu` that answers it.
+//! `fmi2::Model` for the body: each FMI call onto the part of `BodyFmu` that answers it, and
+//! each failure classified for the FMI layer (`ModelError`): an evaluation that cannot be made
+//! at the host's states or inputs is theirs to change (Discard), a value out of range is refused
+//! before anything is set (Refused), a step not taken is Discard or, for refused inputs, Refused;
+//! anything else leaves the model's state unknown (Failed).
 
-use super::resource::read_resource;
+use super::error::VariableError;
+use super::resource::{LoadError, read_resource};
 use super::values::admissible;
 use super::{
     BodyFmu, CAN_INTERPOLATE_INPUTS, FRAME_STATES, MAX_OUTPUT_DERIVATIVE_ORDER, PROVIDES_DIRECTIONAL_DERIVATIVE,
 };
-use crate::body::{REAL_LIMIT, StepError};
+use crate::body::{OutOfRange, REAL_LIMIT, StepError};
 use crate::format::RESOURCE_FILE;
 use crate::reduced::ReducedBody;
+use fmi2::bytes::DecodeError;
 use fmi2::{Interface, Model, ModelError, VarInfo};
 
+/// An evaluation changes nothing but caches, so states or inputs it cannot evaluate (a free
+/// body's quaternion of norm 0 or overflowing, a mount orientation off the rotations) are the
+/// host's to change: fmi2Discard in both interfaces, the instance usable.
+fn evaluation(e: impl Into<VariableError>) -> ModelError {
+    ModelError::discard(e.into())
+}
+
 impl Model for BodyFmu {
-    fn instantiate(resources: Option<&std::path::Path>, interface: Interface) -> Result<Self, String> {
-        let dir =
-            resources.ok_or("no resource location given: the reduced body lives in the FMU's resources folder")?;
+    fn instantiate(resources: Option<&std::path::Path>, interface: Interface) -> Result<Self, ModelError> {
+        let dir = resources.ok_or(ModelError::failed(LoadError::NoResourceLocation))?;
         let path = dir.join(RESOURCE_FILE);
-        let bytes = read_resource(&path)?;
-        let reduced = ReducedBody::from_sealed_bytes(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+        let bytes = read_resource(&path).map_err(ModelError::failed)?;
+        let reduced = ReducedBody::from_sealed_bytes(&bytes)
+            .map_err(|source| ModelError::failed(LoadError::Malformed { path, source }))?;
         Ok(Self::for_interface(reduced, interface))
     }
 
@@ -37,8 +50,8 @@ impl Model for BodyFmu {
         self.table.get(vr).map(|v| v.name.as_str())
     }
 
-    fn get_real(&mut self, vr: u32) -> Result<f64, String> {
-        self.real(vr)
+    fn get_real(&mut self, vr: u32) -> Result<f64, ModelError> {
+        self.real(vr).map_err(evaluation)
     }
 
     fn provides_directional_derivative(&self) -> bool {
@@ -51,12 +64,12 @@ impl Model for BodyFmu {
         knowns: &[u32],
         dv_known: &[f64],
         dv_unknown: &mut [f64],
-    ) -> Result<(), String> {
-        self.directional(unknowns, knowns, dv_known, dv_unknown)
+    ) -> Result<(), ModelError> {
+        self.directional(unknowns, knowns, dv_known, dv_unknown).map_err(evaluation)
     }
 
-    fn get_real_output_derivative(&mut self, vr: u32, _order: i32) -> Result<f64, String> {
-        self.output_derivative(vr)
+    fn get_real_output_derivative(&mut self, vr: u32, _order: i32) -> Result<f64, ModelError> {
+        self.output_derivative(vr).map_err(evaluation)
     }
 
     /// q, q' of the dynamic modes and a free body's frame (the quasi-static modes are not states).
@@ -77,57 +90,51 @@ impl Model for BodyFmu {
         CAN_INTERPOLATE_INPUTS
     }
 
-    fn set_real_input_derivative(&mut self, vr: u32, value: f64) -> Result<(), String> {
-        self.set_input_rate(vr, value)
+    fn set_real_input_derivative(&mut self, vr: u32, value: f64) -> Result<(), ModelError> {
+        self.set_input_rate(vr, value).map_err(ModelError::failed)
     }
 
-    fn admissible_real(&self, vr: u32, value: f64) -> Result<(), String> {
-        admissible(self.quantity(vr)?, value)
+    fn admissible_real(&self, vr: u32, value: f64) -> Result<(), ModelError> {
+        let quantity = self.quantity(vr).map_err(ModelError::refused)?;
+        admissible(quantity, value).map_err(ModelError::refused)
     }
 
-    fn admissible_reals(&self, vrs: &[u32], values: &[f64]) -> Result<(), String> {
-        self.admissible_rotation(vrs, values)
+    fn admissible_reals(&self, vrs: &[u32], values: &[f64]) -> Result<(), ModelError> {
+        self.admissible_rotation(vrs, values).map_err(ModelError::refused)
     }
 
     /// Input derivatives and directional seeds: the range of the values themselves (a rate of
     /// 1e200 turns any step into an overflow).
-    fn admissible_direction(&self, _vr: u32, value: f64) -> Result<(), String> {
+    fn admissible_direction(&self, _vr: u32, value: f64) -> Result<(), ModelError> {
         if value.abs() > REAL_LIMIT {
-            return Err(format!("|{value:e}| is beyond {REAL_LIMIT:e}, the range of any physical rate in SI units"));
+            return Err(ModelError::refused(OutOfRange::RateBeyond(value)));
         }
         Ok(())
     }
 
-    /// An evaluation changes nothing but caches, so states or inputs it cannot evaluate (a free
-    /// body's quaternion of norm 0 or overflowing, a mount orientation off the rotations) are
-    /// the host's to change: fmi2Discard in both interfaces, the instance usable.
-    fn evaluation_failure(&self, reason: String) -> ModelError {
-        ModelError::Discard(reason)
+    fn set_real(&mut self, vr: u32, value: f64) -> Result<(), ModelError> {
+        self.set_value(vr, value).map_err(ModelError::failed)
     }
 
-    fn set_real(&mut self, vr: u32, value: f64) -> Result<(), String> {
-        self.set_value(vr, value)
+    fn get_integer(&mut self, vr: u32) -> Result<i32, ModelError> {
+        Err(ModelError::failed(VariableError::NoIntegers(vr)))
+    }
+    fn set_integer(&mut self, vr: u32, _value: i32) -> Result<(), ModelError> {
+        Err(ModelError::failed(VariableError::NoIntegers(vr)))
     }
 
-    fn get_integer(&mut self, vr: u32) -> Result<i32, String> {
-        Err(format!("value reference {vr} is not an Integer: this FMU has no Integer variables"))
+    fn get_boolean(&mut self, vr: u32) -> Result<bool, ModelError> {
+        self.switch(vr).map_err(ModelError::failed)
     }
-    fn set_integer(&mut self, vr: u32, _value: i32) -> Result<(), String> {
-        Err(format!("value reference {vr} is not an Integer: this FMU has no Integer variables"))
-    }
-
-    fn get_boolean(&mut self, vr: u32) -> Result<bool, String> {
-        self.switch(vr)
-    }
-    fn set_boolean(&mut self, vr: u32, value: bool) -> Result<(), String> {
-        self.set_switch(vr, value)
+    fn set_boolean(&mut self, vr: u32, value: bool) -> Result<(), ModelError> {
+        self.set_switch(vr, value).map_err(ModelError::failed)
     }
 
-    fn get_string(&mut self, vr: u32) -> Result<String, String> {
-        Err(format!("value reference {vr} is not a String: this FMU has no String variables"))
+    fn get_string(&mut self, vr: u32) -> Result<String, ModelError> {
+        Err(ModelError::failed(VariableError::NoStrings(vr)))
     }
-    fn set_string(&mut self, vr: u32, _value: &str) -> Result<(), String> {
-        Err(format!("value reference {vr} is not a String: this FMU has no String variables"))
+    fn set_string(&mut self, vr: u32, _value: &str) -> Result<(), ModelError> {
+        Err(ModelError::failed(VariableError::NoStrings(vr)))
     }
 
     fn n_states(&self) -> usize {
@@ -150,8 +157,8 @@ impl Model for BodyFmu {
         self.set_states(x)
     }
 
-    fn get_derivatives(&mut self, dx: &mut [f64]) -> Result<(), String> {
-        self.state_derivatives(dx)?;
+    fn get_derivatives(&mut self, dx: &mut [f64]) -> Result<(), ModelError> {
+        self.state_derivatives(dx).map_err(evaluation)?;
         // the states it was evaluated at, into the watch's own buffer (no allocation)
         let mut x = self.steps.take_state_buffer();
         if x.len() == dx.len() {
@@ -184,38 +191,32 @@ impl Model for BodyFmu {
         }
     }
 
-    fn get_event_indicators(&mut self, _z: &mut [f64]) -> Result<(), String> {
+    fn get_event_indicators(&mut self, _z: &mut [f64]) -> Result<(), ModelError> {
         Ok(())
     }
 
-    fn enter_initialization(&mut self, _start_time: f64) -> Result<(), String> {
+    fn enter_initialization(&mut self, _start_time: f64) -> Result<(), ModelError> {
         self.body.start_frame();
         Ok(())
     }
 
-    fn exit_initialization(&mut self) -> Result<(), String> {
+    fn exit_initialization(&mut self) -> Result<(), ModelError> {
         self.body.start_frame();
         self.body.start_stepping();
         if self.static_start {
-            self.body.settle_static()?;
+            self.body.settle_static().map_err(ModelError::failed)?;
         }
-        self.body.settle_quasi_static()?;
+        self.body.settle_quasi_static().map_err(ModelError::failed)?;
         // surface bad inputs (a non-rotation base.R) at initialisation, not at the first step
-        self.body.qdd().map(|_| ())
-    }
-
-    fn do_step(&mut self, t: f64, h: f64) -> Result<(), String> {
-        self.try_step(t, h).map_err(|e| match e {
-            ModelError::Failed(r) | ModelError::Discard(r) | ModelError::Refused(r) => r,
-        })
+        self.body.qdd().map(|_| ()).map_err(ModelError::failed)
     }
 
     /// A step not taken leaves the body as before it (`FlexibleBody::step`): refused inputs
     /// are the host's to correct, anything else a step to retry shorter.
-    fn try_step(&mut self, _t: f64, h: f64) -> Result<(), ModelError> {
+    fn do_step(&mut self, _t: f64, h: f64) -> Result<(), ModelError> {
         self.body.step(h).map_err(|e| match e {
-            StepError::Inputs(r) => ModelError::Refused(r),
-            StepError::NotTaken(r) => ModelError::Discard(r),
+            StepError::Inputs(e) => ModelError::refused(e),
+            StepError::NotTaken(e) => ModelError::discard(e),
         })
     }
 
@@ -223,7 +224,7 @@ impl Model for BodyFmu {
         self.body.take_warning()
     }
 
-    fn reset(&mut self) -> Result<(), String> {
+    fn reset(&mut self) -> Result<(), ModelError> {
         let reduced = self.body.reduced().clone();
         let quasi_static = self.body.quasi_static();
         *self = Self::from_reduced(reduced);
@@ -235,7 +236,7 @@ impl Model for BodyFmu {
         self.write_state(out)
     }
 
-    fn load_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+    fn load_state(&mut self, bytes: &[u8]) -> Result<(), DecodeError> {
         self.read_state(bytes)
     }
 }

@@ -1,13 +1,15 @@
 //! The body's part of a serialized FMU state (fmi2SerializeFMUstate, fmi2GetFMUstate).
 
 use super::BodyFmu;
+use super::error::VariableError;
 use super::values::{admissible, real_value};
 use crate::body::{
-    BodyState, CouplingReference, FlangeLoad, FrameState, InitialFrame, InputRates, MountMotion, Parameters,
-    SteppedState,
+    BodyError, BodyState, CouplingReference, FlangeLoad, FrameState, InitialFrame, InputRates, MountMotion, OutOfRange,
+    Parameters, SteppedState,
 };
-use fmi2::bytes::{Reader, Writer};
+use fmi2::bytes::{DecodeError, Reader, Writer};
 use fmi2::{Causality, VarType};
+use std::fmt;
 
 /// Version of the body's part of a serialized FMU state (the layer has its own).
 /// Layout, little-endian: version (u32), modes n (u32), force flanges m (u32), free-floating
@@ -20,6 +22,67 @@ use fmi2::{Causality, VarType};
 /// then mount a[3] z[3], per force flange f[3] t[3], g[3], alpha, beta.
 /// Sizes are checked against the body before any array is read.
 pub const BODY_STATE_VERSION: u32 = 3;
+
+/// Why well-formed state bytes are refused for this body (the reader's own errors name the
+/// field); carried by [`DecodeError::Invalid`].
+#[derive(Clone, PartialEq)]
+pub enum BodyStateError {
+    /// Written by a newer runtime.
+    NewerVersion(u32),
+    VersionZero,
+    /// The state of a body with other sizes.
+    OtherBody {
+        n: usize,
+        nf: usize,
+        free: bool,
+        n_body: usize,
+        nf_body: usize,
+        free_body: bool,
+    },
+    /// The state does not fit the body (its caches, coupling reference or stepped loads).
+    Body(BodyError),
+    /// A restored input or parameter that cannot be read.
+    Value(VariableError),
+    /// A restored input or parameter outside the range fmi2SetReal accepts.
+    Inadmissible {
+        name: String,
+        value: f64,
+        source: OutOfRange,
+    },
+}
+
+impl fmt::Display for BodyStateError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let free_floating = |free: bool| if free { ", free-floating" } else { "" };
+        match self {
+            BodyStateError::NewerVersion(version) => write!(
+                f,
+                "body state version {version} was written by a newer runtime (this one reads up to {BODY_STATE_VERSION})"
+            ),
+            BodyStateError::VersionZero => f.write_str("body state version 0 is invalid"),
+            BodyStateError::OtherBody { n, nf, free, n_body, nf_body, free_body } => write!(
+                f,
+                "the state is of a body with {n} modes, {nf} force flanges{}; this one has {n_body}, {nf_body}{}",
+                free_floating(*free),
+                free_floating(*free_body),
+            ),
+            BodyStateError::Body(e) => fmt::Display::fmt(e, f),
+            BodyStateError::Value(e) => fmt::Display::fmt(e, f),
+            BodyStateError::Inadmissible { name, value, source } => write!(f, "{name} = {value}: {source}"),
+        }
+    }
+}
+
+impl std::error::Error for BodyStateError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            BodyStateError::Body(e) => e.source(),
+            BodyStateError::Value(e) => e.source(),
+            BodyStateError::Inadmissible { source, .. } => Some(source),
+            _ => None,
+        }
+    }
+}
 
 impl BodyFmu {
     pub(super) fn write_state(&self, out: &mut Vec<u8>) {
@@ -62,16 +125,14 @@ impl BodyFmu {
         }
     }
 
-    pub(super) fn read_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+    pub(super) fn read_state(&mut self, bytes: &[u8]) -> Result<(), DecodeError> {
         let mut r = Reader::new(bytes);
         let version = r.u32("body state version")?;
         if version > BODY_STATE_VERSION {
-            return Err(format!(
-                "body state version {version} was written by a newer runtime (this one reads up to {BODY_STATE_VERSION})"
-            ));
+            return Err(DecodeError::invalid(BodyStateError::NewerVersion(version)));
         }
         if version == 0 {
-            return Err("body state version 0 is invalid".into());
+            return Err(DecodeError::invalid(BodyStateError::VersionZero));
         }
         let n = r.u32("number of modes")? as usize;
         let nf = r.u32("number of force flanges")? as usize;
@@ -80,27 +141,27 @@ impl BodyFmu {
         // sizes first: the bytes must describe this body before anything is read by them
         let (n_body, nf_body, free_body) = (self.body.n_modes(), self.body.loads().len(), self.body.frame().is_some());
         if (n, nf, free) != (n_body, nf_body, free_body) {
-            return Err(format!(
-                "the state is of a body with {n} modes, {nf} force flanges{}; this one has {n_body}, {nf_body}{}",
-                if free { ", free-floating" } else { "" },
-                if free_body { ", free-floating" } else { "" },
-            ));
+            return Err(DecodeError::invalid(BodyStateError::OtherBody { n, nf, free, n_body, nf_body, free_body }));
         }
         let state = read_body_state(&mut r, version, n, nf, free)?;
         r.finish("body state")?;
-        self.body = self.body.with_state(state)?;
+        self.body = self.body.with_state(state).map_err(|e| DecodeError::invalid(BodyStateError::Body(e)))?;
         self.static_start = static_start;
-        self.check_restored_knowns()
+        self.check_restored_knowns().map_err(DecodeError::invalid)
     }
 
     /// What the host can set, restored from bytes, obeys the rule fmi2SetReal applies.
-    fn check_restored_knowns(&mut self) -> Result<(), String> {
+    fn check_restored_knowns(&mut self) -> Result<(), BodyStateError> {
         let knowns =
             self.table.variables.iter().filter(|v| matches!(v.causality, Causality::Input | Causality::Parameter));
         for v in knowns {
             if v.var_type == VarType::Real {
-                let value = real_value(&mut self.body, v.quantity)?;
-                admissible(v.quantity, value).map_err(|e| format!("{} = {value}: {e}", v.name))?;
+                let value = real_value(&mut self.body, v.quantity).map_err(BodyStateError::Value)?;
+                admissible(v.quantity, value).map_err(|source| BodyStateError::Inadmissible {
+                    name: v.name.clone(),
+                    value,
+                    source,
+                })?;
             }
         }
         Ok(())
@@ -108,7 +169,7 @@ impl BodyFmu {
 }
 
 /// The body's state after the header, its sizes checked.
-fn read_body_state(r: &mut Reader, version: u32, n: usize, nf: usize, free: bool) -> Result<BodyState, String> {
+fn read_body_state(r: &mut Reader, version: u32, n: usize, nf: usize, free: bool) -> Result<BodyState, DecodeError> {
     let mount = read_mount(r, "")?;
     let loads = read_loads(r, nf, "flange force", "flange torque")?;
     let params = Parameters { g: r.f64_array("g")?, alpha: r.f64("damping.alpha")?, beta: r.f64("damping.beta")? };
@@ -141,7 +202,7 @@ fn write_mount(w: &mut Writer, m: &MountMotion) {
 }
 
 /// The mount's motion or (`suffix` " rate") its rates.
-fn read_mount(r: &mut Reader, suffix: &str) -> Result<MountMotion, String> {
+fn read_mount(r: &mut Reader, suffix: &str) -> Result<MountMotion, DecodeError> {
     let what = |name: &str| format!("mount {name}{suffix}");
     Ok(MountMotion {
         r: r.f64_array(&what("r"))?,
@@ -161,7 +222,7 @@ fn write_loads(w: &mut Writer, loads: &[FlangeLoad]) {
     }
 }
 
-fn read_loads(r: &mut Reader, nf: usize, force: &str, torque: &str) -> Result<Vec<FlangeLoad>, String> {
+fn read_loads(r: &mut Reader, nf: usize, force: &str, torque: &str) -> Result<Vec<FlangeLoad>, DecodeError> {
     let mut loads = Vec::with_capacity(nf);
     for _ in 0..nf {
         loads.push(FlangeLoad { f: r.f64_array(force)?, t: r.f64_array(torque)? });
@@ -182,7 +243,7 @@ fn write_frame_state(w: &mut Writer, f: &FrameState) {
     w.f64s(&f.w_body);
 }
 
-fn read_frame_state(r: &mut Reader) -> Result<FrameState, String> {
+fn read_frame_state(r: &mut Reader) -> Result<FrameState, DecodeError> {
     Ok(FrameState {
         r: r.f64_array("frame r")?,
         quat: r.f64_array("frame quaternion")?,
@@ -191,7 +252,7 @@ fn read_frame_state(r: &mut Reader) -> Result<FrameState, String> {
     })
 }
 
-fn read_coupling_reference(r: &mut Reader, n: usize) -> Result<CouplingReference, String> {
+fn read_coupling_reference(r: &mut Reader, n: usize) -> Result<CouplingReference, DecodeError> {
     let (h, alpha, beta) =
         (r.f64("coupling reference h")?, r.f64("coupling reference alpha")?, r.f64("coupling reference beta")?);
     let mut c_d = vec![0.0; n * n];
@@ -201,7 +262,7 @@ fn read_coupling_reference(r: &mut Reader, n: usize) -> Result<CouplingReference
     Ok(CouplingReference { h, alpha, beta, c_d, c_k })
 }
 
-fn read_stepped_inputs(r: &mut Reader, nf: usize) -> Result<SteppedState, String> {
+fn read_stepped_inputs(r: &mut Reader, nf: usize) -> Result<SteppedState, DecodeError> {
     let (a, z) = (r.f64_array("stepped mount a")?, r.f64_array("stepped mount z")?);
     let loads = read_loads(r, nf, "stepped force", "stepped torque")?;
     let params = Parameters {
@@ -210,4 +271,11 @@ fn read_stepped_inputs(r: &mut Reader, nf: usize) -> Result<SteppedState, String
         beta: r.f64("stepped damping.beta")?,
     };
     Ok(SteppedState { a, z, loads, params })
+}
+
+/// The message, as the FMU logs it (see `body::BodyError`: no derived dump in the binary).
+impl std::fmt::Debug for BodyStateError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        std::fmt::Display::fmt(self, f)
+    }
 }

@@ -2,57 +2,58 @@
 //! derivatives of the values (directional and along time), each through the variable's family.
 
 use super::BodyFmu;
-use crate::body::{FlexibleBody, REAL_LIMIT};
+use super::error::VariableError;
+use crate::body::{BodyError, FlexibleBody, OutOfRange, REAL_LIMIT};
 use crate::interface::{Quantity, Value};
 use crate::kinematics as k3;
 use crate::scalar::Dual;
 
 impl BodyFmu {
-    pub(super) fn real(&mut self, vr: u32) -> Result<f64, String> {
+    pub(super) fn real(&mut self, vr: u32) -> Result<f64, VariableError> {
         let q = self.quantity(vr)?;
         if matches!(q.family.value, Value::Switch) {
-            return Err(format!("value reference {vr} ({}) is a Boolean", self.name(vr)));
+            return Err(VariableError::BooleanAsReal { vr, name: self.name(vr) });
         }
         real_value(&mut self.body, q)
     }
 
     /// fmi2SetReal; the FMI layer has checked `admissible` (finite, in range) before.
-    pub(super) fn set_value(&mut self, vr: u32, value: f64) -> Result<(), String> {
+    pub(super) fn set_value(&mut self, vr: u32, value: f64) -> Result<(), VariableError> {
         let q = self.quantity(vr)?;
         match q.family.write {
             Some(write) => {
                 write(&mut self.body, q.at, value);
                 Ok(())
             }
-            None => Err(format!("{} cannot be set", self.table.get(vr).map(|v| v.name.clone()).unwrap_or_default())),
+            None => Err(VariableError::NotSettable(self.table.get(vr).map(|v| v.name.clone()).unwrap_or_default())),
         }
     }
 
-    pub(super) fn set_input_rate(&mut self, vr: u32, value: f64) -> Result<(), String> {
+    pub(super) fn set_input_rate(&mut self, vr: u32, value: f64) -> Result<(), VariableError> {
         let q = self.quantity(vr)?;
         match q.family.rate {
             Some(rate) => {
                 rate(&mut self.body, q.at, value);
                 Ok(())
             }
-            None => Err(format!("value reference {vr} is not an input")),
+            None => Err(VariableError::NotAnInput(vr)),
         }
     }
 
-    pub(super) fn switch(&self, vr: u32) -> Result<bool, String> {
+    pub(super) fn switch(&self, vr: u32) -> Result<bool, VariableError> {
         match self.quantity(vr)?.family.value {
             Value::Switch => Ok(self.static_start),
-            Value::Real(_) => Err(format!("value reference {vr} is not a Boolean")),
+            Value::Real(_) => Err(VariableError::NotABoolean(vr)),
         }
     }
 
-    pub(super) fn set_switch(&mut self, vr: u32, value: bool) -> Result<(), String> {
+    pub(super) fn set_switch(&mut self, vr: u32, value: bool) -> Result<(), VariableError> {
         match self.quantity(vr)?.family.value {
             Value::Switch => {
                 self.static_start = value;
                 Ok(())
             }
-            Value::Real(_) => Err(format!("value reference {vr} is not a Boolean")),
+            Value::Real(_) => Err(VariableError::NotABoolean(vr)),
         }
     }
 
@@ -63,7 +64,7 @@ impl BodyFmu {
     /// call is accepted and the whole matrix is checked where it is used: the next evaluation
     /// answers fmi2Discard, the next step refuses its inputs (fmi2Error), each naming base.R, and
     /// the instance stays usable.
-    pub(super) fn admissible_rotation(&self, vrs: &[u32], values: &[f64]) -> Result<(), String> {
+    pub(super) fn admissible_rotation(&self, vrs: &[u32], values: &[f64]) -> Result<(), BodyError> {
         let mut rot = self.body.host_rotation();
         let mut set = [false; 9];
         for (&vr, &value) in vrs.iter().zip(values) {
@@ -85,7 +86,7 @@ impl BodyFmu {
         knowns: &[u32],
         dv_known: &[f64],
         dv_unknown: &mut [f64],
-    ) -> Result<(), String> {
+    ) -> Result<(), VariableError> {
         let mut d = self.body.to_dual();
         for (&vr, &dv) in knowns.iter().zip(dv_known) {
             let q = self.quantity(vr)?;
@@ -93,7 +94,7 @@ impl BodyFmu {
                 .family
                 .seed
                 .and_then(|seed| seed(&mut d, q.at))
-                .ok_or_else(|| format!("{} is neither an input nor a continuous state", self.name(vr)))?;
+                .ok_or_else(|| VariableError::NotSeedable(self.name(vr)))?;
             x.d += dv;
         }
         for (&vr, out) in unknowns.iter().zip(dv_unknown.iter_mut()) {
@@ -106,7 +107,7 @@ impl BodyFmu {
     /// and a free body's frame move at their rates; the mount moves as its inputs say it does
     /// (r' = v, R' = w~ R, v' = a, w' = z), and a, z and the flange loads change at the rates
     /// fmi2SetRealInputDerivatives set for the next step (zero when none are set: held).
-    pub(super) fn output_derivative(&mut self, vr: u32) -> Result<f64, String> {
+    pub(super) fn output_derivative(&mut self, vr: u32) -> Result<f64, VariableError> {
         let quantity = self.quantity(vr)?;
         let mut d = self.body.to_dual();
         let qdd = self.body.qdd()?.to_vec();
@@ -116,7 +117,7 @@ impl BodyFmu {
         }
         if self.body.frame().is_some() {
             let rate = self.body.frame_rate()?;
-            let f = d.frame_mut().ok_or("not a free-floating body")?;
+            let f = d.frame_mut().ok_or(BodyError::NotFreeFloating)?;
             for i in 0..3 {
                 f.r[i].d = rate.r[i];
                 f.v[i].d = rate.v[i];
@@ -162,28 +163,28 @@ impl BodyFmu {
 }
 
 /// A Real variable's value (fmi2GetReal).
-pub(super) fn real_value(b: &mut FlexibleBody, q: Quantity) -> Result<f64, String> {
+pub(super) fn real_value(b: &mut FlexibleBody, q: Quantity) -> Result<f64, VariableError> {
     match q.family.value {
-        Value::Real(read) => (read.real)(b, q.at),
-        Value::Switch => Err(format!("{} is a Boolean", q.family.pattern)),
+        Value::Real(read) => Ok((read.real)(b, q.at)?),
+        Value::Switch => Err(VariableError::BooleanFamily(q.family.pattern)),
     }
 }
 
-fn dual_value(d: &mut FlexibleBody<Dual>, q: Quantity) -> Result<Dual, String> {
+fn dual_value(d: &mut FlexibleBody<Dual>, q: Quantity) -> Result<Dual, VariableError> {
     match q.family.value {
-        Value::Real(read) => (read.dual)(d, q.at),
-        Value::Switch => Err(format!("{} is a Boolean", q.family.pattern)),
+        Value::Real(read) => Ok((read.dual)(d, q.at)?),
+        Value::Switch => Err(VariableError::BooleanFamily(q.family.pattern)),
     }
 }
 
 /// Whether `value` is in the physical range of `quantity` (the host's values are finite: the
 /// FMI layer has checked).
-pub(super) fn admissible(quantity: Quantity, value: f64) -> Result<(), String> {
+pub(super) fn admissible(quantity: Quantity, value: f64) -> Result<(), OutOfRange> {
     if !value.is_finite() {
-        return Err(format!("{value} is not a finite number"));
+        return Err(OutOfRange::NotFinite(value));
     }
     if value.abs() > REAL_LIMIT {
-        return Err(format!("|{value:e}| is beyond {REAL_LIMIT:e}, the range of any physical quantity in SI units"));
+        return Err(OutOfRange::Beyond(value));
     }
     quantity.family.range.check(value)
 }

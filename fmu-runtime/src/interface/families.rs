@@ -6,12 +6,12 @@ use super::family::{
     Family, Initially, Nominal, Range, Role, Scope, Shape, StartRule, StateOf, Value, input, local, output, parameter,
     read,
 };
-use crate::body::{FlexibleBody, FrameState};
+use crate::body::{BodyError, FlexibleBody, FrameState};
 use crate::scalar::{Scalar, c};
 use fmi2::Initial;
 
-fn frame<T: Scalar>(b: &FlexibleBody<T>) -> Result<FrameState<T>, String> {
-    b.frame().copied().ok_or_else(|| "not a free-floating body".to_string())
+fn frame<T: Scalar>(b: &FlexibleBody<T>) -> Result<FrameState<T>, BodyError> {
+    b.frame().copied().ok_or(BodyError::NotFreeFloating)
 }
 
 /// The quantities of a stress recovery point, in component order; the names are

@@ -1,6 +1,6 @@
 //! What a descriptor of a variable family says, and the vocabulary its dependency rules use.
 
-use crate::body::FlexibleBody;
+use crate::body::{BodyError, FlexibleBody, OutOfRange};
 use crate::scalar::Dual;
 use fmi2::{Causality, Initial, Variability};
 
@@ -148,14 +148,10 @@ pub enum Range {
 }
 
 impl Range {
-    pub fn check(self, value: f64) -> Result<(), String> {
+    pub fn check(self, value: f64) -> Result<(), OutOfRange> {
         match self {
-            Range::NonNegative if value < 0.0 => {
-                Err(format!("{value} is negative: damping must not feed energy into the body"))
-            }
-            Range::RotationEntry if value.abs() > 1.0 + 1e-6 => {
-                Err(format!("{value} is no entry of a rotation matrix (each lies in [-1, 1])"))
-            }
+            Range::NonNegative if value < 0.0 => Err(OutOfRange::NegativeDamping(value)),
+            Range::RotationEntry if value.abs() > 1.0 + 1e-6 => Err(OutOfRange::RotationEntry(value)),
             _ => Ok(()),
         }
     }
@@ -165,8 +161,8 @@ impl Range {
 /// same expression, instantiated for both by [`read!`].
 #[derive(Debug, Clone, Copy)]
 pub struct Read {
-    pub real: fn(&mut FlexibleBody<f64>, At) -> Result<f64, String>,
-    pub dual: fn(&mut FlexibleBody<Dual>, At) -> Result<Dual, String>,
+    pub real: fn(&mut FlexibleBody<f64>, At) -> Result<f64, BodyError>,
+    pub dual: fn(&mut FlexibleBody<Dual>, At) -> Result<Dual, BodyError>,
 }
 
 /// `read!(|b, at| expression)`: a [`Read`] of `Ok(expression)`, generic over the scalar as the
