@@ -1,5 +1,5 @@
 """Two bodies connected: examples/chain, two links (1 m steel beams) welded tip flange to mount
-and co-simulated by the iterating master examples/chain/welded_chain.py, against the one-piece
+and co-simulated by the iterating master examples/chain/chain_master.py, against the one-piece
 model of the same 2 m beam (examples/chain/one_piece.json: one mesh, the same elements per
 metre, a rigid section at the weld as the links' flanges have).
 
@@ -22,7 +22,7 @@ import calculix as ccx
 from conftest import EXAMPLES, ROOT, run_builder
 
 sys.path.insert(0, str(ROOT / "examples" / "chain"))
-import welded_chain as wc  # noqa: E402
+import chain_master as cm  # noqa: E402
 
 G = {"g[3]": -9.81}
 H = 1e-3
@@ -40,8 +40,8 @@ def fmus(tmp_path_factory):
 
 
 def chain_of(link, start=None, step=H, static=False):
-    bodies = [wc.Body(str(link), f"link{i}", {**G, **(start or {})}) for i in range(2)]
-    chain = wc.WeldedChain(bodies, ["tip"], ["base"], step)
+    bodies = [cm.Body(str(link), f"link{i}", {**G, **(start or {})}) for i in range(2)]
+    chain = cm.Chain.welded(bodies, ["tip"], ["base"], step)
     chain.initialize(static=static)
     return chain
 
@@ -60,7 +60,7 @@ def run_chain(chain, seconds, load=None):
 
 
 def run_one_piece(path, seconds, step=H, static=False, load=None, start=None):
-    body = wc.Body(str(path), "one_piece", {**G, **(start or {})})
+    body = cm.Body(str(path), "one_piece", {**G, **(start or {})})
     body.instantiate({"static_start": True} if static else {})
     if load:
         body.set([body.vr[k] for k in load], list(load.values()))
@@ -116,7 +116,7 @@ def test_static_sag_vs_calculix_and_one_piece(fmus):
     chain = chain_of(link, static=True)
     upper, lower = chain.bodies
     ours = np.concatenate([upper.get(upper.refs("tip", ["r[3]"])), lower.get(lower.refs("tip", ["r[3]"]))])
-    op = wc.Body(str(one_piece), "one_piece", G)
+    op = cm.Body(str(one_piece), "one_piece", G)
     op.instantiate({"static_start": True})
     theirs_fmu = op.get([op.vr["joint.r[3]"], op.vr["tip.r[3]"]])
     analysis = (ccx.rigid_body(deck, "base") + ccx.rigid_body(deck, "joint") + ccx.rigid_body(deck, "tip")
@@ -195,11 +195,11 @@ def test_a_delayed_master_diverges(fmus):
     step, as libcosim and Ecos do) blow up within 0.1 s at h = 1 ms. The docs' claim, kept
     true."""
     link, _, _, _ = fmus
-    upper, lower = (wc.Body(str(link), f"link{i}", G) for i in range(2))
+    upper, lower = (cm.Body(str(link), f"link{i}", G) for i in range(2))
     upper.instantiate()
-    lower.instantiate({f"base.{n}": v for n, v in zip(wc.MOTION, upper.get(upper.refs("tip", wc.MOTION)))})
-    tip_motion, tip_load = upper.refs("tip", wc.MOTION), upper.refs("tip", wc.WRENCH)
-    mount_motion, reaction = lower.refs("base", wc.MOTION), lower.refs("base", wc.WRENCH)
+    lower.instantiate({f"base.{n}": v for n, v in zip(cm.MOTION, upper.get(upper.refs("tip", cm.MOTION)))})
+    tip_motion, tip_load = upper.refs("tip", cm.MOTION), upper.refs("tip", cm.WRENCH)
+    mount_motion, reaction = lower.refs("base", cm.MOTION), lower.refs("base", cm.WRENCH)
     lower_tip = lower.vr["tip.r[3]"]
     blown_up_at = None
     for k in range(100):
@@ -246,3 +246,64 @@ def test_long_run_decays_as_the_one_piece_model(fmus):
           f"of the second period's amplitude; largest growth between periods {growth:.1e}")
     assert growth <= 1e-3
     assert 0.8 <= ratio <= 1.0 + 1e-3
+
+
+def rigid_double_pendulum(phi0, t, length=1.0, width=0.01, height=0.02, rho=7850.0, g=9.81):
+    """Two uniform rigid bars (length x width x height, swinging in the plane of `length` and
+    `height`) hung end to end from a fixed pivot, by Lagrange's equations in the absolute angles
+    from the downward vertical, from rest at `phi0`: the elbow and the tip (x, z) at times `t`."""
+    from scipy.integrate import solve_ivp
+    m, c = rho * length * width * height, length / 2
+    inertia = m * (length ** 2 + height ** 2) / 12  # about the centre of mass, across the plane
+
+    def rates(_, y):
+        p1, p2, w1, w2 = y
+        d = p1 - p2
+        mass = np.array([[inertia + m * c * c + m * length ** 2, m * length * c * np.cos(d)],
+                         [m * length * c * np.cos(d), inertia + m * c * c]])
+        force = np.array([-m * length * c * np.sin(d) * w2 ** 2 - (m * c + m * length) * g * np.sin(p1),
+                          m * length * c * np.sin(d) * w1 ** 2 - m * c * g * np.sin(p2)])
+        return [w1, w2, *np.linalg.solve(mass, force)]
+
+    sol = solve_ivp(rates, (0.0, t[-1]), [phi0[0], phi0[1], 0.0, 0.0], t_eval=t, method="DOP853",
+                    rtol=1e-11, atol=1e-12)
+    assert sol.success
+    p1, p2 = sol.y[0], sol.y[1]
+    return np.column_stack([length * np.sin(p1), -length * np.cos(p1),
+                            length * (np.sin(p1) + np.sin(p2)), -length * (np.cos(p1) + np.cos(p2))])
+
+
+def test_double_pendulum_vs_rigid_theory(fmus):
+    """A flexible double pendulum: two links hung from a pivot on the ground and from each other
+    by revolute joints about y (chain_master's --pivot y:45 --joint y), released from rest,
+    straight at 45 degrees below the horizontal, under gravity, h = 1 ms, 12 s (five periods of
+    its slow mode, 2.4 s). Reference: the rigid double pendulum of two uniform bars of the
+    links' size and mass (Lagrange's equations, integrated to 1e-11). The links bend by about
+    1e-3 m under the joint forces (first bending mode 16 Hz, the pendulum's 0.4 and 1.1 Hz), so
+    the rigid model is a reference to about 1e-3 of the swing. Measured: elbow and tip within
+    8.1e-4 of their swing over the 12 s (4.8e-4 over 8 s; at h = 0.5 ms 3.4e-4 over 3 s where
+    h = 1 ms gives 3.8e-4, so the step is not what is left); tolerance 8e-3, ten times that
+    (the issue asks for 1e-2)."""
+    link = fmus[0]
+    bodies = [cm.Body(str(link), f"link{i}", G) for i in range(2)]
+    pivot = np.radians(45.0)
+    joints = [cm.Joint(None, 0, "base", axis=[0, 1, 0], angle=pivot),
+              cm.Joint(0, 1, "base", "tip", axis=[0, 1, 0])]
+    chain = cm.Chain(bodies, joints, H)
+    chain.initialize()
+    elbow, tip = bodies[0].refs("tip", ["r[1]", "r[3]"]), bodies[1].refs("tip", ["r[1]", "r[3]"])
+    seconds = 12.0
+    ours = [np.concatenate([bodies[0].get(elbow), bodies[1].get(tip)])]
+    for _ in range(int(round(seconds / H))):
+        chain.step()
+        ours.append(np.concatenate([bodies[0].get(elbow), bodies[1].get(tip)]))
+    ours = np.array(ours)
+    t = np.arange(len(ours)) * H
+    # the mount's x axis turned by the pivot angle about y points pi/2 - angle from the vertical
+    theirs = rigid_double_pendulum([np.pi / 2 - pivot] * 2, t)
+    assert ours.shape == theirs.shape
+    swing = np.ptp(theirs, axis=0)
+    error = np.abs(ours - theirs).max(axis=0) / swing
+    print(f"\ndouble pendulum, 12 s: elbow x, z and tip x, z within {error} of the swing "
+          f"({swing} m); {chain.evaluations / (len(ours) - 1):.2f} retaken steps per step")
+    assert error.max() <= 8e-3
