@@ -26,8 +26,7 @@ changes are their average over the step.
 A revolute joint turns the mount about an axis of its own axes by an angle the master
 integrates: the mount's motion is the flange's composed with the joint's rotation, the joint
 carries no torque about its axis, and the master solves for the joint's rate at the step's end
-as one more unknown, with the mean of the mount's torque about the axis over the step as its
-equation (the lower body's angular momentum about the joint changes only by what acts on it).
+as one more unknown, with the mount's torque about the axis at the step's end as its equation.
 A revolute joint on the ground (a pendulum's pivot) has only that unknown.
 
 Run: python examples/chain/chain_master.py Link.fmu Link.fmu --step 1e-3 --stop 2
@@ -130,7 +129,7 @@ class Joint:
     # the mount's motion at the last communication point, and the mean accelerations of the
     # last step (the next step's slope is their change)
     motion: np.ndarray = field(default_factory=lambda: np.zeros(24))
-    mean_acceleration: np.ndarray = field(default_factory=lambda: np.zeros(6))
+    mean_acceleration: np.ndarray | None = None
 
     def __post_init__(self):
         if (self.upper is None) != (self.flange is None):
@@ -235,6 +234,11 @@ class Chain:
         self.joints = sorted(joints, key=lambda j: j.lower)
         self.hung = {j.lower: j for j in self.joints}
         self.offsets = np.cumsum([0] + [j.unknowns for j in self.joints])
+        # which unknowns are a revolute joint's rate (each joint's last)
+        self._angular = np.zeros(self.offsets[-1], dtype=bool)
+        for k, j in enumerate(self.joints):
+            if j.revolute:
+                self._angular[self.offsets[k + 1] - 1] = True
         self.evaluations = 0
         self.jacobians = 0
         self._jacobian: np.ndarray | None = None
@@ -280,7 +284,11 @@ class Chain:
         accelerations = self._consistent_loads()
         for j in self.joints:
             j.motion = compose(self._flange_now(j), j.axis, j.angle, j.rate, accelerations[j.lower])
-            j.mean_acceleration = j.motion[ACCELERATIONS].copy()
+            # the first step's accelerations are constant: those at t = 0 through the
+            # feedthroughs are the instant's, not the step's (a flexible body's modes take up a
+            # sudden acceleration; the links' mount torque answers a joint's angular
+            # acceleration with 3e-4 of their rigid inertia at that instant)
+            j.mean_acceleration = None
             self.bodies[j.lower].set(self._mount_motion(j), j.motion)
         x = []
         for j in self.joints:
@@ -344,11 +352,15 @@ class Chain:
             if j.upper is not None and not j.revolute:
                 y[offsets[k]:offsets[k + 1]] = self.bodies[j.upper].get(self._flange_load(j))
         if len(y):
-            y = self._newton(residual, y, jacobian=None)[0]
+            angular = np.zeros(len(y), dtype=bool)
+            for k, j in enumerate(self.joints):
+                if j.revolute:
+                    angular[offsets[k + 1] - 1] = True
+            y = self._newton(residual, y, jacobian=None, angular=angular)[0]
             residual(y)
         return {j.lower: split(y, k, j)[1] for k, j in enumerate(self.joints)}
 
-    def _newton(self, residual, x, jacobian):
+    def _newton(self, residual, x, jacobian, angular):
         """Quasi-Newton: a Jacobian by finite differences where there is none or where an
         iteration gained less than half, Broyden's update after every iteration (the joints'
         Jacobian turns slowly with the bodies' poses)."""
@@ -363,7 +375,7 @@ class Chain:
             if size < 1e3 * tol and size >= last:
                 return x, jacobian
             if jacobian is None or size > 0.5 * last:
-                jacobian = self._finite_difference_jacobian(residual, x, r)
+                jacobian = self._finite_difference_jacobian(residual, x, r, angular)
             last = size
             dx = -np.linalg.solve(jacobian, r)
             r_new = None
@@ -383,11 +395,17 @@ class Chain:
         raise RuntimeError(f"t = {self.t:.6g} s: the joints did not converge in {MAX_ITERATIONS} "
                            f"iterations (largest residual {np.abs(r).max():.3g})")
 
-    def _finite_difference_jacobian(self, residual, x, r):
+    def _finite_difference_jacobian(self, residual, x, r, angular):
+        """Columns by forward differences: a load's by 1e-3 of the largest load (the residuals
+        are nearly linear in the loads); a joint's rate or angular acceleration by 1e-5 rad/s
+        (rad/s^2) relative, since a rate's step turns into an angular acceleration of step / h
+        on the lower body, which a stiff body answers with large forces."""
         self.jacobians += 1
-        d = 1e-3 * max(1.0, np.abs(x).max())
+        loads = np.abs(x[~angular])
+        d_load = 1e-3 * max(1.0, loads.max() if len(loads) else 0.0)
         jac = np.zeros((len(r), len(x)))
         for c in range(len(x)):
+            d = 1e-5 * max(1.0, abs(x[c])) if angular[c] else d_load
             e = np.zeros(len(x))
             e[c] = d
             jac[:, c] = (residual(x + e) - r) / d
@@ -401,7 +419,8 @@ class Chain:
         try:
             if len(self._x):
                 # Newton's last residual is the step at the solution: the bodies are there already
-                self._x, self._jacobian = self._newton(lambda x: self._retake(states, x), self._x, self._jacobian)
+                self._x, self._jacobian = self._newton(lambda x: self._retake(states, x), self._x, self._jacobian,
+                                                       self._angular)
             else:
                 self._retake(states, self._x)
             starts = [j.rate for j in self.joints]
@@ -424,7 +443,7 @@ class Chain:
     def _retake(self, states, x) -> np.ndarray:
         """The step from `states` with the joints' unknowns `x`: per joint the residuals of
         load plus reaction at both ends (a revolute joint's torque only across its axis) and a
-        revolute joint's mean torque about its axis over the step."""
+        revolute joint's torque about its axis at the step's end."""
         self.evaluations += 1
         h = self.h
         residual = np.zeros_like(x)
@@ -476,7 +495,10 @@ class Chain:
                     out.append(j.wrench_residual(j.wrench(part[:n], r0), reaction0, r0))
                     out.append(j.wrench_residual(j.wrench(part[n:2 * n], r1), reaction1, r1))
                 if j.revolute:
-                    out.append([0.5 * (j.axial_torque(reaction0, r0) + j.axial_torque(reaction1, r1))])
+                    # the torque about the axis at the step's end, not the mean of both ends: that
+                    # leaves the split between the ends free, and it rang at the step's Nyquist
+                    # frequency until a double pendulum of stiff links diverged (t = 1.2 s)
+                    out.append([j.axial_torque(reaction1, r1)])
                 if out:
                     residual[self.offsets[k]:self.offsets[k + 1]] = np.concatenate(out)
             for jj in carried:
@@ -485,13 +507,13 @@ class Chain:
         return residual
 
 
-def mount_motion(start: np.ndarray, end: np.ndarray, last_mean: np.ndarray, h: float):
+def mount_motion(start: np.ndarray, end: np.ndarray, last_mean: np.ndarray | None, h: float):
     """A mount's inputs at the step's start and their rates over the step, from its flange's
     motion at both ends: pose and velocities linear; accelerations linear with mean
-    (v1 - v0) / h, (w1 - w0) / h and slope the change of that mean since the last step.
-    Returns (start values, rates, mean accelerations)."""
+    (v1 - v0) / h, (w1 - w0) / h and slope the change of that mean since the last step (none
+    on the first step, `last_mean` None). Returns (start values, rates, mean accelerations)."""
     mean = np.concatenate([(end[VELOCITY] - start[VELOCITY]) / h, (end[SPIN] - start[SPIN]) / h])
-    slope = (mean - last_mean) / h
+    slope = np.zeros(6) if last_mean is None else (mean - last_mean) / h
     values = start.copy()
     values[ACCELERATIONS] = mean - 0.5 * h * slope
     rates = np.zeros(24)
