@@ -38,6 +38,7 @@ from __future__ import annotations
 import argparse
 import sys
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 from fmpy import extract, read_model_description
@@ -121,8 +122,9 @@ class Joint:
     mount: str
     flange: str | None = None
     axis: np.ndarray | None = None
-    #: the ground frame's motion (24 values, `MOTION`'s order) where `upper` is None
-    ground: np.ndarray | None = None
+    #: the ground frame's motion where `upper` is None: 24 values in `MOTION`'s order, or a
+    #: function of time giving them (a driven crank's pin)
+    ground: np.ndarray | Callable[[float], np.ndarray] | None = None
     #: a revolute joint's angle from the flange's axes to the mount's [rad] and its rate [rad/s]
     angle: float = 0.0
     rate: float = 0.0
@@ -176,6 +178,10 @@ class Joint:
         return float((mount_rotation @ self.axis) @ reaction[3:])
 
 
+def ground_at(j: Joint, t: float) -> np.ndarray:
+    return np.asarray(j.ground(t) if callable(j.ground) else j.ground, dtype=float)
+
+
 def ground_motion(r=(0.0, 0.0, 0.0), rotation=None) -> np.ndarray:
     """A frame at rest: position `r`, orientation `rotation` (identity), no velocity."""
     rotation = np.eye(3) if rotation is None else np.asarray(rotation, dtype=float)
@@ -217,11 +223,41 @@ def compose(flange: np.ndarray, axis, angle: float, rate: float, acceleration: f
     return out
 
 
+@dataclass
+class Slider:
+    """Body `body`'s force flange `flange` kept on a line of the ground (through `point` along
+    `direction`, world) by a frictionless, massless slider: the slider's load on the flange is
+    normal to the line and held over each step (two unknowns: its components along two
+    normals), and the equations are the flange's distance from the line at the step's end.
+    Held, not ramping from the last step's value: a ramp makes the load at the step's end
+    answer for the whole step's error, and it grew by a factor of -2.3 per step (a position
+    constraint's multiplier). With a revolute joint on the same body this closes a kinematic
+    loop (a slider-crank's connecting rod)."""
+
+    body: int
+    flange: str
+    point: np.ndarray
+    direction: np.ndarray
+    #: the slider's load on the flange over the last step (world); None until a static start
+    #: or the first step solves it
+    load: np.ndarray | None = None
+
+    def __post_init__(self):
+        self.point = np.asarray(self.point, dtype=float)
+        u = np.asarray(self.direction, dtype=float)
+        if u.shape != (3,) or not np.linalg.norm(u) > 0 or self.point.shape != (3,):
+            raise ValueError(f"slider on body {self.body}: a point and a non-zero direction, 3-vectors each")
+        self.direction = u / np.linalg.norm(u)
+        self.normals = axis_basis(self.direction)[:, 1:]
+
+    unknowns = 2
+
+
 class Chain:
     """Bodies connected by joints, each joint a body's mount on an upper body's force flange or
     on the ground; every body's upper body comes before it (a chain, or a tree)."""
 
-    def __init__(self, bodies: list[Body], joints: list[Joint], step: float):
+    def __init__(self, bodies: list[Body], joints: list[Joint], step: float, sliders: list[Slider] = ()):
         if not step > 0:
             raise ValueError(f"the step must be positive, not {step}")
         lowers = [j.lower for j in joints]
@@ -233,7 +269,12 @@ class Chain:
         self.bodies, self.h, self.t = bodies, float(step), 0.0
         self.joints = sorted(joints, key=lambda j: j.lower)
         self.hung = {j.lower: j for j in self.joints}
-        self.offsets = np.cumsum([0] + [j.unknowns for j in self.joints])
+        for sl in sliders:
+            if not 0 <= sl.body < len(bodies):
+                raise ValueError(f"slider on body {sl.body}: there are {len(bodies)} bodies")
+        self.sliders = list(sliders)
+        # the unknowns: every joint's, then every slider's
+        self.offsets = np.cumsum([0] + [j.unknowns for j in self.joints] + [sl.unknowns for sl in self.sliders])
         # which unknowns are a revolute joint's rate (each joint's last)
         self._angular = np.zeros(self.offsets[-1], dtype=bool)
         for k, j in enumerate(self.joints):
@@ -265,7 +306,7 @@ class Chain:
         return self.bodies[j.lower].refs(j.mount, WRENCH)
 
     def _flange_now(self, j: Joint) -> np.ndarray:
-        return j.ground if j.upper is None else self.bodies[j.upper].get(self._flange_motion(j))
+        return ground_at(j, self.t) if j.upper is None else self.bodies[j.upper].get(self._flange_motion(j))
 
     def initialize(self, static: bool = False, static_rounds: int = 6):
         """Instantiate the bodies with each mount where its joint puts it, and solve the joints'
@@ -273,14 +314,15 @@ class Chain:
         every body starts in static equilibrium (its `static_start`) under the loads of the
         bodies below it, by `static_rounds` rounds of fixed point (the lower bodies' weight on
         the upper, the upper's deflection tilting the lower), 1e-12 apart after 6 on the
-        examples."""
-        loads = {j.lower: np.zeros(6) for j in self.joints}
-        rounds = static_rounds if static else 1
-        for _ in range(rounds):
-            self._instantiate_all(loads, static)
-            loads = {j.lower: -self.bodies[j.lower].get(self._mount_reaction(j)) for j in self.joints}
-        if static:
-            self._instantiate_all(loads, static)
+        examples. With revolute joints or sliders, `static` also solves, by Newton, for the
+        revolute joints' angles and the sliders' loads of a mechanism at rest: no torque about
+        any joint's axis, every slider's flange on its line (a slider-crank held still, its
+        rod sagging between crank pin and slider); a pendulum away from its rest position
+        has no such state and is refused."""
+        if static and (self.sliders or any(j.revolute for j in self.joints)):
+            self._static_mechanism(static_rounds)
+        else:
+            self._static_rounds(static, static_rounds if static else 1)
         accelerations = self._consistent_loads()
         for j in self.joints:
             j.motion = compose(self._flange_now(j), j.axis, j.angle, j.rate, accelerations[j.lower])
@@ -300,7 +342,59 @@ class Chain:
                 x += [w, w]
             if j.revolute:
                 x.append([j.rate])
+        for sl in self.sliders:
+            x.append(np.zeros(sl.unknowns) if sl.load is None else sl.normals.T @ sl.load)
         self._x = np.concatenate(x) if x else np.zeros(0)
+
+    def _static_rounds(self, static: bool, rounds: int):
+        loads = {j.lower: np.zeros(6) for j in self.joints}
+        for _ in range(rounds):
+            self._instantiate_all(loads, static)
+            loads = {j.lower: -self.bodies[j.lower].get(self._mount_reaction(j)) for j in self.joints}
+        if static:
+            self._instantiate_all(loads, static)
+
+    def _static_mechanism(self, rounds: int):
+        """Newton on the revolute joints' angles and the sliders' normal loads, each evaluation
+        a static start of every body (`_static_rounds`); the residuals are the joints' torques
+        about their axes and the sliders' flanges' distances from their lines."""
+        revolute = [j for j in self.joints if j.revolute]
+        n_angles = len(revolute)
+
+        def residual(z):
+            for j, angle in zip(revolute, z[:n_angles]):
+                j.angle = float(angle)
+            for k, sl in enumerate(self.sliders):
+                sl.load = sl.normals @ z[n_angles + 2 * k:n_angles + 2 * k + 2]
+            self._static_rounds(True, rounds)
+            out = []
+            for j in revolute:
+                reaction = self.bodies[j.lower].get(self._mount_reaction(j))
+                rotation_now = compose(self._flange_now(j), j.axis, j.angle, j.rate, 0.0)[3:12].reshape(3, 3)
+                out.append(j.axial_torque(reaction, rotation_now))
+            for sl in self.sliders:
+                at = self.bodies[sl.body].get(self.bodies[sl.body].refs(sl.flange, ["r[1]", "r[2]", "r[3]"]))
+                out.extend(sl.normals.T @ (at - sl.point))
+            return np.array(out)
+
+        z = np.concatenate([[j.angle for j in revolute]] + [np.zeros(2) for _ in self.sliders])
+        steps = np.array([1e-6] * n_angles + [1e-3] * (2 * len(self.sliders)))
+        r = residual(z)
+        for _ in range(MAX_ITERATIONS):
+            scale = max(1.0, np.abs(z[n_angles:]).max() if len(z) > n_angles else 0.0)
+            if np.abs(r).max() <= RELATIVE_TOLERANCE * scale:
+                break
+            jac = np.zeros((len(r), len(z)))
+            for c in range(len(z)):
+                e = np.zeros(len(z))
+                e[c] = steps[c]
+                jac[:, c] = (residual(z + e) - r) / steps[c]
+            z = z - np.linalg.solve(jac, r)
+            r = residual(z)
+        else:
+            raise RuntimeError(f"no static equilibrium of the mechanism found in {MAX_ITERATIONS} iterations "
+                               f"(largest torque or distance {np.abs(r).max():.3g}): a pendulum away from "
+                               "its rest position has none; start it without --static")
 
     def _instantiate_all(self, loads, static):
         for i, body in enumerate(self.bodies):
@@ -312,6 +406,9 @@ class Chain:
             for j in self.joints:
                 if j.upper == i:
                     inputs.update({f"{j.flange}.{n}": v for n, v in zip(WRENCH, loads[j.lower])})
+            for sl in self.sliders:
+                if sl.body == i and sl.load is not None:
+                    inputs.update({f"{sl.flange}.{n}": v for n, v in zip(WRENCH[:3], sl.load)})
             body.instantiate(inputs)
 
     def _consistent_loads(self) -> dict[int, float]:
@@ -377,7 +474,12 @@ class Chain:
             if jacobian is None or size > 0.5 * last:
                 jacobian = self._finite_difference_jacobian(residual, x, r, angular)
             last = size
-            dx = -np.linalg.solve(jacobian, r)
+            try:
+                dx = -np.linalg.solve(jacobian, r)
+            except np.linalg.LinAlgError:
+                # a Broyden update can make the Jacobian singular: take it anew
+                jacobian = self._finite_difference_jacobian(residual, x, r, angular)
+                dx = -np.linalg.solve(jacobian, r)
             r_new = None
             # a trial far off (an FMU refusing the step, e.g. a body spun past its critical
             # speed by a stale Jacobian's guess) is halved back towards the last iterate
@@ -424,8 +526,11 @@ class Chain:
             else:
                 self._retake(states, self._x)
             starts = [j.rate for j in self.joints]
+            slider_starts = [sl.load for sl in self.sliders]
             for j, (angle, rate, motion, mean) in zip(self.joints, self._pending):
                 j.angle, j.rate, j.motion, j.mean_acceleration = angle, rate, motion, mean
+            for sl, load in zip(self.sliders, self._pending_sliders):
+                sl.load = load
         finally:
             for b, s in zip(self.bodies, states):
                 b.fmu.freeFMUstate(s)
@@ -439,6 +544,10 @@ class Chain:
                 part[:n], part[n:2 * n] = end, 2 * end - start
             if j.revolute:
                 part[-1] = 2 * j.rate - starts[k]
+        for k, (sl, start) in enumerate(zip(self.sliders, slider_starts)):
+            if start is not None:
+                part = self._x[self.offsets[len(self.joints) + k]:self.offsets[len(self.joints) + k + 1]]
+                part[:] = 2 * part - sl.normals.T @ start
 
     def _retake(self, states, x) -> np.ndarray:
         """The step from `states` with the joints' unknowns `x`: per joint the residuals of
@@ -449,6 +558,7 @@ class Chain:
         residual = np.zeros_like(x)
         end_flange: dict[int, np.ndarray] = {}
         pending: dict[int, tuple] = {}
+        pending_sliders: list[np.ndarray | None] = [None] * len(self.sliders)
         # the mount's axes at the step's end, for a revolute joint's loads: turned from the start
         # by the flange's spin (an end-of-step basis the loads need before the upper body steps)
         end_rotation = {}
@@ -464,7 +574,7 @@ class Chain:
                 part = x[self.offsets[k]:self.offsets[k + 1]]
                 rate = part[-1] if j.revolute else 0.0
                 angle = j.angle + 0.5 * h * (j.rate + rate) if j.revolute else 0.0
-                flange = j.ground if j.upper is None else end_flange[j.lower]
+                flange = ground_at(j, self.t + h) if j.upper is None else end_flange[j.lower]
                 end = compose(flange, j.axis, angle, rate, 0.0)
                 refs = self._mount_motion(j)
                 start, rates, mean = mount_motion(j.motion, end, j.mean_acceleration, h)
@@ -481,9 +591,21 @@ class Chain:
                 refs = self._flange_load(jj)
                 body.set(refs, w0)
                 body.set_rates(refs, (w1 - w0) / h)
+            held = [(k, sl) for k, sl in enumerate(self.sliders) if sl.body == i]
+            for k, sl in held:
+                part = x[self.offsets[len(self.joints) + k]:self.offsets[len(self.joints) + k + 1]]
+                w1 = np.concatenate([sl.normals @ part, np.zeros(3)])
+                refs = body.refs(sl.flange, WRENCH)
+                body.set(refs, w1)
+                body.set_rates(refs, np.zeros(6))
+                pending_sliders[k] = w1[:3]
             if j is not None:
                 reaction0 = body.get(self._mount_reaction(j))
             body.fmu.doStep(self.t, h)
+            for k, sl in held:
+                at = body.get(body.refs(sl.flange, ["r[1]", "r[2]", "r[3]"]))
+                row = self.offsets[len(self.joints) + k]
+                residual[row:row + sl.unknowns] = sl.normals.T @ (at - sl.point)
             if j is not None:
                 reaction1 = body.get(self._mount_reaction(j))
                 k = self.joints.index(j)
@@ -504,6 +626,7 @@ class Chain:
             for jj in carried:
                 end_flange[jj.lower] = body.get(self._flange_motion(jj))
         self._pending = [pending[j.lower] for j in self.joints]
+        self._pending_sliders = pending_sliders
         return residual
 
 
