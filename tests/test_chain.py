@@ -137,7 +137,7 @@ def test_tip_load_transient_vs_one_piece(fmus):
     rotations), 2 s at h = 1 ms (4 periods of the first mode, y, 2.04 Hz; 8 of the second, z,
     4.08 Hz): the weld's and the tip's lateral and vertical motion against the one-piece FMU,
     as a fraction of each one's swing, and the two lowest frequencies from the tip's periods.
-    Measured: 2.2e-4 (y) and 8.8e-4 (z) of the swing, the step's coupling error (it shrinks
+    Measured: 2.2e-4 (y) and 8.5e-4 (z) of the swing, the step's coupling error (it shrinks
     with h, test_chain_converges_in_the_step); frequencies 7.9e-6 and 1.8e-5 apart.
     Tolerances ten times: 9e-3 and 2e-4."""
     link, one_piece, _, _ = fmus
@@ -164,7 +164,7 @@ def test_tip_load_transient_vs_one_piece(fmus):
 def test_gravity_from_rest_vs_one_piece(fmus):
     """The scene where a delayed master diverges: both links at rest under gravity from t = 0,
     1 s at h = 1 ms. Against the one-piece FMU, as a fraction of the tip's swing. Measured:
-    9.9e-4; the same run at g / 10 gives 4.2e-4, the step's coupling error, and the rest is the
+    1.0e-3; the same run at g / 10 gives 4.2e-4, the step's coupling error, and the rest is the
     chain's large-rotation kinematics against the one-piece model's linear ones (it grows with
     the swing). Tolerance 1e-2, ten times."""
     link, one_piece, _, _ = fmus
