@@ -376,3 +376,24 @@ def test_slider_crank_vs_rigid_theory(fmus):
           f"swing ({np.ptp(load_ref):.3g} N); {chain.evaluations / len(rows):.2f} retaken steps per step")
     assert x_error <= 1e-5
     assert load_error <= 1e-2
+
+
+def test_the_master_refuses_what_it_cannot_carry():
+    """Joints out of order, a body on two joints, a slider without a direction, a revolute
+    joint without an axis, a ground joint naming a flange: refused with the reason, before any
+    FMU is touched (the bodies here are placeholders)."""
+    bodies = [object(), object()]
+    with pytest.raises(ValueError, match="upper body must come before it"):
+        cm.Chain(bodies, [cm.Joint(1, 0, "base", "tip")], H)
+    with pytest.raises(ValueError, match="one joint at most"):
+        cm.Chain(bodies, [cm.Joint(None, 1, "base"), cm.Joint(0, 1, "base", "tip")], H)
+    with pytest.raises(ValueError, match="the step must be positive"):
+        cm.Chain(bodies, [cm.Joint(0, 1, "base", "tip")], 0.0)
+    with pytest.raises(ValueError, match="non-zero direction"):
+        cm.Slider(0, "tip", [0, 0, 0], [0, 0, 0])
+    with pytest.raises(ValueError, match="slider on body 2: there are 2 bodies"):
+        cm.Chain(bodies, [], H, sliders=[cm.Slider(2, "tip", [0, 0, 0], [1, 0, 0])])
+    with pytest.raises(ValueError, match="the axis must be a non-zero 3-vector"):
+        cm.Joint(None, 0, "base", axis=[0, 0, 0])
+    with pytest.raises(ValueError, match="the ground has none"):
+        cm.Joint(None, 0, "base", "tip")

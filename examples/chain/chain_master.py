@@ -317,8 +317,8 @@ class Chain:
         examples. With revolute joints or sliders, `static` also solves, by Newton, for the
         revolute joints' angles and the sliders' loads of a mechanism at rest: no torque about
         any joint's axis, every slider's flange on its line (a slider-crank held still, its
-        rod sagging between crank pin and slider); a pendulum away from its rest position
-        has no such state and is refused."""
+        rod sagging between crank pin and slider). The joints' angles given are where Newton
+        starts: a pendulum started at 45 degrees with `static` ends hanging down at rest."""
         if static and (self.sliders or any(j.revolute for j in self.joints)):
             self._static_mechanism(static_rounds)
         else:
@@ -393,8 +393,7 @@ class Chain:
             r = residual(z)
         else:
             raise RuntimeError(f"no static equilibrium of the mechanism found in {MAX_ITERATIONS} iterations "
-                               f"(largest torque or distance {np.abs(r).max():.3g}): a pendulum away from "
-                               "its rest position has none; start it without --static")
+                               f"(largest torque [N m] or distance [m] {np.abs(r).max():.3g}); start it without static")
 
     def _instantiate_all(self, loads, static):
         for i, body in enumerate(self.bodies):
@@ -682,7 +681,8 @@ def main(argv=None) -> int:
     p.add_argument("--stop", type=float, default=1.0, help="stop time [s]")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="a start value for every body (e.g. g[3]=-9.81)")
-    p.add_argument("--static", action="store_true", help="start in static equilibrium")
+    p.add_argument("--static", action="store_true",
+                   help="start in static equilibrium (revolute joints' angles included: a pendulum starts hanging at rest)")
     p.add_argument("--output", default="tip.r[3]", help="the last body's output to print")
     p.add_argument("--csv", help="write time and the output at every step to this file")
     args = p.parse_args(argv)
@@ -702,6 +702,9 @@ def main(argv=None) -> int:
         raise SystemExit("one body and no --pivot: nothing to connect")
     chain = Chain(bodies, joints, args.step)
     chain.initialize(static=args.static)
+    if args.static and any(j.revolute for j in joints):
+        print("static start: revolute joints at " + ", ".join(f"{np.degrees(j.angle):.6g}" for j in joints if j.revolute)
+              + " degrees")
     out_ref = bodies[-1].vr[args.output]
     rows = [(0.0, bodies[-1].get([out_ref])[0])]
     for _ in range(int(round(args.stop / args.step))):
