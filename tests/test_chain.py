@@ -423,3 +423,105 @@ def test_chain_is_bounded_at_any_step(fmus):
         assert np.abs(ours).max() <= 1.001 * peak
         if h == 2e-3:
             assert error <= 3.4e-2
+
+
+def model_exchange_chain(link, seconds, rtol):
+    """The two links welded as a Modelica tool imports them: both FMUs in Model Exchange, one
+    ODE of both bodies' states integrated by SciPy's BDF (atol = rtol x the states' nominals),
+    the joint's loop solved in every right-hand side through the feedthroughs (the upper tip's
+    motion, a and z included, drives the lower mount; the load W on the upper tip makes
+    W + the lower mount's reaction zero), by a fixed number of Newton iterations with a
+    Jacobian of the loop taken once, so that the right-hand side is a smooth function of the
+    state, as a stiff integrator's difference Jacobian needs. Returns the lower tip's z at every
+    millisecond after t = 0."""
+    import ctypes
+    from scipy.integrate import solve_ivp
+    from fmu_access import Fmu
+
+    upper, lower = Fmu(str(link)), Fmu(str(link))
+    try:
+        for body in (upper, lower):
+            body.set(**G)
+        upper.initialize()
+        tip_motion = [upper.vr[f"tip.{n}"] for n in cm.MOTION]
+        tip_load = [upper.vr[f"tip.{n}"] for n in cm.WRENCH]
+        mount_motion = [lower.vr[f"base.{n}"] for n in cm.MOTION]
+        reaction = [lower.vr[f"base.{n}"] for n in cm.WRENCH]
+        lower.fmu.setReal(mount_motion, upper.fmu.getReal(tip_motion))
+        lower.initialize()
+        n = upper.nx
+
+        def loop(w):
+            upper.fmu.setReal(tip_load, list(w))
+            lower.fmu.setReal(mount_motion, upper.fmu.getReal(tip_motion))
+            return w + np.array(lower.fmu.getReal(reaction))
+
+        jacobian = None
+
+        def rhs(t, x):
+            nonlocal jacobian
+            for body in (upper, lower):
+                body.fmu.setTime(t)
+            upper.set_states(x[:n])
+            lower.set_states(x[n:])
+            if jacobian is None:
+                r0 = loop(np.zeros(6))
+                jacobian = np.column_stack([loop(e) - r0 for e in np.eye(6)])
+            w = np.zeros(6)
+            for _ in range(6):
+                w = w - np.linalg.solve(jacobian, loop(w))
+            residual = loop(w)
+            assert np.abs(residual).max() <= 1e-7 * max(1.0, np.abs(w).max()), residual
+            return np.concatenate([upper.derivatives(), lower.derivatives()])
+
+        nominals = np.zeros(2 * n)
+        for k, body in enumerate((upper, lower)):
+            part = np.zeros(n)
+            body.fmu.getNominalsOfContinuousStates(part.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), n)
+            nominals[k * n:(k + 1) * n] = part
+        grid = np.arange(1, int(round(seconds / H)) + 1) * H
+        x0 = np.concatenate([upper.states(), lower.states()])
+        sol = solve_ivp(rhs, (0.0, seconds), x0, method="BDF", rtol=rtol, atol=rtol * nominals, t_eval=grid)
+        assert sol.success, sol.message
+        tip = []
+        for k, t in enumerate(sol.t):
+            rhs(t, sol.y[:, k])
+            tip.append(lower.get("tip.r[3]")[0])
+        return np.array(tip)
+    finally:
+        upper.close()
+        lower.close()
+
+
+def test_model_exchange_chain_in_a_generic_host(fmus):
+    """The links welded in Model Exchange, the loop solved in every right-hand side (what a
+    Modelica tool does with two imported FMUs connected through MultiBody frames), under
+    gravity from rest for 1 s, against the one-piece FMU, as a fraction of the tip's swing.
+    With every mode dynamic in Model Exchange (`reduction.dynamic_cutoff` above the highest
+    mode): 7.4e-4 at rtol 1e-6 and 8.7e-4 at 1e-4 (fmusim's and many tools' default);
+    tolerance 8e-3, ten times. With the links' default split (their two highest modes
+    quasi-static in Model Exchange) the chain is 8.9e-2 off, and with the modes above 200 Hz
+    quasi-static 0.26: Model Exchange's flange accelerations leave out the quasi-static modes'
+    acceleration, and those modes carry the tip's static flexibility, which a body hung from it
+    follows (docs/CONNECTING.md); checked here too, as more than 3e-2, so that the documented
+    limit stays true."""
+    link, one_piece, _, d = fmus
+    spec = json.loads((EXAMPLES / "chain" / "link.json").read_text())
+    spec["name"] = "LinkAllDynamic"
+    spec["reduction"]["dynamic_cutoff"] = 1e5
+    all_dynamic = d / "link_all_dynamic.json"
+    all_dynamic.write_text(json.dumps(spec))
+    all_dynamic_fmu = d / "LinkAllDynamic.fmu"
+    run_builder([all_dynamic, "-o", all_dynamic_fmu, "-q"])
+    reference = run_one_piece(one_piece, 1.0)[:, 5]
+    swing = np.ptp(reference)
+    print()
+    for path, rtol, bound in ((all_dynamic_fmu, 1e-6, 8e-3), (all_dynamic_fmu, 1e-4, 8e-3), (link, 1e-6, None)):
+        ours = model_exchange_chain(path, 1.0, rtol)
+        assert ours.shape == reference.shape
+        error = np.abs(ours - reference).max() / swing
+        print(f"Model Exchange chain, {path.name}, rtol {rtol:g}: {error:.2e} of the tip's swing")
+        if bound is None:
+            assert error > 3e-2
+        else:
+            assert error <= bound
