@@ -151,13 +151,19 @@ class Joint:
         return self.axis is not None
 
     @property
+    def load_size(self) -> int:
+        """Parameters of the flange load: a weld's six components, a revolute joint's force and
+        its two torques across the axis."""
+        return 5 if self.revolute else 6
+
+    @property
     def unknowns(self) -> int:
         """Per step: a weld's wrench at both ends (12); a revolute joint's force and its two
         torques across the axis at both ends and its rate at the end (11); on the ground only
         the rate (1), or nothing for a welded (fixed) mount."""
         if self.upper is None:
             return 1 if self.revolute else 0
-        return 11 if self.revolute else 12
+        return 2 * self.load_size + (1 if self.revolute else 0)
 
     def wrench(self, p: np.ndarray, mount_rotation: np.ndarray) -> np.ndarray:
         """The flange load (world) from its parameters: a weld's six components; a revolute
@@ -269,6 +275,7 @@ class Chain:
         self.bodies, self.h, self.t = bodies, float(step), 0.0
         self.joints = sorted(joints, key=lambda j: j.lower)
         self.hung = {j.lower: j for j in self.joints}
+        self._joint_index = {j.lower: k for k, j in enumerate(self.joints)}
         for sl in sliders:
             if not 0 <= sl.body < len(bodies):
                 raise ValueError(f"slider on body {sl.body}: there are {len(bodies)} bodies")
@@ -284,6 +291,10 @@ class Chain:
         self.jacobians = 0
         self._jacobian: np.ndarray | None = None
         self._x: np.ndarray | None = None
+
+    def _part(self, x: np.ndarray, owner: int) -> np.ndarray:
+        """The unknowns (a view) of joint `owner`, or of slider `owner - len(joints)`."""
+        return x[self.offsets[owner]:self.offsets[owner + 1]]
 
     @classmethod
     def welded(cls, bodies: list[Body], flanges: list[str], mounts: list[str], step: float) -> "Chain":
@@ -414,7 +425,7 @@ class Chain:
         """Newton at t = 0 through the feedthroughs (no step): per joint its load (a revolute
         joint's without torque about its axis) and a revolute joint's angular acceleration,
         such that loads and reactions balance. Returns the angular accelerations."""
-        sizes = [(0 if j.upper is None else (5 if j.revolute else 6)) + (1 if j.revolute else 0) for j in self.joints]
+        sizes = [(0 if j.upper is None else j.load_size) + (1 if j.revolute else 0) for j in self.joints]
         offsets = np.cumsum([0] + sizes)
         rotations = {j.lower: compose(self._flange_now(j), j.axis, j.angle, j.rate, 0.0)[3:12].reshape(3, 3)
                      for j in self.joints}
@@ -536,16 +547,16 @@ class Chain:
         self.t += self.h
         # the next step's start wrench is this one's end, its end extrapolated; so the rates
         for k, j in enumerate(self.joints):
-            part = self._x[self.offsets[k]:self.offsets[k + 1]]
+            part = self._part(self._x, k)
             if j.upper is not None:
-                n = 5 if j.revolute else 6
+                n = j.load_size
                 start, end = part[:n].copy(), part[n:2 * n].copy()
                 part[:n], part[n:2 * n] = end, 2 * end - start
             if j.revolute:
                 part[-1] = 2 * j.rate - starts[k]
         for k, (sl, start) in enumerate(zip(self.sliders, slider_starts)):
             if start is not None:
-                part = self._x[self.offsets[len(self.joints) + k]:self.offsets[len(self.joints) + k + 1]]
+                part = self._part(self._x, len(self.joints) + k)
                 part[:] = 2 * part - sl.normals.T @ start
 
     def _retake(self, states, x) -> np.ndarray:
@@ -569,8 +580,7 @@ class Chain:
             body.fmu.setFMUstate(states[i])
             j = self.hung.get(i)
             if j is not None:
-                k = self.joints.index(j)
-                part = x[self.offsets[k]:self.offsets[k + 1]]
+                part = self._part(x, self._joint_index[i])
                 rate = part[-1] if j.revolute else 0.0
                 angle = j.angle + 0.5 * h * (j.rate + rate) if j.revolute else 0.0
                 flange = ground_at(j, self.t + h) if j.upper is None else end_flange[j.lower]
@@ -582,9 +592,8 @@ class Chain:
                 pending[i] = (angle, rate, end, mean)
             carried = [jj for jj in self.joints if jj.upper == i]
             for jj in carried:
-                k = self.joints.index(jj)
-                part = x[self.offsets[k]:self.offsets[k + 1]]
-                n = 5 if jj.revolute else 6
+                part = self._part(x, self._joint_index[jj.lower])
+                n = jj.load_size
                 w0 = jj.wrench(part[:n], jj.motion[3:12].reshape(3, 3))
                 w1 = jj.wrench(part[n:2 * n], end_rotation[jj.lower])
                 refs = self._flange_load(jj)
@@ -592,7 +601,7 @@ class Chain:
                 body.set_rates(refs, (w1 - w0) / h)
             held = [(k, sl) for k, sl in enumerate(self.sliders) if sl.body == i]
             for k, sl in held:
-                part = x[self.offsets[len(self.joints) + k]:self.offsets[len(self.joints) + k + 1]]
+                part = self._part(x, len(self.joints) + k)
                 w1 = np.concatenate([sl.normals @ part, np.zeros(3)])
                 refs = body.refs(sl.flange, WRENCH)
                 body.set(refs, w1)
@@ -603,16 +612,15 @@ class Chain:
             body.fmu.doStep(self.t, h)
             for k, sl in held:
                 at = body.get(body.refs(sl.flange, ["r[1]", "r[2]", "r[3]"]))
-                row = self.offsets[len(self.joints) + k]
-                residual[row:row + sl.unknowns] = sl.normals.T @ (at - sl.point)
+                self._part(residual, len(self.joints) + k)[:] = sl.normals.T @ (at - sl.point)
             if j is not None:
                 reaction1 = body.get(self._mount_reaction(j))
-                k = self.joints.index(j)
-                part = x[self.offsets[k]:self.offsets[k + 1]]
+                k = self._joint_index[i]
+                part = self._part(x, k)
                 out = []
                 r0, r1 = j.motion[3:12].reshape(3, 3), end_rotation[j.lower]
                 if j.upper is not None:
-                    n = 5 if j.revolute else 6
+                    n = j.load_size
                     out.append(j.wrench_residual(j.wrench(part[:n], r0), reaction0, r0))
                     out.append(j.wrench_residual(j.wrench(part[n:2 * n], r1), reaction1, r1))
                 if j.revolute:
@@ -621,7 +629,7 @@ class Chain:
                     # frequency until a double pendulum of stiff links diverged (t = 1.2 s)
                     out.append([j.axial_torque(reaction1, r1)])
                 if out:
-                    residual[self.offsets[k]:self.offsets[k + 1]] = np.concatenate(out)
+                    self._part(residual, k)[:] = np.concatenate(out)
             for jj in carried:
                 end_flange[jj.lower] = body.get(self._flange_motion(jj))
         self._pending = [pending[j.lower] for j in self.joints]
