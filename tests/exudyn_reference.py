@@ -7,12 +7,15 @@ Nothing of the builder, the FMUs or the co-simulation master is used.
 
     t, positions = double_pendulum(deck_text, workdir)
     # one row per millisecond from t = 0: elbow x, z and tip x, z (world)
+    t, rows = slider_crank(deck_text, workdir, pin)
+    # one row per millisecond from t = 0: the rod's tip x, z and the slider's load on it (z)
 
 Exudyn's pitfalls met on the way (Exudyn 1.13.6): spectral radius 1.0 stopped Newton converging
 at t = 7..9 s of the double pendulum, and Exudyn then cuts its step silently (runs of ten
 minutes); 0.9 runs clean. A Newton tolerance below the default 1e-8 stalls (K ~ 1e11). Nodes
 of no element (the deck's flange reference nodes) must stay out of the FE model, or M is
-singular. The first boundary list is fixed to the floating frame."""
+singular. The first boundary list is fixed to the floating frame. Exudyn's static solver runs a
+pseudo-time from 0 to 1 through the joints' user functions."""
 
 from __future__ import annotations
 
@@ -73,82 +76,66 @@ def rotation_y(degrees):
     return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
 
 
-def double_pendulum(deck_text: str, workdir, pivot_deg=45.0, seconds=12.0, step=1e-3, modes=12,
-                    damping_beta=1e-3, spectral_radius=0.9, modified_newton=True, verbose=False, matrices=None):
-    """(t, positions): t every 1 ms from 0, positions (n, 4) = elbow x, z, tip x, z (world).
+class _FlexibleLink:
+    """The link's CalculiX matrices turned into Exudyn's Craig-Bampton floating-frame body
+    template (RBE2 faces BASE and TIP, `modes` fixed-interface eigenmodes), with the faces'
+    centres in the body frame."""
 
-    Both links start straight in line, local x rotated by rotation_y(pivot_deg), at rest; gravity -z."""
-    import exudyn as exu
-    import exudyn.itemInterface as ei
-    from exudyn.FEM import FEMinterface, ObjectFFRFreducedOrderInterface, HCBstaticModeSelection
+    def __init__(self, deck_text, workdir, modes, matrices=None):
+        from exudyn.FEM import FEMinterface, ObjectFFRFreducedOrderInterface, HCBstaticModeSelection
 
-    pos, ids, M, K = matrices or ccx_matrices(deck_text, workdir)
-    index = {nid: k for k, nid in enumerate(ids)}
-    base = [index[i] for i in node_set(deck_text, "BASE")]
-    tip = [index[i] for i in node_set(deck_text, "TIP")]
+        pos, ids, M, K = matrices or ccx_matrices(deck_text, workdir)
+        index = {nid: k for k, nid in enumerate(ids)}
+        self.pos = pos
+        self.base = [index[i] for i in node_set(deck_text, "BASE")]
+        self.tip = [index[i] for i in node_set(deck_text, "TIP")]
+        fem = FEMinterface()
+        fem.nodes = {"Position": pos}
+        fem.massMatrix = M  # FEMinterface stores scipy CSR directly (not the old triplet arrays)
+        fem.stiffnessMatrix = K
+        # RBE2 with excludeRigidBodyMotion: BASE face is rigidly fixed to the floating frame, TIP
+        # face moves rigidly (6 static modes) + `modes` fixed-interface eigenmodes.
+        fem.ComputeHurtyCraigBamptonModes(boundaryNodesList=[self.base, self.tip], nEigenModes=modes,
+                                          useSparseSolver=True, computationMode=HCBstaticModeSelection.RBE2)
+        self.cms = ObjectFFRFreducedOrderInterface(fem)
+        self.base_c = pos[self.base].mean(axis=0)  # face centres in the body frame (local)
+        self.tip_c = pos[self.tip].mean(axis=0)
 
-    fem = FEMinterface()
-    fem.nodes = {"Position": pos}
-    fem.massMatrix = M  # FEMinterface stores scipy CSR directly (not the old triplet arrays)
-    fem.stiffnessMatrix = K
-    # RBE2 with excludeRigidBodyMotion: BASE face is rigidly fixed to the floating frame, TIP
-    # face moves rigidly (6 static modes) + `modes` fixed-interface eigenmodes.
-    fem.ComputeHurtyCraigBamptonModes(boundaryNodesList=[base, tip], nEigenModes=modes,
-                                      useSparseSolver=True,
-                                      computationMode=HCBstaticModeSelection.RBE2)
-    cms = ObjectFFRFreducedOrderInterface(fem)
+    def add(self, mbs, origin, rotation, damping_beta, name):
+        b = self.cms.AddObjectFFRFreducedOrder(mbs, positionRef=list(origin), rotationMatrixRef=rotation,
+                                               stiffnessProportionalDamping=damping_beta,
+                                               gravity=[0.0, 0.0, -9.81], name=name)
+        return b["oFFRFreducedOrder"]
 
-    SC = exu.SystemContainer()
-    mbs = SC.AddSystem()
-    A = rotation_y(pivot_deg)
-    L = pos[tip].mean(axis=0)[0] - pos[base].mean(axis=0)[0]
-    base_c = pos[base].mean(axis=0)  # face centres in the body frame (local)
-    tip_c = pos[tip].mean(axis=0)
-    g = [0.0, 0.0, -9.81]
+    def face_marker(self, mbs, body, nodes):
+        import exudyn.itemInterface as ei
 
-    bodies = []
-    origin = np.zeros(3) - A @ base_c  # place body 1's base face centre at the world origin
-    for k in range(2):
-        b = cms.AddObjectFFRFreducedOrder(mbs, positionRef=list(origin), rotationMatrixRef=A,
-                                          stiffnessProportionalDamping=damping_beta,
-                                          gravity=g, name=f"link{k + 1}")
-        bodies.append(b["oFFRFreducedOrder"])
-        origin = origin + A @ (tip_c - base_c)
-
-    def face_marker(body, nodes):
         # uniform weights: faces are rigid under RBE2 modes, so the weighting only sets the
         # marker origin (the face centre by symmetry), not its motion
         w = np.ones(len(nodes)) / len(nodes)
         return mbs.AddMarker(ei.MarkerSuperElementRigid(bodyNumber=body, meshNodeNumbers=np.array(nodes),
                                                         weightingFactors=w))
 
-    ground = mbs.AddObject(ei.ObjectGround())
-    # revolute about world y: the ground marker frame is turned like the body's initial frame so
-    # the joint starts with zero relative rotation (Ry leaves y unchanged); rotationMarker0 of
-    # GenericJoint does the same but is deprecated in this Exudyn in favour of the marker's localHT
-    m_ground = mbs.AddMarker(ei.MarkerBodyRigid(bodyNumber=ground, localHT=exu.HT(rotation=A, translation=[0, 0, 0])))
-    m_base1, m_tip1 = face_marker(bodies[0], base), face_marker(bodies[0], tip)
-    m_base2, m_tip2 = face_marker(bodies[1], base), face_marker(bodies[1], tip)
-    mbs.AddObject(ei.GenericJoint(markerNumbers=[m_ground, m_base1], constrainedAxes=[1, 1, 1, 1, 0, 1]))
-    mbs.AddObject(ei.GenericJoint(markerNumbers=[m_tip1, m_base2], constrainedAxes=[1, 1, 1, 1, 0, 1]))
+    def tip_sensor(self, mbs, body):
+        """A position sensor on the mesh node at the tip face's centre (the face is rigid, so it
+        moves as the face's marker)."""
+        import exudyn as exu
+        import exudyn.itemInterface as ei
 
-    # sensors on the face-centre mesh nodes (exist in the 2x2 quadratic face mesh); the face is
-    # rigid, so this equals the marker position
-    def centre_node(nodes, c):
-        k = nodes[int(np.argmin(np.linalg.norm(pos[nodes] - c, axis=1)))]
-        if np.linalg.norm(pos[k] - c) > 1e-9:
+        nodes, c = self.tip, self.tip_c
+        k = nodes[int(np.argmin(np.linalg.norm(self.pos[nodes] - c, axis=1)))]
+        if np.linalg.norm(self.pos[k] - c) > 1e-9:
             raise RuntimeError("no mesh node at the face centre")
-        return k
-
-    sensors = [mbs.AddSensor(ei.SensorSuperElement(bodyNumber=bodies[b], meshNodeNumber=centre_node(tip, tip_c),
+        return mbs.AddSensor(ei.SensorSuperElement(bodyNumber=body, meshNodeNumber=k,
                                                    outputVariableType=exu.OutputVariableType.Position,
                                                    storeInternal=True, writeToFile=False))
-               for b in (0, 1)]
-    mbs.Assemble()
+
+
+def _settings(seconds, step, spectral_radius, modified_newton, verbose):
+    import exudyn as exu
 
     s = exu.SimulationSettings()
-    n_steps = int(round(seconds / step))
-    s.timeIntegration.numberOfSteps = n_steps
+    s.timeIntegration.numberOfSteps = int(round(seconds / step))
     s.timeIntegration.endTime = seconds
     # rho_inf = 1 (no numerical damping) drifts into Newton failures and step cuts after ~7 s
     # (index-3 joints on a stiff FFRF body); 0.9 runs through, and halving the step changes the
@@ -156,22 +143,107 @@ def double_pendulum(deck_text: str, workdir, pivot_deg=45.0, seconds=12.0, step=
     s.timeIntegration.generalizedAlpha.spectralRadius = spectral_radius
     s.timeIntegration.newton.useModifiedNewton = modified_newton  # reuse Jacobian: faster, same result
     s.timeIntegration.verboseMode = 1 if verbose else 0
+    s.staticSolver.verboseMode = 1 if verbose else 0
     # tighter than the default 1e-8 stagnates near 4e-9 (round-off with K ~ 1e11) and makes the
     # solver cut the step size to 6e-5 s for the rest of the run
     s.timeIntegration.newton.relativeTolerance = 1e-8
     s.solution.file.write = False
     s.solution.sensors.writePeriod = 0.5 * step  # record every step; resampled below
     s.show.statistics = verbose
-    mbs.SolveDynamic(s)
+    return s
 
-    data = [mbs.GetSensorStoredData(k) for k in sensors]
+
+def _every_sample(data, seconds, step, columns):
+    """Rows of a sensor's stored data at every SAMPLE from t = 0 (the step divides it)."""
     t_out = np.arange(int(round(seconds / SAMPLE)) + 1) * SAMPLE
-    out = np.empty((len(t_out), 4))
-    for j, d in enumerate(data):
-        # sensors are written at the step times; pick the rows at every SAMPLE (step divides it)
-        idx = np.searchsorted(d[:, 0], t_out - 0.25 * step)
-        if idx.max() >= len(d) or np.abs(d[idx, 0] - t_out).max() > 1e-9:
-            raise RuntimeError("sensor times do not hit every ms (step must divide 1 ms)")
-        out[:, 2 * j] = d[idx, 1]
-        out[:, 2 * j + 1] = d[idx, 3]
-    return t_out, out
+    idx = np.searchsorted(data[:, 0], t_out - 0.25 * step)
+    if idx.max() >= len(data) or np.abs(data[idx, 0] - t_out).max() > 1e-9:
+        raise RuntimeError("sensor times do not hit every ms (step must divide 1 ms)")
+    return t_out, data[idx][:, columns]
+
+
+def double_pendulum(deck_text: str, workdir, pivot_deg=45.0, seconds=12.0, step=1e-3, modes=12,
+                    damping_beta=1e-3, spectral_radius=0.9, modified_newton=True, verbose=False, matrices=None):
+    """(t, positions): t every 1 ms from 0, positions (n, 4) = elbow x, z, tip x, z (world).
+
+    Both links start straight in line, local x rotated by rotation_y(pivot_deg), at rest; gravity -z."""
+    import exudyn as exu
+    import exudyn.itemInterface as ei
+
+    link = _FlexibleLink(deck_text, workdir, modes, matrices)
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    A = rotation_y(pivot_deg)
+    bodies = []
+    origin = np.zeros(3) - A @ link.base_c  # place body 1's base face centre at the world origin
+    for k in range(2):
+        bodies.append(link.add(mbs, origin, A, damping_beta, f"link{k + 1}"))
+        origin = origin + A @ (link.tip_c - link.base_c)
+
+    ground = mbs.AddObject(ei.ObjectGround())
+    # revolute about world y: the ground marker frame is turned like the body's initial frame so
+    # the joint starts with zero relative rotation (Ry leaves y unchanged); rotationMarker0 of
+    # GenericJoint does the same but is deprecated in this Exudyn in favour of the marker's localHT
+    m_ground = mbs.AddMarker(ei.MarkerBodyRigid(bodyNumber=ground, localHT=exu.HT(rotation=A, translation=[0, 0, 0])))
+    m_base1, m_tip1 = link.face_marker(mbs, bodies[0], link.base), link.face_marker(mbs, bodies[0], link.tip)
+    m_base2 = link.face_marker(mbs, bodies[1], link.base)
+    mbs.AddObject(ei.GenericJoint(markerNumbers=[m_ground, m_base1], constrainedAxes=[1, 1, 1, 1, 0, 1]))
+    mbs.AddObject(ei.GenericJoint(markerNumbers=[m_tip1, m_base2], constrainedAxes=[1, 1, 1, 1, 0, 1]))
+    sensors = [link.tip_sensor(mbs, b) for b in bodies]
+    mbs.Assemble()
+    mbs.SolveDynamic(_settings(seconds, step, spectral_radius, modified_newton, verbose))
+
+    columns = []
+    for k in sensors:
+        t_out, xz = _every_sample(mbs.GetSensorStoredData(k), seconds, step, [1, 3])
+        columns.append(xz)
+    return t_out, np.hstack(columns)
+
+
+def slider_crank(deck_text: str, workdir, pin, seconds=6.0, step=1e-3, modes=12, damping_beta=1e-3,
+                 spectral_radius=0.9, modified_newton=True, verbose=False, matrices=None):
+    """(t, rows): t every 1 ms from 0, rows (n, 3) = the rod's tip x, z and the slider's load
+    on the rod along z (world).
+
+    The link is the connecting rod: its BASE face's centre is forced to the crank pin's position
+    `pin(t)` (a 3-vector, world; the crank's law is the scene's, given) with the rotations
+    about x and z held and the one about y free (a revolute joint about y on the pin); its TIP
+    face's centre is held on the world x axis (y = z = 0; a frictionless slider). The rod starts
+    along +x from pin(0), in static equilibrium (Exudyn's static solve under gravity at t = 0),
+    and the dynamic run starts from there."""
+    import exudyn as exu
+    import exudyn.itemInterface as ei
+
+    link = _FlexibleLink(deck_text, workdir, modes, matrices)
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    start = np.asarray(pin(0.0), dtype=float)
+    rod = link.add(mbs, start - link.base_c, np.eye(3), damping_beta, "rod")
+    ground = mbs.AddObject(ei.ObjectGround())
+    m_ground = mbs.AddMarker(ei.MarkerBodyRigid(bodyNumber=ground, localPosition=[0.0, 0.0, 0.0]))
+    m_base, m_tip = link.face_marker(mbs, rod, link.base), link.face_marker(mbs, rod, link.tip)
+
+    # Exudyn's static solver runs its load steps in a pseudo-time from 0 to 1, which the user
+    # function would read as the crank's time: it sees t = 0 until the dynamic run starts
+    clock = {"static": True}
+
+    def pin_offset(mbs_, t, item, parameters):
+        return [*np.asarray(pin(0.0 if clock["static"] else t), dtype=float), 0.0, 0.0, 0.0]
+
+    mbs.AddObject(ei.GenericJoint(markerNumbers=[m_ground, m_base], constrainedAxes=[1, 1, 1, 1, 0, 1],
+                                  offsetUserFunction=pin_offset))
+    slider = mbs.AddObject(ei.GenericJoint(markerNumbers=[m_ground, m_tip], constrainedAxes=[0, 1, 1, 0, 0, 0]))
+    tip = link.tip_sensor(mbs, rod)
+    # the joint's force in the joint frame (marker 0's, here the world's axes); its sign is the
+    # force on marker 0, the ground: at the static start it reads -m g / 2 under the rod's weight
+    load = mbs.AddSensor(ei.SensorObject(objectNumber=slider, outputVariableType=exu.OutputVariableType.ForceLocal,
+                                         storeInternal=True, writeToFile=False))
+    mbs.Assemble()
+    s = _settings(seconds, step, spectral_radius, modified_newton, verbose)
+    mbs.SolveStatic(s)
+    clock["static"] = False
+    mbs.systemData.SetODE2Coordinates(mbs.systemData.GetODE2Coordinates(), configuration=exu.ConfigurationType.Initial)
+    mbs.SolveDynamic(s)
+    t_out, xz = _every_sample(mbs.GetSensorStoredData(tip), seconds, step, [1, 3])
+    _, fz = _every_sample(mbs.GetSensorStoredData(load), seconds, step, [3])
+    return t_out, np.hstack([xz, -fz])
