@@ -11,6 +11,7 @@ pub mod fmu;
 pub mod format;
 pub mod interface;
 pub mod kinematics;
+pub mod matmul;
 pub mod propagator;
 pub mod reduced;
 pub mod scalar;
