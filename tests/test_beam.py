@@ -149,20 +149,24 @@ def test_cosimulation_settles_on_the_full_fe_static_solution(beam):
 
 def test_timings_profile_every_phase_of_the_build(tmp_path):
     """`--timings` prints the build's phases in the order they ran, nested phases indented, each
-    with a wall time and a peak resident memory: the profile users size machines by and the
-    benchmarks read. (No time is asserted: speed is measured in the benchmarks.)"""
+    with a wall time, a peak resident memory, the process's CPU time and its ratio to the wall
+    time (the cores the phase kept busy): the profile users size machines by and the benchmarks
+    read. (No time is asserted: speed is measured in the benchmarks.)"""
     spec = json.loads((EXAMPLES / "beam.json").read_text())
     spec["geometry"]["boxes"][0]["elements"] = [20, 2, 2]
     path = tmp_path / "beam.json"
     path.write_text(json.dumps(spec))
     proc = run_builder([path, "-o", tmp_path / "Beam.fmu", "--timings", "-q"])
     lines = proc.stdout.splitlines()
-    assert lines[0].split() == ["phase", "wall", "[s]", "peak", "[MiB]", "detail"], proc.stdout
+    assert lines[0].split() == ["phase", "wall", "[s]", "peak", "[MiB]", "cpu", "[s]", "cpu/wall", "detail"], proc.stdout
     rows = []
     for line in lines[1:]:
-        m = re.match(r"^( *)(\S.*?)\s+(\d+\.\d{3})\s+(\d+)\s*(.*)$", line)
+        m = re.match(r"^( *)(\S.*?)\s+(\d+\.\d{3})\s+(\d+)\s+(\d+\.\d{3})\s+(\d+\.\d{2}|-)\s*(.*)$", line)
         assert m, line
-        rows.append((len(m.group(1)) // 2, m.group(2), float(m.group(3)), float(m.group(4)), m.group(5)))
+        rows.append((len(m.group(1)) // 2, m.group(2), float(m.group(3)), float(m.group(4)), m.group(7),
+                     float(m.group(5)), m.group(6)))
+    # a ratio wherever the phase lasted 10 ms or more (shorter ones are below the CPU clock's tick)
+    assert all((r[6] == "-") == (r[2] < 0.01) for r in rows), rows
     names = [r[1] for r in rows]
     for expected in ["read and check the input", "mesh or import", "assembly (free-free K, M)",
                      "coupling of the flanges", "ordering: the stiffness of the mounted body",

@@ -1,6 +1,7 @@
 //! Where a build spends its time and memory: a profile of its phases (import, assembly, coupling,
 //! factorisations, eigen-solves, shapes, invariants, accuracy comparison, packaging), each with
-//! wall time and peak resident memory, for `fmu-builder --timings` and the benchmarks. A user
+//! wall time, peak resident memory and CPU time (so the serial phases show), for
+//! `fmu-builder --timings` and the benchmarks. A user
 //! sizing a machine for a large model, and whoever makes the builder faster, reads it.
 //!
 //! The stages emit their phases as `tracing` spans (the `phases` crate); a [`Profile`] is a
@@ -47,6 +48,10 @@ pub struct Phase {
     pub seconds: f64,
     /// Peak resident memory while the phase ran [MiB]; None where the system does not tell.
     pub peak_mib: Option<f64>,
+    /// CPU time of the whole process while the phase ran, every thread's, user and system [s];
+    /// None where the system does not tell. Over `seconds`: the cores the phase kept busy (1.0
+    /// for a serial phase, 2.0 for one that uses both cores of a 2-core machine throughout).
+    pub cpu_seconds: Option<f64>,
     /// Counts of the phase (sizes, iterations, solves), in words.
     pub detail: String,
 }
@@ -55,6 +60,7 @@ struct Open {
     span: Id,
     index: usize,
     start: Instant,
+    start_cpu: Option<f64>,
     /// Peak seen so far in this phase, up to the last phase boundary [KiB].
     peak_kib: Option<u64>,
 }
@@ -127,6 +133,17 @@ impl Drop for Profile {
     fn drop(&mut self) {
         self.window.ended.store(true, Ordering::Relaxed);
     }
+}
+
+/// CPU time this process has used so far, all its threads, user and system [s] (getrusage).
+pub fn process_cpu_seconds() -> Option<f64> {
+    // SAFETY: getrusage writes into the zeroed struct it is given
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut usage) } != 0 {
+        return None;
+    }
+    let seconds = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    Some(seconds(usage.ru_utime) + seconds(usage.ru_stime))
 }
 
 /// Peak resident set of this process [KiB] (Linux: VmHWM).
@@ -204,8 +221,21 @@ impl<S: Subscriber + for<'a> LookupSpan<'a>> Layer<S> for ProfileLayer {
         }
         let (index, depth) = (r.finished.len(), r.open.len());
         // placed now so that phases list in the order they started
-        r.finished.push(Phase { name: name.0, depth, seconds: 0.0, peak_mib: None, detail: String::new() });
-        r.open.push(Open { span: id.clone(), index, start: Instant::now(), peak_kib: None });
+        r.finished.push(Phase {
+            name: name.0,
+            depth,
+            seconds: 0.0,
+            peak_mib: None,
+            cpu_seconds: None,
+            detail: String::new(),
+        });
+        r.open.push(Open {
+            span: id.clone(),
+            index,
+            start: Instant::now(),
+            start_cpu: process_cpu_seconds(),
+            peak_kib: None,
+        });
     }
 
     fn on_close(&self, id: Id, _ctx: Context<'_, S>) {
@@ -219,6 +249,7 @@ impl<S: Subscriber + for<'a> LookupSpan<'a>> Layer<S> for ProfileLayer {
         let phase = &mut r.finished[open.index];
         phase.seconds = open.start.elapsed().as_secs_f64();
         phase.peak_mib = peak.map(|k| k as f64 / 1024.0);
+        phase.cpu_seconds = process_cpu_seconds().zip(open.start_cpu).map(|(end, start)| (end - start).max(0.0));
     }
 
     fn on_event(&self, event: &Event<'_>, _ctx: Context<'_, S>) {
@@ -237,13 +268,22 @@ impl<S: Subscriber + for<'a> LookupSpan<'a>> Layer<S> for ProfileLayer {
     }
 }
 
-/// The profile as a table for the terminal: nested phases indented under their parent.
+/// The profile as a table for the terminal: nested phases indented under their parent. The
+/// cpu/wall column is the cores a phase kept busy: a phase near 1.0 on a machine of several
+/// cores is serial.
 pub fn table(phases: &[Phase]) -> String {
-    let mut out = format!("{:<62} {:>8}  {:>10}  detail\n", "phase", "wall [s]", "peak [MiB]");
+    let mut out = format!(
+        "{:<62} {:>8}  {:>10}  {:>8}  {:>8}  detail\n",
+        "phase", "wall [s]", "peak [MiB]", "cpu [s]", "cpu/wall"
+    );
     for p in phases {
         let name = format!("{}{}", "  ".repeat(p.depth), p.name);
         let peak = p.peak_mib.map_or("-".to_string(), |m| format!("{m:.0}"));
-        out.push_str(&format!("{name:<62} {:>8.3}  {peak:>10}  {}\n", p.seconds, p.detail));
+        let cpu = p.cpu_seconds.map_or("-".to_string(), |c| format!("{c:.3}"));
+        // a phase too short for the clock's resolution (getrusage counts in ticks) has no ratio
+        let ratio =
+            p.cpu_seconds.filter(|_| p.seconds >= 0.01).map_or("-".to_string(), |c| format!("{:.2}", c / p.seconds));
+        out.push_str(&format!("{name:<62} {:>8.3}  {peak:>10}  {cpu:>8}  {ratio:>8}  {}\n", p.seconds, p.detail));
     }
     out
 }

@@ -528,7 +528,8 @@ mod tests {
             }
             c_d[i * n + i] = 0.0;
         }
-        let cases = [(1e-3, 0.0, 0.0, 1e-12), (1e-3, 1.0, 1e-3, 1e-12), (2e-2, 0.5, 1e-5, 1e-12), (0.5, 0.0, 1e-4, 1e-10)];
+        let cases =
+            [(1e-3, 0.0, 0.0, 1e-12), (1e-3, 1.0, 1e-3, 1e-12), (2e-2, 0.5, 1e-5, 1e-12), (0.5, 0.0, 1e-4, 1e-10)];
         for &(h, alpha, beta, tolerance) in &cases {
             let damping: Vec<f64> = omega.iter().map(|w| alpha + beta * w * w).collect();
             let mut p = CoupledPropagator::with_modes(n);
@@ -538,13 +539,17 @@ mod tests {
             assert_eq!(p.top.len(), reference.len());
             let (m, w) = (2 * n, 4 * n);
             for (block, cols) in [("P", 0..m), ("G1", m..m + n), ("G2", m + n..w)] {
-                let largest = (0..m).flat_map(|r| cols.clone().map(move |c| (r, c)))
-                    .map(|(r, c)| reference[r * w + c].abs()).fold(0.0, f64::max);
+                let largest = (0..m)
+                    .flat_map(|r| cols.clone().map(move |c| (r, c)))
+                    .map(|(r, c)| reference[r * w + c].abs())
+                    .fold(0.0, f64::max);
                 for r in 0..m {
                     for c in cols.clone() {
                         let (ours, theirs) = (p.top[r * w + c], reference[r * w + c]);
-                        assert!((ours - theirs).abs() <= tolerance * largest,
-                            "h {h}, beta {beta}: {block}[{r},{c}] {ours} vs {theirs} (largest {largest})");
+                        assert!(
+                            (ours - theirs).abs() <= tolerance * largest,
+                            "h {h}, beta {beta}: {block}[{r},{c}] {ours} vs {theirs} (largest {largest})"
+                        );
                     }
                 }
             }
@@ -603,4 +608,3 @@ mod tests {
         assert_eq!((refused.needed, refused.available, q, qd), (12, 5, [1.0; 3], [2.0; 3]));
     }
 }
-
