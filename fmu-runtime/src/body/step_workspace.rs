@@ -103,9 +103,7 @@ impl JumpWork {
 /// step's end and their midpoint, and the coupled propagator's scratch.
 #[derive(Debug, Clone, Default)]
 pub(super) struct CoupledWork {
-    /// The substep's start state and the predictor-corrector's loads (n each).
-    pub(super) q0: Vec<f64>,
-    pub(super) qd0: Vec<f64>,
+    /// The predictor-corrector's loads (n each).
     pub(super) f0: Vec<f64>,
     pub(super) f1: Vec<f64>,
     /// The coupling at the step's midpoint (ramped inputs, n x n each) and a zero load rate
@@ -123,8 +121,6 @@ pub(super) struct CoupledWork {
 impl CoupledWork {
     fn new(n: usize, flanges: usize, couples: bool) -> Self {
         Self {
-            q0: vec![0.0; n],
-            qd0: vec![0.0; n],
             f0: vec![0.0; n],
             f1: vec![0.0; n],
             c_d_mid: vec![0.0; n * n],
