@@ -28,7 +28,6 @@ import argparse
 import os
 import re
 import sys
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -109,11 +108,10 @@ def main(argv=None) -> int:
 
     walls, profiles = [], []
     for t in counts:
-        start = time.perf_counter()
         wall, phases = run_at(t, spec, inp.parent, builder)
         walls.append(wall)
         profiles.append({p.path: p for p in phases})
-        print(f"  {t} thread(s): {wall:.1f} s ({time.perf_counter() - start:.1f} s with the process)", flush=True)
+        print(f"  {t} thread(s): {wall:.1f} s", flush=True)
 
     base = profiles[0]
     head = ["phase", *[f"{t}t [s]" for t in counts], *[f"x{t}t" for t in counts[1:]],

@@ -14,8 +14,9 @@
 //! many periods of the stiffest mode. The load enters through the phi functions, the top rows of
 //! the exponential of the block matrix [[A h, E h, 0], [0, 0, I h], [0, 0, 0]] (E = [0; I]):
 //! exp(A h), h phi1(A h) E and h^2 phi2(A h) E (Van Loan; Al-Mohy and Higham). Its structure is
-//! used throughout: Taylor series of phi2 on the scaled A, then squaring of the blocks, all in
-//! 2n x 2n and 2n x n products (a quarter of the full block matrix's work).
+//! used throughout: the Taylor series of phi2 on the scaled A (Paterson and Stockmeyer), then
+//! squaring of the blocks, all in 2n x 2n products (a quarter of the full block matrix's work),
+//! in the blocked kernel of [`crate::matmul`].
 //!
 //! The propagator holds only its state, the transition and the coupling it was made for
 //! (allocated at construction). The scratch of `prepare` (the exponential) and `advance` is a
