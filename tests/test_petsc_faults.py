@@ -66,9 +66,19 @@ def job_of(jobs):
     return folders[0] if folders and (folders[0] / "job.json").exists() else None
 
 
+def parent_pid(pid):
+    try:
+        return int(Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()[1])
+    except (OSError, IndexError, ValueError):
+        return None
+
+
 def rank_pids(folder):
-    """The driver's rank processes (python ... driver.py), by rank."""
-    ranks = {}
+    """The driver's rank processes (python ... driver.py), by rank. Each rank forks its
+    heartbeat watcher before MPI starts, and until the fork execs its own Python it has the
+    rank's command line and environment: a process whose parent is itself a rank is such a
+    fork, never the rank (CI once killed one in place of rank 1, and the build finished)."""
+    with_rank = {}
     for pid in processes_mentioning(str(folder / "driver.py")):
         try:
             environ = Path(f"/proc/{pid}/environ").read_bytes().split(b"\0")
@@ -76,8 +86,8 @@ def rank_pids(folder):
             continue
         for v in environ:
             if v.startswith(b"OMPI_COMM_WORLD_RANK="):
-                ranks[int(v.split(b"=")[1])] = pid
-    return ranks
+                with_rank[pid] = int(v.split(b"=")[1])
+    return {rank: pid for pid, rank in with_rank.items() if parent_pid(pid) not in with_rank}
 
 
 def assert_nothing_left(folder, within=10.0):
