@@ -26,6 +26,7 @@ pub mod dot2;
 pub mod eigen;
 pub mod error;
 pub mod faer_error;
+pub mod first_touch;
 pub mod held;
 pub mod ordering;
 pub mod sparse;

@@ -3,6 +3,7 @@
 use super::{Sparse, SpdSolve};
 use crate::error::{LinalgError, Result};
 use crate::faer_error;
+use crate::first_touch;
 use crate::ordering;
 use crate::symmetric_product;
 use crate::tree_solve::TreeSolve;
@@ -109,14 +110,10 @@ impl<'m> SpdSolver<'m> {
                     entries as f64 * FACTOR_BYTES_PER_ENTRY / (1u64 << 20) as f64,
                 )
             });
-            // the factor's pages touched first by every thread at once: the first touch of a page
-            // is slow on this (virtual) machine, 1.27 GB took 3 s from one thread, and faer's
+            // the factor's pages touched first by every thread at once (`first_touch`): faer's
             // factorisation touches them one supernode at a time (factorisation with the touch
             // 5.7-7.3 s -> 4.0-4.4 s, the 249k-DoF bracket)
-            {
-                use rayon::prelude::*;
-                values.par_chunks_mut(1 << 18).for_each(|c| c.fill(0.0));
-            }
+            first_touch::touch_zeroed(&mut values);
             let mut scratch =
                 MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()))
                     .map_err(|_| LltError::Generic(faer::sparse::FaerError::OutOfMemory))?;
