@@ -2,10 +2,11 @@
 given), side by side in one run, from the builder's own phase profile (`--timings`).
 
 The mesh and spec are builder_vs_calculix.py's: the example bracket meshed by Gmsh at about
-2.4e5 DoF (cached in the work directory), Craig-Bampton with 20 modes. The builder runs `--repeats`
-times per thread count (RAYON_NUM_THREADS and OMP_NUM_THREADS), the counts interleaved, each a
-child process, and each phase keeps its fastest run. Printed per phase: that wall time at each count, the speed-up from the first count to each other, and the process's
-CPU time over the wall time at each count (the cores the phase kept busy: 1.0 is a serial phase,
+2.4e5 DoF (cached in the work directory), Craig-Bampton with 20 modes. The builder runs
+`--repeats` times per thread count (RAYON_NUM_THREADS and OMP_NUM_THREADS), the counts
+interleaved, each a child process, and each phase keeps its fastest run. Printed per phase: that
+wall time at each count, the speed-up from the first count to each other, and the process's CPU
+time over the wall time at each count (the cores the phase kept busy: 1.0 is a serial phase,
 whatever the thread count).
 
 Target, PASS or MISS, exit code 1 on a miss: every phase that takes at least 1 s at the first
