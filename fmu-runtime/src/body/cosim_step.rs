@@ -22,23 +22,22 @@ const REFERENCE_DRIFT: f64 = 3e-2;
 
 /// |dC| = |C_d - R_d| + |(C_k - R_k) Omega^-1| (largest row sums): the norm of the difference in
 /// the transition's own state [Omega q; q'], a rate in 1/s. A stiffness change of a mode at
-/// omega shifts its frequency by dC_k / (2 omega), hence the division.
-fn coupling_drift(c: &Coupling<f64>, reference: (&[f64], &[f64]), omega: &[f64]) -> f64 {
-    drift_between((&c.c_d, &c.c_k), reference, omega)
+/// omega shifts its frequency by dC_k / (2 omega), hence the scaling by `inv_omega` = 1 / omega.
+fn coupling_drift(c: &Coupling<f64>, reference: (&[f64], &[f64]), inv_omega: &[f64]) -> f64 {
+    drift_between((&c.c_d, &c.c_k), reference, inv_omega)
 }
 
-/// |dC| of [`coupling_drift`] between two couplings (C_d, C_k), row-major n x n each.
-fn drift_between(c: (&[f64], &[f64]), reference: (&[f64], &[f64]), omega: &[f64]) -> f64 {
-    let n = omega.len();
+/// |dC| of [`coupling_drift`] between two couplings (C_d, C_k), row-major n x n each. Every
+/// spin-up step runs it over 2 n^2 entries: four partial sums per row keep the additions
+/// independent (a single running sum waits on each addition), and the scaling is a product.
+fn drift_between(c: (&[f64], &[f64]), reference: (&[f64], &[f64]), inv_omega: &[f64]) -> f64 {
+    let n = inv_omega.len();
     let mut worst = 0.0f64;
     for i in 0..n {
         let r = i * n..(i + 1) * n;
         let (cd, ck, rd, rk) = (&c.0[r.clone()], &c.1[r.clone()], &reference.0[r.clone()], &reference.1[r]);
-        let mut sum = 0.0;
-        for j in 0..n {
-            sum += (cd[j] - rd[j]).abs() + (ck[j] - rk[j]).abs() / omega[j];
-        }
-        worst = worst.max(sum);
+        let row = four_sums(n, |j| (cd[j] - rd[j]).abs() + (ck[j] - rk[j]).abs() * inv_omega[j]);
+        worst = worst.max(row);
     }
     worst
 }
@@ -48,11 +47,23 @@ fn residual_coupling_force(c: &Coupling<f64>, reference: (&[f64], &[f64]), i: us
     let n = q.len();
     let r = i * n..(i + 1) * n;
     let (cd, ck, rd, rk) = (&c.c_d[r.clone()], &c.c_k[r.clone()], &reference.0[r.clone()], &reference.1[r]);
-    let mut s = 0.0;
-    for j in 0..n {
-        s += (cd[j] - rd[j]) * qd[j] + (ck[j] - rk[j]) * q[j];
+    four_sums(n, |j| (cd[j] - rd[j]) * qd[j] + (ck[j] - rk[j]) * q[j])
+}
+
+/// The sum of term(j) for j < n in four interleaved partial sums (j mod 4), added pairwise.
+#[inline(always)]
+fn four_sums(n: usize, term: impl Fn(usize) -> f64) -> f64 {
+    let mut s = [0.0f64; 4];
+    let full = n - n % 4;
+    for j in (0..full).step_by(4) {
+        for (k, sk) in s.iter_mut().enumerate() {
+            *sk += term(j + k);
+        }
     }
-    s
+    for j in full..n {
+        s[j - full] += term(j);
+    }
+    (s[0] + s[1]) + (s[2] + s[3])
 }
 
 /// Largest rotation of a free body within one of its substeps (rad): the Heun splitting's error
@@ -357,8 +368,9 @@ impl FlexibleBody {
         // a steady spin meets its own transition again: compared first, cheaper than the drift
         let held_exactly =
             !moving && prepared && self.coupled.reference() == (&self.coupling.c_d[..], &self.coupling.c_k[..]);
+        let inv_omega = &work.inv_omega;
         let drift_ok =
-            |c: &Coupling<f64>| h * coupling_drift(c, self.coupled.reference(), &self.body.omega) <= REFERENCE_DRIFT;
+            |c: &Coupling<f64>| h * coupling_drift(c, self.coupled.reference(), inv_omega) <= REFERENCE_DRIFT;
         let current = held_exactly || prepared && drift_ok(&self.coupling) && (!moving || drift_ok(&work.coupling_end));
         let renewed_for_this_step = !current && self.renew_reference(work, moving, prepared, h)?;
         let rate: &[f64] = if ramp { &self.load_rate } else { &work.zeros };
@@ -413,7 +425,7 @@ impl FlexibleBody {
         }
         let old = self.coupled.reference();
         let steady = prepared
-            && h * drift_between((&work.c_d_mid, &work.c_k_mid), old, &self.body.omega) <= 2.0 * REFERENCE_DRIFT;
+            && h * drift_between((&work.c_d_mid, &work.c_k_mid), old, &work.inv_omega) <= 2.0 * REFERENCE_DRIFT;
         if steady {
             for (m, o) in work.c_d_mid.iter_mut().zip(old.0) {
                 *m += 0.5 * (*m - o);
