@@ -349,7 +349,7 @@ fn damaged_and_foreign_states_are_refused_with_a_reason() {
         assert!(edited(8, &7u32.to_le_bytes()).contains("written by a newer runtime"));
         assert!(edited(0, b"FLEXBODY").contains("not a serialized FMU state"));
         assert!(edited(20, &[0]).contains("ModelExchange instance"));
-        assert!(edited(section, &4u32.to_le_bytes()).contains("body state version 4 was written by a newer runtime"));
+        assert!(edited(section, &5u32.to_le_bytes()).contains("body state version 5 was written by a newer runtime"));
         assert!(edited(section + 4, &3u32.to_le_bytes()).contains("body with 3 modes"));
         assert!(edited(section + 12, &[2]).contains("free-floating flag is 2, not a boolean"));
         assert!(edited(section + 13, &[5]).contains("static_start is 5, not a boolean"));

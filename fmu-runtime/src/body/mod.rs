@@ -19,6 +19,7 @@
 //! products and the small in-place solver); `error` why the equations fail, by failure class.
 
 mod cosim_step;
+mod coupling_bound;
 pub use cosim_step::SUBSTEP_ANGLE;
 mod dense;
 mod error;
@@ -37,6 +38,8 @@ use crate::kinematics::{self as k3, Mat3, Vec3};
 use crate::propagator::ModalPropagator;
 use crate::reduced::ReducedBody;
 use crate::scalar::{Dual, Scalar, c};
+use coupling_bound::TermNorms;
+pub(crate) use coupling_bound::term_count;
 use dense::shape_dot;
 use input_jump::SteppedInputs;
 use quasi_static::QuasiStaticWork;
@@ -201,6 +204,9 @@ pub struct CouplingReference {
     pub beta: f64,
     pub c_d: Vec<f64>,
     pub c_k: Vec<f64>,
+    /// The coefficients the reference coupling combines its matrices with (the drift test's
+    /// reference); None in states written before they were kept: the next step renews it.
+    pub coef: Option<Vec<f64>>,
 }
 
 /// Terms that couple the modes, for the present inputs: q'' = ... - C_d q' - C_k q.
@@ -214,6 +220,8 @@ struct Coupling<T> {
     w: Vec3<T>,
     z: Vec3<T>,
     a: Vec3<T>,
+    /// The coefficients c_d and c_k combine the body's matrices with (see `coupling_bound`).
+    coef: Vec<T>,
 }
 
 /// The body's equations over the scalar `T`: `f64` for the model, [`Dual`] for the exact
@@ -242,6 +250,12 @@ pub struct FlexibleBody<T = f64> {
     propagator: ModalPropagator,
     /// Exact transition of the coupled modes (mounted bodies with rotation or stiffening terms).
     coupled: CoupledPropagator,
+    /// The coefficients of the coupling `coupled` was made for, where known (see
+    /// `coupling_bound`; every renewal sets them), and the norms of the matrices they multiply,
+    /// computed once per reduced body and shared by its copies.
+    reference_coef: Vec<f64>,
+    reference_coef_known: bool,
+    term_norms: Arc<TermNorms>,
     /// A warning of the last step for the host's log.
     warning: Option<&'static str>,
     /// First derivatives of the inputs for the next step (fmi2SetRealInputDerivatives), and
@@ -303,6 +317,13 @@ pub const UNSTABLE_STIFFNESS: &str = "the effective stiffness of the body (elast
 
 impl FlexibleBody {
     pub fn new(body: Arc<ReducedBody>) -> Self {
+        let norms = Arc::new(TermNorms::of(&body));
+        Self::with_term_norms(body, norms)
+    }
+
+    /// A body at rest whose coupling-term norms are known (a copy of a body of the same
+    /// reduced body shares them instead of computing them again).
+    fn with_term_norms(body: Arc<ReducedBody>, term_norms: Arc<TermNorms>) -> Self {
         let n = body.n_modes();
         let nf = body.flanges.len();
         let params = Parameters { g: [0.0; 3], alpha: body.alpha, beta: body.beta };
@@ -323,7 +344,12 @@ impl FlexibleBody {
                 generation: 0,
                 stresses: vec![([0.0; 7], 0); body.stress_points.len()],
             },
-            coupling: Coupling { c_d: vec![0.0; n * n], c_k: vec![0.0; n * n], ..Coupling::default() },
+            coupling: Coupling {
+                c_d: vec![0.0; n * n],
+                c_k: vec![0.0; n * n],
+                coef: vec![0.0; term_count(nf)],
+                ..Coupling::default()
+            },
             rot: k3::IDENTITY,
             frame: body.free_floating.then(FrameState::default),
             initial_frame: InitialFrame::default(),
@@ -335,6 +361,9 @@ impl FlexibleBody {
             } else {
                 CoupledPropagator::with_modes(n)
             },
+            reference_coef: vec![0.0; term_count(nf)],
+            reference_coef_known: false,
+            term_norms,
             warning: None,
             rates: InputRates {
                 mount: MountMotion { rot: [0.0; 9], ..MountMotion::default() },
@@ -378,7 +407,12 @@ impl FlexibleBody {
                 generation: 0,
                 stresses: vec![([Dual::default(); 7], 0); self.eval.stresses.len()],
             },
-            coupling: Coupling { c_d: zeros(n * n), c_k: zeros(n * n), ..Coupling::default() },
+            coupling: Coupling {
+                c_d: zeros(n * n),
+                c_k: zeros(n * n),
+                coef: zeros(term_count(self.loads.len())),
+                ..Coupling::default()
+            },
             rot: k3::IDENTITY.map(Dual::from),
             frame: self.frame.map(|f| f.map(Dual::from)),
             initial_frame: self.initial_frame,
@@ -386,6 +420,9 @@ impl FlexibleBody {
             cr_q: zeros(3 * n),
             propagator: ModalPropagator::with_modes(0),
             coupled: CoupledPropagator::default(),
+            reference_coef: Vec::new(),
+            reference_coef_known: false,
+            term_norms: Arc::clone(&self.term_norms),
             warning: None,
             rates: self.rates.clone(),
             load_rate: Vec::new(),
@@ -418,7 +455,8 @@ impl FlexibleBody {
             rates: self.rates.clone(),
             coupling_reference: self.coupled.key().map(|(h, alpha, beta)| {
                 let (c_d, c_k) = self.coupled.reference();
-                CouplingReference { h, alpha, beta, c_d: c_d.to_vec(), c_k: c_k.to_vec() }
+                let coef = self.reference_coef_known.then(|| self.reference_coef.clone());
+                CouplingReference { h, alpha, beta, c_d: c_d.to_vec(), c_k: c_k.to_vec(), coef }
             }),
             stepped_inputs: self.stepped_inputs(),
         }
@@ -437,7 +475,7 @@ impl FlexibleBody {
         if state.frame.is_some() != self.frame.is_some() {
             return Err(StateMismatch::Kind { free: state.frame.is_some(), body_free: self.frame.is_some() }.into());
         }
-        let mut b = FlexibleBody::new(Arc::clone(&self.body));
+        let mut b = FlexibleBody::with_term_norms(Arc::clone(&self.body), Arc::clone(&self.term_norms));
         b.quasi_static = self.quasi_static;
         b.mount = state.mount;
         b.loads = state.loads;
@@ -462,6 +500,12 @@ impl FlexibleBody {
             let body = Arc::clone(&b.body);
             let ws = &mut b.step_work.coupled.propagator;
             b.coupled.prepare(&body.omega, r.alpha, r.beta, &body.modal_damping, &r.c_d, &r.c_k, r.h, ws)?;
+            // coefficients of another length or not finite: unknown, and the next step renews
+            if let Some(coef) = r.coef.filter(|c| c.len() == b.reference_coef.len() && c.iter().all(|v| v.is_finite()))
+            {
+                b.reference_coef.copy_from_slice(&coef);
+                b.reference_coef_known = true;
+            }
         }
         Ok(b)
     }

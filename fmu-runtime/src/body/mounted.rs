@@ -211,6 +211,11 @@ pub(super) fn fill_coupling<T: Scalar>(
             }
         }
     }
+    let wrenches = loads.iter().map(|l| {
+        let (f, t) = (k3::mul_t(a, l.f), k3::mul_t(a, l.t));
+        [f[0], f[1], f[2], t[0], t[1], t[2]]
+    });
+    super::coupling_bound::coefficients(c.w, c.z, c.a, wrenches, &mut c.coef);
     c.active = active;
     c.valid = true;
 }

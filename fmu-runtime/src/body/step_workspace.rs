@@ -5,9 +5,10 @@
 //! that need it, so their signatures say that a step allocates nothing.
 //!
 //! Scratch, not state: every step writes what it reads here before reading it (the zero load
-//! rate and the reciprocal frequencies excepted, which nothing writes), so a saved FMU state leaves it out and a copy of the body
+//! rate excepted, which nothing writes), so a saved FMU state leaves it out and a copy of the body
 //! (an FMU state restored by cloning) has buffers of its own, whatever they hold.
 
+use super::coupling_bound::term_count;
 use super::{Coupling, FlangeLoad, FrameState, HostMount, MountMotion, Parameters};
 use crate::coupled_propagator::CoupledPropagator;
 use crate::reduced::ReducedBody;
@@ -38,11 +39,7 @@ impl StepWorkspace {
             flanges,
             start: StepStart::new(n, flanges),
             jump: JumpWork::new(n),
-            coupled: if body.free_floating {
-                CoupledWork::default()
-            } else {
-                CoupledWork::new(&body.omega, flanges, couples)
-            },
+            coupled: if body.free_floating { CoupledWork::default() } else { CoupledWork::new(n, flanges, couples) },
             free: if body.free_floating { FreeWork::new(n) } else { FreeWork::default() },
         }
     }
@@ -115,9 +112,8 @@ pub(super) struct CoupledWork {
     pub(super) c_d_mid: Vec<f64>,
     pub(super) c_k_mid: Vec<f64>,
     pub(super) zeros: Vec<f64>,
-    /// 1 / omega_j (n; never written): the drift test's column scaling as a product, not a
-    /// division per entry of an n x n matrix every step.
-    pub(super) inv_omega: Vec<f64>,
+    /// The coefficients of the midpoint coupling (see `coupling_bound`).
+    pub(super) coef_mid: Vec<f64>,
     pub(super) loads_end: Vec<FlangeLoad>,
     pub(super) coupling_end: Coupling<f64>,
     /// The exponential's and the advance's scratch, [`CoupledPropagator::workspace_req`] values
@@ -126,17 +122,21 @@ pub(super) struct CoupledWork {
 }
 
 impl CoupledWork {
-    fn new(omega: &[f64], flanges: usize, couples: bool) -> Self {
-        let n = omega.len();
+    fn new(n: usize, flanges: usize, couples: bool) -> Self {
         Self {
             f0: vec![0.0; n],
             f1: vec![0.0; n],
             c_d_mid: vec![0.0; n * n],
             c_k_mid: vec![0.0; n * n],
             zeros: vec![0.0; n],
-            inv_omega: omega.iter().map(|w| 1.0 / w).collect(),
+            coef_mid: vec![0.0; term_count(flanges)],
             loads_end: vec![FlangeLoad::default(); flanges],
-            coupling_end: Coupling { c_d: vec![0.0; n * n], c_k: vec![0.0; n * n], ..Coupling::default() },
+            coupling_end: Coupling {
+                c_d: vec![0.0; n * n],
+                c_k: vec![0.0; n * n],
+                coef: vec![0.0; term_count(flanges)],
+                ..Coupling::default()
+            },
             propagator: Workspace::new(CoupledPropagator::workspace_req(if couples { n } else { 0 })),
         }
     }

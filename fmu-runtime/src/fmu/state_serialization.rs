@@ -5,7 +5,7 @@ use super::error::VariableError;
 use super::values::{admissible, real_value};
 use crate::body::{
     BodyError, BodyState, CouplingReference, FlangeLoad, FrameState, InitialFrame, InputRates, MountMotion, OutOfRange,
-    Parameters, SteppedState,
+    Parameters, SteppedState, term_count,
 };
 use fmi2::bytes::{DecodeError, Reader, Writer};
 use fmi2::{Causality, VarType};
@@ -19,9 +19,12 @@ use std::fmt;
 /// the next step: flag (u8 0/1), mount rates r[3] R[9] v[3] w[3] a[3] z[3], per force flange
 /// f[3] t[3]; since version 2 the coupled transition's reference: flag (u8), then h, alpha,
 /// beta, C_d[n*n], C_k[n*n]; since version 3 the loads the last step ended with: flag (u8),
-/// then mount a[3] z[3], per force flange f[3] t[3], g[3], alpha, beta.
+/// then mount a[3] z[3], per force flange f[3] t[3], g[3], alpha, beta; since version 4 the
+/// reference's C_k is followed by a flag (u8) and, where set, its coupling coefficients (15 + 6
+/// per force flange: w[3] z[3], w_i w_j for ij = 11 12 13 22 23 33, a_B[3], per force flange
+/// the body-frame f[3] t[3]).
 /// Sizes are checked against the body before any array is read.
-pub const BODY_STATE_VERSION: u32 = 3;
+pub const BODY_STATE_VERSION: u32 = 4;
 
 /// Why well-formed state bytes are refused for this body (the reader's own errors name the
 /// field); carried by [`DecodeError::Invalid`].
@@ -115,6 +118,10 @@ impl BodyFmu {
             w.f64(c.beta);
             w.f64s(&c.c_d);
             w.f64s(&c.c_k);
+            w.bool(c.coef.is_some());
+            if let Some(coef) = &c.coef {
+                w.f64s(coef);
+            }
         }
         w.bool(s.stepped_inputs.is_some());
         if let Some(st) = &s.stepped_inputs {
@@ -187,8 +194,11 @@ fn read_body_state(r: &mut Reader, version: u32, n: usize, nf: usize, free: bool
     let any = r.bool("input rates flag")?;
     let rate_mount = read_mount(r, " rate")?;
     let rate_loads = read_loads(r, nf, "flange force rate", "flange torque rate")?;
-    let coupling_reference =
-        if version >= 2 && r.bool("coupling reference flag")? { Some(read_coupling_reference(r, n)?) } else { None };
+    let coupling_reference = if version >= 2 && r.bool("coupling reference flag")? {
+        Some(read_coupling_reference(r, version, n, nf)?)
+    } else {
+        None
+    };
     let stepped_inputs =
         if version >= 3 && r.bool("stepped inputs flag")? { Some(read_stepped_inputs(r, nf)?) } else { None };
     let rates = InputRates { mount: rate_mount, loads: rate_loads, any };
@@ -252,14 +262,26 @@ fn read_frame_state(r: &mut Reader) -> Result<FrameState, DecodeError> {
     })
 }
 
-fn read_coupling_reference(r: &mut Reader, n: usize) -> Result<CouplingReference, DecodeError> {
+fn read_coupling_reference(
+    r: &mut Reader,
+    version: u32,
+    n: usize,
+    nf: usize,
+) -> Result<CouplingReference, DecodeError> {
     let (h, alpha, beta) =
         (r.f64("coupling reference h")?, r.f64("coupling reference alpha")?, r.f64("coupling reference beta")?);
     let mut c_d = vec![0.0; n * n];
     r.f64s_into(&mut c_d, "coupling reference C_d")?;
     let mut c_k = vec![0.0; n * n];
     r.f64s_into(&mut c_k, "coupling reference C_k")?;
-    Ok(CouplingReference { h, alpha, beta, c_d, c_k })
+    let coef = if version >= 4 && r.bool("coupling reference coefficients flag")? {
+        let mut coef = vec![0.0; term_count(nf)];
+        r.f64s_into(&mut coef, "coupling reference coefficients")?;
+        Some(coef)
+    } else {
+        None
+    };
+    Ok(CouplingReference { h, alpha, beta, c_d, c_k, coef })
 }
 
 fn read_stepped_inputs(r: &mut Reader, nf: usize) -> Result<SteppedState, DecodeError> {
