@@ -18,7 +18,7 @@
 //! spin-up's cost above the steady spinning step (`SPIN_UP_RATIOS`). Absolute
 //! timings are reported against the figures but not checked: machines differ. `--short`
 //! (CI): the 20-mode FMU only, fewer batches, a 0.1 s window for the full model and the hard
-//! cases without the 300-mode build; the same targets.
+//! cases without the 300-mode build; the same targets but the spin-up's.
 
 mod fmi;
 mod hard_cases;
