@@ -15,8 +15,11 @@
 #[path = "../src/fmi.rs"]
 #[allow(dead_code)]
 mod fmi;
+#[path = "../src/rotating_mount.rs"]
+mod rotating_mount;
 
 use fmi2::types::*;
+use rotating_mount::rotating_mount;
 use std::path::Path;
 use std::time::Instant;
 
@@ -25,25 +28,9 @@ const SPIN: f64 = 10.0;
 const SPIN_UP_RATE: f64 = 30.0;
 const STEPS: usize = 1000;
 
-fn rotating_mount(inst: &fmi::Instance) -> Result<(), String> {
-    let (s, c) = 0.3f64.sin_cos();
-    let rot = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]];
-    let mut names = Vec::new();
-    let mut values = Vec::new();
-    for (i, row) in rot.iter().enumerate() {
-        for (j, value) in row.iter().enumerate() {
-            names.push(format!("base.R[{},{}]", i + 1, j + 1));
-            values.push(*value);
-        }
-    }
-    for (i, w) in [0.0, 0.0, SPIN].into_iter().enumerate() {
-        for (what, v) in [("w", w), ("r", 0.0), ("v", 0.0), ("a", 0.0)] {
-            names.push(format!("base.{what}[{}]", i + 1));
-            values.push(v);
-        }
-    }
-    let names: Vec<&str> = names.iter().map(String::as_str).collect();
-    inst.set(&names, &values)?;
+/// The bench's rotating mount at 10 rad/s, the bench's 100 N tip force, initialised.
+fn start(inst: &fmi::Instance) -> Result<(), String> {
+    rotating_mount(inst, SPIN)?;
     inst.set(&["tip.f[3]"], &[100.0])?;
     inst.initialize()
 }
@@ -87,7 +74,7 @@ fn time(fmus: &[fmi::Fmu], paths: [&String; 2], rounds: usize) -> Result<(), Str
     let mut runs = Vec::new();
     for fmu in fmus {
         let inst = fmu.instantiate(fmi2CoSimulation, "spin_up_ab")?;
-        rotating_mount(&inst)?;
+        start(&inst)?;
         for k in 0..50 {
             inst.check("fmi2DoStep", inst.do_step(k as f64 * H, H))?;
         }

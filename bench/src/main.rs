@@ -23,11 +23,13 @@
 mod fmi;
 mod hard_cases;
 mod newmark;
+mod rotating_mount;
 mod stress_outputs;
 
 use clap::Parser;
 use fmi::{Fmu, Instance};
 use fmi2::types::{fmi2CoSimulation, fmi2FMUstate, fmi2ModelExchange, fmi2Status};
+use rotating_mount::rotating_mount;
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -119,34 +121,6 @@ fn measure(repeats: usize, target: Duration, max_n: usize, mut batch: impl FnMut
     Stats { median: samples[samples.len() / 2], min: samples[0], max: samples[samples.len() - 1] }
 }
 
-/// Inputs of the rotating mount, set once: spinning at SPIN about world z through the mount
-/// point, which stays at the origin (r = 0, so v = w x r = 0 and a = w x (w x r) = 0), at the
-/// orientation Rz(0.3).
-fn rotating_mount(inst: &Instance) -> Result<(), String> {
-    let (s, c) = 0.3f64.sin_cos();
-    let rot = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]];
-    let mut names = Vec::new();
-    let mut values = Vec::new();
-    for (i, row) in rot.iter().enumerate() {
-        for (j, value) in row.iter().enumerate() {
-            names.push(format!("base.R[{},{}]", i + 1, j + 1));
-            values.push(*value);
-        }
-    }
-    for (i, w) in [0.0, 0.0, SPIN].iter().enumerate() {
-        names.push(format!("base.w[{}]", i + 1));
-        values.push(*w);
-        names.push(format!("base.r[{}]", i + 1));
-        values.push(0.0);
-        names.push(format!("base.v[{}]", i + 1));
-        values.push(0.0);
-        names.push(format!("base.a[{}]", i + 1));
-        values.push(0.0);
-    }
-    let names: Vec<&str> = names.iter().map(String::as_str).collect();
-    inst.set(&names, &values)
-}
-
 /// A co-simulation instance a few steps into a tip-force transient, with its FMU state saved so
 /// every timed batch starts from the same state (the free decay would otherwise drift into
 /// subnormal numbers over millions of steps and time the FPU's slow path instead of the FMU).
@@ -160,7 +134,7 @@ impl<'a> CoSim<'a> {
     fn new(fmu: &'a Fmu, spin: bool) -> Result<Self, String> {
         let inst = fmu.instantiate(fmi2CoSimulation, "bench")?;
         if spin {
-            rotating_mount(&inst)?;
+            rotating_mount(&inst, SPIN)?;
         }
         inst.set(&["tip.f[3]"], &[F_TIP])?;
         inst.initialize()?;
@@ -255,7 +229,7 @@ impl Drop for CoSim<'_> {
 fn derivatives(fmu: &Fmu, spin: bool, n_states: usize, repeats: usize, target: Duration) -> Result<Stats, String> {
     let inst = fmu.instantiate(fmi2ModelExchange, "bench-me")?;
     if spin {
-        rotating_mount(&inst)?;
+        rotating_mount(&inst, SPIN)?;
     }
     inst.set(&["tip.f[3]"], &[F_TIP])?;
     inst.initialize()?;
@@ -395,7 +369,7 @@ fn count_allocations(dir: &Path, spin: bool) -> Result<Vec<(String, usize)>, Str
         let before = alloc::total();
         let inst = fmu.instantiate(fmi2CoSimulation, "count")?;
         if spin {
-            rotating_mount(&inst)?;
+            rotating_mount(&inst, SPIN)?;
         }
         inst.initialize()?;
         // the counter sees the runtime's allocations: instantiation reads and stores the body
@@ -438,7 +412,7 @@ fn count_allocations(dir: &Path, spin: bool) -> Result<Vec<(String, usize)>, Str
     {
         let inst = fmu.instantiate(fmi2ModelExchange, "count-me")?;
         if spin {
-            rotating_mount(&inst)?;
+            rotating_mount(&inst, SPIN)?;
         }
         inst.set(&["tip.f[3]"], &[F_TIP])?;
         inst.initialize()?;

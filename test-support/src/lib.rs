@@ -7,6 +7,7 @@
 //! - [`alloc`]: the counting global allocator behind every "no allocation per step" check.
 //! - [`loader`]: an FMU's shared library and its fmi2 entry points, through `libloading`.
 //! - [`scratch`]: a temporary folder per test or case (FMU resources, input files), removed on drop.
+//! - [`reference`]: textbook computations tests compare against (symmetric eigenvalues).
 //! - [`fuzz`] (feature `fuzz`): the fuzz targets' proptest settings and memory ceiling.
 
 pub mod alloc;
@@ -14,6 +15,7 @@ pub mod alloc;
 pub mod fuzz;
 pub mod loader;
 pub mod logger;
+pub mod reference;
 pub mod scratch;
 
 // this crate's own tests check the counter, so their binary must count

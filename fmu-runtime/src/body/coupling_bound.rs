@@ -221,43 +221,6 @@ mod tests {
         body
     }
 
-    /// Largest eigenvalue of the symmetric n x n `a` by cyclic Jacobi rotations (the textbook's
-    /// method, nothing of the power iteration): the reference the norms are checked against.
-    fn largest_eigenvalue(n: usize, mut a: Vec<f64>) -> f64 {
-        for _ in 0..100 {
-            let off: f64 = (0..n)
-                .flat_map(|i| (0..n).filter(move |&j| j != i).map(move |j| (i, j)))
-                .map(|(i, j)| a[i * n + j].powi(2))
-                .sum();
-            if off < 1e-30 * a.iter().map(|x| x * x).sum::<f64>() {
-                break;
-            }
-            for p in 0..n {
-                for q in p + 1..n {
-                    let apq = a[p * n + q];
-                    if apq == 0.0 {
-                        continue;
-                    }
-                    let theta = (a[q * n + q] - a[p * n + p]) / (2.0 * apq);
-                    let sign = if theta >= 0.0 { 1.0 } else { -1.0 };
-                    let t = sign / (theta.abs() + (theta * theta + 1.0).sqrt());
-                    let (c, s) = (1.0 / (t * t + 1.0).sqrt(), t / (t * t + 1.0).sqrt());
-                    for k in 0..n {
-                        let (akp, akq) = (a[k * n + p], a[k * n + q]);
-                        a[k * n + p] = c * akp - s * akq;
-                        a[k * n + q] = s * akp + c * akq;
-                    }
-                    for k in 0..n {
-                        let (apk, aqk) = (a[p * n + k], a[q * n + k]);
-                        a[p * n + k] = c * apk - s * aqk;
-                        a[q * n + k] = s * apk + c * aqk;
-                    }
-                }
-            }
-        }
-        (0..n).map(|i| a[i * n + i]).fold(f64::MIN, f64::max)
-    }
-
     /// Exact spectral norm of [dC_k Omega^-1, dC_d] (n x 2n): the square root of the largest
     /// eigenvalue of its product with its transpose (n x n).
     fn exact_drift_norm(body: &ReducedBody, dc_k: &[f64], dc_d: &[f64]) -> f64 {
@@ -272,7 +235,10 @@ mod tests {
                 mmt[i * n + j] = rows[i].iter().zip(&rows[j]).map(|(x, y)| x * y).sum();
             }
         }
-        largest_eigenvalue(n, mmt).max(0.0).sqrt()
+        // the largest eigenvalue by cyclic Jacobi rotations (the textbook's method, nothing of
+        // the power iteration)
+        let eigenvalues = test_support::reference::jacobi_eigenvalues(mmt, n);
+        eigenvalues.last().copied().unwrap_or(0.0).max(0.0).sqrt()
     }
 
     /// The coupling matrices of coefficient vector `coef`, by the runtime's own `fill_coupling`

@@ -95,46 +95,6 @@ fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
-/// Eigenvalues of a symmetric matrix by cyclic Jacobi rotations.
-fn jacobi_eigenvalues(mut a: Vec<f64>, n: usize) -> Vec<f64> {
-    for _sweep in 0..100 {
-        let off: f64 = (0..n)
-            .flat_map(|i| (0..n).filter(move |&j| j != i).map(move |j| (i, j)))
-            .map(|(i, j)| a[i * n + j] * a[i * n + j])
-            .sum();
-        let diag: f64 = (0..n).map(|i| a[i * n + i] * a[i * n + i]).sum();
-        if off <= 1e-30 * diag {
-            break;
-        }
-        for p in 0..n {
-            for q in p + 1..n {
-                let apq = a[p * n + q];
-                if apq.abs() < 1e-300 {
-                    continue;
-                }
-                let theta = (a[q * n + q] - a[p * n + p]) / (2.0 * apq);
-                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
-                let t = if theta == 0.0 { 1.0 } else { t };
-                let c = 1.0 / (t * t + 1.0).sqrt();
-                let s = t * c;
-                for k in 0..n {
-                    let (akp, akq) = (a[k * n + p], a[k * n + q]);
-                    a[k * n + p] = c * akp - s * akq;
-                    a[k * n + q] = s * akp + c * akq;
-                }
-                for k in 0..n {
-                    let (apk, aqk) = (a[p * n + k], a[q * n + k]);
-                    a[p * n + k] = c * apk - s * aqk;
-                    a[q * n + k] = s * apk + c * aqk;
-                }
-            }
-        }
-    }
-    let mut ev: Vec<f64> = (0..n).map(|i| a[i * n + i]).collect();
-    ev.sort_by(f64::total_cmp);
-    ev
-}
-
 /// Assembles the global dense stiffness of a small mesh.
 fn assemble(kind: ElementKind, nodes: &[[f64; 3]], elements: &[usize]) -> Vec<f64> {
     let npe = kind.nodes_per_element();
@@ -557,7 +517,7 @@ fn rigid_body_modes_have_zero_energy() {
 fn stiffness_has_exactly_six_zero_eigenvalues() {
     for kind in KINDS {
         let dofs = 3 * kind.nodes_per_element();
-        let ev = jacobi_eigenvalues(stiffness(kind, &distorted_element(kind)), dofs);
+        let ev = test_support::reference::jacobi_eigenvalues(stiffness(kind, &distorted_element(kind)), dofs);
         let max = ev[dofs - 1];
         let zeros = ev.iter().filter(|v| v.abs() < 1e-9 * max).count();
         // A lone C3D20R has 6 hourglass modes on top of the 6 rigid-body modes:
@@ -584,7 +544,7 @@ fn hex20r_hourglass_modes_vanish_in_meshes() {
             mesh_boxes(&[BoxRegion { min: [0.0; 3], max: [1.0, 0.6, 0.5], divisions }], ElementKind::Hex20R).unwrap();
         let dofs = 3 * mesh.nodes.len();
         let k = assemble(ElementKind::Hex20R, &mesh.nodes, &mesh.elements);
-        let ev = jacobi_eigenvalues(k, dofs);
+        let ev = test_support::reference::jacobi_eigenvalues(k, dofs);
         let max = ev[dofs - 1];
         let zeros = ev.iter().filter(|v| v.abs() < 1e-9 * max).count();
         assert_eq!(zeros, expected, "{divisions:?}: {:?}", &ev[..expected + 1]);
@@ -684,7 +644,7 @@ fn reduced_masses_have_the_rank_of_their_rule() {
         let n = kind.nodes_per_element();
         let mut m = vec![0.0; n * n];
         element_mass(kind, &distorted_element(kind), rho, &mut m).unwrap();
-        let ev = jacobi_eigenvalues(m, n);
+        let ev = test_support::reference::jacobi_eigenvalues(m, n);
         let max = ev[n - 1];
         let nonzero = ev.iter().filter(|&&v| v > 1e-10 * max).count();
         assert_eq!(nonzero, rank, "{kind}: {ev:?}");
