@@ -45,27 +45,19 @@ pub fn jacobi_eigenvalues(mut a: Vec<f64>, n: usize) -> Vec<f64> {
 
 #[cfg(test)]
 mod tests {
-    /// A rotated diagonal matrix gives back its diagonal: Q diag(d) Q^T with Q a product of
-    /// plane rotations.
+    /// A diagonal matrix seen in another orthonormal basis gives back its diagonal:
+    /// H diag(d) H with H = I - 2 u u^T / |u|^2 (a reflection).
     #[test]
-    fn a_rotated_diagonal_gives_back_its_values() {
+    fn a_reflected_diagonal_gives_back_its_values() {
         let n = 5;
         let d = [-3.0, 0.5, 1.0, 2.0, 7.5];
+        let u = [0.3, -1.0, 0.8, 2.0, -0.4];
+        let uu: f64 = u.iter().map(|x| x * x).sum();
+        let h = |i: usize, j: usize| f64::from(u8::from(i == j)) - 2.0 * u[i] * u[j] / uu;
         let mut a = vec![0.0; n * n];
         for i in 0..n {
-            a[i * n + i] = d[i];
-        }
-        for (p, q, angle) in [(0, 1, 0.3), (1, 3, -1.1), (2, 4, 0.7), (0, 4, 2.0)] {
-            let (s, c) = f64::sin_cos(angle);
-            for k in 0..n {
-                let (akp, akq) = (a[k * n + p], a[k * n + q]);
-                a[k * n + p] = c * akp - s * akq;
-                a[k * n + q] = s * akp + c * akq;
-            }
-            for k in 0..n {
-                let (apk, aqk) = (a[p * n + k], a[q * n + k]);
-                a[p * n + k] = c * apk - s * aqk;
-                a[q * n + k] = s * apk + c * aqk;
+            for j in 0..n {
+                a[i * n + j] = (0..n).map(|k| h(i, k) * d[k] * h(k, j)).sum();
             }
         }
         let ev = super::jacobi_eigenvalues(a, n);
