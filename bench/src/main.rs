@@ -465,7 +465,7 @@ fn opt_cell(t: Option<&Timings>, f: impl Fn(&Timings) -> Stats) -> String {
     t.map_or("-".into(), |t| cell(f(t)))
 }
 
-/// The real-time figures for a spin-up (the coupling changing every step): at most
+/// The real-time targets for a spin-up (the coupling changing every step): at most
 /// about 3 us per step above the steady spinning step at 20 modes and 20 us at 100, as ratios
 /// of this run's spin-up to its steady spinning `fmi2DoStep` (3 us above a 3 us step at 20
 /// modes; 20 us above the 40 us steady step of the 100-mode beam on the README's VM). Minima
@@ -481,7 +481,7 @@ fn spin_up_targets(rows: &[Row]) -> Vec<Target> {
             let ratio = up.min / steady.min;
             targets.push(Target {
                 what: format!(
-                    "spin-up / steady spinning fmi2DoStep, {modes} modes (minima; the issue's {figure} above the steady step; here {:.1} us above {:.1} us)",
+                    "spin-up / steady spinning fmi2DoStep, {modes} modes (minima; target {figure} above the steady step; here {:.1} us above {:.1} us)",
                     (up.min - steady.min) / 1e3,
                     steady.min / 1e3
                 ),

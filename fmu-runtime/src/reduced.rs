@@ -96,6 +96,12 @@ impl ReducedBody {
         self.omega.len()
     }
 
+    /// Whether the modes can couple: a mounted body with rotation or stiffening terms (the
+    /// coupled propagator, its scratch and the coupling-term norms exist only then).
+    pub fn modes_couple(&self) -> bool {
+        !self.free_floating && (self.rotation.is_some() || self.stiffening.is_some())
+    }
+
     /// Number of dynamic modes: the first ones (omega ascending) up to the cutoff.
     pub fn n_dynamic(&self) -> usize {
         self.omega.iter().take_while(|&&w| w <= self.dynamic_cutoff).count()

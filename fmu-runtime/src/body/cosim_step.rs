@@ -17,8 +17,8 @@ use crate::workspace::WorkspaceTooSmall;
 /// from the coupling's coefficients (`coupling_bound`): the predictor-corrector then gains at
 /// most (h |dC|)^4 / 8 = 1e-7 of energy in a step (and far less on average, as the drift runs
 /// between -REFERENCE_DRIFT/2 and +REFERENCE_DRIFT, the reference set ahead of a steady change),
-/// and a renewal, one exponential, is needed only every few hundred steps of a spin-up (about
-/// every 430 at 30 rad/s^2 on the bench's 100-mode beam).
+/// and a renewal, one exponential, is needed only every few hundred steps of a spin-up (once in
+/// the bench's 1000-step spin-up from 10 to 40 rad/s, at 20 to 100 modes).
 const REFERENCE_DRIFT: f64 = 3e-2;
 
 /// ((C_d - R_d) q' + (C_k - R_k) q)_i: the coupling's force beyond the reference transition's.

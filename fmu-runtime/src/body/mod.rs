@@ -356,11 +356,7 @@ impl FlexibleBody {
             frame_rate: FrameState::default(),
             cr_q: vec![0.0; 3 * n],
             propagator: ModalPropagator::with_modes(n),
-            coupled: if body.free_floating || (body.rotation.is_none() && body.stiffening.is_none()) {
-                CoupledPropagator::default()
-            } else {
-                CoupledPropagator::with_modes(n)
-            },
+            coupled: if body.modes_couple() { CoupledPropagator::with_modes(n) } else { CoupledPropagator::default() },
             reference_coef: vec![0.0; term_count(nf)],
             reference_coef_known: false,
             term_norms,

@@ -33,7 +33,7 @@ impl StepWorkspace {
     /// couple its modes (a mounted body with rotation or stiffening terms).
     pub(super) fn for_body(body: &ReducedBody) -> Self {
         let (n, flanges) = (body.n_modes(), body.flanges.len());
-        let couples = !body.free_floating && (body.rotation.is_some() || body.stiffening.is_some());
+        let couples = body.modes_couple();
         Self {
             modes: n,
             flanges,
