@@ -23,7 +23,7 @@
 //! [`Workspace`] of [`CoupledPropagator::workspace_req`] values that the caller allocated once and
 //! lends to each call: neither allocates, and a workspace too small is refused, not a panic.
 
-use crate::matmul::mat_mul;
+use crate::matmul::{dot, mat_mul};
 use crate::workspace::{Workspace, WorkspaceReq, WorkspaceTooSmall};
 
 /// More squarings than any finite |A h| needs (log2(f64::MAX) = 1024).
@@ -369,24 +369,6 @@ struct Exponential<'a> {
     /// [G1 | G2] (2n x n each, side by side) and its product with P.
     g: &'a mut [f64],
     gt: &'a mut [f64],
-}
-
-/// a . b with four partial sums (independent chains the compiler can keep in flight).
-#[inline]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let mut s = [0.0; 4];
-    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
-    let (ra, rb) = (ca.remainder(), cb.remainder());
-    for (x, y) in ca.zip(cb) {
-        for k in 0..4 {
-            s[k] += x[k] * y[k];
-        }
-    }
-    let mut tail = 0.0;
-    for (x, y) in ra.iter().zip(rb) {
-        tail += x * y;
-    }
-    (s[0] + s[1]) + (s[2] + s[3]) + tail
 }
 
 /// out = sum over i of coefficient(i) a^i, with powers[i] = a^i for i >= 1 (a^0 = I).

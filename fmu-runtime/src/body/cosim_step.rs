@@ -2,7 +2,7 @@
 //! transition of the modal diagonal or of the coupled modes, with a predictor-corrector load for
 //! the coupling's drift from the transition's) and the free body's substeps.
 
-use super::mounted::fill_coupling;
+use super::mounted::coupling_coefficients;
 use super::step_workspace::{CoupledWork, FreeWork, StepStart, StepWorkspace};
 use super::{
     BodyError, Coupling, FlangeLoad, FlexibleBody, FrameState, InputRates, MountMotion, REAL_LIMIT, StepError,
@@ -20,30 +20,6 @@ use crate::workspace::WorkspaceTooSmall;
 /// and a renewal, one exponential, is needed only every few hundred steps of a spin-up (once in
 /// the bench's 1000-step spin-up from 10 to 40 rad/s, at 20 to 100 modes).
 const REFERENCE_DRIFT: f64 = 3e-2;
-
-/// ((C_d - R_d) q' + (C_k - R_k) q)_i: the coupling's force beyond the reference transition's.
-fn residual_coupling_force(c: &Coupling<f64>, reference: (&[f64], &[f64]), i: usize, q: &[f64], qd: &[f64]) -> f64 {
-    let n = q.len();
-    let r = i * n..(i + 1) * n;
-    let (cd, ck, rd, rk) = (&c.c_d[r.clone()], &c.c_k[r.clone()], &reference.0[r.clone()], &reference.1[r]);
-    four_sums(n, |j| (cd[j] - rd[j]) * qd[j] + (ck[j] - rk[j]) * q[j])
-}
-
-/// The sum of term(j) for j < n in four interleaved partial sums (j mod 4), added pairwise.
-#[inline(always)]
-fn four_sums(n: usize, term: impl Fn(usize) -> f64) -> f64 {
-    let mut s = [0.0f64; 4];
-    let full = n - n % 4;
-    for j in (0..full).step_by(4) {
-        for (k, sk) in s.iter_mut().enumerate() {
-            *sk += term(j + k);
-        }
-    }
-    for j in full..n {
-        s[j - full] += term(j);
-    }
-    (s[0] + s[1]) + (s[2] + s[3])
-}
 
 /// Largest rotation of a free body within one of its substeps (rad): the Heun splitting's error
 /// per substep is of third order in it.
@@ -273,7 +249,7 @@ impl FlexibleBody {
         if ramp {
             self.modal_load_rate();
         }
-        self.prepare_coupling();
+        self.prepare_coupling_coefficients();
         // a mount turning at a steady spin (R' = w~ R, nothing else moving) keeps the
         // body-frame spin and hence the coupling: only the load turns
         let steady = held.steady && self.steady_coupling();
@@ -308,8 +284,8 @@ impl FlexibleBody {
         Ok(())
     }
 
-    /// The coupling matrices at the step's end, where the inputs' rates carry the mount and the
-    /// loads.
+    /// The coupling's coefficients at the step's end, where the inputs' rates carry the mount
+    /// and the loads.
     fn coupling_at_step_end(&self, work: &mut CoupledWork, h: f64) {
         let mut end = self.mount;
         let r = &self.rates.mount;
@@ -325,7 +301,14 @@ impl FlexibleBody {
             *e = FlangeLoad { f: k3::add(l.f, k3::scale(h, rate.f)), t: k3::add(l.t, k3::scale(h, rate.t)) };
         }
         let end_rot = k3::nearest_rotation(&end.rot);
-        fill_coupling(&self.body, &end_rot, &end, &work.loads_end, self.params.g, &mut work.coupling_end);
+        coupling_coefficients(
+            &self.coupling_terms,
+            &end_rot,
+            &end,
+            &work.loads_end,
+            self.params.g,
+            &mut work.coupling_end,
+        );
     }
 
     /// The modes over a step with coupling. The transition is exact for the coupling it was
@@ -344,11 +327,13 @@ impl FlexibleBody {
         h: f64,
     ) -> Result<(), WorkspaceTooSmall> {
         let prepared = self.coupled.is_prepared(h, self.params.alpha, self.params.beta);
-        // a steady spin meets its own transition again: compared first, cheaper than the drift
+        // a steady spin meets its own transition again (the same coefficients make the same
+        // matrices)
         let held_exactly =
-            !moving && prepared && self.coupled.reference() == (&self.coupling.c_d[..], &self.coupling.c_k[..]);
+            !moving && prepared && self.reference_coef_known && self.coupling.coef == self.reference_coef;
         let drift_ok = |c: &Coupling<f64>| {
-            self.reference_coef_known && h * self.term_norms.bound(&c.coef, &self.reference_coef) <= REFERENCE_DRIFT
+            self.reference_coef_known
+                && h * self.coupling_terms.drift_bound(&c.coef, &self.reference_coef) <= REFERENCE_DRIFT
         };
         let current = held_exactly || prepared && drift_ok(&self.coupling) && (!moving || drift_ok(&work.coupling_end));
         let renewed_for_this_step = !current && self.renew_reference(work, moving, prepared, h)?;
@@ -363,16 +348,17 @@ impl FlexibleBody {
         // ramp's difference to the predictor's end (G2 (f1 - rate), a 2n x n product) instead of
         // taking the step again (2n x 4n)
         let end = if moving { &work.coupling_end } else { &self.coupling };
-        let n = self.q.len();
-        for i in 0..n {
-            work.f0[i] =
-                self.load[i] - residual_coupling_force(&self.coupling, self.coupled.reference(), i, &self.q, &self.qd);
+        let terms = &self.coupling_terms;
+        let reference = &self.reference_coef;
+        terms.drift_force(&self.body, &self.coupling.coef, reference, h, &self.q, &self.qd, &mut work.f0);
+        for (f0, load) in work.f0.iter_mut().zip(&self.load) {
+            *f0 = load - *f0;
         }
         self.coupled.advance(&self.body.omega, &work.f0, rate, &mut self.q, &mut self.qd, ws)?;
-        for (i, rate) in rate.iter().enumerate() {
-            let f_end =
-                self.load[i] + h * rate - residual_coupling_force(end, self.coupled.reference(), i, &self.q, &self.qd);
-            work.f1[i] = (f_end - work.f0[i]) / h - rate;
+        terms.drift_force(&self.body, &end.coef, reference, h, &self.q, &self.qd, &mut work.f1);
+        for (((f1, rate), load), f0) in work.f1.iter_mut().zip(rate).zip(&self.load).zip(&work.f0) {
+            let f_end = load + h * rate - *f1;
+            *f1 = (f_end - f0) / h - rate;
         }
         self.coupled.add_ramp(&self.body.omega, &work.f1, &mut self.q, &mut self.qd, ws)
     }
@@ -392,35 +378,24 @@ impl FlexibleBody {
         h: f64,
     ) -> Result<bool, WorkspaceTooSmall> {
         if moving {
-            for (m, (a, b)) in work.c_d_mid.iter_mut().zip(self.coupling.c_d.iter().zip(&work.coupling_end.c_d)) {
-                *m = 0.5 * (a + b);
-            }
-            for (m, (a, b)) in work.c_k_mid.iter_mut().zip(self.coupling.c_k.iter().zip(&work.coupling_end.c_k)) {
-                *m = 0.5 * (a + b);
-            }
             for (m, (a, b)) in work.coef_mid.iter_mut().zip(self.coupling.coef.iter().zip(&work.coupling_end.coef)) {
                 *m = 0.5 * (a + b);
             }
         } else {
-            work.c_d_mid.copy_from_slice(&self.coupling.c_d);
-            work.c_k_mid.copy_from_slice(&self.coupling.c_k);
             work.coef_mid.copy_from_slice(&self.coupling.coef);
         }
         let steady = prepared
             && self.reference_coef_known
-            && h * self.term_norms.bound(&work.coef_mid, &self.reference_coef) <= 2.0 * REFERENCE_DRIFT;
+            && h * self.coupling_terms.drift_bound(&work.coef_mid, &self.reference_coef) <= 2.0 * REFERENCE_DRIFT;
         if steady {
-            let old = self.coupled.reference();
-            for (m, o) in work.c_d_mid.iter_mut().zip(old.0) {
-                *m += 0.5 * (*m - o);
-            }
-            for (m, o) in work.c_k_mid.iter_mut().zip(old.1) {
-                *m += 0.5 * (*m - o);
-            }
             for (m, o) in work.coef_mid.iter_mut().zip(&self.reference_coef) {
                 *m += 0.5 * (*m - o);
             }
         }
+        // the coupling is linear in the coefficients (the products w_i w_j are coefficients of
+        // their own): the midpoint's and the extrapolated coefficients make the midpoint's and
+        // the extrapolated matrices
+        self.coupling_terms.fill(&self.body, &work.coef_mid, &mut work.c_d_mid, &mut work.c_k_mid);
         let (c_d, c_k): (&[f64], &[f64]) = (&work.c_d_mid, &work.c_k_mid);
         let was_definite = self.coupled.definite();
         let prepared = self.coupled.prepare(

@@ -20,6 +20,7 @@
 
 mod cosim_step;
 mod coupling_bound;
+mod coupling_terms;
 pub use cosim_step::SUBSTEP_ANGLE;
 mod dense;
 mod error;
@@ -38,8 +39,8 @@ use crate::kinematics::{self as k3, Mat3, Vec3};
 use crate::propagator::ModalPropagator;
 use crate::reduced::ReducedBody;
 use crate::scalar::{Dual, Scalar, c};
-use coupling_bound::TermNorms;
-pub(crate) use coupling_bound::term_count;
+use coupling_terms::CouplingTerms;
+pub(crate) use coupling_terms::term_count;
 use dense::shape_dot;
 use input_jump::SteppedInputs;
 use quasi_static::QuasiStaticWork;
@@ -212,15 +213,19 @@ pub struct CouplingReference {
 /// Terms that couple the modes, for the present inputs: q'' = ... - C_d q' - C_k q.
 #[derive(Debug, Clone, Default)]
 struct Coupling<T> {
+    /// The coefficients (and `active`) are those of the present inputs.
     valid: bool,
     active: bool,
+    /// C_d, C_k are those of the coefficients (filled only where they are needed: Model
+    /// Exchange, the static start, a renewal of the coupled transition).
+    matrices: bool,
     c_d: Vec<T>,
     c_k: Vec<T>,
     /// Body-frame angular velocity, angular acceleration and a_B of the present inputs.
     w: Vec3<T>,
     z: Vec3<T>,
     a: Vec3<T>,
-    /// The coefficients c_d and c_k combine the body's matrices with (see `coupling_bound`).
+    /// The coefficients c_d and c_k combine the body's matrices with (see `coupling_terms`).
     coef: Vec<T>,
 }
 
@@ -250,12 +255,12 @@ pub struct FlexibleBody<T = f64> {
     propagator: ModalPropagator,
     /// Exact transition of the coupled modes (mounted bodies with rotation or stiffening terms).
     coupled: CoupledPropagator,
-    /// The coefficients of the coupling `coupled` was made for, where known (see
-    /// `coupling_bound`; every renewal sets them), and the norms of the matrices they multiply,
-    /// computed once per reduced body and shared by its copies.
+    /// The coefficients of the coupling `coupled` was made for, where known (every renewal sets
+    /// them), and the matrices they multiply with their norms (`coupling_terms`), made once per
+    /// reduced body and shared by its copies.
     reference_coef: Vec<f64>,
     reference_coef_known: bool,
-    term_norms: Arc<TermNorms>,
+    coupling_terms: Arc<CouplingTerms>,
     /// A warning of the last step for the host's log.
     warning: Option<&'static str>,
     /// First derivatives of the inputs for the next step (fmi2SetRealInputDerivatives), and
@@ -317,13 +322,13 @@ pub const UNSTABLE_STIFFNESS: &str = "the effective stiffness of the body (elast
 
 impl FlexibleBody {
     pub fn new(body: Arc<ReducedBody>) -> Self {
-        let norms = Arc::new(TermNorms::of(&body));
-        Self::with_term_norms(body, norms)
+        let terms = Arc::new(CouplingTerms::of(&body));
+        Self::with_coupling_terms(body, terms)
     }
 
-    /// A body at rest whose coupling-term norms are known (a copy of a body of the same
-    /// reduced body shares them instead of computing them again).
-    fn with_term_norms(body: Arc<ReducedBody>, term_norms: Arc<TermNorms>) -> Self {
+    /// A body at rest whose coupling terms are known (a copy of a body of the same reduced
+    /// body shares them instead of computing them again).
+    fn with_coupling_terms(body: Arc<ReducedBody>, coupling_terms: Arc<CouplingTerms>) -> Self {
         let n = body.n_modes();
         let nf = body.flanges.len();
         let params = Parameters { g: [0.0; 3], alpha: body.alpha, beta: body.beta };
@@ -359,7 +364,7 @@ impl FlexibleBody {
             coupled: if body.modes_couple() { CoupledPropagator::with_modes(n) } else { CoupledPropagator::default() },
             reference_coef: vec![0.0; term_count(nf)],
             reference_coef_known: false,
-            term_norms,
+            coupling_terms,
             warning: None,
             rates: InputRates {
                 mount: MountMotion { rot: [0.0; 9], ..MountMotion::default() },
@@ -418,7 +423,7 @@ impl FlexibleBody {
             coupled: CoupledPropagator::default(),
             reference_coef: Vec::new(),
             reference_coef_known: false,
-            term_norms: Arc::clone(&self.term_norms),
+            coupling_terms: Arc::clone(&self.coupling_terms),
             warning: None,
             rates: self.rates.clone(),
             load_rate: Vec::new(),
@@ -471,7 +476,7 @@ impl FlexibleBody {
         if state.frame.is_some() != self.frame.is_some() {
             return Err(StateMismatch::Kind { free: state.frame.is_some(), body_free: self.frame.is_some() }.into());
         }
-        let mut b = FlexibleBody::with_term_norms(Arc::clone(&self.body), Arc::clone(&self.term_norms));
+        let mut b = FlexibleBody::with_coupling_terms(Arc::clone(&self.body), Arc::clone(&self.coupling_terms));
         b.quasi_static = self.quasi_static;
         b.mount = state.mount;
         b.loads = state.loads;

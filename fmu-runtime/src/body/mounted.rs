@@ -1,6 +1,7 @@
 //! The equations of a body on a prescribed mount: the mount inputs' check, the modal load p, the
 //! coupling terms C_d, C_k of rotation and stiffening, and q''.
 
+use super::coupling_terms::{CouplingTerms, coefficients};
 use super::{BodyError, Coupling, FlangeLoad, FlexibleBody, MountMotion};
 use crate::kinematics::{self as k3, Mat3, Vec3};
 use crate::reduced::ReducedBody;
@@ -54,12 +55,27 @@ impl<T: Scalar> FlexibleBody<T> {
         Ok(())
     }
 
-    /// Gather C_d = 2 sum W_a G_a and C_k = sum Z_a G_a + sum W_a W_b O_ab + K_G for the inputs.
+    /// The coupling's coefficients for the inputs, and its matrices C_d, C_k.
     pub(super) fn prepare_coupling(&mut self) {
-        if self.coupling.valid {
-            return;
+        self.prepare_coupling_coefficients();
+        if !self.coupling.matrices {
+            fill_coupling_matrices(&self.coupling_terms, &self.body, &mut self.coupling);
         }
-        fill_coupling(&self.body, &self.rot, &self.mount, &self.loads, self.params.g, &mut self.coupling);
+    }
+
+    /// The coupling's coefficients for the inputs (the Co-Simulation step needs its matrices
+    /// only where it renews its transition).
+    pub(super) fn prepare_coupling_coefficients(&mut self) {
+        if !self.coupling.valid {
+            coupling_coefficients(
+                &self.coupling_terms,
+                &self.rot,
+                &self.mount,
+                &self.loads,
+                self.params.g,
+                &mut self.coupling,
+            );
+        }
     }
 
     /// (C_d q' + C_k q)_i: the coupling terms' force on mode i.
@@ -146,78 +162,37 @@ impl<T: Scalar> FlexibleBody<T> {
     }
 }
 
-/// C_d = 2 sum W_a G_a and C_k = sum Z_a G_a + sum W_a W_b O_ab + K_G for the given inputs.
-/// `rot` is the mount orientation in use (the input projected onto the rotations), as in the load.
-pub(super) fn fill_coupling<T: Scalar>(
-    body: &ReducedBody,
+/// The coupling's coefficients for the given inputs (body-frame w, z, a_B and flange wrenches;
+/// see `coupling_terms`) and whether any term is active; its matrices are left to
+/// [`fill_coupling_matrices`]. `rot` is the mount orientation in use (the input projected onto
+/// the rotations), as in the load.
+pub(super) fn coupling_coefficients<T: Scalar>(
+    terms: &CouplingTerms,
     rot: &Mat3<T>,
     mount: &MountMotion<T>,
     loads: &[FlangeLoad<T>],
     g: Vec3,
     c: &mut Coupling<T>,
 ) {
-    let n = body.n_modes();
-    let nn = n * n;
     let a = rot;
     c.w = k3::mul_t(a, mount.w);
     c.z = k3::mul_t(a, mount.z);
     c.a = k3::mul_t(a, k3::sub(mount.a, g.map(crate::scalar::c)));
-    c.c_d.fill(T::zero());
-    c.c_k.fill(T::zero());
-    let mut active = false;
-    let mut add = |target: &mut Vec<T>, scale: T, block: &[f64]| {
-        if !scale.is_zero() {
-            active = true;
-            for (t, b) in target.iter_mut().zip(block) {
-                *t += scale * *b;
-            }
-        }
-    };
-    if let Some(rot) = &body.rotation {
-        for i in 0..3 {
-            add(&mut c.c_d, c.w[i] * 2.0, &rot.g[i * nn..(i + 1) * nn]);
-            add(&mut c.c_k, c.z[i], &rot.g[i * nn..(i + 1) * nn]);
-            for j in 0..3 {
-                add(&mut c.c_k, c.w[i] * c.w[j], &rot.o_mat[(3 * i + j) * nn..(3 * i + j + 1) * nn]);
-            }
-        }
-    }
-    if let Some(st) = &body.stiffening {
-        if let Some(k) = &st.centrifugal {
-            for i in 0..3 {
-                for j in 0..3 {
-                    add(&mut c.c_k, c.w[i] * c.w[j], &k[(3 * i + j) * nn..(3 * i + j + 1) * nn]);
-                }
-            }
-        }
-        if let Some(k) = &st.euler {
-            for i in 0..3 {
-                add(&mut c.c_k, c.z[i], &k[i * nn..(i + 1) * nn]);
-            }
-        }
-        if let Some(k) = &st.translation {
-            for i in 0..3 {
-                add(&mut c.c_k, c.a[i], &k[i * nn..(i + 1) * nn]);
-            }
-        }
-        for (f, k) in st.flanges.iter().enumerate() {
-            if k.is_empty() {
-                continue;
-            }
-            let load = &loads[f];
-            let wrench = [k3::mul_t(a, load.f), k3::mul_t(a, load.t)];
-            for i in 0..6 {
-                add(&mut c.c_k, wrench[i / 3][i % 3], &k[i * nn..(i + 1) * nn]);
-            }
-        }
-    }
     let wrenches = loads.iter().map(|l| {
         let (f, t) = (k3::mul_t(a, l.f), k3::mul_t(a, l.t));
         [f[0], f[1], f[2], t[0], t[1], t[2]]
     });
-    super::coupling_bound::coefficients(c.w, c.z, c.a, wrenches, &mut c.coef);
-    c.active = active;
+    coefficients(c.w, c.z, c.a, wrenches, &mut c.coef);
+    c.active = terms.active(&c.coef);
     c.valid = true;
+    c.matrices = false;
+}
+
+/// C_d = 2 sum w_a G_a and C_k = sum z_a (G_a + E_a) + sum w_a w_b (O_ab + K_ab) + K_G for the
+/// coefficients [`coupling_coefficients`] set.
+pub(super) fn fill_coupling_matrices<T: Scalar>(terms: &CouplingTerms, body: &ReducedBody, c: &mut Coupling<T>) {
+    terms.fill(body, &c.coef, &mut c.c_d, &mut c.c_k);
+    c.matrices = true;
 }
 
 /// (C_d q' + C_k q)_i for the coupling `c` (the present one or the step end's).

@@ -8,7 +8,7 @@
 //! rate excepted, which nothing writes), so a saved FMU state leaves it out and a copy of the body
 //! (an FMU state restored by cloning) has buffers of its own, whatever they hold.
 
-use super::coupling_bound::term_count;
+use super::coupling_terms::term_count;
 use super::{Coupling, FlangeLoad, FrameState, HostMount, MountMotion, Parameters};
 use crate::coupled_propagator::CoupledPropagator;
 use crate::reduced::ReducedBody;
@@ -112,7 +112,7 @@ pub(super) struct CoupledWork {
     pub(super) c_d_mid: Vec<f64>,
     pub(super) c_k_mid: Vec<f64>,
     pub(super) zeros: Vec<f64>,
-    /// The coefficients of the midpoint coupling (see `coupling_bound`).
+    /// The coefficients of the midpoint coupling (see `coupling_terms`).
     pub(super) coef_mid: Vec<f64>,
     pub(super) loads_end: Vec<FlangeLoad>,
     pub(super) coupling_end: Coupling<f64>,
@@ -131,12 +131,8 @@ impl CoupledWork {
             zeros: vec![0.0; n],
             coef_mid: vec![0.0; term_count(flanges)],
             loads_end: vec![FlangeLoad::default(); flanges],
-            coupling_end: Coupling {
-                c_d: vec![0.0; n * n],
-                c_k: vec![0.0; n * n],
-                coef: vec![0.0; term_count(flanges)],
-                ..Coupling::default()
-            },
+            // its coefficients only: the step's drift and a renewal's midpoint need no more
+            coupling_end: Coupling { coef: vec![0.0; term_count(flanges)], ..Coupling::default() },
             propagator: Workspace::new(CoupledPropagator::workspace_req(if couples { n } else { 0 })),
         }
     }
