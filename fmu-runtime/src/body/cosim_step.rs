@@ -329,8 +329,10 @@ impl FlexibleBody {
         let prepared = self.coupled.is_prepared(h, self.params.alpha, self.params.beta);
         // a steady spin meets its own transition again (the same coefficients make the same
         // matrices)
-        let held_exactly =
-            !moving && prepared && self.reference_coef_known && self.coupling.coef == self.reference_coef;
+        let held_exactly = !moving
+            && prepared
+            && self.reference_coef_known
+            && self.coupling_terms.same_coupling(&self.coupling.coef, &self.reference_coef);
         let drift_ok = |c: &Coupling<f64>| {
             self.reference_coef_known
                 && h * self.coupling_terms.drift_bound(&c.coef, &self.reference_coef) <= REFERENCE_DRIFT

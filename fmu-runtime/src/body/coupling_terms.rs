@@ -13,6 +13,7 @@
 
 use super::Vec3;
 use super::coupling_bound::energy_norm;
+use super::dense::row_dot;
 use crate::matmul::dot;
 use crate::reduced::ReducedBody;
 use crate::scalar::Scalar;
@@ -209,6 +210,32 @@ impl CouplingTerms {
         self.terms.iter().any(|t| !coef[t.coef].is_zero())
     }
 
+    /// Whether the coefficients `a` and `b` make the same coupling: equal wherever a term reads
+    /// them (a flange wrench without prestress terms may differ).
+    pub(super) fn same_coupling(&self, a: &[f64], b: &[f64]) -> bool {
+        self.terms.iter().all(|t| a[t.coef] == b[t.coef])
+    }
+
+    /// out[i] = (C_d q' + C_k q)_i for the rows i < out.len(), from the terms of the nonzero
+    /// coefficients (the matrices C_d, C_k are not formed).
+    pub(super) fn force<T: Scalar>(&self, body: &ReducedBody, coef: &[T], q: &[T], qd: &[T], out: &mut [T]) {
+        out.fill(T::zero());
+        for t in &self.terms {
+            let c = coef[t.coef];
+            if c.is_zero() {
+                continue;
+            }
+            let x = match t.acts {
+                Acts::Velocity => qd,
+                Acts::Position => q,
+            };
+            let scale = c * t.scale;
+            for (o, row) in out.iter_mut().zip(self.matrix(t, body).chunks_exact(self.n)) {
+                *o += scale * row_dot(row, x);
+            }
+        }
+    }
+
     /// C_d and C_k (row-major n x n) for the coefficients `coef`.
     pub(super) fn fill<T: Scalar>(&self, body: &ReducedBody, coef: &[T], c_d: &mut [T], c_k: &mut [T]) {
         c_d.fill(T::zero());
@@ -353,5 +380,44 @@ mod tests {
             let g: f64 = (0..n).map(|j| 2.0 * change * gyroscopic[i * n + j] * qd[j]).sum();
             assert!((f - g).abs() <= 1e-14 * g.abs().max(1e-9), "mode {i}: {f:e} against 2 dw G q' {g:e}");
         }
+    }
+
+    /// An evaluation's coupling force from the terms is C_d q' + C_k q with the matrices summed
+    /// from the blocks, for every row or the leading ones; coefficients that differ only where
+    /// no term reads them make the same coupling. Measured: 9.7e-17 of the force's largest
+    /// entry (sums in another order); the limit 5e-15, ten times the few ulps that order can
+    /// move in sums of nine terms.
+    #[test]
+    fn the_force_is_the_coupling_applied() {
+        let body = coupled_body(9);
+        let terms = CouplingTerms::of(&body);
+        let n = body.n_modes();
+        let q: Vec<f64> = (0..n).map(|i| 0.1 * (i as f64 + 1.0).sin()).collect();
+        let qd: Vec<f64> = (0..n).map(|i| (0.7 * i as f64).cos()).collect();
+        let (d, k, coef) = coupling_of(&body, [0.7, -1.3, 4.0], [0.5, 0.2, -2.0], [1.0, -0.4, -9.81], [3.0, -1.0, 2.0]);
+        let expected: Vec<f64> =
+            (0..n).map(|i| (0..n).map(|j| d[i * n + j] * qd[j] + k[i * n + j] * q[j]).sum()).collect();
+        for rows in [n, 4] {
+            let mut found = vec![f64::NAN; rows];
+            terms.force(&body, &coef, &q, &qd, &mut found);
+            let (diff, scale) = worst(&found, &expected[..rows]);
+            eprintln!("force of {rows} rows: {:.2e} of its largest entry {scale:.3e}", diff / scale);
+            assert!(scale > 0.0);
+            assert!(diff <= 5e-15 * scale, "{rows} rows: off by {diff:e} of {scale:e}");
+        }
+        let mut other = coef.clone();
+        assert!(terms.same_coupling(&other, &coef));
+        other[2] += 1e-12;
+        assert!(!terms.same_coupling(&other, &coef), "a changed spin is the same coupling");
+        // a body whose flange has no prestress terms: its wrench reads no matrix
+        let mut plain = body.clone();
+        if let Some(st) = plain.stiffening.as_mut() {
+            st.flanges.iter_mut().for_each(Vec::clear);
+        }
+        let plain_terms = CouplingTerms::of(&plain);
+        let mut wrench_only = coef.clone();
+        wrench_only[MOUNT_TERMS] += 5.0;
+        assert!(plain_terms.same_coupling(&wrench_only, &coef));
+        assert!(!terms.same_coupling(&wrench_only, &coef));
     }
 }

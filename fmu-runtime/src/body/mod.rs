@@ -220,6 +220,8 @@ struct Coupling<T> {
     /// Exchange, the static start, a renewal of the coupled transition).
     matrices: bool,
     c_d: Vec<T>,
+    /// (C_d q' + C_k q) of an evaluation (n).
+    force: Vec<T>,
     c_k: Vec<T>,
     /// Body-frame angular velocity, angular acceleration and a_B of the present inputs.
     w: Vec3<T>,
@@ -352,6 +354,7 @@ impl FlexibleBody {
             coupling: Coupling {
                 c_d: vec![0.0; n * n],
                 c_k: vec![0.0; n * n],
+                force: vec![0.0; n],
                 coef: vec![0.0; term_count(nf)],
                 ..Coupling::default()
             },
@@ -411,6 +414,7 @@ impl FlexibleBody {
             coupling: Coupling {
                 c_d: zeros(n * n),
                 c_k: zeros(n * n),
+                force: zeros(n),
                 coef: zeros(term_count(self.loads.len())),
                 ..Coupling::default()
             },

@@ -78,11 +78,6 @@ impl<T: Scalar> FlexibleBody<T> {
         }
     }
 
-    /// (C_d q' + C_k q)_i: the coupling terms' force on mode i.
-    fn coupling_force(&self, i: usize) -> T {
-        coupling_force_of(&self.coupling, i, &self.q, &self.qd)
-    }
-
     /// p = -C_t^T a_B + sum_k Phi_k^T [A^T f_k; A^T t_k]
     pub(super) fn modal_load(&mut self) {
         let a = &self.rot;
@@ -132,8 +127,14 @@ impl<T: Scalar> FlexibleBody<T> {
     pub(super) fn mounted_accelerations(&mut self) -> Result<(), BodyError> {
         self.check_inputs()?;
         self.modal_load();
-        self.prepare_coupling();
         let n = self.q.len();
+        // the algebraic modes' solve (Model Exchange) reads the coupling's rows; the accelerated
+        // modes' coupling force comes from its terms
+        if self.quasi_static && self.n_dynamic < n {
+            self.prepare_coupling();
+        } else {
+            self.prepare_coupling_coefficients();
+        }
         if self.quasi_static {
             // the coupling's rows are lent to the solve (moving the vectors allocates nothing)
             let coupling = std::mem::take(&mut self.coupling);
@@ -152,9 +153,10 @@ impl<T: Scalar> FlexibleBody<T> {
                 self.load[j] - self.qd[j] * (alpha + beta * w2 + self.body.modal_damping[j]) - self.q[j] * w2;
         }
         if self.coupling.active {
-            for i in 0..na {
-                let f = self.coupling_force(i);
-                self.eval.qdd[i] -= f;
+            let force = &mut self.coupling.force[..na];
+            self.coupling_terms.force(&self.body, &self.coupling.coef, &self.q, &self.qd, force);
+            for (qdd, f) in self.eval.qdd.iter_mut().zip(force.iter()) {
+                *qdd -= *f;
             }
         }
         self.eval.qdd[na..].fill(T::zero());
@@ -193,15 +195,4 @@ pub(super) fn coupling_coefficients<T: Scalar>(
 pub(super) fn fill_coupling_matrices<T: Scalar>(terms: &CouplingTerms, body: &ReducedBody, c: &mut Coupling<T>) {
     terms.fill(body, &c.coef, &mut c.c_d, &mut c.c_k);
     c.matrices = true;
-}
-
-/// (C_d q' + C_k q)_i for the coupling `c` (the present one or the step end's).
-fn coupling_force_of<T: Scalar>(c: &Coupling<T>, i: usize, q: &[T], qd: &[T]) -> T {
-    let n = q.len();
-    let (rd, rk) = (&c.c_d[i * n..(i + 1) * n], &c.c_k[i * n..(i + 1) * n]);
-    let mut s = T::zero();
-    for j in 0..n {
-        s += rd[j] * qd[j] + rk[j] * q[j];
-    }
-    s
 }
