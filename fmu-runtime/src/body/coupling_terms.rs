@@ -238,6 +238,18 @@ impl CouplingTerms {
 
     /// C_d and C_k (row-major n x n) for the coefficients `coef`.
     pub(super) fn fill<T: Scalar>(&self, body: &ReducedBody, coef: &[T], c_d: &mut [T], c_k: &mut [T]) {
+        self.fill_rows(body, coef, 0, c_d, c_k);
+    }
+
+    /// Rows `first..` of C_d and C_k (row-major, n values a row) for the coefficients `coef`.
+    pub(super) fn fill_rows<T: Scalar>(
+        &self,
+        body: &ReducedBody,
+        coef: &[T],
+        first: usize,
+        c_d: &mut [T],
+        c_k: &mut [T],
+    ) {
         c_d.fill(T::zero());
         c_k.fill(T::zero());
         for t in &self.terms {
@@ -250,7 +262,7 @@ impl CouplingTerms {
                 Acts::Velocity => &mut *c_d,
                 Acts::Position => &mut *c_k,
             };
-            for (x, m) in target.iter_mut().zip(self.matrix(t, body)) {
+            for (x, m) in target.iter_mut().zip(&self.matrix(t, body)[first * self.n..]) {
                 *x += scale * *m;
             }
         }
@@ -335,6 +347,10 @@ mod tests {
             assert!(scale > 0.0, "{name} is zero: the inputs set no term");
             assert!(diff <= 2e-15 * scale, "{name}: off by {diff:e} of {scale:e}");
         }
+        // the rows from 4 on alone, as Model Exchange's algebraic modes read them
+        let (mut rows_d, mut rows_k) = (vec![1.0; (n - 4) * n], vec![1.0; (n - 4) * n]);
+        terms.fill_rows(&body, &coef, 4, &mut rows_d, &mut rows_k);
+        assert_eq!((&rows_d[..], &rows_k[..]), (&c_d[4 * n..], &c_k[4 * n..]), "rows differ from the whole");
         assert!(terms.active(&coef));
         assert!(!terms.active(&vec![0.0; coef.len()]));
     }

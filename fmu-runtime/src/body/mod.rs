@@ -216,9 +216,10 @@ struct Coupling<T> {
     /// The coefficients (and `active`) are those of the present inputs.
     valid: bool,
     active: bool,
-    /// C_d, C_k are those of the coefficients (filled only where they are needed: Model
-    /// Exchange, the static start, a renewal of the coupled transition).
-    matrices: bool,
+    /// The rows of C_d, C_k from this one on are those of the coefficients (None: no row). They
+    /// are filled only where needed: the rows of Model Exchange's algebraic modes, all of them for
+    /// the static start.
+    rows_from: Option<usize>,
     c_d: Vec<T>,
     /// (C_d q' + C_k q) of an evaluation (n).
     force: Vec<T>,

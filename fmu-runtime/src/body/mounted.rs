@@ -55,11 +55,12 @@ impl<T: Scalar> FlexibleBody<T> {
         Ok(())
     }
 
-    /// The coupling's coefficients for the inputs, and its matrices C_d, C_k.
-    pub(super) fn prepare_coupling(&mut self) {
+    /// The coupling's coefficients for the inputs, and the rows of its matrices C_d, C_k from
+    /// `first` on.
+    pub(super) fn prepare_coupling_rows(&mut self, first: usize) {
         self.prepare_coupling_coefficients();
-        if !self.coupling.matrices {
-            fill_coupling_matrices(&self.coupling_terms, &self.body, &mut self.coupling);
+        if self.coupling.rows_from.is_none_or(|r| r > first) {
+            fill_coupling_rows(&self.coupling_terms, &self.body, first, &mut self.coupling);
         }
     }
 
@@ -131,7 +132,7 @@ impl<T: Scalar> FlexibleBody<T> {
         // the algebraic modes' solve (Model Exchange) reads the coupling's rows; the accelerated
         // modes' coupling force comes from its terms
         if self.quasi_static && self.n_dynamic < n {
-            self.prepare_coupling();
+            self.prepare_coupling_rows(self.n_dynamic);
         } else {
             self.prepare_coupling_coefficients();
         }
@@ -166,7 +167,7 @@ impl<T: Scalar> FlexibleBody<T> {
 
 /// The coupling's coefficients for the given inputs (body-frame w, z, a_B and flange wrenches;
 /// see `coupling_terms`) and whether any term is active; its matrices are left to
-/// [`fill_coupling_matrices`]. `rot` is the mount orientation in use (the input projected onto
+/// [`fill_coupling_rows`]. `rot` is the mount orientation in use (the input projected onto
 /// the rotations), as in the load.
 pub(super) fn coupling_coefficients<T: Scalar>(
     terms: &CouplingTerms,
@@ -187,12 +188,18 @@ pub(super) fn coupling_coefficients<T: Scalar>(
     coefficients(c.w, c.z, c.a, wrenches, &mut c.coef);
     c.active = terms.active(&c.coef);
     c.valid = true;
-    c.matrices = false;
+    c.rows_from = None;
 }
 
-/// C_d = 2 sum w_a G_a and C_k = sum z_a (G_a + E_a) + sum w_a w_b (O_ab + K_ab) + K_G for the
-/// coefficients [`coupling_coefficients`] set.
-pub(super) fn fill_coupling_matrices<T: Scalar>(terms: &CouplingTerms, body: &ReducedBody, c: &mut Coupling<T>) {
-    terms.fill(body, &c.coef, &mut c.c_d, &mut c.c_k);
-    c.matrices = true;
+/// Rows `first..` of C_d = 2 sum w_a G_a and C_k = sum z_a (G_a + E_a) + sum w_a w_b (O_ab +
+/// K_ab) + K_G for the coefficients [`coupling_coefficients`] set.
+pub(super) fn fill_coupling_rows<T: Scalar>(
+    terms: &CouplingTerms,
+    body: &ReducedBody,
+    first: usize,
+    c: &mut Coupling<T>,
+) {
+    let n = body.n_modes();
+    terms.fill_rows(body, &c.coef, first, &mut c.c_d[first * n..], &mut c.c_k[first * n..]);
+    c.rows_from = Some(first);
 }

@@ -13,7 +13,7 @@ impl<T: Scalar> FlexibleBody<T> {
         }
         self.check_inputs()?;
         self.modal_load();
-        self.prepare_coupling();
+        self.prepare_coupling_rows(0);
         let n = self.q.len();
         if self.coupling.active {
             let mut a = self.coupling.c_k.clone();
