@@ -43,8 +43,12 @@ pub struct CoupledPropagator {
     key: Option<(f64, f64, f64)>,
     key_c_d: Vec<f64>,
     key_c_k: Vec<f64>,
-    /// Top 2n rows of exp(X), row-major 2n x 4n: [P | G1 | G2].
+    /// Top 2n rows of exp(X): [P | G1] (row-major 2n x 3n) and G2 (2n x n) apart, read last by
+    /// a step and again by the corrector's `add_ramp`: 2n x n values that then still lie in the
+    /// second-level cache (the drift force between them reads a few n x n matrices), where rows
+    /// of [P | G1 | G2] were read from the third.
     top: Vec<f64>,
+    g2: Vec<f64>,
     /// Whether Lambda + sym(C_k) is positive definite for the cached coupling.
     definite: bool,
 }
@@ -63,13 +67,13 @@ impl CoupledPropagator {
     /// A propagator for `n` modes: its transition and reference are allocated here, its scratch
     /// is a `Workspace::new(Self::workspace_req(n))` of the caller's.
     pub fn with_modes(n: usize) -> Self {
-        let m = 4 * n;
         Self {
             n,
             key: None,
             key_c_d: vec![0.0; n * n],
             key_c_k: vec![0.0; n * n],
-            top: vec![0.0; 2 * n * m],
+            top: vec![0.0; 6 * n * n],
+            g2: vec![0.0; 2 * n * n],
             definite: true,
         }
     }
@@ -120,7 +124,7 @@ impl CoupledPropagator {
 
     /// Whether this propagator has the storage for its modes (bodies that can couple).
     pub fn has_storage(&self) -> bool {
-        self.n > 0 && self.top.len() == 8 * self.n * self.n
+        self.n > 0 && self.top.len() == 6 * self.n * self.n && self.g2.len() == 2 * self.n * self.n
     }
 
     /// The coupling (C_d, C_k) the prepared transition is exact for.
@@ -252,10 +256,11 @@ impl CoupledPropagator {
             std::mem::swap(&mut p, &mut p_next);
             c *= 2.0;
         }
-        let w = 4 * n;
+        let w = 3 * n;
         for r in 0..m {
             self.top[r * w..r * w + m].copy_from_slice(&p[r * m..(r + 1) * m]);
-            self.top[r * w + m..(r + 1) * w].copy_from_slice(&g[r * m..(r + 1) * m]);
+            self.top[r * w + m..(r + 1) * w].copy_from_slice(&g[r * m..r * m + n]);
+            self.g2[r * n..(r + 1) * n].copy_from_slice(&g[r * m + n..(r + 1) * m]);
         }
     }
 
@@ -273,21 +278,19 @@ impl CoupledPropagator {
         ws: &mut Workspace,
     ) -> Result<(), WorkspaceTooSmall> {
         let n = self.n;
-        let m = 4 * n;
         let [y, y1] = ws.carve(Self::advance_slices(n))?;
         for i in 0..n {
             y[i] = omega[i] * q[i];
             y[n + i] = qd[i];
         }
-        let ramp = p1.iter().any(|v| *v != 0.0);
-        for (row, out) in self.top.chunks_exact(m).zip(y1.iter_mut()) {
-            let (p, g) = row.split_at(2 * n);
-            let (g1, g2) = g.split_at(n);
-            let mut acc = dot(p, y) + dot(g1, p0);
-            if ramp {
-                acc += dot(g2, p1);
+        for (row, out) in self.top.chunks_exact(3 * n).zip(y1.iter_mut()) {
+            let (p, g1) = row.split_at(2 * n);
+            *out = dot(p, y) + dot(g1, p0);
+        }
+        if p1.iter().any(|v| *v != 0.0) {
+            for (g2, out) in self.g2.chunks_exact(n).zip(y1.iter_mut()) {
+                *out += dot(g2, p1);
             }
-            *out = acc;
         }
         for i in 0..n {
             q[i] = y1[i] / omega[i];
@@ -309,10 +312,9 @@ impl CoupledPropagator {
         ws: &mut Workspace,
     ) -> Result<(), WorkspaceTooSmall> {
         let n = self.n;
-        let m = 4 * n;
         let [dy, _] = ws.carve(Self::advance_slices(n))?;
-        for (row, out) in self.top.chunks_exact(m).zip(dy.iter_mut()) {
-            *out = dot(&row[3 * n..], p1);
+        for (g2, out) in self.g2.chunks_exact(n).zip(dy.iter_mut()) {
+            *out = dot(g2, p1);
         }
         for i in 0..n {
             q[i] += dy[i] / omega[i];
@@ -544,8 +546,9 @@ mod tests {
             let mut ws = Workspace::new(CoupledPropagator::workspace_req(n));
             p.prepare(&omega, alpha, beta, &vec![0.0; n], &c_d, &c_k, h, &mut ws).unwrap();
             let reference = van_loan_reference(&omega, &damping, &c_d, &c_k, h);
-            assert_eq!(p.top.len(), reference.len());
             let (m, w) = (2 * n, 4 * n);
+            assert_eq!(p.top.len() + p.g2.len(), reference.len());
+            let ours = |r: usize, c: usize| if c < 3 * n { p.top[r * 3 * n + c] } else { p.g2[r * n + c - 3 * n] };
             for (block, cols) in [("P", 0..m), ("G1", m..m + n), ("G2", m + n..w)] {
                 let largest = (0..m)
                     .flat_map(|r| cols.clone().map(move |c| (r, c)))
@@ -553,7 +556,7 @@ mod tests {
                     .fold(0.0, f64::max);
                 for r in 0..m {
                     for c in cols.clone() {
-                        let (ours, theirs) = (p.top[r * w + c], reference[r * w + c]);
+                        let (ours, theirs) = (ours(r, c), reference[r * w + c]);
                         assert!(
                             (ours - theirs).abs() <= tolerance * largest,
                             "h {h}, beta {beta}: {block}[{r},{c}] {ours} vs {theirs} (largest {largest})"
