@@ -76,11 +76,23 @@ fn blocked<const FUSED: bool>(r: usize, k: usize, c: usize, a: &[f64], b: &[f64]
     let c_full = c - c % COLS;
     let mut a_panel = [[0.0f64; ROWS]; DEPTH];
     let mut b_edge = [[0.0f64; COLS]; DEPTH];
-    for i in (0..r).step_by(ROWS) {
-        // rows past r stay zero in the panel: their block rows are computed and dropped
-        let rows = ROWS.min(r - i);
-        for k0 in (0..k).step_by(DEPTH) {
-            let depth = DEPTH.min(k - k0);
+    // the shared dimension outermost: b's edge columns are packed once per panel, not once per
+    // block of rows (a 212-column b packed its last four columns 35 times a panel, one short
+    // copy per shared index: a fifth of the product's time)
+    for k0 in (0..k).step_by(DEPTH) {
+        let depth = DEPTH.min(k - k0);
+        let cols = c - c_full;
+        if cols > 0 {
+            for (l, edge) in b_edge[..depth].iter_mut().enumerate() {
+                let row = &b[(k0 + l) * c + c_full..(k0 + l + 1) * c];
+                for (col, e) in edge.iter_mut().enumerate() {
+                    *e = if col < cols { row[col] } else { 0.0 };
+                }
+            }
+        }
+        for i in (0..r).step_by(ROWS) {
+            // rows past r stay zero in the panel: their block rows are computed and dropped
+            let rows = ROWS.min(r - i);
             for (l, packed) in a_panel[..depth].iter_mut().enumerate() {
                 for (row, v) in packed.iter_mut().enumerate() {
                     *v = if row < rows { a[(i + row) * k + k0 + l] } else { 0.0 };
@@ -98,12 +110,7 @@ fn blocked<const FUSED: bool>(r: usize, k: usize, c: usize, a: &[f64], b: &[f64]
                     out,
                 );
             }
-            if c_full < c {
-                let cols = c - c_full;
-                for (l, edge) in b_edge[..depth].iter_mut().enumerate() {
-                    edge[..cols].copy_from_slice(&b[(k0 + l) * c + c_full..(k0 + l + 1) * c]);
-                    edge[cols..].fill(0.0);
-                }
+            if cols > 0 {
                 let edge = &b_edge[..depth];
                 block::<FUSED>(panel, |l| &edge[l], k0 > 0, (i, rows), (c_full, cols), c, out);
             }
