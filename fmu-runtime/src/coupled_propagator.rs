@@ -23,7 +23,7 @@
 //! [`Workspace`] of [`CoupledPropagator::workspace_req`] values that the caller allocated once and
 //! lends to each call: neither allocates, and a workspace too small is refused, not a panic.
 
-use crate::matmul::{dot, mat_mul};
+use crate::matmul::{dot, mat_mul_strided};
 use crate::workspace::{Workspace, WorkspaceReq, WorkspaceTooSmall};
 
 /// More squarings than any finite |A h| needs (log2(f64::MAX) = 1024).
@@ -78,8 +78,9 @@ impl CoupledPropagator {
         }
     }
 
-    /// The scratch `prepare` and `advance` need for `n` modes: the exponential's 32 n^2 values,
-    /// whose room the definiteness test before it (n^2) and each advance (4 n) reuse.
+    /// The scratch `prepare` and `advance` need for `n` modes: the exponential's eight 2n x 2n
+    /// matrices (rows padded to whole cache lines), whose room the definiteness test before it
+    /// (n^2) and each advance (4 n) reuse.
     pub const fn workspace_req(n: usize) -> WorkspaceReq {
         WorkspaceReq::slices(&Self::definiteness_slices(n))
             .or(WorkspaceReq::slices(&Self::exponential_slices(n)))
@@ -93,9 +94,9 @@ impl CoupledPropagator {
 
     /// The exponential's scratch, in the order of [`Exponential`]'s fields: the scaled generator
     /// and its square, cube and fourth power, the phi series and a product (2n x 2n each);
-    /// [G1 | G2] and its product with P (2n x 2n each).
+    /// [G1 | G2] and its product with P (2n x 2n each); rows [`row_stride`] values apart.
     const fn exponential_slices(n: usize) -> [usize; 8] {
-        let square = 4 * n * n;
+        let square = 2 * n * row_stride(2 * n);
         [square; 8]
     }
 
@@ -161,19 +162,20 @@ impl CoupledPropagator {
         self.definite = self.effective_stiffness_definite(omega, ws)?;
         let [a, a2, a3, a4, phi, tmp, g, gt] = ws.carve(Self::exponential_slices(n))?;
         let m = 2 * n;
+        let ld = row_stride(m);
         // A h in the scaled state, then scaled by 2^-s so that |A h 2^-s|_1 <= SCALED_NORM
         a.fill(0.0);
         for i in 0..n {
-            a[i * m + n + i] = h * omega[i];
+            a[i * ld + n + i] = h * omega[i];
             let row = n + i;
             for j in 0..n {
-                a[row * m + j] = -h * c_k[i * n + j] / omega[j];
-                a[row * m + n + j] = -h * c_d[i * n + j];
+                a[row * ld + j] = -h * c_k[i * n + j] / omega[j];
+                a[row * ld + n + j] = -h * c_d[i * n + j];
             }
-            a[row * m + i] -= h * omega[i];
-            a[row * m + n + i] -= h * (alpha + beta * omega[i] * omega[i] + extra[i]);
+            a[row * ld + i] -= h * omega[i];
+            a[row * ld + n + i] -= h * (alpha + beta * omega[i] * omega[i] + extra[i]);
         }
-        let norm = (0..m).map(|j| (0..m).map(|i| a[i * m + j].abs()).sum::<f64>()).fold(0.0, f64::max);
+        let norm = (0..m).map(|j| (0..m).map(|i| a[i * ld + j].abs()).sum::<f64>()).fold(0.0, f64::max);
         // the load blocks have norm h, like A h's time scale: scale them alike
         let norm = norm.max(h);
         // a finite norm needs at most log2(f64::MAX) squarings; an overflowing one (a step of
@@ -194,57 +196,63 @@ impl CoupledPropagator {
     fn exponentiate(&mut self, s: i32, tau: f64, x: Exponential<'_>) {
         let n = self.n;
         let m = 2 * n;
+        // square matrices in rows of `ld` values, 2n x n ones (a3, a4 below) of `ldn`; the values
+        // past a row's end are never read by a product (elementwise sums may pass over them)
+        let (ld, ldn) = (row_stride(m), row_stride(n));
+        let mul = |r: usize, k: usize, c: usize, x: (&[f64], usize), y: (&[f64], usize), out: (&mut [f64], usize)| {
+            mat_mul_strided(r, k, c, x, y, out)
+        };
         let Exponential { a, a2, a3, a4, phi, tmp, g, gt } = x;
         let a = &*a;
         // The block matrix X = [[a, e, 0], [0, 0, tau I], [0, 0, 0]] (a = A tau, e = [0; tau I])
         // has X^k = [[a^k, a^(k-1) e, a^(k-2) e tau], 0, 0], so exp(X) = [[P, G1, G2], [0, I,
         // tau I], [0, 0, I]] with P = I + a + a^2 phi2(a), G1 = phi1(a) e, G2 = phi2(a) e tau,
         // phi1 = I + a phi2 and phi2(a) = sum c_k a^k, c_k = 1 / (k + 2)!.
-        mat_mul(m, m, m, a, a, a2);
-        mat_mul(m, m, m, a2, a, a3);
-        mat_mul(m, m, m, a2, a2, a4);
+        mul(m, m, m, (a, ld), (a, ld), (a2, ld));
+        mul(m, m, m, (a2, ld), (a, ld), (a3, ld));
+        mul(m, m, m, (a2, ld), (a2, ld), (a4, ld));
         let powers: [&[f64]; PS_POWER] = [&[], a, a2, a3];
         // Paterson-Stockmeyer: phi2 = B_0 + a^4 (B_1 + a^4 (B_2 + ...)), each B_j = sum over
         // i < 4 of c_(4j+i) a^i a sum of the powers at hand
         let blocks = TAYLOR_DEGREE / PS_POWER;
         let coefficient = |k: usize| if k <= TAYLOR_DEGREE { 1.0 / factorial(k + 2) } else { 0.0 };
         let (mut acc, mut spare) = (phi, tmp);
-        power_sum(m, &powers, |i| coefficient(PS_POWER * blocks + i), acc);
+        power_sum(m, ld, &powers, |i| coefficient(PS_POWER * blocks + i), acc);
         for j in (0..blocks).rev() {
-            mat_mul(m, m, m, a4, acc, spare);
+            mul(m, m, m, (a4, ld), (acc, ld), (spare, ld));
             std::mem::swap(&mut acc, &mut spare);
-            add_power_sum(m, &powers, |i| coefficient(PS_POWER * j + i), acc);
+            add_power_sum(m, ld, &powers, |i| coefficient(PS_POWER * j + i), acc);
         }
         let phi2 = &*acc;
         // [G1 | G2]: G2 = phi2 e tau, the right half columns of phi2 times tau^2; G1 = phi1 e =
         // (e + a phi2 e), the same columns times a plus tau I below
         for r in 0..m {
             for j in 0..n {
-                a3[r * n + j] = phi2[r * m + n + j];
-                g[r * m + n + j] = phi2[r * m + n + j] * tau * tau;
+                a3[r * ldn + j] = phi2[r * ld + n + j];
+                g[r * ld + n + j] = phi2[r * ld + n + j] * tau * tau;
             }
         }
-        mat_mul(m, m, n, a, a3, a4);
+        mul(m, m, n, (a, ld), (a3, ldn), (a4, ldn));
         for r in 0..m {
             for j in 0..n {
                 let identity = if r == n + j { 1.0 } else { 0.0 };
-                g[r * m + j] = (a4[r * n + j] + identity) * tau;
+                g[r * ld + j] = (a4[r * ldn + j] + identity) * tau;
             }
         }
         // P = I + a + a^2 phi2
         let p = spare;
-        mat_mul(m, m, m, a2, phi2, p);
+        mul(m, m, m, (a2, ld), (phi2, ld), (p, ld));
         for (pv, av) in p.iter_mut().zip(a) {
             *pv += av;
         }
-        add_identity(m, p, 1.0);
+        add_identity(m, ld, p, 1.0);
         // squaring: exp(X)^2 = [[P^2, P G1 + G1, P G2 + G1 c + G2], [0, I, 2c I], [0, 0, I]];
         // P [G1 | G2] as one product
         let (mut p, mut p_next) = (p, a3);
         let mut c = tau;
         for _ in 0..s {
-            mat_mul(m, m, m, p, g, gt);
-            for (row, t_row) in g.chunks_exact_mut(m).zip(gt.chunks_exact(m)) {
+            mul(m, m, m, (p, ld), (g, ld), (gt, ld));
+            for (row, t_row) in g.chunks_exact_mut(ld).zip(gt.chunks_exact(ld)) {
                 let (g1, g2) = row.split_at_mut(n);
                 let (t1, t2) = t_row.split_at(n);
                 for j in 0..n {
@@ -252,15 +260,15 @@ impl CoupledPropagator {
                     g1[j] += t1[j];
                 }
             }
-            mat_mul(m, m, m, p, p, p_next);
+            mul(m, m, m, (p, ld), (p, ld), (p_next, ld));
             std::mem::swap(&mut p, &mut p_next);
             c *= 2.0;
         }
         let w = 3 * n;
         for r in 0..m {
-            self.top[r * w..r * w + m].copy_from_slice(&p[r * m..(r + 1) * m]);
-            self.top[r * w + m..(r + 1) * w].copy_from_slice(&g[r * m..r * m + n]);
-            self.g2[r * n..(r + 1) * n].copy_from_slice(&g[r * m + n..(r + 1) * m]);
+            self.top[r * w..r * w + m].copy_from_slice(&p[r * ld..r * ld + m]);
+            self.top[r * w + m..(r + 1) * w].copy_from_slice(&g[r * ld..r * ld + n]);
+            self.g2[r * n..(r + 1) * n].copy_from_slice(&g[r * ld + n..r * ld + m]);
         }
     }
 
@@ -374,14 +382,14 @@ struct Exponential<'a> {
 }
 
 /// out = sum over i of coefficient(i) a^i, with powers[i] = a^i for i >= 1 (a^0 = I).
-fn power_sum(m: usize, powers: &[&[f64]], coefficient: impl Fn(usize) -> f64, out: &mut [f64]) {
+fn power_sum(m: usize, ld: usize, powers: &[&[f64]], coefficient: impl Fn(usize) -> f64, out: &mut [f64]) {
     out.fill(0.0);
-    add_power_sum(m, powers, coefficient, out);
+    add_power_sum(m, ld, powers, coefficient, out);
 }
 
 /// out += sum over i of coefficient(i) a^i (powers as in [`power_sum`]).
-fn add_power_sum(m: usize, powers: &[&[f64]], coefficient: impl Fn(usize) -> f64, out: &mut [f64]) {
-    add_identity(m, out, coefficient(0));
+fn add_power_sum(m: usize, ld: usize, powers: &[&[f64]], coefficient: impl Fn(usize) -> f64, out: &mut [f64]) {
+    add_identity(m, ld, out, coefficient(0));
     for (i, power) in powers.iter().enumerate().skip(1) {
         let c = coefficient(i);
         if c != 0.0 {
@@ -392,10 +400,15 @@ fn add_power_sum(m: usize, powers: &[&[f64]], coefficient: impl Fn(usize) -> f64
     }
 }
 
-fn add_identity(m: usize, out: &mut [f64], value: f64) {
+fn add_identity(m: usize, ld: usize, out: &mut [f64], value: f64) {
     for i in 0..m {
-        out[i * m + i] += value;
+        out[i * ld + i] += value;
     }
+}
+
+/// Values between the rows of the exponential's m-column matrices: whole cache lines (8 values).
+const fn row_stride(m: usize) -> usize {
+    m.next_multiple_of(8)
 }
 
 fn factorial(k: usize) -> f64 {
@@ -614,7 +627,8 @@ mod tests {
         let c_d = [0.0, 5.0, 0.0, -5.0, 0.0, 1.0, 0.0, -1.0, 0.0];
         let c_k = [3.0, 0.5, 0.0, 0.5, -2.0, 0.1, 0.0, 0.1, 7.0];
         let needed = CoupledPropagator::workspace_req(3).len();
-        assert_eq!(needed, 32 * 9);
+        // the exponential's eight 2n x 2n matrices, rows of whole cache lines (8 values for 6)
+        assert_eq!(needed, 8 * 6 * 8);
         let mut p = CoupledPropagator::with_modes(3);
         let mut small = Workspace::new(CoupledPropagator::workspace_req(2));
         let refused = p.prepare(&omega, 0.1, 1e-4, &[0.0; 3], &c_d, &c_k, 0.01, &mut small).unwrap_err();
