@@ -14,7 +14,6 @@
 use super::Vec3;
 use super::coupling_bound::energy_norm;
 use super::dense::row_dot;
-use crate::matmul::dot;
 use crate::reduced::ReducedBody;
 use crate::scalar::Scalar;
 
@@ -228,14 +227,19 @@ impl CouplingTerms {
             if c.is_zero() {
                 continue;
             }
-            let x = match t.acts {
-                Acts::Velocity => qd,
-                Acts::Position => q,
-            };
-            let scale = c * t.scale;
-            for (o, row) in out.iter_mut().zip(self.matrix(t, body).chunks_exact(self.n)) {
-                *o += scale * row_dot(row, x);
-            }
+            self.add_term(t, body, c, q, qd, out);
+        }
+    }
+
+    /// out += c times the term's scaled matrix applied to q' or q (its rows up to out.len()).
+    fn add_term<T: Scalar>(&self, t: &Term, body: &ReducedBody, c: T, q: &[T], qd: &[T], out: &mut [T]) {
+        let x = match t.acts {
+            Acts::Velocity => qd,
+            Acts::Position => q,
+        };
+        let scale = c * t.scale;
+        for (o, row) in out.iter_mut().zip(self.matrix(t, body).chunks_exact(self.n)) {
+            *o += scale * row_dot(row, x);
         }
     }
 
@@ -292,14 +296,7 @@ impl CouplingTerms {
             if h * change.abs() * t.norm <= NEGLIGIBLE_DRIFT {
                 continue;
             }
-            let x = match t.acts {
-                Acts::Velocity => qd,
-                Acts::Position => q,
-            };
-            let scale = change * t.scale;
-            for (o, row) in out.iter_mut().zip(self.matrix(t, body).chunks_exact(self.n)) {
-                *o += scale * dot(row, x);
-            }
+            self.add_term(t, body, change, q, qd, out);
         }
     }
 
@@ -323,6 +320,16 @@ impl CouplingTerms {
 mod tests {
     use super::bound_tests::{coupled_body, coupling_of};
     use super::*;
+
+    /// The tests' body (nine modes, every term) with its terms, and a state q, q' of it.
+    fn nine_modes_in_motion() -> (ReducedBody, CouplingTerms, Vec<f64>, Vec<f64>) {
+        let body = coupled_body(9);
+        let terms = CouplingTerms::of(&body);
+        let n = body.n_modes();
+        let q = (0..n).map(|i| 0.1 * (i as f64 + 1.0).sin()).collect();
+        let qd = (0..n).map(|i| (0.7 * i as f64).cos()).collect();
+        (body, terms, q, qd)
+    }
 
     /// Largest |x - y| over two equally long sequences, and the largest |y|.
     fn worst(x: &[f64], y: &[f64]) -> (f64, f64) {
@@ -365,11 +372,8 @@ mod tests {
     /// ten times that.
     #[test]
     fn the_drift_force_is_the_difference_of_the_couplings_applied() {
-        let body = coupled_body(9);
-        let terms = CouplingTerms::of(&body);
+        let (body, terms, q, qd) = nine_modes_in_motion();
         let n = body.n_modes();
-        let q: Vec<f64> = (0..n).map(|i| 0.1 * (i as f64 + 1.0).sin()).collect();
-        let qd: Vec<f64> = (0..n).map(|i| (0.7 * i as f64).cos()).collect();
         let (d0, k0, c0) = coupling_of(&body, [0.7, -1.3, 4.0], [0.5, 0.2, -2.0], [1.0, -0.4, -9.81], [3.0, -1.0, 2.0]);
         let (d1, k1, c1) = coupling_of(&body, [0.7, -1.3, 4.1], [0.5, 0.2, -1.9], [1.0, -0.4, -9.7], [3.0, -1.1, 2.0]);
         let expected: Vec<f64> = (0..n)
@@ -408,11 +412,8 @@ mod tests {
     /// move in sums of nine terms.
     #[test]
     fn the_force_is_the_coupling_applied() {
-        let body = coupled_body(9);
-        let terms = CouplingTerms::of(&body);
+        let (body, terms, q, qd) = nine_modes_in_motion();
         let n = body.n_modes();
-        let q: Vec<f64> = (0..n).map(|i| 0.1 * (i as f64 + 1.0).sin()).collect();
-        let qd: Vec<f64> = (0..n).map(|i| (0.7 * i as f64).cos()).collect();
         let (d, k, coef) = coupling_of(&body, [0.7, -1.3, 4.0], [0.5, 0.2, -2.0], [1.0, -0.4, -9.81], [3.0, -1.0, 2.0]);
         let expected: Vec<f64> =
             (0..n).map(|i| (0..n).map(|j| d[i * n + j] * qd[j] + k[i * n + j] * q[j]).sum()).collect();
