@@ -93,8 +93,9 @@ impl CoupledPropagator {
     }
 
     /// The exponential's scratch, in the order of [`Exponential`]'s fields: the scaled generator
-    /// and its square, cube and fourth power, the phi series and a product (2n x 2n each);
-    /// [G1 | G2] and its product with P (2n x 2n each); rows [`row_stride`] values apart.
+    /// and its square, cube and fourth power, the phi series and a product (2n x 2n each; the
+    /// cube and the fourth power also serve as 2n x n scratch); [G1 | G2] and its product with P
+    /// (2n x 2n each); rows [`row_stride`] values apart.
     const fn exponential_slices(n: usize) -> [usize; 8] {
         let square = 2 * n * row_stride(2 * n);
         [square; 8]
@@ -192,7 +193,7 @@ impl CoupledPropagator {
     }
 
     /// exp of the scaled generator in `x.a` (with its load blocks), squared `s` times back to the
-    /// step: the transition `top` = [P, G1, G2].
+    /// step: the transition [P, G1] in `top`, G2 in `g2`.
     fn exponentiate(&mut self, s: i32, tau: f64, x: Exponential<'_>) {
         let n = self.n;
         let m = 2 * n;
@@ -365,7 +366,7 @@ impl CoupledPropagator {
 
 /// The exponential's scratch, carved from the workspace (see
 /// [`CoupledPropagator::exponential_slices`]); written before it is read, so what a previous
-/// call left in it does not matter. 2n x 2n each.
+/// call left in it does not matter. 2n x 2n each, in rows of [`row_stride`] values.
 struct Exponential<'a> {
     /// The scaled generator A tau (its load blocks are implicit) and its powers; the cube and
     /// the fourth power serve as scratch once the series is summed, the cube as P's square.

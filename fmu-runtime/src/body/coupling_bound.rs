@@ -26,19 +26,19 @@ pub(super) fn energy_norm(n: usize, matrix: &[f64], omega: Option<&[f64]>, scrat
     if matrix.len() != n * n || n == 0 {
         return 0.0;
     }
-    let norm = match omega {
-        None => spectral_norm(n, matrix, scratch),
-        Some(omega) => {
-            let mut scaled = matrix.to_vec();
-            for row in scaled.chunks_exact_mut(n) {
-                for (m, w) in row.iter_mut().zip(omega) {
-                    *m /= w;
-                }
+    let mut scaled = matrix.to_vec();
+    if let Some(omega) = omega {
+        for row in scaled.chunks_exact_mut(n) {
+            for (m, w) in row.iter_mut().zip(omega) {
+                *m /= w;
             }
-            spectral_norm(n, &scaled, scratch)
         }
-    };
-    ESTIMATE_MARGIN * norm
+    }
+    let estimate = spectral_norm(n, &scaled, scratch);
+    // a start vector the matrix maps to zero leaves the estimate at zero for a matrix that is
+    // not: the term would then never count as drift (nor its force be added). The Frobenius
+    // norm bounds the spectral norm from above.
+    if estimate > 0.0 { ESTIMATE_MARGIN * estimate } else { scaled.iter().map(|v| v * v).sum::<f64>().sqrt() }
 }
 
 /// Largest singular value of the n x n row-major `b`: power iteration on b^T b from a vector
@@ -82,7 +82,8 @@ mod tests {
 
     /// The estimate is the margin times the largest singular value: of a diagonal matrix its
     /// largest |entry|, of a rank-one u v^T the product of the norms (both exact: the iteration
-    /// converges to them to its 1e-6 stopping rule); with the columns divided by omega.
+    /// converges to them to its 1e-6 stopping rule); with the columns divided by omega. Never
+    /// zero for a matrix that is not, even one that maps the iteration's start vector to zero.
     #[test]
     fn the_estimate_is_the_margin_over_the_largest_singular_value() {
         let n = 5;
@@ -101,5 +102,15 @@ mod tests {
         let found = energy_norm(n, &rank_one, None, &mut scratch);
         assert!((found / ESTIMATE_MARGIN - exact).abs() <= exact * 1e-5, "rank one: {found} against {exact}");
         assert_eq!(energy_norm(n, &[], None, &mut scratch), 0.0);
+        assert_eq!(energy_norm(n, &vec![0.0; n * n], None, &mut scratch), 0.0);
+        // rank one, its row orthogonal to the iteration's start vector: the start maps to zero,
+        // the bound falls back to the Frobenius norm (here the exact norm)
+        let start: Vec<f64> = (0..n).map(|j| 1.0 + ((j * 7919) % 31) as f64 / 31.0).collect();
+        let mut row = vec![0.0; n];
+        (row[0], row[1]) = (start[1], -start[0]);
+        let blind: Vec<f64> = (0..n * n).map(|k| if k < n { row[k] } else { 0.0 }).collect();
+        let exact = row.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let found = energy_norm(n, &blind, None, &mut scratch);
+        assert!(found >= exact * (1.0 - 1e-12), "a matrix blind to the start vector: {found} below {exact}");
     }
 }
