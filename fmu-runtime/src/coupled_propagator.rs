@@ -23,7 +23,8 @@
 //! [`Workspace`] of [`CoupledPropagator::workspace_req`] values that the caller allocated once and
 //! lends to each call: neither allocates, and a workspace too small is refused, not a panic.
 
-use crate::matmul::{dot, mat_mul_strided};
+use crate::matmul::mat_mul_strided;
+use crate::matvec::{Into, mat_vec};
 use crate::workspace::{Workspace, WorkspaceReq, WorkspaceTooSmall};
 
 /// More squarings than any finite |A h| needs (log2(f64::MAX) = 1024).
@@ -101,9 +102,10 @@ impl CoupledPropagator {
         [square; 8]
     }
 
-    /// The scaled state y = [Omega q; q'] at the step's start and end (2n each).
+    /// The scaled state y = [Omega q; q'] at the step's start with the load p0 after it (3n), and
+    /// at its end (2n).
     const fn advance_slices(n: usize) -> [usize; 2] {
-        [2 * n, 2 * n]
+        [3 * n, 2 * n]
     }
 
     /// Whether the effective stiffness Lambda + sym(C_k) of the prepared step is positive
@@ -287,19 +289,16 @@ impl CoupledPropagator {
         ws: &mut Workspace,
     ) -> Result<(), WorkspaceTooSmall> {
         let n = self.n;
+        // [P | G1] applied to [y; p0] in one product, then G2 p1
         let [y, y1] = ws.carve(Self::advance_slices(n))?;
         for i in 0..n {
             y[i] = omega[i] * q[i];
             y[n + i] = qd[i];
         }
-        for (row, out) in self.top.chunks_exact(3 * n).zip(y1.iter_mut()) {
-            let (p, g1) = row.split_at(2 * n);
-            *out = dot(p, y) + dot(g1, p0);
-        }
+        y[2 * n..].copy_from_slice(p0);
+        mat_vec((&self.top, 3 * n), y, y1, Into::Set);
         if p1.iter().any(|v| *v != 0.0) {
-            for (g2, out) in self.g2.chunks_exact(n).zip(y1.iter_mut()) {
-                *out += dot(g2, p1);
-            }
+            mat_vec((&self.g2, n), p1, y1, Into::AddScaled(1.0));
         }
         for i in 0..n {
             q[i] = y1[i] / omega[i];
@@ -321,10 +320,8 @@ impl CoupledPropagator {
         ws: &mut Workspace,
     ) -> Result<(), WorkspaceTooSmall> {
         let n = self.n;
-        let [dy, _] = ws.carve(Self::advance_slices(n))?;
-        for (g2, out) in self.g2.chunks_exact(n).zip(dy.iter_mut()) {
-            *out = dot(g2, p1);
-        }
+        let [_, dy] = ws.carve(Self::advance_slices(n))?;
+        mat_vec((&self.g2, n), p1, dy, Into::Set);
         for i in 0..n {
             q[i] += dy[i] / omega[i];
             qd[i] += dy[n + i];
@@ -654,7 +651,8 @@ mod tests {
         run(&mut Workspace::new(CoupledPropagator::workspace_req(3)), &mut prepared);
         let mut tiny = Workspace::new(WorkspaceReq::slices(&[5]));
         let (mut q, mut qd) = ([1.0; 3], [2.0; 3]);
+        // the advance's [y; p0] (3n) and its end (2n)
         let refused = prepared.advance(&omega, &[0.0; 3], &[0.0; 3], &mut q, &mut qd, &mut tiny).unwrap_err();
-        assert_eq!((refused.needed, refused.available, q, qd), (12, 5, [1.0; 3], [2.0; 3]));
+        assert_eq!((refused.needed, refused.available, q, qd), (15, 5, [1.0; 3], [2.0; 3]));
     }
 }

@@ -12,6 +12,7 @@ pub mod format;
 pub mod interface;
 pub mod kinematics;
 pub mod matmul;
+pub mod matvec;
 pub mod propagator;
 pub mod reduced;
 pub mod scalar;

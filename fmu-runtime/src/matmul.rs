@@ -66,24 +66,6 @@ fn mat_mul_fma(r: usize, k: usize, c: usize, a: &[f64], b: &[f64], out: &mut [f6
     blocked::<true>(r, k, c, a, b, out, ld);
 }
 
-/// a . b with four partial sums (independent chains the compiler can keep in flight).
-#[inline]
-pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let mut s = [0.0; 4];
-    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
-    let (ra, rb) = (ca.remainder(), cb.remainder());
-    for (x, y) in ca.zip(cb) {
-        for k in 0..4 {
-            s[k] += x[k] * y[k];
-        }
-    }
-    let mut tail = 0.0;
-    for (x, y) in ra.iter().zip(rb) {
-        tail += x * y;
-    }
-    (s[0] + s[1]) + (s[2] + s[3]) + tail
-}
-
 /// acc + x y, fused where `FUSED` (one rounding; a call into libm without the FMA unit, hence
 /// the separate instantiation).
 #[inline(always)]

@@ -14,6 +14,7 @@
 use super::Vec3;
 use super::coupling_bound::energy_norm;
 use super::dense::row_dot;
+use crate::matvec::{Into, mat_vec};
 use crate::reduced::ReducedBody;
 use crate::scalar::Scalar;
 
@@ -296,7 +297,11 @@ impl CouplingTerms {
             if h * change.abs() * t.norm <= NEGLIGIBLE_DRIFT {
                 continue;
             }
-            self.add_term(t, body, change, q, qd, out);
+            let x = match t.acts {
+                Acts::Velocity => qd,
+                Acts::Position => q,
+            };
+            mat_vec((self.matrix(t, body), self.n), x, out, Into::AddScaled(change * t.scale));
         }
     }
 
