@@ -35,9 +35,34 @@ pub trait Scalar:
     fn zero() -> Self {
         Self::default()
     }
+    /// out[i] += scale (m_i . x) for the rows i < out.len() of the row-major `m`, x.len() values
+    /// a row: a coupling term applied to the state. Four partial sums a row (one chain of sums
+    /// waits on itself); f64 takes the blocked kernel of [`crate::matvec`].
+    fn add_scaled_mat_vec(m: &[f64], x: &[Self], scale: Self, out: &mut [Self]) {
+        let k = x.len();
+        if k == 0 {
+            return;
+        }
+        for (o, row) in out.iter_mut().zip(m.chunks_exact(k)) {
+            let mut s = [Self::zero(); 4];
+            for (r, xs) in row.chunks_exact(4).zip(x.chunks_exact(4)) {
+                for l in 0..4 {
+                    s[l] += xs[l] * r[l];
+                }
+            }
+            let mut sum = (s[0] + s[1]) + (s[2] + s[3]);
+            for j in k - k % 4..k {
+                sum += x[j] * row[j];
+            }
+            *o += scale * sum;
+        }
+    }
 }
 
 impl Scalar for f64 {
+    fn add_scaled_mat_vec(m: &[f64], x: &[f64], scale: f64, out: &mut [f64]) {
+        crate::matvec::mat_vec((m, x.len()), x, out, crate::matvec::Into::AddScaled(scale));
+    }
     const CARRIES_DERIVATIVE: bool = false;
     #[inline]
     fn value(self) -> f64 {

@@ -13,8 +13,6 @@
 
 use super::Vec3;
 use super::coupling_bound::energy_norm;
-use super::dense::row_dot;
-use crate::matvec::{Into, mat_vec};
 use crate::reduced::ReducedBody;
 use crate::scalar::Scalar;
 
@@ -238,10 +236,7 @@ impl CouplingTerms {
             Acts::Velocity => qd,
             Acts::Position => q,
         };
-        let scale = c * t.scale;
-        for (o, row) in out.iter_mut().zip(self.matrix(t, body).chunks_exact(self.n)) {
-            *o += scale * row_dot(row, x);
-        }
+        T::add_scaled_mat_vec(self.matrix(t, body), x, c * t.scale, out);
     }
 
     /// C_d and C_k (row-major n x n) for the coefficients `coef`.
@@ -297,11 +292,7 @@ impl CouplingTerms {
             if h * change.abs() * t.norm <= NEGLIGIBLE_DRIFT {
                 continue;
             }
-            let x = match t.acts {
-                Acts::Velocity => qd,
-                Acts::Position => q,
-            };
-            mat_vec((self.matrix(t, body), self.n), x, out, Into::AddScaled(change * t.scale));
+            self.add_term(t, body, change, q, qd, out);
         }
     }
 

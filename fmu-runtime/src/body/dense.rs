@@ -13,26 +13,6 @@ pub(super) fn shape_dot<T: Scalar>(s: &[f64], x: &[T]) -> T {
     sum
 }
 
-/// A row of a matrix of the body's (f64) times x, in four interleaved partial sums: independent
-/// chains the processor keeps in flight (one chain waits on each add; n^2-sized rows of the
-/// coupling are the hot loop of an evaluation).
-#[inline]
-pub(super) fn row_dot<T: Scalar>(row: &[f64], x: &[T]) -> T {
-    let mut s = [T::zero(); 4];
-    let (rows, xs) = (row.chunks_exact(4), x.chunks_exact(4));
-    let (rest_r, rest_x) = (rows.remainder(), xs.remainder());
-    for (r, x) in rows.zip(xs) {
-        for k in 0..4 {
-            s[k] += x[k] * r[k];
-        }
-    }
-    let mut tail = T::zero();
-    for (r, x) in rest_r.iter().zip(rest_x) {
-        tail += *x * *r;
-    }
-    (s[0] + s[1]) + (s[2] + s[3]) + tail
-}
-
 #[inline]
 pub(super) fn dot<T: Scalar>(a: &[T], b: &[T]) -> T {
     let mut sum = T::zero();
