@@ -41,7 +41,6 @@ use crate::reduced::ReducedBody;
 use crate::scalar::{Dual, Scalar, c};
 use coupling_terms::CouplingTerms;
 pub(crate) use coupling_terms::term_count;
-use dense::shape_dot;
 use input_jump::SteppedInputs;
 use quasi_static::QuasiStaticWork;
 use std::sync::Arc;
@@ -628,13 +627,16 @@ impl<T: Scalar> FlexibleBody<T> {
         let m = &self.mount;
         let a = &self.rot;
         for (i, flange) in self.body.flanges.iter().enumerate() {
-            let row = |r: usize, x: &[T]| shape_dot(&flange.shapes[r * n..(r + 1) * n], x);
-            let u = [row(0, &self.q), row(1, &self.q), row(2, &self.q)];
-            let phi = [row(3, &self.q), row(4, &self.q), row(5, &self.q)];
-            let ud = [row(0, &self.qd), row(1, &self.qd), row(2, &self.qd)];
-            let phid = [row(3, &self.qd), row(4, &self.qd), row(5, &self.qd)];
-            let udd = [row(0, &self.eval.qdd), row(1, &self.eval.qdd), row(2, &self.eval.qdd)];
-            let phidd = [row(3, &self.eval.qdd), row(4, &self.eval.qdd), row(5, &self.eval.qdd)];
+            // the flange's six shape rows (translation, rotation) times q, q' and q''
+            let rows = |x: &[T]| {
+                let mut out = [T::zero(); 6];
+                T::add_scaled_mat_vec(&flange.shapes[..6 * n], x, T::from(1.0), &mut out);
+                out
+            };
+            let (x, xd, xdd) = (rows(&self.q), rows(&self.qd), rows(&self.eval.qdd));
+            let (u, phi) = ([x[0], x[1], x[2]], [x[3], x[4], x[5]]);
+            let (ud, phid) = ([xd[0], xd[1], xd[2]], [xd[3], xd[4], xd[5]]);
+            let (udd, phidd) = ([xdd[0], xdd[1], xdd[2]], [xdd[3], xdd[4], xdd[5]]);
             let rho = k3::mul(a, k3::add(flange.position.map(c), u));
             let ud_w = k3::mul(a, ud);
             let phid_w = k3::mul(a, phid);
