@@ -13,21 +13,42 @@ pub(super) fn shape_dot<T: Scalar>(s: &[f64], x: &[T]) -> T {
     sum
 }
 
+/// a . b over the shorter length, in four interleaved partial sums: independent chains the
+/// processor keeps in flight (one chain waits on each add: the quasi-static right-hand sides,
+/// rows of n values for each algebraic mode, took most of a spinning Model Exchange evaluation).
 #[inline]
 pub(super) fn dot<T: Scalar>(a: &[T], b: &[T]) -> T {
-    let mut sum = T::zero();
-    for (a, b) in a.iter().zip(b) {
-        sum += *a * *b;
+    let k = a.len().min(b.len());
+    let (a, b) = (&a[..k], &b[..k]);
+    let mut s = [T::zero(); 4];
+    for (x, y) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
+        for l in 0..4 {
+            s[l] += x[l] * y[l];
+        }
+    }
+    let mut sum = (s[0] + s[1]) + (s[2] + s[3]);
+    for j in k - k % 4..k {
+        sum += a[j] * b[j];
     }
     sum
 }
 
 /// Solve A x = b in place (A row-major n x n, destroyed) by Gaussian elimination with partial
-/// pivoting; Err on a singular matrix. Allocation-free, so fit for a step: every evaluation of a
-/// free-floating body solves its 3 x 3 Schur complement for the angular acceleration here (on
-/// stack arrays), and `settle_static` the n x n static equilibrium (on copies it makes at
-/// initialisation).
-pub(super) fn solve_dense<T: Scalar>(a: &mut [T], b: &mut [T], n: usize) -> Result<(), ()> {
+/// pivoting ([`lu_factor`], [`lu_solve`]); Err on a singular matrix. Allocation-free, so fit for a
+/// step: every evaluation of a free-floating body solves its 3 x 3 Schur complement for the
+/// angular acceleration here (on stack arrays), and `settle_static` the n x n static equilibrium
+/// (on copies it makes at initialisation). `pivots` holds n values.
+pub(super) fn solve_dense<T: Scalar>(a: &mut [T], b: &mut [T], n: usize, pivots: &mut [usize]) -> Result<(), ()> {
+    lu_factor(a, n, pivots)?;
+    lu_solve(a, n, pivots, b);
+    Ok(())
+}
+
+/// A = P^T L U in place (row-major n x n): the unit lower factor's multipliers below the
+/// diagonal, U on and above it, and in pivots[c] the row exchanged with row c before column c
+/// was eliminated (partial pivoting). Err on a singular matrix: a pivot at most 1e-14 of A's
+/// largest entry, or NaN.
+pub(super) fn lu_factor<T: Scalar>(a: &mut [T], n: usize, pivots: &mut [usize]) -> Result<(), ()> {
     let scale = a.iter().fold(0.0f64, |m, v| m.max(v.value().abs()));
     for col in 0..n {
         let piv =
@@ -37,31 +58,45 @@ pub(super) fn solve_dense<T: Scalar>(a: &mut [T], b: &mut [T], n: usize) -> Resu
         if pivot.is_nan() || pivot <= 1e-14 * scale {
             return Err(());
         }
+        pivots[col] = piv;
         if piv != col {
             for k in 0..n {
                 a.swap(piv * n + k, col * n + k);
             }
-            b.swap(piv, col);
         }
         let d = a[col * n + col];
         for i in col + 1..n {
             let f = a[i * n + col] / d;
+            a[i * n + col] = f;
             if !f.is_zero() {
-                for k in col..n {
+                for k in col + 1..n {
                     let v = f * a[col * n + k];
                     a[i * n + k] -= v;
                 }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// b = A^-1 b in place, from [`lu_factor`]'s factors of A.
+pub(super) fn lu_solve<T: Scalar>(a: &[T], n: usize, pivots: &[usize], b: &mut [T]) {
+    // the exchanges first (the factorisation exchanged whole rows, the multipliers of earlier
+    // columns with them), then the unit lower factor
+    for (col, &piv) in pivots[..n].iter().enumerate() {
+        b.swap(col, piv);
+    }
+    for col in 0..n {
+        for i in col + 1..n {
+            let f = a[i * n + col];
+            if !f.is_zero() {
                 let v = f * b[col];
                 b[i] -= v;
             }
         }
     }
     for col in (0..n).rev() {
-        let mut s = T::zero();
-        for k in col + 1..n {
-            s += a[col * n + k] * b[k];
-        }
+        let s = dot(&a[col * n + col + 1..(col + 1) * n], &b[col + 1..n]);
         b[col] = (b[col] - s) / a[col * n + col];
     }
-    Ok(())
 }

@@ -69,7 +69,7 @@ impl<T: Scalar> FlexibleBody<T> {
             }
         }
         let mut w_dot = rhs;
-        solve_dense(&mut s, &mut w_dot, 3).map_err(|()| BodyError::SingularInertia)?;
+        solve_dense(&mut s, &mut w_dot, 3, &mut [0; 3]).map_err(|()| BodyError::SingularInertia)?;
         for r in 0..nd {
             let f = self.cr_q[r] * w_dot[0] + self.cr_q[n + r] * w_dot[1] + self.cr_q[2 * n + r] * w_dot[2];
             self.eval.qdd[r] -= f;
@@ -169,7 +169,7 @@ impl<T: Scalar> FlexibleBody<T> {
     /// out: W' is solved after q_s and depends on it.
     fn free_quasi_static(&mut self, w: Vec3<T>) -> Result<(), BodyError> {
         if w.iter().all(|x| x.is_zero()) {
-            return self.solve_quasi_static(None);
+            return self.solve_quasi_static(None, None);
         }
         let (n, nd) = (self.q.len(), self.n_dynamic);
         let nn = n * n;
@@ -192,7 +192,7 @@ impl<T: Scalar> FlexibleBody<T> {
                 }
             }
         }
-        let solved = self.solve_quasi_static(Some((&c_k, &c_d)));
+        let solved = self.solve_quasi_static(Some((&c_k, &c_d)), None);
         self.qs_work.c_k = c_k;
         self.qs_work.c_d = c_d;
         solved

@@ -379,7 +379,7 @@ impl FlexibleBody {
             n_relaxing: body.n_relaxing(),
             quasi_static: false,
             settling: false,
-            qs_work: QuasiStaticWork::new(n, body.n_dynamic(), body.free_floating),
+            qs_work: QuasiStaticWork::new(n, body.n_dynamic(), body.free_floating, term_count(nf)),
             stepped: SteppedInputs::new(nf),
             host_mount: HostMount::default(),
             step_work: StepWorkspace::for_body(&body),
@@ -435,7 +435,7 @@ impl FlexibleBody {
             n_relaxing: self.n_relaxing,
             quasi_static: self.quasi_static,
             settling: false,
-            qs_work: QuasiStaticWork::new(n, self.n_dynamic, self.frame.is_some()),
+            qs_work: QuasiStaticWork::new(n, self.n_dynamic, self.frame.is_some(), term_count(self.loads.len())),
             // stepping is f64 only
             stepped: SteppedInputs::default(),
             host_mount: HostMount::default(),

@@ -141,7 +141,7 @@ impl<T: Scalar> FlexibleBody<T> {
             let coupling = std::mem::take(&mut self.coupling);
             let nd = self.n_dynamic;
             let rows = coupling.active.then(|| (&coupling.c_k[nd * n..], &coupling.c_d[nd * n..]));
-            let solved = self.solve_quasi_static(rows);
+            let solved = self.solve_quasi_static(rows, Some(&coupling.coef));
             self.coupling = coupling;
             solved?;
         }

@@ -21,7 +21,7 @@ impl<T: Scalar> FlexibleBody<T> {
                 a[j * n + j] += c(self.body.omega[j] * self.body.omega[j]);
             }
             let mut x = self.load.clone();
-            solve_dense(&mut a, &mut x, n).map_err(|()| BodyError::NoStaticEquilibrium)?;
+            solve_dense(&mut a, &mut x, n, &mut vec![0; n]).map_err(|()| BodyError::NoStaticEquilibrium)?;
             self.q.copy_from_slice(&x);
         } else {
             for j in 0..n {
