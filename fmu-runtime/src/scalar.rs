@@ -44,17 +44,7 @@ pub trait Scalar:
             return;
         }
         for (o, row) in out.iter_mut().zip(m.chunks_exact(k)) {
-            let mut s = [Self::zero(); 4];
-            for (r, xs) in row.chunks_exact(4).zip(x.chunks_exact(4)) {
-                for l in 0..4 {
-                    s[l] += xs[l] * r[l];
-                }
-            }
-            let mut sum = (s[0] + s[1]) + (s[2] + s[3]);
-            for j in k - k % 4..k {
-                sum += x[j] * row[j];
-            }
-            *o += scale * sum;
+            *o += scale * four_sums(row, x, |r, x| x * r);
         }
     }
 }
@@ -205,6 +195,26 @@ impl Scalar for Dual {
 #[inline]
 pub fn c<T: Scalar>(x: f64) -> T {
     T::from(x)
+}
+
+/// sum over j of mul(a_j, b_j) (over the shorter length) in four interleaved partial sums
+/// (j mod 4), added pairwise, then the last terms: independent chains the processor keeps in
+/// flight, where one chain of sums waits on each add.
+#[inline(always)]
+pub fn four_sums<A: Copy, B: Copy, T: Scalar>(a: &[A], b: &[B], mul: impl Fn(A, B) -> T) -> T {
+    let k = a.len().min(b.len());
+    let (a, b) = (&a[..k], &b[..k]);
+    let mut s = [T::zero(); 4];
+    for (x, y) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
+        for l in 0..4 {
+            s[l] += mul(x[l], y[l]);
+        }
+    }
+    let mut sum = (s[0] + s[1]) + (s[2] + s[3]);
+    for j in k - k % 4..k {
+        sum += mul(a[j], b[j]);
+    }
+    sum
 }
 
 #[cfg(test)]

@@ -1,7 +1,7 @@
 //! Dense kernels of the body's equations: dot products of a constant row or a state vector, and
 //! a small dense solver. None allocates: they work on the caller's slices.
 
-use crate::scalar::Scalar;
+use crate::scalar::{Scalar, four_sums};
 
 /// sum_j s_j x_j of a constant row and a state vector.
 #[inline]
@@ -18,19 +18,7 @@ pub(super) fn shape_dot<T: Scalar>(s: &[f64], x: &[T]) -> T {
 /// rows of n values for each algebraic mode, took most of a spinning Model Exchange evaluation).
 #[inline]
 pub(super) fn dot<T: Scalar>(a: &[T], b: &[T]) -> T {
-    let k = a.len().min(b.len());
-    let (a, b) = (&a[..k], &b[..k]);
-    let mut s = [T::zero(); 4];
-    for (x, y) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
-        for l in 0..4 {
-            s[l] += x[l] * y[l];
-        }
-    }
-    let mut sum = (s[0] + s[1]) + (s[2] + s[3]);
-    for j in k - k % 4..k {
-        sum += a[j] * b[j];
-    }
-    sum
+    four_sums(a, b, |x, y| x * y)
 }
 
 /// Solve A x = b in place (A row-major n x n, destroyed) by Gaussian elimination with partial
