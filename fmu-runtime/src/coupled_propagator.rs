@@ -24,7 +24,7 @@
 //! lends to each call: neither allocates, and a workspace too small is refused, not a panic.
 
 use crate::matmul::mat_mul_strided;
-use crate::matvec::{Into, mat_vec};
+use crate::matvec::{Store, mat_vec};
 use crate::workspace::{Workspace, WorkspaceReq, WorkspaceTooSmall};
 
 /// More squarings than any finite |A h| needs (log2(f64::MAX) = 1024).
@@ -296,9 +296,9 @@ impl CoupledPropagator {
             y[n + i] = qd[i];
         }
         y[2 * n..].copy_from_slice(p0);
-        mat_vec((&self.top, 3 * n), y, y1, Into::Set);
+        mat_vec((&self.top, 3 * n), y, y1, Store::Set);
         if p1.iter().any(|v| *v != 0.0) {
-            mat_vec((&self.g2, n), p1, y1, Into::AddScaled(1.0));
+            mat_vec((&self.g2, n), p1, y1, Store::AddScaled(1.0));
         }
         for i in 0..n {
             q[i] = y1[i] / omega[i];
@@ -321,7 +321,7 @@ impl CoupledPropagator {
     ) -> Result<(), WorkspaceTooSmall> {
         let n = self.n;
         let [_, dy] = ws.carve(Self::advance_slices(n))?;
-        mat_vec((&self.g2, n), p1, dy, Into::Set);
+        mat_vec((&self.g2, n), p1, dy, Store::Set);
         for i in 0..n {
             q[i] += dy[i] / omega[i];
             qd[i] += dy[n + i];

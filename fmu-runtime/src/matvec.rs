@@ -7,33 +7,33 @@
 
 /// What the product does with `out`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Into {
+pub enum Store {
     /// out[i] = a_i . x
     Set,
     /// out[i] += s (a_i . x)
     AddScaled(f64),
 }
 
-/// out[i] (see [`Into`]) for the rows i < out.len() of `a`, `lda` values apart, each of x.len()
+/// out[i] (see [`Store`]) for the rows i < out.len() of `a`, `lda` values apart, each of x.len()
 /// values.
-pub fn mat_vec((a, lda): (&[f64], usize), x: &[f64], out: &mut [f64], into: Into) {
+pub fn mat_vec((a, lda): (&[f64], usize), x: &[f64], out: &mut [f64], mode: Store) {
     let (rows, k) = (out.len(), x.len());
     assert!(rows == 0 || (lda >= k && a.len() >= (rows - 1) * lda + k), "mat_vec: operands too short");
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
             // SAFETY: the processor has the features the function is compiled for
-            unsafe { mat_vec_fma(a, lda, x, out, into) };
+            unsafe { mat_vec_fma(a, lda, x, out, mode) };
             return;
         }
     }
-    rows_by_four::<false>(a, lda, x, out, into);
+    rows_by_four::<false>(a, lda, x, out, mode);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn mat_vec_fma(a: &[f64], lda: usize, x: &[f64], out: &mut [f64], into: Into) {
-    rows_by_four::<true>(a, lda, x, out, into);
+fn mat_vec_fma(a: &[f64], lda: usize, x: &[f64], out: &mut [f64], mode: Store) {
+    rows_by_four::<true>(a, lda, x, out, mode);
 }
 
 #[inline(always)]
@@ -42,7 +42,7 @@ fn mul_add<const FUSED: bool>(x: f64, y: f64, acc: f64) -> f64 {
 }
 
 #[inline(always)]
-fn rows_by_four<const FUSED: bool>(a: &[f64], lda: usize, x: &[f64], out: &mut [f64], into: Into) {
+fn rows_by_four<const FUSED: bool>(a: &[f64], lda: usize, x: &[f64], out: &mut [f64], mode: Store) {
     let k = x.len();
     let row = |i: usize| &a[i * lda..i * lda + k];
     let done = out.len() - out.len() % 4;
@@ -65,7 +65,7 @@ fn rows_by_four<const FUSED: bool>(a: &[f64], lda: usize, x: &[f64], out: &mut [
             for j in tail..k {
                 s = mul_add::<FUSED>(r[j], x[j], s);
             }
-            store(o, s, into);
+            store(o, s, mode);
         }
     }
     for (i, o) in out.iter_mut().enumerate().skip(done) {
@@ -80,15 +80,15 @@ fn rows_by_four<const FUSED: bool>(a: &[f64], lda: usize, x: &[f64], out: &mut [
         for j in k - k % 4..k {
             s = mul_add::<FUSED>(r[j], x[j], s);
         }
-        store(o, s, into);
+        store(o, s, mode);
     }
 }
 
 #[inline(always)]
-fn store(o: &mut f64, s: f64, into: Into) {
-    match into {
-        Into::Set => *o = s,
-        Into::AddScaled(c) => *o += c * s,
+fn store(o: &mut f64, s: f64, mode: Store) {
+    match mode {
+        Store::Set => *o = s,
+        Store::AddScaled(c) => *o += c * s,
     }
 }
 
@@ -110,11 +110,11 @@ mod tests {
                 let scale: Vec<f64> =
                     (0..rows).map(|i| (0..k).map(|j| (a[i * lda + j] * x[j]).abs()).sum::<f64>().max(1e-300)).collect();
                 let mut set = vec![f64::NAN; rows];
-                mat_vec((&a, lda), &x, &mut set, Into::Set);
+                mat_vec((&a, lda), &x, &mut set, Store::Set);
                 let mut added = vec![1.5; rows];
-                mat_vec((&a, lda), &x, &mut added, Into::AddScaled(-2.0));
+                mat_vec((&a, lda), &x, &mut added, Store::AddScaled(-2.0));
                 let mut generic = vec![f64::NAN; rows];
-                rows_by_four::<false>(&a, lda, &x, &mut generic, Into::Set);
+                rows_by_four::<false>(&a, lda, &x, &mut generic, Store::Set);
                 assert_eq!((set.len(), added.len(), generic.len()), (rows, rows, rows));
                 for i in 0..rows {
                     let tolerance = 1e-15 * (k as f64).max(1.0) * scale[i];

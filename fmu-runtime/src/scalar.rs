@@ -51,7 +51,7 @@ pub trait Scalar:
 
 impl Scalar for f64 {
     fn add_scaled_mat_vec(m: &[f64], x: &[f64], scale: f64, out: &mut [f64]) {
-        crate::matvec::mat_vec((m, x.len()), x, out, crate::matvec::Into::AddScaled(scale));
+        crate::matvec::mat_vec((m, x.len()), x, out, crate::matvec::Store::AddScaled(scale));
     }
     const CARRIES_DERIVATIVE: bool = false;
     #[inline]

@@ -220,9 +220,9 @@ struct Coupling<T> {
     /// the static start.
     rows_from: Option<usize>,
     c_d: Vec<T>,
+    c_k: Vec<T>,
     /// (C_d q' + C_k q) of an evaluation (n).
     force: Vec<T>,
-    c_k: Vec<T>,
     /// Body-frame angular velocity, angular acceleration and a_B of the present inputs.
     w: Vec3<T>,
     z: Vec3<T>,
