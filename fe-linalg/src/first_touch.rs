@@ -1,4 +1,5 @@
-//! Large buffers whose pages are touched on every core before the work that fills them.
+//! Large buffers whose pages are touched on every core before the work that fills them, and
+//! given back to the system when a buffer's tail is no longer needed.
 //!
 //! A fresh allocation of many megabytes is mapped but not backed: each 4 KiB page is backed at
 //! its first touch, by a page fault. Faults taken where a scatter happens to write (pages in
@@ -28,6 +29,35 @@ pub fn touched_zeros(len: usize) -> Vec<f64> {
     v
 }
 
+/// Gives the memory pages wholly inside the `len` values from `start` back to the system, without
+/// freeing the allocation they belong to: the values there are lost (read again, they are
+/// zeros). For the tail of a large matrix whose allocation cannot shrink (faer's `Mat` keeps its
+/// capacity): the Ritz vectors formed in the Lanczos space's storage leave most of it unused.
+///
+/// # Safety
+/// `start .. start + len` must lie within one live allocation that nothing reads or writes
+/// until it is written again or freed.
+pub unsafe fn give_back(start: *mut f64, len: usize) {
+    #[cfg(target_os = "linux")]
+    {
+        // SAFETY: sysconf has no preconditions
+        let page = unsafe { libc::sysconf(libc::_SC_PAGESIZE) }.max(4096) as usize;
+        let begin = (start as usize).next_multiple_of(page);
+        let end = start as usize + len * std::mem::size_of::<f64>();
+        let end = end - end % page;
+        if end > begin {
+            // SAFETY: whole pages inside the caller's range (its safety contract): MADV_DONTNEED
+            // on private anonymous or heap memory makes them read as zeros from now on, which
+            // the caller does not rely on either way
+            unsafe {
+                libc::madvise(begin as *mut libc::c_void, end - begin, libc::MADV_DONTNEED);
+            }
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = (start, len);
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -46,5 +76,23 @@ mod tests {
         let mut v: Vec<f64> = (0..2 * CHUNK + 5).map(|i| i as f64 + 1.0).collect();
         touch_zeroed(&mut v);
         assert!(v.iter().all(|&x| x == 0.0));
+    }
+
+    /// The pages inside the range read as zeros after (Linux), the values around it are kept.
+    #[test]
+    fn given_back_pages_read_as_zeros_and_the_rest_is_kept() {
+        let len = 4 * CHUNK;
+        let mut v: Vec<f64> = (0..len).map(|i| i as f64 + 1.0).collect();
+        let from = CHUNK + 3;
+        // SAFETY: the range lies within v, which nothing reads until the checks below
+        unsafe { give_back(v.as_mut_ptr().add(from), len - from) };
+        assert!(v[..from].iter().enumerate().all(|(i, &x)| x == i as f64 + 1.0));
+        if cfg!(target_os = "linux") {
+            // from the first page boundary after `from` to the last before the end, every value
+            // is gone (pages of 4 KiB to 64 KiB: at most 8192 values kept at either end)
+            let zeros = v[from..].iter().filter(|&&x| x == 0.0).count();
+            assert!(zeros >= len - from - 2 * 8192, "{zeros} of {}", len - from);
+            assert_eq!(v[len / 2], 0.0);
+        }
     }
 }

@@ -74,8 +74,10 @@ struct SharedSearch<'a, 'h> {
 
 /// A space grown until its Ritz pairs were estimated converged (or could grow no more).
 struct Grown {
-    /// The whole problem's pairs, then the held problem's, side by side.
-    both: Eigenpairs,
+    /// The whole problem's Ritz values, then the held problem's, and their coordinates in the
+    /// space, side by side.
+    values: Vec<f64>,
+    coordinates: Mat<f64>,
     count_whole: usize,
     estimated: bool,
     at_limit: bool,
@@ -136,13 +138,16 @@ impl<'a, 'h> SharedSearch<'a, 'h> {
             // products need), so a check that fails starts a new space: refined solves if the
             // plain ones were used, else a tighter estimate
             let mut lanczos = BlockLanczos::new(self.m, &self.start, None, adaptive, self.max_dim)?;
-            let Some(Grown { both, count_whole, estimated, at_limit, refine, solves, dim }) =
+            let Some(Grown { values, coordinates, count_whole, estimated, at_limit, refine, solves, dim }) =
                 self.grow(&mut lanczos, estimate_tol)?
             else {
                 return Ok(None);
             };
             clock.add(&lanczos.clock);
-            drop(lanczos);
+            // the vectors take the space's place (its memory is what the check's products need)
+            let began = std::time::Instant::now();
+            let both = Eigenpairs { vectors: lanczos.into_vectors(&coordinates), values };
+            clock.ritz += began.elapsed();
             // one refined solve checks both: the held columns through the held solver
             let (both, worst) = clock.time(
                 |c| &mut c.checks,
@@ -219,12 +224,9 @@ impl<'a, 'h> SharedSearch<'a, 'h> {
             let mut coordinates = Mat::<f64>::zeros(dim, y.ncols() + held_y.ncols());
             coordinates.as_mut().subcols_mut(0, y.ncols()).copy_from(&y);
             coordinates.as_mut().subcols_mut(y.ncols(), held_y.ncols()).copy_from(&held_y);
-            let both = Eigenpairs {
-                vectors: lanczos.vectors(&coordinates),
-                values: values.iter().chain(&held_values).copied().collect(),
-            };
             return Ok(Some(Grown {
-                both,
+                values: values.iter().chain(&held_values).copied().collect(),
+                coordinates,
                 count_whole: values.len(),
                 estimated,
                 at_limit,

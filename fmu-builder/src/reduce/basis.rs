@@ -12,6 +12,7 @@ use crate::linalg::symmetric_eigen::graded_spd_eigen;
 use crate::model::rigid_coupling::Assembled;
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{ColMut, ColRef, Mat, MatMut, MatRef};
+use std::borrow::Cow;
 
 #[derive(Debug, Clone, Copy)]
 pub enum ModeCount {
@@ -60,7 +61,7 @@ pub fn craig_bampton(
     let nc = d.n_clamped();
     let nb = nc - ni;
     // the force flanges' masters are the rows from ni on, in the order of their unit loads
-    let solver = HeldSolver::with_shapes(mounted, ni, flange_shapes.clone())?;
+    let solver = HeldSolver::with_shapes(mounted, ni, Cow::Borrowed(flange_shapes))?;
 
     // constraint modes: [-K_ii^-1 K_ib; I], from the flange shapes
     let psi = phases::phase("constraint modes", || {
