@@ -485,7 +485,9 @@ mod tests {
     use crate::test_grids::{diagonal, laplacian};
 
     /// The Ritz vectors formed in the space's storage equal those formed beside it (the same
-    /// products, summed by another blocking), over several row blocks and a block's remainder.
+    /// products, summed by another blocking), over several row blocks and a block's remainder: a
+    /// consistency check of the storage, not of the modes (those are checked against CalculiX
+    /// and beam theory in the Python tests).
     #[test]
     fn ritz_vectors_in_place_equal_the_product_beside_the_space() {
         let k = laplacian(11, |_| 6.01);
