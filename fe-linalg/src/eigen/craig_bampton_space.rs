@@ -145,9 +145,8 @@ impl<'a, 'h> SharedSearch<'a, 'h> {
             };
             clock.add(&lanczos.clock);
             // the vectors take the space's place (its memory is what the check's products need)
-            let began = std::time::Instant::now();
-            let both = Eigenpairs { vectors: lanczos.into_vectors(&coordinates), values };
-            clock.ritz += began.elapsed();
+            let vectors = clock.time(|c| &mut c.ritz, || lanczos.into_vectors(&coordinates));
+            let both = Eigenpairs { vectors, values };
             // one refined solve checks both: the held columns through the held solver
             let (both, worst) = clock.time(
                 |c| &mut c.checks,
