@@ -4,6 +4,7 @@
 //! and `interface` maps FMU variables onto it. `format`/`reduced` define the reduced-model file
 //! the builder writes into `resources/`.
 
+pub mod assembly;
 pub mod body;
 pub mod coupled_propagator;
 pub mod explicit_host;

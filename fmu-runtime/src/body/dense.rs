@@ -5,7 +5,7 @@ use crate::scalar::{Scalar, four_sums};
 
 /// sum_j s_j x_j of a constant row and a state vector.
 #[inline]
-pub(super) fn shape_dot<T: Scalar>(s: &[f64], x: &[T]) -> T {
+pub(crate) fn shape_dot<T: Scalar>(s: &[f64], x: &[T]) -> T {
     let mut sum = T::zero();
     for (s, x) in s.iter().zip(x) {
         sum += *x * *s;
@@ -36,7 +36,7 @@ pub(super) fn solve_dense<T: Scalar>(a: &mut [T], b: &mut [T], n: usize, pivots:
 /// diagonal, U on and above it, and in pivots[c] the row exchanged with row c before column c
 /// was eliminated (partial pivoting). Err on a singular matrix: a pivot at most 1e-14 of A's
 /// largest entry, or NaN.
-pub(super) fn lu_factor<T: Scalar>(a: &mut [T], n: usize, pivots: &mut [usize]) -> Result<(), ()> {
+pub(crate) fn lu_factor<T: Scalar>(a: &mut [T], n: usize, pivots: &mut [usize]) -> Result<(), ()> {
     let scale = a.iter().fold(0.0f64, |m, v| m.max(v.value().abs()));
     for col in 0..n {
         let piv =
@@ -68,7 +68,7 @@ pub(super) fn lu_factor<T: Scalar>(a: &mut [T], n: usize, pivots: &mut [usize]) 
 }
 
 /// b = A^-1 b in place, from [`lu_factor`]'s factors of A.
-pub(super) fn lu_solve<T: Scalar>(a: &[T], n: usize, pivots: &[usize], b: &mut [T]) {
+pub(crate) fn lu_solve<T: Scalar>(a: &[T], n: usize, pivots: &[usize], b: &mut [T]) {
     // the exchanges first (the factorisation exchanged whole rows, the multipliers of earlier
     // columns with them), then the unit lower factor
     for (col, &piv) in pivots[..n].iter().enumerate() {

@@ -22,7 +22,7 @@ mod cosim_step;
 mod coupling_bound;
 mod coupling_terms;
 pub use cosim_step::SUBSTEP_ANGLE;
-mod dense;
+pub(crate) mod dense;
 mod error;
 pub use error::{BodyError, OutOfRange, StateMismatch, StepError};
 mod free_floating;

@@ -1,0 +1,251 @@
+//! One body of an assembly as its equations of motion see it: mass properties about the body
+//! frame's origin and, for a flexible body, its reduced modes and the floating-frame invariants.
+//! A rigid body is the same with no modes.
+//!
+//! Velocities are the frame origin's v (world), the frame's angular velocity w (body axes) and
+//! the modal rates q'; the same slots hold the accelerations a, w', q''. With gravity g, a material
+//! point's position is p = r + R (x + Phi q), and d'Alembert's principle over the virtual motions
+//! (dr, R dtheta, dq) gives (S = m c(q) = S_0 + C_t q, J(q), C_r(q) = C_r0 + [G_a q]_a):
+//!
+//! ```text
+//! translation (world): m (a - g) + R (w' x S + C_t q'' + 2 w x C_t q' + w x (w x S))
+//! rotation (body):     S x a_B + J w' + C_r q'' + w x (J w + C_r q') + J' w
+//! modes:               C_t^T a_B + C_r^T w' + q'' + D q' + Lambda q
+//!                        + 2 sum_a w_a G_a q' + sum_ab w_a w_b (o_ab + O_ab q)
+//! ```
+//!
+//! with a_B = R^T (a - g), each equal to the generalised external and joint forces. The unit test
+//! puts these against the same principle summed over a cloud of particles.
+
+use crate::body::dense::shape_dot;
+use crate::kinematics::{self as k3, Mat3, Vec3};
+use super::error::AssemblyError;
+use crate::reduced::ReducedBody;
+
+/// A flange of a body where joints and external loads attach.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Marker {
+    pub name: String,
+    /// Reference point in the body frame, undeformed [m].
+    pub position: Vec3,
+    /// 6 x n row-major: translation (rows 0..3) and small rotation (rows 3..6) per unit q.
+    pub shapes: Vec<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Inertia {
+    pub mass: f64,
+    /// m c of the undeformed body about the frame origin [kg m].
+    pub first_moment: Vec3,
+    /// Inertia tensor about the frame origin, undeformed, row-major [kg m^2].
+    pub inertia: Mat3,
+    /// Modal angular frequencies squared (the reduced stiffness).
+    pub stiffness: Vec<f64>,
+    /// d_k of q''_k + d_k q'_k + omega_k^2 q_k [1/s].
+    pub damping: Vec<f64>,
+    /// 3 x n: C_t = T^T M Phi, C_r0 = R_X^T M Phi.
+    pub c_t: Vec<f64>,
+    pub c_r: Vec<f64>,
+    /// G_a (3 x n x n), O_ab (9 x n x n), o_ab (9 x n), as in [`crate::reduced::RotationTerms`].
+    pub g: Vec<f64>,
+    pub o_mat: Vec<f64>,
+    pub o_vec: Vec<f64>,
+    pub markers: Vec<Marker>,
+}
+
+impl Inertia {
+    pub fn n_modes(&self) -> usize {
+        self.stiffness.len()
+    }
+
+    /// A flexible body from its reduction: the mount flange is its frame (marker 0, no shapes),
+    /// the force flanges follow. `alpha`, `beta`: the Rayleigh damping it runs with.
+    pub fn flexible(name: &str, body: &ReducedBody, alpha: f64, beta: f64) -> Result<Self, AssemblyError> {
+        if body.free_floating {
+            return Err(AssemblyError::Body {
+                body: name.into(),
+                reason: "it is free-floating: an assembly's flexible body needs a motion flange as its frame".into(),
+            });
+        }
+        let rot = body.rotation.as_ref().ok_or_else(|| AssemblyError::Body {
+            body: name.into(),
+            reason: "it has no rotating-frame terms (its input declares a scene without rotation)".into(),
+        })?;
+        let n = body.n_modes();
+        let mut markers = vec![Marker { name: body.mount.clone(), position: [0.0; 3], shapes: vec![0.0; 6 * n] }];
+        markers.extend(
+            body.flanges.iter().map(|f| Marker { name: f.name.clone(), position: f.position, shapes: f.shapes.clone() }),
+        );
+        Ok(Self {
+            mass: body.mass,
+            first_moment: body.first_moment,
+            inertia: body.inertia,
+            stiffness: body.omega.iter().map(|w| w * w).collect(),
+            damping: (0..n).map(|j| body.damping_rate(j, alpha, beta)).collect(),
+            c_t: body.c_t.clone(),
+            c_r: body.c_r.clone(),
+            g: rot.g.clone(),
+            o_mat: rot.o_mat.clone(),
+            o_vec: rot.o_vec.clone(),
+            markers,
+        })
+    }
+
+    /// A rigid body: `inertia_at_centre` about the centre of mass, body axes; flanges by name
+    /// and position in the body frame.
+    pub fn rigid(
+        name: &str,
+        mass: f64,
+        centre: Vec3,
+        inertia_at_centre: Mat3,
+        flanges: &[(String, Vec3)],
+    ) -> Result<Self, AssemblyError> {
+        if !(mass > 0.0) || !mass.is_finite() {
+            return Err(AssemblyError::Body { body: name.into(), reason: format!("mass {mass} is not positive") });
+        }
+        let c2 = k3::dot(centre, centre);
+        let inertia: Mat3 = std::array::from_fn(|ij| {
+            let (i, j) = (ij / 3, ij % 3);
+            inertia_at_centre[ij] + mass * (if i == j { c2 } else { 0.0 } - centre[i] * centre[j])
+        });
+        Ok(Self {
+            mass,
+            first_moment: k3::scale(mass, centre),
+            inertia,
+            stiffness: vec![],
+            damping: vec![],
+            c_t: vec![],
+            c_r: vec![],
+            g: vec![],
+            o_mat: vec![],
+            o_vec: vec![],
+            markers: flanges.iter().map(|(n, p)| Marker { name: n.clone(), position: *p, shapes: vec![] }).collect(),
+        })
+    }
+
+    /// S(q) = m c(q), C_r(q) (3 x n into `cr_q`), J(q) and J'(q, q').
+    pub fn deformed(&self, q: &[f64], qd: &[f64], cr_q: &mut [f64]) -> (Vec3, Mat3, Mat3) {
+        let n = q.len();
+        let nn = n * n;
+        let mut s = self.first_moment;
+        for a in 0..3 {
+            s[a] += shape_dot(&self.c_t[a * n..(a + 1) * n], q);
+            let g = &self.g[a * nn..(a + 1) * nn];
+            for col in 0..n {
+                cr_q[a * n + col] = self.c_r[a * n + col] + shape_dot(&g[col * n..(col + 1) * n], q);
+            }
+        }
+        let mut j = self.inertia;
+        let mut j_rate = [0.0; 9];
+        for p in 0..3 {
+            for r in 0..3 {
+                let (o_pr, o_rp) = (&self.o_vec[(3 * p + r) * n..][..n], &self.o_vec[(3 * r + p) * n..][..n]);
+                let o_mat = &self.o_mat[(3 * p + r) * nn..(3 * p + r + 1) * nn];
+                let (mut lin, mut lin_rate, mut quad, mut quad_rate) = (0.0, 0.0, 0.0, 0.0);
+                for k in 0..n {
+                    lin += q[k] * (o_pr[k] + o_rp[k]);
+                    lin_rate += qd[k] * (o_pr[k] + o_rp[k]);
+                    let oq = shape_dot(&o_mat[k * n..(k + 1) * n], q);
+                    let oqd = shape_dot(&o_mat[k * n..(k + 1) * n], qd);
+                    quad += q[k] * oq;
+                    quad_rate += qd[k] * oq + q[k] * oqd;
+                }
+                j[3 * p + r] -= lin + quad;
+                j_rate[3 * p + r] = -(lin_rate + quad_rate);
+            }
+        }
+        (s, j, j_rate)
+    }
+
+    /// The body's inertial, elastic and damping forces minus its weight, in the velocity slots
+    /// (module docs), into `out` (6 + n). `cr_q` is scratch of 3 n.
+    #[allow(clippy::too_many_arguments)]
+    pub fn forces(
+        &self,
+        rot: &Mat3,
+        q: &[f64],
+        vel: &[f64],
+        acc: &[f64],
+        gravity: Vec3,
+        cr_q: &mut [f64],
+        out: &mut [f64],
+    ) {
+        let n = q.len();
+        let nn = n * n;
+        // the origin's velocity drops out: its terms cancel between momentum and its rate
+        let (w, qd) = (vel3(vel, 3), &vel[6..]);
+        let (a, w_d, qdd) = (vel3(acc, 0), vel3(acc, 3), &acc[6..]);
+        let a_b = k3::mul_t(rot, k3::sub(a, gravity));
+        let (s, j, j_rate) = self.deformed(q, qd, cr_q);
+        let ct = |x: &[f64]| -> Vec3 { std::array::from_fn(|i| shape_dot(&self.c_t[i * n..(i + 1) * n], x)) };
+        let cr = |x: &[f64]| -> Vec3 { std::array::from_fn(|i| shape_dot(&cr_q[i * n..(i + 1) * n], x)) };
+        let (ct_qd, ct_qdd, cr_qd, cr_qdd) = (ct(qd), ct(qdd), cr(qd), cr(qdd));
+        // translation, world
+        let body_part = k3::add(
+            k3::add(k3::cross(w_d, s), ct_qdd),
+            k3::add(k3::scale(2.0, k3::cross(w, ct_qd)), k3::cross(w, k3::cross(w, s))),
+        );
+        let trans = k3::add(k3::scale(self.mass, k3::sub(a, gravity)), k3::mul(rot, body_part));
+        // rotation, body axes
+        let h = k3::add(k3::mul(&j, w), cr_qd);
+        let rotation = k3::add(
+            k3::add(k3::cross(s, a_b), k3::add(k3::mul(&j, w_d), cr_qdd)),
+            k3::add(k3::cross(w, h), k3::mul(&j_rate, w)),
+        );
+        out[..3].copy_from_slice(&trans);
+        out[3..6].copy_from_slice(&rotation);
+        for k in 0..n {
+            let mut f = qdd[k] + self.damping[k] * qd[k] + self.stiffness[k] * q[k];
+            for i in 0..3 {
+                f += self.c_t[i * n + k] * a_b[i] + cr_q[i * n + k] * w_d[i];
+                f += 2.0 * w[i] * shape_dot(&self.g[i * nn + k * n..][..n], qd);
+                for b in 0..3 {
+                    let ab = 3 * i + b;
+                    let ww = w[i] * w[b];
+                    if ww != 0.0 {
+                        f += ww * (self.o_vec[ab * n + k] + shape_dot(&self.o_mat[ab * nn + k * n..][..n], q));
+                    }
+                }
+            }
+            out[6 + k] = f;
+        }
+    }
+
+    /// Kinetic energy of the body at velocities `vel` (module docs' slots).
+    pub fn kinetic_energy(&self, rot: &Mat3, q: &[f64], vel: &[f64], cr_q: &mut [f64]) -> f64 {
+        let n = q.len();
+        let (v, w, qd) = (vel3(vel, 0), vel3(vel, 3), &vel[6..]);
+        let (s, j, _) = self.deformed(q, qd, cr_q);
+        let ct_qd: Vec3 = std::array::from_fn(|i| shape_dot(&self.c_t[i * n..(i + 1) * n], qd));
+        let cr_qd: Vec3 = std::array::from_fn(|i| shape_dot(&cr_q[i * n..(i + 1) * n], qd));
+        let v_b = k3::mul_t(rot, v);
+        0.5 * self.mass * k3::dot(v, v)
+            + k3::dot(v_b, k3::add(k3::cross(w, s), ct_qd))
+            + 0.5 * k3::dot(w, k3::mul(&j, w))
+            + k3::dot(w, cr_qd)
+            + 0.5 * qd.iter().map(|x| x * x).sum::<f64>()
+    }
+
+    /// Strain energy 1/2 q^T Lambda q.
+    pub fn strain_energy(&self, q: &[f64]) -> f64 {
+        0.5 * self.stiffness.iter().zip(q).map(|(k, q)| k * q * q).sum::<f64>()
+    }
+
+    /// Potential energy of the weight: -g . (m r + R S(q)).
+    pub fn gravity_energy(&self, r: Vec3, rot: &Mat3, q: &[f64], gravity: Vec3) -> f64 {
+        let n = q.len();
+        let mut s = self.first_moment;
+        for (a, s) in s.iter_mut().enumerate() {
+            *s += shape_dot(&self.c_t[a * n..(a + 1) * n], q);
+        }
+        -k3::dot(gravity, k3::add(k3::scale(self.mass, r), k3::mul(rot, s)))
+    }
+}
+
+#[inline]
+pub(crate) fn vel3(x: &[f64], at: usize) -> Vec3 {
+    [x[at], x[at + 1], x[at + 2]]
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,7 @@
+//! Assemblies: several bodies, flexible and rigid, joined by joints and solved together inside
+//! one FMU. `inertia` holds a body's equations of motion.
+
+pub mod inertia;
+pub mod error;
+
+pub use error::AssemblyError;
