@@ -3,5 +3,6 @@
 
 pub mod inertia;
 pub mod error;
+pub mod joint;
 
 pub use error::AssemblyError;
