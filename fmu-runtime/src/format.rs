@@ -115,6 +115,25 @@ impl Container {
         })
     }
 
+    /// Copy every entry of `other` in, its name behind `prefix` (a container inside another: an
+    /// assembly's bodies).
+    pub fn nest(&mut self, prefix: &str, other: &Container) {
+        for (name, entry) in &other.entries {
+            self.entries.insert(format!("{prefix}{name}"), entry.clone());
+        }
+    }
+
+    /// The entries whose names start with `prefix`, the prefix taken off.
+    pub fn nested(&self, prefix: &str) -> Container {
+        let entries = self
+            .entries
+            .range(prefix.to_owned()..)
+            .take_while(|(name, _)| name.starts_with(prefix))
+            .map(|(name, e)| (name[prefix.len()..].to_owned(), e.clone()))
+            .collect();
+        Container { entries }
+    }
+
     pub fn contains(&self, name: &str) -> bool {
         self.entries.contains_key(name)
     }

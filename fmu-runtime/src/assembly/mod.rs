@@ -1,8 +1,12 @@
 //! Assemblies: several bodies, flexible and rigid, joined by joints and solved together inside
 //! one FMU. `inertia` holds a body's equations of motion.
 
-pub mod inertia;
 pub mod error;
 pub mod joint;
 
 pub use error::AssemblyError;
+pub mod description;
+pub mod inertia;
+pub mod model;
+pub mod solver;
+pub mod system;

@@ -1,0 +1,320 @@
+//! The step of an assembly: generalised-alpha on the Lie group of the bodies' poses (Arnold and
+//! Brüls 2007; Brüls, Cardona and Arnold 2012) for the index-3 equations of motion with the
+//! joints' multipliers, solved by Newton's method at every step.
+//!
+//! Per step h, with the pseudo-accelerations a~ and the accelerations a = v':
+//!
+//! ```text
+//! dx      = h v_n + h^2 (1/2 - beta) a~_n + h^2 beta a~_{n+1}     (r + dr, R exp(dtheta~), q + dq)
+//! v_{n+1} = v_n + h (1 - gamma) a~_n + h gamma a~_{n+1}
+//! (1 - alpha_m) a~_{n+1} + alpha_m a~_n = (1 - alpha_f) a_{n+1} + alpha_f a_n
+//! forces(x_{n+1}, v_{n+1}, a_{n+1}) - applied - B^T lambda = 0,   phi(x_{n+1}, t_{n+1}) = 0
+//! ```
+//!
+//! Second order; with spectral radius 1 (trapezoidal) a linear undamped system keeps its energy
+//! exactly, lower radii damp what the step does not resolve. The joints hold at position level
+//! at every step (to Newton's tolerance): no drift. The iteration matrix comes from finite
+//! differences of the residual in the accelerations (the multipliers' columns exactly) and is
+//! kept over steps while Newton converges fast with it (modified Newton); it is formed again when
+//! an iteration stalls. Every buffer is allocated when the solver is made.
+
+use super::description::SolverSettings;
+use super::error::AssemblyError;
+use super::system::{Instant, System};
+use crate::body::dense::{lu_factor, lu_solve};
+
+/// Generalised-alpha's coefficients of a spectral radius.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Coefficients {
+    pub alpha_m: f64,
+    pub alpha_f: f64,
+    pub beta: f64,
+    pub gamma: f64,
+}
+
+impl Coefficients {
+    pub fn of(rho: f64) -> Self {
+        let alpha_m = (2.0 * rho - 1.0) / (rho + 1.0);
+        let alpha_f = rho / (rho + 1.0);
+        let gamma = 0.5 + alpha_f - alpha_m;
+        Self { alpha_m, alpha_f, beta: 0.25 * (gamma + 0.5) * (gamma + 0.5), gamma }
+    }
+
+    /// d(dx)/d(a_{n+1}) per unit h^2.
+    fn position_gain(&self) -> f64 {
+        self.beta * (1.0 - self.alpha_f) / (1.0 - self.alpha_m)
+    }
+}
+
+/// The assembly's evolving state: what a saved FMU state holds.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Motion {
+    pub pos: Vec<f64>,
+    pub vel: Vec<f64>,
+    pub acc: Vec<f64>,
+    pub pseudo: Vec<f64>,
+    pub lambda: Vec<f64>,
+}
+
+/// Buffers of a step.
+#[derive(Debug, Clone)]
+struct Work {
+    pos: Vec<f64>,
+    vel: Vec<f64>,
+    acc: Vec<f64>,
+    pseudo: Vec<f64>,
+    lambda: Vec<f64>,
+    dx: Vec<f64>,
+    forces: Vec<f64>,
+    phi: Vec<f64>,
+    jac: Vec<f64>,
+    residual: Vec<f64>,
+    probe: Vec<f64>,
+    matrix: Vec<f64>,
+    pivots: Vec<usize>,
+    cr_q: Vec<f64>,
+}
+
+#[derive(Debug, Clone)]
+pub struct Solver {
+    pub settings: SolverSettings,
+    pub coefficients: Coefficients,
+    work: Work,
+    /// The step the kept iteration matrix was formed for (None: none kept).
+    matrix_step: Option<f64>,
+    /// Newton iterations of the last step, and matrices formed so far.
+    pub last_iterations: usize,
+    pub matrices_formed: u64,
+}
+
+impl Solver {
+    pub fn new(system: &System, settings: SolverSettings) -> Self {
+        let (nv, ne, np) = (system.n_vel, system.n_eq, system.n_pos);
+        let dim = nv + ne;
+        Self {
+            settings,
+            coefficients: Coefficients::of(settings.spectral_radius),
+            work: Work {
+                pos: vec![0.0; np],
+                vel: vec![0.0; nv],
+                acc: vec![0.0; nv],
+                pseudo: vec![0.0; nv],
+                lambda: vec![0.0; ne],
+                dx: vec![0.0; nv],
+                forces: vec![0.0; nv],
+                phi: vec![0.0; ne],
+                jac: vec![0.0; ne * nv],
+                residual: vec![0.0; dim],
+                probe: vec![0.0; dim],
+                matrix: vec![0.0; dim * dim],
+                pivots: vec![0; dim],
+                cr_q: vec![0.0; 3 * system.max_modes().max(1)],
+            },
+            matrix_step: None,
+            last_iterations: 0,
+            matrices_formed: 0,
+        }
+    }
+
+    /// Forget the kept iteration matrix (after the state was replaced).
+    pub fn invalidate(&mut self) {
+        self.matrix_step = None;
+    }
+
+    /// Accelerations and multipliers consistent with the positions and velocities of `m` at
+    /// `now` (the start of a run): the equations of motion with the joints' equations twice
+    /// differentiated in time.
+    pub fn settle_accelerations(&mut self, system: &System, m: &mut Motion, now: &Instant) -> Result<(), AssemblyError> {
+        let (nv, ne) = (system.n_vel, system.n_eq);
+        let dim = nv + ne;
+        let w = &mut self.work;
+        w.acc.fill(0.0);
+        system.body_forces(&m.pos, &m.vel, &w.acc, &mut w.cr_q, &mut w.forces);
+        let mut base = w.forces.clone();
+        for x in &mut base {
+            *x = -*x;
+        }
+        system.add_applied(&m.pos, now, &mut base);
+        system.constraints(&m.pos, now, &mut w.phi, &mut w.jac);
+        w.matrix.fill(0.0);
+        for j in 0..nv {
+            w.acc.fill(0.0);
+            w.acc[j] = 1.0;
+            system.body_forces(&m.pos, &m.vel, &w.acc, &mut w.cr_q, &mut w.probe[..nv]);
+            for i in 0..nv {
+                w.matrix[i * dim + j] = w.probe[i] + base[i];
+            }
+        }
+        for k in 0..ne {
+            for j in 0..nv {
+                let b = w.jac[k * nv + j];
+                w.matrix[j * dim + nv + k] = -b;
+                w.matrix[(nv + k) * dim + j] = b;
+            }
+        }
+        // phi'' at a = 0: second differences along the present velocities (geodesics of the
+        // poses) and time
+        let eps = 1e-4;
+        let mut second = vec![0.0; ne];
+        let mut moved = m.pos.clone();
+        let mut shifted_phi = vec![0.0; ne];
+        let mut scratch_jac = vec![0.0; ne * nv];
+        for sign in [1.0, -1.0] {
+            let dx: Vec<f64> = m.vel.iter().map(|v| sign * eps * v).collect();
+            system.advance(&m.pos, &dx, &mut moved);
+            let at = Instant { t: now.t + sign * eps, ..*now };
+            system.constraints(&moved, &at, &mut shifted_phi, &mut scratch_jac);
+            for k in 0..ne {
+                second[k] += shifted_phi[k];
+            }
+        }
+        let mut rhs = base;
+        for k in 0..ne {
+            rhs.push(-(second[k] - 2.0 * w.phi[k]) / (eps * eps));
+        }
+        lu_factor(&mut w.matrix, dim, &mut w.pivots).map_err(|_| AssemblyError::Singular { time: now.t })?;
+        lu_solve(&w.matrix, dim, &w.pivots, &mut rhs);
+        if rhs.iter().any(|x| !x.is_finite()) {
+            return Err(AssemblyError::NotFinite { time: now.t });
+        }
+        m.acc.copy_from_slice(&rhs[..nv]);
+        m.pseudo.copy_from_slice(&rhs[..nv]);
+        m.lambda.copy_from_slice(&rhs[nv..]);
+        self.matrix_step = None;
+        Ok(())
+    }
+
+    /// The residual at the trial accelerations and multipliers in `work.acc`, `work.lambda`:
+    /// fills work's pos, vel, pseudo, phi, jac and `out`.
+    fn residual(&mut self, system: &System, m: &Motion, h: f64, now: &Instant, out_probe: bool) {
+        let c = self.coefficients;
+        let (nv, ne) = (system.n_vel, system.n_eq);
+        let w = &mut self.work;
+        for i in 0..nv {
+            let p = ((1.0 - c.alpha_f) * w.acc[i] + c.alpha_f * m.acc[i] - c.alpha_m * m.pseudo[i]) / (1.0 - c.alpha_m);
+            w.pseudo[i] = p;
+            w.dx[i] = h * m.vel[i] + h * h * ((0.5 - c.beta) * m.pseudo[i] + c.beta * p);
+            w.vel[i] = m.vel[i] + h * ((1.0 - c.gamma) * m.pseudo[i] + c.gamma * p);
+        }
+        system.advance(&m.pos, &w.dx, &mut w.pos);
+        system.body_forces(&w.pos, &w.vel, &w.acc, &mut w.cr_q, &mut w.forces);
+        for x in &mut w.forces {
+            *x = -*x;
+        }
+        system.add_applied(&w.pos, now, &mut w.forces);
+        system.constraints(&w.pos, now, &mut w.phi, &mut w.jac);
+        let out = if out_probe { &mut w.probe } else { &mut w.residual };
+        for i in 0..nv {
+            out[i] = -w.forces[i];
+        }
+        for k in 0..ne {
+            let l = w.lambda[k];
+            if l != 0.0 {
+                for (o, b) in out[..nv].iter_mut().zip(&w.jac[k * nv..(k + 1) * nv]) {
+                    *o -= l * b;
+                }
+            }
+        }
+        let scale = 1.0 / (h * h * c.position_gain());
+        for k in 0..ne {
+            out[nv + k] = w.phi[k] * scale;
+        }
+    }
+
+    /// The iteration matrix at the present trial (work.acc, work.lambda), factored.
+    fn form_matrix(&mut self, system: &System, m: &Motion, h: f64, now: &Instant) -> Result<(), AssemblyError> {
+        let (nv, ne) = (system.n_vel, system.n_eq);
+        let dim = nv + ne;
+        self.residual(system, m, h, now, false);
+        // the multipliers' columns: -B^T over the body rows
+        for k in 0..ne {
+            for j in 0..nv {
+                self.work.matrix[j * dim + nv + k] = -self.work.jac[k * nv + j];
+            }
+            for i in 0..ne {
+                self.work.matrix[(nv + i) * dim + nv + k] = 0.0;
+            }
+        }
+        // the accelerations' columns by forward differences: a step that moves the positions by
+        // about 1e-8 (forces are linear in the accelerations, nonlinear in the positions)
+        let delta = 1e-8 / (h * h * self.coefficients.position_gain());
+        for j in 0..nv {
+            let keep = self.work.acc[j];
+            self.work.acc[j] = keep + delta;
+            self.residual(system, m, h, now, true);
+            self.work.acc[j] = keep;
+            for i in 0..dim {
+                self.work.matrix[i * dim + j] = (self.work.probe[i] - self.work.residual[i]) / delta;
+            }
+        }
+        let w = &mut self.work;
+        lu_factor(&mut w.matrix, dim, &mut w.pivots).map_err(|_| AssemblyError::Singular { time: now.t })?;
+        self.matrix_step = Some(h);
+        self.matrices_formed += 1;
+        Ok(())
+    }
+
+    /// Newton from the last step's accelerations and multipliers; Ok(true) when converged.
+    fn iterate(&mut self, system: &System, m: &Motion, h: f64, now: &Instant) -> Result<bool, AssemblyError> {
+        let (nv, ne) = (system.n_vel, system.n_eq);
+        let dim = nv + ne;
+        let gain = h * h * self.coefficients.position_gain();
+        let tol = self.settings.tolerance;
+        let mut last = f64::INFINITY;
+        for it in 0..self.settings.max_iterations {
+            self.residual(system, m, h, now, false);
+            let w = &mut self.work;
+            for x in &mut w.residual {
+                *x = -*x;
+            }
+            lu_solve(&w.matrix, dim, &w.pivots, &mut w.residual);
+            let mut size = 0.0f64;
+            for i in 0..nv {
+                w.acc[i] += w.residual[i];
+                size = size.max((w.residual[i] * gain).abs());
+            }
+            for k in 0..ne {
+                w.lambda[k] += w.residual[nv + k];
+            }
+            if !size.is_finite() {
+                return Ok(false);
+            }
+            self.last_iterations = it + 1;
+            if size <= tol {
+                self.residual(system, m, h, now, false);
+                return Ok(true);
+            }
+            // a kept matrix that no longer contracts well is formed again
+            if it >= 2 && size > 0.5 * last {
+                return Ok(false);
+            }
+            last = size;
+        }
+        Ok(false)
+    }
+
+    /// One step of length h to `now` (the step's end): `m` becomes the state at its end.
+    pub fn step(&mut self, system: &System, m: &mut Motion, h: f64, now: &Instant) -> Result<(), AssemblyError> {
+        for attempt in 0..2 {
+            self.work.acc.copy_from_slice(&m.acc);
+            self.work.lambda.copy_from_slice(&m.lambda);
+            if attempt == 1 || self.matrix_step != Some(h) {
+                self.form_matrix(system, m, h, now)?;
+            }
+            if self.iterate(system, m, h, now)? {
+                let w = &self.work;
+                if w.pos.iter().chain(&w.vel).chain(&w.acc).chain(&w.lambda).any(|x| !x.is_finite()) {
+                    return Err(AssemblyError::NotFinite { time: now.t - h });
+                }
+                m.pos.copy_from_slice(&w.pos);
+                m.vel.copy_from_slice(&w.vel);
+                m.acc.copy_from_slice(&w.acc);
+                m.pseudo.copy_from_slice(&w.pseudo);
+                m.lambda.copy_from_slice(&w.lambda);
+                return Ok(());
+            }
+        }
+        let residual = self.work.residual.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        Err(AssemblyError::NotConverged { time: now.t, residual })
+    }
+}
