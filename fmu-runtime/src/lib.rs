@@ -19,7 +19,7 @@ pub mod reduced;
 pub mod scalar;
 pub mod workspace;
 
-fmi2::export_fmi2!(crate::fmu::BodyFmu);
+fmi2::export_fmi2!(crate::fmu::any::AnyFmu);
 
 include!(concat!(env!("OUT_DIR"), "/build_id.rs"));
 

@@ -39,6 +39,15 @@ pub struct Inputs {
     pub load_rates: Vec<f64>,
 }
 
+/// What a step changes, kept to undo a step that is not taken.
+#[derive(Debug, Clone)]
+pub struct Checkpoint {
+    motion: Motion,
+    inputs: Inputs,
+    angles: Vec<f64>,
+    time: f64,
+}
+
 #[derive(Debug, Clone)]
 pub struct Assembly {
     pub system: System,
@@ -134,6 +143,28 @@ impl Assembly {
 
     fn instant_at<'a>(&self, t: f64, inputs: &Inputs, drives: &'a [f64], loads: &'a [f64]) -> Instant<'a> {
         Instant { t, host: inputs.host.at(t - self.time), drives, loads }
+    }
+
+    /// A checkpoint of the present state (allocates: made once).
+    pub fn checkpoint(&self) -> Checkpoint {
+        Checkpoint { motion: self.motion.clone(), inputs: self.inputs.clone(), angles: self.angles.clone(), time: self.time }
+    }
+
+    /// Copy the present state into `c` (no allocation).
+    pub fn keep(&self, c: &mut Checkpoint) {
+        copy_motion(&mut c.motion, &self.motion);
+        copy_inputs(&mut c.inputs, &self.inputs);
+        c.angles.copy_from_slice(&self.angles);
+        c.time = self.time;
+    }
+
+    /// Back to the state kept in `c` (no allocation).
+    pub fn restore(&mut self, c: &Checkpoint) {
+        copy_motion(&mut self.motion, &c.motion);
+        copy_inputs(&mut self.inputs, &c.inputs);
+        self.angles.copy_from_slice(&c.angles);
+        self.time = c.time;
+        self.solver.invalidate();
     }
 
     /// Back to the start (inputs at their start values).
@@ -292,6 +323,22 @@ impl Assembly {
     pub fn drive_input_is_motion(&self, i: usize) -> bool {
         self.system.drive_inputs[i].1 == DriveQuantity::Motion
     }
+}
+
+fn copy_motion(to: &mut Motion, from: &Motion) {
+    to.pos.copy_from_slice(&from.pos);
+    to.vel.copy_from_slice(&from.vel);
+    to.acc.copy_from_slice(&from.acc);
+    to.pseudo.copy_from_slice(&from.pseudo);
+    to.lambda.copy_from_slice(&from.lambda);
+}
+
+fn copy_inputs(to: &mut Inputs, from: &Inputs) {
+    to.host = from.host;
+    to.drives.copy_from_slice(&from.drives);
+    to.drive_rates.copy_from_slice(&from.drive_rates);
+    to.loads.copy_from_slice(&from.loads);
+    to.load_rates.copy_from_slice(&from.load_rates);
 }
 
 /// Rows of `jac` (rows x cols) that depend on earlier ones, with the earlier rows they combine

@@ -4,6 +4,8 @@
 //! `continuous_states` Model Exchange's state vector, `state_serialization` the saved states,
 //! `resource` the reduced-model file, `error` why a variable's access fails.
 
+pub mod any;
+pub mod assembly;
 mod continuous_states;
 mod error;
 mod model;

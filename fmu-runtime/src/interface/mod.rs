@@ -3,6 +3,7 @@
 //! belongs to a family described once in `families.rs` (name, attributes, value, range,
 //! dependencies); the table lays the families out for a body.
 
+pub mod assembly;
 mod dependencies;
 pub mod families;
 pub mod family;
