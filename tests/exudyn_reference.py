@@ -9,13 +9,26 @@ Nothing of the builder, the FMUs or the co-simulation master is used.
     # one row per millisecond from t = 0: elbow x, z and tip x, z (world)
     t, rows = slider_crank(deck_text, workdir, pin)
     # one row per millisecond from t = 0: the rod's tip x, z and the slider's load on it (z)
+    t, positions = pendulum_chain(deck_text, workdir, n_links=3)
+    # one row per millisecond from t = 0: each link's tip x, z (world)
+    t, rows = four_bar(deck_text, workdir)
+    # one row per millisecond from t = 0: rocker angle, C x, z, the crank's torque, the
+    # coupler's mid-span deflection (the rigid theory of the same scenes: rigid_mechanisms.py)
 
 Exudyn's pitfalls met on the way (Exudyn 1.13.6): spectral radius 1.0 stopped Newton converging
 at t = 7..9 s of the double pendulum, and Exudyn then cuts its step silently (runs of ten
 minutes); 0.9 runs clean. A Newton tolerance below the default 1e-8 stalls (K ~ 1e11). Nodes
 of no element (the deck's flange reference nodes) must stay out of the FE model, or M is
 singular. The first boundary list is fixed to the floating frame. Exudyn's static solver runs a
-pseudo-time from 0 to 1 through the joints' user functions."""
+pseudo-time from 0 to 1 through the joints' user functions. Two runs of the same model differ
+by ~2e-10 m (the double pendulum, 2 s): Exudyn is not bit-reproducible run to run. GenericJoint's
+ForceLocal is the force on marker 0, but the rotational parts of TorqueLocal are multipliers of
+constraints like t_z0 . t_x1 = 0 and act on marker 1 with the sign as printed (four_bar's drive).
+A drive by GenericJoint's rotational offset (Tait-Bryan angles added to marker 0's frame) turns
+through any number of revolutions; offsetUserFunction_t is not implemented in this version, so
+the drive starts at rest with zero acceleration. Constraint multipliers of the index-3
+generalised-alpha solver alternate from step to step at ~1e-3 of their swing and ring for the
+first ~50 ms after a start out of equilibrium."""
 
 from __future__ import annotations
 

@@ -283,3 +283,22 @@ def rigid_four_bar(t, crank_speed=2 * np.pi, spin_up=1.0, g=9.81):
     rocker = np.angle(np.exp(1j * (k["gamma"] - gamma0)))  # the rocker swings less than pi
     tau = four_bar_torque_lagrange(t, crank_speed, spin_up, g)
     return np.column_stack([rocker, k["C"][:, 0], k["C"][:, 1], tau])
+
+
+def four_bar_coupler_deflection(t, E=2.0e11, crank_speed=2 * np.pi, spin_up=1.0, g=9.81, width=0.01, height=0.02,
+                                rho=7850.0, geometry=FOUR_BAR):
+    """The quasi-static mid-span deflection of a flexible coupler (a uniform beam pinned at B and
+    C, bending in the plane, I = width height^3 / 12) under its weight and the d'Alembert loads
+    of the rigid motion: the transverse load per length is linear along the coupler (the rigid
+    body's acceleration field is), and only its mean q moves the mid-span of a pinned beam:
+    w = 5 q L^4 / (384 E I), q = m (g - a_c) . n / L, a_c the coupler's centre's acceleration,
+    g = (0, -g), n = u x y = (-u_z, u_x) in (x, z) for the unit chord u = (C - B) / L (at t = 0
+    (-0.745, 0.667), up and back). Returns w along n [m] at `t` (negative: sagging)."""
+    s = four_bar_state(t, crank_speed, spin_up, geometry)
+    k = s["kinematics"]
+    L = geometry["coupler"]
+    u = (k["C"] - k["B"]) / L
+    n = np.stack([-u[:, 1], u[:, 0]], axis=-1)
+    m, _ = bar(L, width, height, rho)
+    q = m * np.sum((np.array([0.0, -g]) - s["bodies"][1]["acceleration"]) * n, axis=-1) / L
+    return 5 * q * L ** 4 / (384 * E * width * height ** 3 / 12)
