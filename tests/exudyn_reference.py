@@ -391,7 +391,8 @@ def four_bar(deck_text: str, workdir, seconds=6.0, step=1e-3, modes=12, damping_
     # universal: [1, 0, 0] on the rotations holds t_y0 . t_z1 = 0 (Exudyn's GenericJoint)
     mbs.AddObject(ei.GenericJoint(markerNumbers=[rigid_marker(rocker, [r3 / 2, 0, 0]), tip],
                                   constrainedAxes=[1, 1, 1, 1, 0, 0]))
-    mbs.AddObject(ei.GenericJoint(markerNumbers=[rigid_marker(ground, D, A_rocker), rigid_marker(rocker, [-r3 / 2, 0, 0])],
+    mbs.AddObject(ei.GenericJoint(markerNumbers=[rigid_marker(ground, D, A_rocker),
+                                                 rigid_marker(rocker, [-r3 / 2, 0, 0])],
                                   constrainedAxes=[1, 1, 1, 1, 0, 1]))
 
     tip_sensor = link.tip_sensor(mbs, coupler)
