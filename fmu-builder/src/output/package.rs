@@ -127,3 +127,67 @@ fn generation_time() -> Result<String> {
     };
     Ok(fmu::xs_date_time(secs))
 }
+
+/// The FMU of an assembly: Co-Simulation, the runtime's assembly table as its variables, the
+/// assembly's file (every body inside) as its resource, and a page that lists the bodies, their
+/// reductions' figures, the joints and the variables.
+#[allow(clippy::too_many_arguments)]
+pub fn write_assembly_fmu(
+    spec: &crate::input::assembly::AssemblySpec,
+    description: &fmu_runtime::assembly::description::AssemblyDescription,
+    table: &fmu_runtime::interface::assembly::AssemblyTable,
+    reports: &[(String, Report)],
+    (stop, step): (f64, f64),
+    output: &Path,
+    others: &[PlatformBinary],
+) -> Result<()> {
+    use fmu_runtime::assembly::description::ASSEMBLY_FILE;
+    for (_, report) in reports {
+        finite::check_report(report)?;
+    }
+    let id = fmu::model_identifier(&spec.name);
+    let info = fmu::ModelInfo {
+        model_name: spec.name.clone(),
+        model_identifier: id.clone(),
+        description: spec.description.clone().unwrap_or_else(|| {
+            format!("Assembly '{}' of {} bodies and {} joints", spec.name, spec.bodies.len(), spec.joints.len())
+        }),
+        guid: description.guid.clone(),
+        generation_tool: format!("fmu-builder {}", env!("CARGO_PKG_VERSION")),
+        generation_date_time: generation_time()?,
+        default_experiment: fmu::DefaultExperiment {
+            start: 0.0,
+            stop,
+            step,
+            tolerance: spec.experiment.as_ref().and_then(|e| e.tolerance).unwrap_or(1e-6),
+        },
+    };
+    let xml = fmu::assembly_description::assembly_description_xml(&info, table).map_err(|e| {
+        BuildError::Numerical(format!(
+            "{e}: a body's, joint's or external flange's name collides with another variable of the FMU; rename it"
+        ))
+    })?;
+    let required = fmi2_functions::required(&xml);
+    for binary in others {
+        binary.check(&required)?;
+    }
+    let mut binaries: Vec<(Platform, &[u8])> = others.iter().map(|b| (b.platform, b.data.as_slice())).collect();
+    if !binaries.iter().any(|(p, _)| *p == Platform::Linux64) {
+        binaries.insert(0, (Platform::Linux64, RUNTIME_SO));
+    }
+    let input = serde_json::to_string_pretty(spec).map_err(|e| BuildError::Internal(format!("serialising the input: {e}")))?;
+    let archive = fmu::FmuArchive {
+        model_description: xml,
+        model_identifier: &id,
+        binaries,
+        resources: vec![(ASSEMBLY_FILE.to_string(), description.to_bytes())],
+        documentation: vec![
+            ("index.html".to_string(), documentation::assembly_html(spec, description, table, reports).into_bytes()),
+            ("input.json".to_string(), input.into_bytes()),
+        ],
+    };
+    fmu::write_fmu(output, &archive).map_err(|e| match e {
+        fmu::FmuError::Archive { path, message } => BuildError::File { path, message },
+        other => BuildError::Numerical(other.to_string()),
+    })
+}

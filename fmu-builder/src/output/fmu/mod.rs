@@ -4,6 +4,7 @@
 //! reduced model and the documentation.
 
 pub mod archive;
+pub mod assembly_description;
 pub mod guid;
 pub mod model_description;
 

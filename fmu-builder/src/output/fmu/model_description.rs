@@ -62,7 +62,7 @@ pub fn xs_date_time(unix_seconds: u64) -> String {
     humantime::format_rfc3339_seconds(time).to_string()
 }
 
-fn check_info(info: &ModelInfo) -> Result<()> {
+pub(super) fn check_info(info: &ModelInfo) -> Result<()> {
     for (field, value) in
         [("modelName", &info.model_name), ("guid", &info.guid), ("generationTool", &info.generation_tool)]
     {
@@ -139,7 +139,7 @@ fn xs_double(x: f64, what: &str) -> Result<String> {
     if x.is_finite() { Ok(format!("{x:?}")) } else { err(format!("{what} is {x}, expected a finite number")) }
 }
 
-fn causality_name(c: Causality) -> &'static str {
+pub(super) fn causality_name(c: Causality) -> &'static str {
     match c {
         Causality::Parameter => "parameter",
         Causality::CalculatedParameter => "calculatedParameter",
@@ -150,7 +150,7 @@ fn causality_name(c: Causality) -> &'static str {
     }
 }
 
-fn variability_name(v: Variability) -> &'static str {
+pub(super) fn variability_name(v: Variability) -> &'static str {
     match v {
         Variability::Constant => "constant",
         Variability::Fixed => "fixed",
@@ -322,9 +322,9 @@ fn row<'t>(v: &'t Variable, to_index: &dyn Fn(u32, &str) -> Result<usize>) -> Re
     Ok(Row { var: v, start, derivative })
 }
 
-type W = Writer<Vec<u8>>;
+pub(super) type W = Writer<Vec<u8>>;
 
-fn attrs<'a>(pairs: &'a [(&'a str, String)]) -> impl Iterator<Item = (&'a str, &'a str)> {
+pub(super) fn attrs<'a>(pairs: &'a [(&'a str, String)]) -> impl Iterator<Item = (&'a str, &'a str)> {
     pairs.iter().map(|(k, v)| (*k, v.as_str()))
 }
 
@@ -388,7 +388,7 @@ fn write_interfaces(w: &mut W, model_identifier: &str) -> io::Result<()> {
     Ok(())
 }
 
-fn write_units(w: &mut W, units: &[(&str, [i32; 4])]) -> io::Result<()> {
+pub(super) fn write_units(w: &mut W, units: &[(&str, [i32; 4])]) -> io::Result<()> {
     if units.is_empty() {
         return Ok(()); // the schema wants at least one Unit inside UnitDefinitions
     }
@@ -411,7 +411,7 @@ fn write_units(w: &mut W, units: &[(&str, [i32; 4])]) -> io::Result<()> {
     Ok(())
 }
 
-fn write_log_categories(w: &mut W) -> io::Result<()> {
+pub(super) fn write_log_categories(w: &mut W) -> io::Result<()> {
     w.create_element("LogCategories").write_inner_content(|w| {
         for c in Category::ALL {
             let description = match c {
