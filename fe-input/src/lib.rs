@@ -14,6 +14,7 @@
 //! let _ = std::mem::size_of::<ElementKind>();
 //! ```
 
+pub mod assembly;
 pub mod element;
 pub mod error;
 pub mod file_read;

@@ -549,6 +549,78 @@ fn check_box_proportions(path: &Path, i: usize, b: &BoxSpec, unit: LengthUnit) -
     Ok(())
 }
 
+/// A run a host can start: positive finite times, a step within the run, a tolerance a
+/// double-precision integrator can meet.
+pub(crate) fn check_experiment(path: &Path, experiment: Option<&Experiment>) -> Result<()> {
+    let Some(e) = experiment else { return Ok(()) };
+    for (field, v) in [("experiment.stop_time", e.stop_time), ("experiment.step_size", e.step_size)] {
+        if let Some(v) = v
+            && !(v > 0.0 && v <= 1e9)
+        {
+            return Err(InputError::field(path, field, format!("{v:e} s must be positive and at most 1e9 s")));
+        }
+    }
+    if let (Some(stop), Some(step)) = (e.stop_time, e.step_size)
+        && step > stop
+    {
+        return Err(InputError::field(
+            path,
+            "experiment.step_size",
+            format!("{step:e} s is longer than experiment.stop_time = {stop:e} s"),
+        ));
+    }
+    if let Some(tol) = e.tolerance
+        && !(1e-14..1.0).contains(&tol)
+    {
+        return Err(InputError::field(
+            path,
+            "experiment.tolerance",
+            format!("{tol:e} must lie in [1e-14, 1): a relative tolerance double precision can meet"),
+        ));
+    }
+    Ok(())
+}
+
+/// `value` checked against the input's schema; the problems, every one, as one error whose
+/// fields lie below `at` (empty: the whole file).
+pub(crate) fn check_against_schema(path: &Path, value: &serde_json::Value, at: &str) -> Result<()> {
+    let schema: serde_json::Value =
+        serde_json::from_str(SCHEMA).map_err(|e| InputError::Internal(format!("embedded schema: {e}")))?;
+    let validator = jsonschema::validator_for(&schema)
+        .map_err(|e| InputError::Internal(format!("embedded schema does not compile: {e}")))?;
+    let problems = schema_errors::explain(&schema, validator.iter_errors(value));
+    if let Some((first, rest)) = problems.split_first() {
+        let shown =
+            |f: &str| if f.is_empty() && at.is_empty() { "(top level)".to_string() } else { below_field(at, f) };
+        let mut message = first.message.clone();
+        for p in rest {
+            message.push_str(&format!("\n  and {}: {}", shown(&p.field), p.message));
+        }
+        message.push_str("\n  (the input's schema: fmu-builder --print-schema)");
+        return Err(InputError::field(path, shown(&first.field), message));
+    }
+    Ok(())
+}
+
+/// `field` of a value found at `at` (`assembly.bodies[1].flexible` + `material.E`).
+pub(crate) fn below_field(at: &str, field: &str) -> String {
+    match (at.is_empty(), field.is_empty()) {
+        (true, _) => field.to_string(),
+        (false, true) => at.to_string(),
+        (false, false) => format!("{at}.{field}"),
+    }
+}
+
+/// `e` with its field put below `at`.
+pub(crate) fn below(at: &str, e: InputError) -> InputError {
+    match e {
+        InputError::Field { file, field, message } => {
+            InputError::Field { file, field: below_field(at, &field), message }
+        }
+        other => other,
+    }
+}
+
 /// Flange names the FMU's own variables use, checked before the schema so the message says why
 /// (the schema's `not` would only say the name "is not allowed").
 fn check_flange_names(path: &Path, value: &serde_json::Value) -> Result<()> {
@@ -587,26 +659,28 @@ impl Spec {
             InputError::field(path, format!("line {} column {}", e.line(), e.column()), format!("not valid JSON: {e}"))
         })?;
         json_keys::check_unique_keys(path, text)?;
-        check_flange_names(path, &value)?;
-        let schema: serde_json::Value =
-            serde_json::from_str(SCHEMA).map_err(|e| InputError::Internal(format!("embedded schema: {e}")))?;
-        let validator = jsonschema::validator_for(&schema)
-            .map_err(|e| InputError::Internal(format!("embedded schema does not compile: {e}")))?;
-        let problems = schema_errors::explain(&schema, validator.iter_errors(&value));
-        if let Some((first, rest)) = problems.split_first() {
-            let field = if first.field.is_empty() { "(top level)".to_string() } else { first.field.clone() };
-            let mut message = first.message.clone();
-            for p in rest {
-                let f = if p.field.is_empty() { "(top level)" } else { p.field.as_str() };
-                message.push_str(&format!("\n  and {f}: {}", p.message));
-            }
-            message.push_str("\n  (the input's schema: fmu-builder --print-schema)");
-            return Err(InputError::field(path, field, message));
+        if value.get("assembly").is_some() {
+            return Err(InputError::field(
+                path,
+                "assembly",
+                "this is an assembly's input (bodies and joints), where one body's input is expected; a body of an \
+                 assembly names a body input (geometry, material, flanges, reduction), not another assembly",
+            ));
         }
-        let mut spec: Spec = serde_json::from_value(value)
-            .map_err(|e| InputError::field(path, "", format!("does not match the input format: {e}")))?;
-        spec.check(path)?;
-        spec.keep_connected(path)?;
+        Self::from_value(path, value, "")
+    }
+
+    /// The body input `value`, found in `path` at the field `at` (empty for the whole file; an
+    /// assembly's inline body is `assembly.bodies[1].flexible`): checked against the schema and
+    /// read, every message naming its field below `at`.
+    pub(crate) fn from_value(path: &Path, value: serde_json::Value, at: &str) -> Result<Self> {
+        check_flange_names(path, &value).map_err(|e| below(at, e))?;
+        check_against_schema(path, &value, at)?;
+        let mut spec: Spec = serde_json::from_value(value).map_err(|e| {
+            InputError::field(path, below_field(at, ""), format!("does not match the input format: {e}"))
+        })?;
+        spec.check(path).map_err(|e| below(at, e))?;
+        spec.keep_connected(path).map_err(|e| below(at, e))?;
         Ok(spec)
     }
 
@@ -806,39 +880,7 @@ impl Spec {
                 return Err(InputError::field(path, field, format!("{v:e} is outside [0, {max:e}]{unit}: {why}")));
             }
         }
-        self.check_experiment(path)
-    }
-
-    /// A run a host can start: positive finite times, a step within the run, a tolerance a
-    /// double-precision integrator can meet.
-    fn check_experiment(&self, path: &Path) -> Result<()> {
-        let Some(e) = &self.experiment else { return Ok(()) };
-        for (field, v) in [("experiment.stop_time", e.stop_time), ("experiment.step_size", e.step_size)] {
-            if let Some(v) = v
-                && !(v > 0.0 && v <= 1e9)
-            {
-                return Err(InputError::field(path, field, format!("{v:e} s must be positive and at most 1e9 s")));
-            }
-        }
-        if let (Some(stop), Some(step)) = (e.stop_time, e.step_size)
-            && step > stop
-        {
-            return Err(InputError::field(
-                path,
-                "experiment.step_size",
-                format!("{step:e} s is longer than experiment.stop_time = {stop:e} s"),
-            ));
-        }
-        if let Some(tol) = e.tolerance
-            && !(1e-14..1.0).contains(&tol)
-        {
-            return Err(InputError::field(
-                path,
-                "experiment.tolerance",
-                format!("{tol:e} must lie in [1e-14, 1): a relative tolerance double precision can meet"),
-            ));
-        }
-        Ok(())
+        check_experiment(path, self.experiment.as_ref())
     }
 
     /// The part's source and its material: boxes need a complete material, matrices none.
