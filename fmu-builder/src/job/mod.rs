@@ -50,6 +50,9 @@ struct Input {
 /// Run `job`: every failure comes back as one error, for the caller to print.
 pub fn run(job: &Job) -> Result<()> {
     let input = read_input(&job.input)?;
+    if crate::input::assembly::is_assembly(&input.text) {
+        return build_assembly(job, &input);
+    }
     if job.sweep {
         check_destinations(job, &input, None)?;
         return sweep(job, &input);
@@ -155,6 +158,56 @@ fn sweep(job: &Job, input: &Input) -> Result<()> {
             option: format!("--sweep-svg {}", path.display()),
             message: e.to_string(),
         })?;
+    }
+    Ok(())
+}
+
+/// An assembly: its bodies reduced and one FMU written; the exports and the sweep are a single
+/// body's, refused here before any work.
+fn build_assembly(job: &Job, input: &Input) -> Result<()> {
+    use crate::input::assembly::AssemblySpec;
+    let e = &job.exports;
+    let refused = [
+        ("--sweep", job.sweep),
+        ("--report", e.report.is_some()),
+        ("--export-inp", e.inp.is_some()),
+        ("--export-vtk", e.vtk.is_some()),
+        ("--export-matrices", e.matrices.is_some()),
+        ("--export-free-free", e.free_free.is_some()),
+        ("--platform-binary", !job.platform_binaries.is_empty()),
+    ];
+    if let Some((option, _)) = refused.iter().find(|(_, asked)| *asked) {
+        return Err(BuildError::CommandLine {
+            option: option.to_string(),
+            message: format!(
+                "{} is an assembly: build each body's input on its own for this",
+                input.path.display()
+            ),
+        });
+    }
+    let profile = Profile::new(job.timings);
+    let spec = observed(job, &profile, || {
+        phases::phase("read and check the input", || AssemblySpec::from_str(&input.path, &input.text))
+    })?;
+    let output = job.output.clone().unwrap_or_else(|| {
+        let folder = input.path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        folder.join(format!("{}.fmu", spec.name))
+    });
+    let mut inputs = spec.input_files();
+    if input.path != Path::new("<stdin>") {
+        inputs.push(input.path.clone());
+    }
+    destinations::check(&[Destination::file("-o", &output)], &inputs, job.force)?;
+    let built = observed(job, &profile, || pipeline::assembly::build_assembly(spec, &output, &[]))?;
+    if !job.quiet {
+        print!("{}", crate::output::summary::assembly_text(&built));
+        if let Some(mib) = profile::process_peak_mib() {
+            println!("peak memory {mib:.0} MiB");
+        }
+        println!("wrote {}", output.display());
+    }
+    if job.timings {
+        print!("{}", profile::table(&profile.take()));
     }
     Ok(())
 }

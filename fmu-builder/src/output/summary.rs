@@ -136,3 +136,31 @@ fn accuracy(s: &mut String, r: &Report) {
     }
     let _ = writeln!(s, "  vs full FE: static flange compliance within {:.1e}", a.compliance_max_relative_error);
 }
+
+/// What an assembly's build printed: its bodies, joints and the FMU's variables.
+pub fn assembly_text(b: &crate::pipeline::assembly::BuiltAssembly) -> String {
+    use fmu_runtime::assembly::description::BodyModel;
+    use std::fmt::Write;
+    let d = &b.description;
+    let mut s = String::new();
+    let _ = writeln!(s, "assembly {}: {} bodies, {} joints", d.model_name, d.bodies.len(), d.joints.len());
+    for body in &d.bodies {
+        match &body.model {
+            BodyModel::Flexible(r) => {
+                let _ = writeln!(s, "  body {}: flexible, {:.4} kg, {} modes", body.name, r.mass, r.n_modes());
+            }
+            BodyModel::Rigid { mass, .. } => {
+                let _ = writeln!(s, "  body {}: rigid, {mass:.4} kg", body.name);
+            }
+        }
+    }
+    for j in &d.joints {
+        let _ = writeln!(s, "  joint {}: {}{}", j.name, j.kind.name(), if j.drive.is_some() { ", driven" } else { "" });
+    }
+    let _ = writeln!(
+        s,
+        "Co-Simulation: generalised-alpha (spectral radius {}), steps of at most {} s; DefaultExperiment stop {} s, step {} s",
+        d.solver.spectral_radius, d.solver.max_step, b.experiment.0, b.experiment.1
+    );
+    s
+}

@@ -129,7 +129,7 @@ fn describe(spec: &AssemblySpec) -> Result<(AssemblyDescription, Vec<(String, Re
                 InputFunction::Input => DriveFunction::Input,
                 InputFunction::Constant(v) => DriveFunction::Constant(v),
                 InputFunction::SpinUp { speed, time } => DriveFunction::SpinUp { speed, time },
-                InputFunction::Sine { amplitude, frequency, phase, offset } => {
+                InputFunction::Sine { amplitude, frequency, phase_rad: phase, offset } => {
                     DriveFunction::Sine { amplitude, frequency, phase, offset }
                 }
             },

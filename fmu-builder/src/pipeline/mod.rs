@@ -5,6 +5,7 @@
 //! and orders side by side.
 
 mod against;
+pub mod assembly;
 mod body;
 mod built;
 mod free_floating;
