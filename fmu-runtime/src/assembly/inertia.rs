@@ -41,6 +41,16 @@ pub struct Inertia {
     pub inertia: Mat3,
     /// Modal angular frequencies squared (the reduced stiffness).
     pub stiffness: Vec<f64>,
+    /// The first modes carry inertia; those above the body's dynamic cutoff are quasi-static:
+    /// their rates are taken as zero and their coordinates solved from the loads in every step
+    /// (the mode-acceleration method: a reduced mode far above the band stands for the part's
+    /// whole spectrum there, whose statics it carries exactly and whose ringing is no response
+    /// of the part; the body's own FMU treats them so, too).
+    pub n_dynamic: usize,
+    /// Modes n_dynamic..n_moving relax: no inertia, their damping kept (an overdamped mode
+    /// creeps toward its equilibrium at omega^2 / d; solved algebraically it would jump). The
+    /// modes above n_moving are algebraic.
+    pub n_moving: usize,
     /// d_k of q''_k + d_k q'_k + omega_k^2 q_k [1/s].
     pub damping: Vec<f64>,
     /// 3 x n: C_t = T^T M Phi, C_r0 = R_X^T M Phi.
@@ -81,6 +91,8 @@ impl Inertia {
             first_moment: body.first_moment,
             inertia: body.inertia,
             stiffness: body.omega.iter().map(|w| w * w).collect(),
+            n_dynamic: body.n_dynamic(),
+            n_moving: n,
             damping: (0..n).map(|j| body.damping_rate(j, alpha, beta)).collect(),
             c_t: body.c_t.clone(),
             c_r: body.c_r.clone(),
@@ -89,6 +101,19 @@ impl Inertia {
             o_vec: rot.o_vec.clone(),
             markers,
         })
+    }
+
+    /// Keep as dynamic only the modes a step of `h` resolves, omega h <= RESOLVED: the
+    /// generalised-alpha step turns a mode of omega h >> 1 into one at the step's Nyquist
+    /// frequency, whose transient after a load change is then wrong by O(h); solved
+    /// quasi-statically it is right to the mode's own (omega_band / omega)^2.
+    pub fn resolve_within(&mut self, h: f64) {
+        let limit = RESOLVED / h;
+        self.n_dynamic = self.n_dynamic.min(self.stiffness.iter().take_while(|k| k.sqrt() <= limit).count());
+        // relaxing: a rate the step follows (trapezoidal at rate h <= 10 damps a jump's
+        // alternation by two thirds a step)
+        let relaxes = |k: usize| self.damping[k] > 0.0 && self.stiffness[k] / self.damping[k] * h <= 10.0;
+        self.n_moving = self.n_dynamic + (self.n_dynamic..self.n_modes()).take_while(|&k| relaxes(k)).count();
     }
 
     /// A rigid body: `inertia_at_centre` about the centre of mass, body axes; flanges by name
@@ -113,6 +138,8 @@ impl Inertia {
             first_moment: k3::scale(mass, centre),
             inertia,
             stiffness: vec![],
+            n_dynamic: 0,
+            n_moving: 0,
             damping: vec![],
             c_t: vec![],
             c_r: vec![],
@@ -123,7 +150,8 @@ impl Inertia {
         })
     }
 
-    /// S(q) = m c(q), C_r(q) (3 x n into `cr_q`), J(q) and J'(q, q').
+    /// S(q) = m c(q), C_r(q) (3 x n into `cr_q`), J(q) and J'(q, q'); `qd` may hold only the
+    /// dynamic modes' rates (the others are zero).
     pub fn deformed(&self, q: &[f64], qd: &[f64], cr_q: &mut [f64]) -> (Vec3, Mat3, Mat3) {
         let n = q.len();
         let nn = n * n;
@@ -143,12 +171,13 @@ impl Inertia {
                 let o_mat = &self.o_mat[(3 * p + r) * nn..(3 * p + r + 1) * nn];
                 let (mut lin, mut lin_rate, mut quad, mut quad_rate) = (0.0, 0.0, 0.0, 0.0);
                 for k in 0..n {
+                    let qd_k = qd.get(k).copied().unwrap_or(0.0);
                     lin += q[k] * (o_pr[k] + o_rp[k]);
-                    lin_rate += qd[k] * (o_pr[k] + o_rp[k]);
+                    lin_rate += qd_k * (o_pr[k] + o_rp[k]);
                     let oq = shape_dot(&o_mat[k * n..(k + 1) * n], q);
                     let oqd = shape_dot(&o_mat[k * n..(k + 1) * n], qd);
                     quad += q[k] * oq;
-                    quad_rate += qd[k] * oq + q[k] * oqd;
+                    quad_rate += qd_k * oq + q[k] * oqd;
                 }
                 j[3 * p + r] -= lin + quad;
                 j_rate[3 * p + r] = -(lin_rate + quad_rate);
@@ -173,8 +202,9 @@ impl Inertia {
         let n = q.len();
         let nn = n * n;
         // the origin's velocity drops out: its terms cancel between momentum and its rate
-        let (w, qd) = (vel3(vel, 3), &vel[6..]);
-        let (a, w_d, qdd) = (vel3(acc, 0), vel3(acc, 3), &acc[6..]);
+        let (nd, nm) = (self.n_dynamic, self.n_moving);
+        let (w, qd) = (vel3(vel, 3), &vel[6..6 + nm]);
+        let (a, w_d, qdd) = (vel3(acc, 0), vel3(acc, 3), &acc[6..6 + nd]);
         let a_b = k3::mul_t(rot, k3::sub(a, gravity));
         let (s, j, j_rate) = self.deformed(q, qd, cr_q);
         let ct = |x: &[f64]| -> Vec3 { std::array::from_fn(|i| shape_dot(&self.c_t[i * n..(i + 1) * n], x)) };
@@ -195,7 +225,13 @@ impl Inertia {
         out[..3].copy_from_slice(&trans);
         out[3..6].copy_from_slice(&rotation);
         for k in 0..n {
-            let mut f = qdd[k] + self.damping[k] * qd[k] + self.stiffness[k] * q[k];
+            let mut f = self.stiffness[k] * q[k];
+            if k < nd {
+                f += qdd[k];
+            }
+            if k < nm {
+                f += self.damping[k] * qd[k];
+            }
             for i in 0..3 {
                 f += self.c_t[i * n + k] * a_b[i] + cr_q[i * n + k] * w_d[i];
                 f += 2.0 * w[i] * shape_dot(&self.g[i * nn + k * n..][..n], qd);
@@ -214,7 +250,7 @@ impl Inertia {
     /// Kinetic energy of the body at velocities `vel` (module docs' slots).
     pub fn kinetic_energy(&self, rot: &Mat3, q: &[f64], vel: &[f64], cr_q: &mut [f64]) -> f64 {
         let n = q.len();
-        let (v, w, qd) = (vel3(vel, 0), vel3(vel, 3), &vel[6..]);
+        let (v, w, qd) = (vel3(vel, 0), vel3(vel, 3), &vel[6..6 + self.n_dynamic]);
         let (s, j, _) = self.deformed(q, qd, cr_q);
         let ct_qd: Vec3 = std::array::from_fn(|i| shape_dot(&self.c_t[i * n..(i + 1) * n], qd));
         let cr_qd: Vec3 = std::array::from_fn(|i| shape_dot(&cr_q[i * n..(i + 1) * n], qd));
@@ -241,6 +277,9 @@ impl Inertia {
         -k3::dot(gravity, k3::add(k3::scale(self.mass, r), k3::mul(rot, s)))
     }
 }
+
+/// The largest omega h of a dynamic mode in an assembly (see [`Inertia::resolve_within`]).
+pub const RESOLVED: f64 = 2.0;
 
 #[inline]
 pub(crate) fn vel3(x: &[f64], at: usize) -> Vec3 {

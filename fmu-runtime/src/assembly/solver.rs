@@ -82,6 +82,11 @@ pub struct Solver {
     work: Work,
     /// The step the kept iteration matrix was formed for (None: none kept).
     matrix_step: Option<f64>,
+    /// Whether the next step is a run's first: taken with spectral radius 0, which moves the modes
+    /// the step cannot resolve straight to their equilibrium with the start's loads (a reduced
+    /// mode far above the band stands for the part's whole spectrum there, whose ringing is no
+    /// response of the part: the bodies' own Co-Simulation starts them so, too).
+    first: bool,
     /// Newton iterations of the last step, and matrices formed so far.
     pub last_iterations: usize,
     pub matrices_formed: u64,
@@ -111,6 +116,7 @@ impl Solver {
                 cr_q: vec![0.0; 3 * system.max_modes().max(1)],
             },
             matrix_step: None,
+            first: false,
             last_iterations: 0,
             matrices_formed: 0,
         }
@@ -152,6 +158,14 @@ impl Solver {
                 w.matrix[(nv + k) * dim + j] = b;
             }
         }
+        // quasi-static modes have no acceleration: their rows say so
+        for b in &system.bodies {
+            for k in b.slot + 6 + b.inertia.n_dynamic..b.slot + 6 + b.n_modes() {
+                w.matrix[k * dim..(k + 1) * dim].fill(0.0);
+                w.matrix[k * dim + k] = 1.0;
+                base[k] = 0.0;
+            }
+        }
         // phi'' at a = 0: second differences along the present velocities (geodesics of the
         // poses) and time
         let eps = 1e-4;
@@ -181,6 +195,7 @@ impl Solver {
         m.pseudo.copy_from_slice(&rhs[..nv]);
         m.lambda.copy_from_slice(&rhs[nv..]);
         self.matrix_step = None;
+        self.first = true;
         Ok(())
     }
 
@@ -295,6 +310,23 @@ impl Solver {
 
     /// One step of length h to `now` (the step's end): `m` becomes the state at its end.
     pub fn step(&mut self, system: &System, m: &mut Motion, h: f64, now: &Instant) -> Result<(), AssemblyError> {
+        if self.first {
+            self.coefficients = Coefficients::of(0.0);
+            self.matrix_step = None;
+            let done = self.step_with_kept(system, m, h, now);
+            self.coefficients = Coefficients::of(self.settings.spectral_radius);
+            self.matrix_step = None;
+            if done.is_ok() {
+                self.first = false;
+                // the pseudo-accelerations of the run's own coefficients start from the step's
+                m.pseudo.copy_from_slice(&m.acc);
+            }
+            return done;
+        }
+        self.step_with_kept(system, m, h, now)
+    }
+
+    fn step_with_kept(&mut self, system: &System, m: &mut Motion, h: f64, now: &Instant) -> Result<(), AssemblyError> {
         for attempt in 0..2 {
             self.work.acc.copy_from_slice(&m.acc);
             self.work.lambda.copy_from_slice(&m.lambda);
@@ -311,6 +343,10 @@ impl Solver {
                 m.acc.copy_from_slice(&w.acc);
                 m.pseudo.copy_from_slice(&w.pseudo);
                 m.lambda.copy_from_slice(&w.lambda);
+                for x in [&mut m.acc, &mut m.pseudo] {
+                    system.zero_modes_from(x, |b| b.n_dynamic);
+                }
+                system.zero_modes_from(&mut m.vel, |b| b.n_moving);
                 return Ok(());
             }
         }

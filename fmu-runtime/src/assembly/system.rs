@@ -127,7 +127,11 @@ impl System {
         let (mut slot, mut at) = (0, 0);
         for b in &d.bodies {
             let inertia = match &b.model {
-                BodyModel::Flexible(r) => Inertia::flexible(&b.name, r, r.alpha, r.beta)?,
+                BodyModel::Flexible(r) => {
+                    let mut inertia = Inertia::flexible(&b.name, r, r.alpha, r.beta)?;
+                    inertia.resolve_within(d.solver.max_step);
+                    inertia
+                }
                 BodyModel::Rigid { mass, centre, inertia_at_centre, flanges } => {
                     Inertia::rigid(&b.name, *mass, *centre, *inertia_at_centre, flanges)?
                 }
@@ -382,6 +386,14 @@ impl System {
         e
     }
 
+    /// Zero the entries of modes from `from(body)` on: the accelerations of the modes without
+    /// inertia, the velocities of the algebraic ones (their coordinates are solved in each step).
+    pub fn zero_modes_from(&self, x: &mut [f64], from: impl Fn(&Inertia) -> usize) {
+        for b in &self.bodies {
+            x[b.slot + 6 + from(&b.inertia)..b.slot + 6 + b.n_modes()].fill(0.0);
+        }
+    }
+
     /// The largest modal count (scratch sizes).
     pub fn max_modes(&self) -> usize {
         self.bodies.iter().map(|b| b.n_modes()).max().unwrap_or(0)
@@ -402,7 +414,7 @@ impl System {
             if n == 0 { [0.0; 3] } else { std::array::from_fn(|i| shape_dot(&shapes[(from + i) * n..][..n], x)) }
         };
         let v = &vel[b.slot..];
-        let (w, qd) = (vel3(v, 3), &v[6..6 + n]);
+        let (w, qd) = (vel3(v, 3), &v[6..6 + b.inertia.n_moving]);
         let (u_d, phi_d) = (rows(qd, 0), k3::mul(&pose.lj, rows(qd, 3)));
         match acc {
             None => (
@@ -411,7 +423,7 @@ impl System {
             ),
             Some(acc) => {
                 let a = &acc[b.slot..];
-                let (w_d, qdd) = (vel3(a, 3), &a[6..6 + n]);
+                let (w_d, qdd) = (vel3(a, 3), &a[6..6 + b.inertia.n_dynamic]);
                 let (u_dd, phi_dd) = (rows(qdd, 0), k3::mul(&pose.lj, rows(qdd, 3)));
                 let body_a = k3::add(
                     k3::add(k3::cross(w_d, pose.s), k3::cross(w, k3::cross(w, pose.s))),

@@ -90,6 +90,8 @@ pub(crate) fn inertia_of(c: &Cloud) -> Inertia {
         first_moment,
         inertia,
         stiffness: vec![0.0; n],
+        n_dynamic: n,
+        n_moving: n,
         damping: vec![0.0; n],
         c_t,
         c_r,
