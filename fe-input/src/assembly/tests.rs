@@ -520,3 +520,35 @@ fn the_examples_are_bodies_and_is_assembly_tells_them_apart() {
     assert!(e.starts_with("arm.json: assembly: this is an assembly's input"), "{e}");
     assert!(is_assembly(r#"{"assembly": null}"#) && !is_assembly("[1]") && !is_assembly("{") && !is_assembly("{}"));
 }
+
+/// The schema refuses what the reading refuses for names and types, so editors flag them too.
+#[test]
+fn the_schema_lists_the_reserved_names_and_the_joint_types() {
+    let schema: Value = serde_json::from_str(spec::SCHEMA).unwrap();
+    let listed = |pointer: &str| -> Vec<String> {
+        let mut v: Vec<String> = schema
+            .pointer(pointer)
+            .unwrap_or_else(|| panic!("{pointer}"))
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_str().unwrap().to_string())
+            .collect();
+        v.sort_unstable();
+        v
+    };
+    let mut reserved: Vec<String> = crate::variable_names::RESERVED.iter().map(|s| s.to_string()).collect();
+    reserved.sort_unstable();
+    assert_eq!(listed("/$defs/joint/properties/name/not/enum"), reserved);
+    assert_eq!(listed("/$defs/assembly_flange/properties/name/not/enum"), reserved);
+    reserved.push("ground".into());
+    reserved.sort_unstable();
+    assert_eq!(listed("/$defs/assembly_body/properties/name/not/enum"), reserved);
+    let mut types: Vec<String> = JointType::ALL.iter().map(|t| t.word().to_string()).collect();
+    types.sort_unstable();
+    assert_eq!(listed("/$defs/joint/properties/type/enum"), types);
+    assert_eq!(forms::BODY_KEYS.len(), schema["then"]["properties"].as_object().unwrap().len());
+    for key in forms::BODY_KEYS {
+        assert_eq!(schema["then"]["properties"][key], Value::Bool(false), "{key}");
+    }
+}
