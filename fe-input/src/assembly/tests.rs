@@ -322,9 +322,22 @@ fn axes_and_drives_fit_the_joint_type() {
         &with(|d| d["assembly"]["joints"][0]["drive"] = json!({ "torque": "inpt" })),
         &["assembly.joints[0].drive.torque: ", "\"input\""],
     );
-    refused(
+    // only the type: its axis and drive are not refused for a type it does not have
+    let e = refused(
         &with(|d| d["assembly"]["joints"][0]["type"] = json!("hinge")),
         &["assembly.joints[0].type: found \"hinge\", expected one of \"weld\""],
+    );
+    assert!(!e.contains("axis") && !e.contains("drive"), "{e}");
+    // where the schema speaks first (an unknown key beside), a key the type rules out is named
+    refused(
+        &with(|d| {
+            d["assembly"]["joints"][1]["axis"] = json!([0, 1, 0]);
+            d["assembly"]["joints"][1]["colour"] = json!(1);
+        }),
+        &[
+            "assembly.joints[1].colour: unknown key",
+            "assembly.joints[1].axis: found [0,1,0]: \"axis\" is not allowed here",
+        ],
     );
 }
 
