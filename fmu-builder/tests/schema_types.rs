@@ -112,7 +112,7 @@ fn assembly_documents() -> Vec<Value> {
             "gravity": [0.0, 0.0, -9.81],
             "bodies": [
                 {"name": "upper", "flexible": link, "position": [0.0, 0.0, 0.0], "rotation": {"axis": [0.0, 1.0, 0.0], "angle": 45.0}},
-                {"name": "crank", "rigid": rigid(&["centre", "pin"]), "position": [0.7071, 0.0, -0.7071]},
+                {"name": "crank", "rigid": rigid(&["centre", "pin"]), "position": [0.7, 0.0, -0.7]},
                 {"name": "free", "rigid": rigid(&["f"])}
             ],
             "joints": [
@@ -153,7 +153,7 @@ fn assembly_documents() -> Vec<Value> {
     }
     let functions = [
         json!({"constant": 0.5}),
-        json!({"spin_up": {"speed": 6.28, "time": 1.0}}),
+        json!({"spin_up": {"speed": 6.5, "time": 1.0}}),
         json!({"sine": {"amplitude": 0.1, "frequency": 2.0, "phase": 90.0, "offset": 0.01}}),
         json!("input"),
     ];
