@@ -174,7 +174,7 @@ fn body_files_resolve_from_the_assembly_and_their_errors_name_them() {
     // an assembly where a body's input is expected
     std::fs::write(&file, good().to_string()).unwrap();
     let e = AssemblySpec::from_str(&assembly, &doc.to_string()).unwrap_err().to_string();
-    assert!(e.starts_with(&format!("{}: assembly: this is an assembly's input", file.display())), "{e}");
+    assert!(e.starts_with(&format!("{}: assembly: this file is an assembly's input", file.display())), "{e}");
     // a missing file: the field, the path as resolved, the folder
     let doc = with(|d| d["assembly"]["bodies"][0]["flexible"] = json!("parts/lnk.json"));
     let e = AssemblySpec::from_str(&assembly, &doc.to_string()).unwrap_err().to_string();
@@ -530,7 +530,7 @@ fn the_examples_are_bodies_and_is_assembly_tells_them_apart() {
     let text = good().to_string();
     assert!(is_assembly(&text));
     let e = Spec::from_str(Path::new("arm.json"), &text).unwrap_err().to_string();
-    assert!(e.starts_with("arm.json: assembly: this is an assembly's input"), "{e}");
+    assert!(e.starts_with("arm.json: assembly: this file is an assembly's input"), "{e}");
     assert!(is_assembly(r#"{"assembly": null}"#) && !is_assembly("[1]") && !is_assembly("{") && !is_assembly("{}"));
 }
 
