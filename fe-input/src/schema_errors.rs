@@ -133,6 +133,17 @@ fn describe(schema: &Value, e: &ValidationError<'_>, out: &mut Vec<Problem>) {
         ValidationErrorKind::OneOfNotValid { context } | ValidationErrorKind::AnyOf { context } => {
             one_of(schema, e, &field, &schema_path, context, out);
         }
+        ValidationErrorKind::FalseSchema => {
+            // a key the object's other fields rule out (an axis on a spherical joint)
+            let key = field.rsplit(['.', '[']).next().unwrap_or(&field).trim_end_matches(']').to_string();
+            out.push(Problem {
+                field: field.clone(),
+                message: format!(
+                    "found {}: \"{key}\" is not allowed here, given the object's other fields",
+                    short(e.instance())
+                ),
+            });
+        }
         ValidationErrorKind::Required { property } => {
             let key = property.as_str().unwrap_or_default();
             out.push(Problem { field: join(&field, key), message: format!("\"{key}\" is missing and required here") });

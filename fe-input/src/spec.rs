@@ -663,8 +663,8 @@ impl Spec {
             return Err(InputError::field(
                 path,
                 "assembly",
-                "this is an assembly's input (bodies and joints), where one body's input is expected; a body of an \
-                 assembly names a body input (geometry, material, flanges, reduction), not another assembly",
+                "this file is an assembly's input (bodies and joints), and one body's input (geometry, material, \
+                 flanges, reduction) is expected here",
             ));
         }
         Self::from_value(path, value, "")

@@ -7,9 +7,12 @@
 //! Base inputs below use every field of the schema (checked: a field they miss fails the test).
 //! For every field with a numeric or length bound, the value at the bound (or just inside an
 //! exclusive one) and just beyond it are put to both the schema and the builder's input check
-//! (`Spec::from_str`, all that `fmu-builder` checks before meshing), and their verdicts must
-//! agree; for every enum, every value and one that is not.
+//! (`Spec::from_str`, all that `fmu-builder` checks before meshing, or `AssemblySpec::from_str`
+//! for an assembly), and their verdicts must agree; for every enum, every value and one that is
+//! not. An assembly's inline body is the body input's own form (the schema's `"$ref": "#"`), its
+//! fields covered by the body documents: the walks below stop there.
 
+use fmu_builder::input::assembly::{AssemblySpec, json::AssemblyFile};
 use fmu_builder::input::ranges;
 use fmu_builder::input::spec::{MAX_MODES, SCHEMA, Spec};
 use serde_json::{Value, json};
@@ -73,7 +76,101 @@ fn base_documents() -> Vec<Value> {
         "reduction": {"modes": 2, "backend": {"kind": "petsc", "ranks": 2, "launcher": "mpirun", "python": "python3",
                       "host": "127.0.0.1", "job_folder": "jobs", "partitioner": "ptscotch", "connect_timeout": 30.0}}
     });
-    vec![boxes, mesh, krylov, petsc]
+    let mut docs = vec![boxes, mesh, krylov, petsc];
+    docs.extend(assembly_documents());
+    docs
+}
+
+/// A rigid body's mass properties with the flanges `names`.
+fn rigid(names: &[&str]) -> Value {
+    let flanges: Vec<Value> = names.iter().map(|n| json!({"name": n, "position": [0.0, 0.0, 0.0]})).collect();
+    json!({"mass": 1.0, "centre_of_mass": [0.1, 0.0, 0.0], "inertia": [1.0, 1.0, 1.0, 0.0, 0.0, 0.0], "flanges": flanges})
+}
+
+/// Assemblies that together use every field of the assembly form. Where a document's first joint
+/// or first external flange takes another value of its enum, the counts of degrees of freedom
+/// leave room for it (each enum value builds in one of them, the others are refused by both for
+/// the form, not the count).
+fn assembly_documents() -> Vec<Value> {
+    let link = json!({
+        "name": "Link",
+        "geometry": {"element": "hex8", "boxes": [{"min": [0.0, 0.0, 0.0], "max": [1.0, 0.01, 0.02], "elements": [10, 1, 1]}]},
+        "material": {"E": 2e11, "nu": 0.3, "rho": 7850.0},
+        "flanges": [
+            {"name": "base", "role": "motion", "nodes": {"box_face": {"box": 0, "face": "-x"}}},
+            {"name": "tip", "role": "force", "nodes": {"box_face": {"box": 0, "face": "+x"}}}
+        ],
+        "reduction": {"modes": 2}
+    });
+    // a flexible link hinged to the ground, a rigid crank on a ball joint at its tip, and a free
+    // rigid body the host holds (a force and a motion flange at the same place)
+    let full = json!({
+        "$schema": "../schemas/fmu-builder-input.schema.json",
+        "name": "Arm",
+        "description": "every field of the assembly form but the drives",
+        "assembly": {
+            "gravity": [0.0, 0.0, -9.81],
+            "bodies": [
+                {"name": "upper", "flexible": link, "position": [0.0, 0.0, 0.0], "rotation": {"axis": [0.0, 1.0, 0.0], "angle": 45.0}},
+                {"name": "crank", "rigid": rigid(&["centre", "pin"]), "position": [0.7, 0.0, -0.7]},
+                {"name": "free", "rigid": rigid(&["f"])}
+            ],
+            "joints": [
+                {"name": "pivot", "type": "revolute", "between": ["ground", "upper.base"], "axis": [0.0, 1.0, 0.0]},
+                {"name": "elbow", "type": "spherical", "between": ["upper.tip", "crank.centre"]},
+                {"name": "cardan", "type": "universal", "between": ["crank.pin", "ground"], "axes": [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]}
+            ],
+            "flanges": [{"name": "load", "role": "force", "at": "free.f"}, {"name": "mount", "role": "motion", "at": "free.f"}],
+            "solver": {"spectral_radius": 0.8, "tolerance": 1e-9, "max_iterations": 12}
+        },
+        "experiment": {"stop_time": 2.0, "tolerance": 1e-6}
+    });
+    let mut docs = vec![full];
+    // a chain of rigid bodies each held to the ground by one joint: `joints` the first joint of
+    // each document (every type first once), then one per drive quantity and function
+    let chain = |first: Value, more: &[Value]| {
+        let joints: Vec<Value> = std::iter::once(&first)
+            .chain(more)
+            .enumerate()
+            .map(|(i, j)| {
+                let mut j = j.clone();
+                j["name"] = json!(format!("j{i}"));
+                j["between"] = json!(["ground", format!("b{i}.f")]);
+                j
+            })
+            .collect();
+        let bodies: Vec<Value> =
+            (0..joints.len()).map(|i| json!({"name": format!("b{i}"), "rigid": rigid(&["f"])})).collect();
+        json!({"name": "Chain", "assembly": {"bodies": bodies, "joints": joints}})
+    };
+    for first in [
+        json!({"type": "weld"}),
+        json!({"type": "prismatic", "axis": [1.0, 0.0, 0.0]}),
+        json!({"type": "spherical"}),
+        json!({"type": "universal", "axes": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]}),
+    ] {
+        docs.push(chain(first, &[]));
+    }
+    let functions = [
+        json!({"constant": 0.5}),
+        json!({"spin_up": {"speed": 6.5, "time": 1.0}}),
+        json!({"sine": {"amplitude": 0.1, "frequency": 2.0, "phase": 90.0, "offset": 0.01}}),
+        json!("input"),
+    ];
+    let mut driven = Vec::new();
+    for (quantity, kind) in
+        [("angle", "revolute"), ("torque", "revolute"), ("position", "prismatic"), ("force", "prismatic")]
+    {
+        for f in &functions {
+            driven.push(json!({"type": kind, "axis": [0.0, 0.0, 1.0], "drive": {quantity: f}}));
+        }
+    }
+    docs.push(chain(driven[0].clone(), &driven[1..]));
+    // the first external flange a motion flange: a body the host holds, and nothing else
+    docs.push(json!({"name": "Held", "assembly": {"bodies": [{"name": "b0", "rigid": rigid(&["f"])}],
+                                                  "flanges": [{"name": "mount", "role": "motion", "at": "b0.f"}]},
+                     "experiment": {"step_size": 1e-3}}));
+    docs
 }
 
 fn schema() -> Value {
@@ -82,7 +179,19 @@ fn schema() -> Value {
 
 /// The builder's verdict: Ok, or its message.
 fn builder(doc: &Value) -> Result<(), String> {
-    Spec::from_str(Path::new("in.json"), &doc.to_string()).map(|_| ()).map_err(|e| e.to_string())
+    let text = doc.to_string();
+    if doc.get("assembly").is_some() {
+        AssemblySpec::from_str(Path::new("in.json"), &text).map(|_| ()).map_err(|e| e.to_string())
+    } else {
+        Spec::from_str(Path::new("in.json"), &text).map(|_| ()).map_err(|e| e.to_string())
+    }
+}
+
+/// Whether `s` offers the whole input's schema (`"$ref": "#"`, an assembly's inline body): the
+/// body documents cover its fields.
+fn is_whole_input(s: &Value) -> bool {
+    s.get("$ref").and_then(Value::as_str) == Some("#")
+        || s.get("oneOf").and_then(Value::as_array).is_some_and(|alts| alts.iter().any(is_whole_input))
 }
 
 fn resolve<'a>(root: &'a Value, s: &'a Value) -> &'a Value {
@@ -116,6 +225,9 @@ fn keyword<'a>(root: &'a Value, s: &'a Value, key: &str) -> Option<&'a Value> {
 
 /// Every property path of the schema: `flanges[].nodes.plane.tolerance`, `materials.*.E`.
 fn schema_paths(root: &Value, s: &Value, path: &str, out: &mut BTreeSet<String>) {
+    if is_whole_input(s) && !path.is_empty() {
+        return;
+    }
     let s = resolve(root, s);
     let join = |k: &str| if path.is_empty() { k.to_string() } else { format!("{path}.{k}") };
     for (k, p) in s.get("properties").and_then(Value::as_object).into_iter().flatten() {
@@ -158,6 +270,9 @@ fn locations<'a>(root: &'a Value, doc: &Value) -> Vec<Location<'a>> {
         let (pointer, field, generic) = at;
         if !generic.is_empty() && seen.insert(generic.to_string()) {
             out.push(Location { pointer: pointer.into(), field: field.into(), generic: generic.into(), schema: s });
+        }
+        if !generic.is_empty() && is_whole_input(s) {
+            return;
         }
         match v {
             Value::Object(map) => {
@@ -243,10 +358,16 @@ fn the_base_documents_use_every_field_and_the_types_take_them() {
         assert!(problems.is_empty(), "a base document is invalid for the schema: {problems:?}");
         builder(&doc).unwrap_or_else(|e| panic!("the builder refuses a base document: {e}"));
         // the serde types alone (deny_unknown_fields, no schema in front of them) take every name
-        let spec: Spec = serde_json::from_value(doc.clone()).unwrap_or_else(|e| panic!("the types refuse: {e}"));
+        let written = if doc.get("assembly").is_some() {
+            let file: AssemblyFile =
+                serde_json::from_value(doc.clone()).unwrap_or_else(|e| panic!("the types refuse: {e}"));
+            serde_json::to_value(&file).unwrap()
+        } else {
+            let spec: Spec = serde_json::from_value(doc.clone()).unwrap_or_else(|e| panic!("the types refuse: {e}"));
+            serde_json::to_value(&spec).unwrap()
+        };
         used.extend(locations(&root, &doc).into_iter().map(|l| l.generic));
         // ... and every field the types write back is one the schema knows
-        let written = serde_json::to_value(&spec).unwrap();
         let mut back = Vec::new();
         fn keys(v: &Value, path: &str, out: &mut Vec<String>) {
             match v {
@@ -262,7 +383,8 @@ fn the_base_documents_use_every_field_and_the_types_take_them() {
             }
         }
         keys(&written, "", &mut back);
-        for k in back {
+        // (an inline body's own fields are a body input's, written back by `Spec`)
+        for k in back.into_iter().filter(|k| !k.contains(".flexible.")) {
             let generic = k.replace("materials.STEEL", "materials.*");
             assert!(declared.contains(&generic), "the types have a field {generic} the schema does not declare");
         }
@@ -353,7 +475,15 @@ fn every_enum_value_is_taken_by_both_or_refused_by_both() {
         let never: Vec<&String> = values.iter().filter(|v| !taken.contains(*v)).collect();
         assert!(never.is_empty(), "{path}: no base document builds with {never:?}");
     }
-    for path in ["geometry.length_unit", "geometry.element", "flanges[].role", "reduction.method", "scene.loads[]"] {
+    for path in [
+        "geometry.length_unit",
+        "geometry.element",
+        "flanges[].role",
+        "reduction.method",
+        "scene.loads[]",
+        "assembly.joints[].type",
+        "assembly.flanges[].role",
+    ] {
         assert!(offered.contains_key(path), "{path} was not tested");
     }
 }

@@ -174,7 +174,7 @@ fn body_files_resolve_from_the_assembly_and_their_errors_name_them() {
     // an assembly where a body's input is expected
     std::fs::write(&file, good().to_string()).unwrap();
     let e = AssemblySpec::from_str(&assembly, &doc.to_string()).unwrap_err().to_string();
-    assert!(e.starts_with(&format!("{}: assembly: this is an assembly's input", file.display())), "{e}");
+    assert!(e.starts_with(&format!("{}: assembly: this file is an assembly's input", file.display())), "{e}");
     // a missing file: the field, the path as resolved, the folder
     let doc = with(|d| d["assembly"]["bodies"][0]["flexible"] = json!("parts/lnk.json"));
     let e = AssemblySpec::from_str(&assembly, &doc.to_string()).unwrap_err().to_string();
@@ -322,9 +322,22 @@ fn axes_and_drives_fit_the_joint_type() {
         &with(|d| d["assembly"]["joints"][0]["drive"] = json!({ "torque": "inpt" })),
         &["assembly.joints[0].drive.torque: ", "\"input\""],
     );
-    refused(
+    // only the type: its axis and drive are not refused for a type it does not have
+    let e = refused(
         &with(|d| d["assembly"]["joints"][0]["type"] = json!("hinge")),
         &["assembly.joints[0].type: found \"hinge\", expected one of \"weld\""],
+    );
+    assert!(!e.contains("axis") && !e.contains("drive"), "{e}");
+    // where the schema speaks first (an unknown key beside), a key the type rules out is named
+    refused(
+        &with(|d| {
+            d["assembly"]["joints"][1]["axis"] = json!([0, 1, 0]);
+            d["assembly"]["joints"][1]["colour"] = json!(1);
+        }),
+        &[
+            "assembly.joints[1].colour: unknown key",
+            "assembly.joints[1].axis: found [0,1,0]: \"axis\" is not allowed here",
+        ],
     );
 }
 
@@ -517,6 +530,38 @@ fn the_examples_are_bodies_and_is_assembly_tells_them_apart() {
     let text = good().to_string();
     assert!(is_assembly(&text));
     let e = Spec::from_str(Path::new("arm.json"), &text).unwrap_err().to_string();
-    assert!(e.starts_with("arm.json: assembly: this is an assembly's input"), "{e}");
+    assert!(e.starts_with("arm.json: assembly: this file is an assembly's input"), "{e}");
     assert!(is_assembly(r#"{"assembly": null}"#) && !is_assembly("[1]") && !is_assembly("{") && !is_assembly("{}"));
+}
+
+/// The schema refuses what the reading refuses for names and types, so editors flag them too.
+#[test]
+fn the_schema_lists_the_reserved_names_and_the_joint_types() {
+    let schema: Value = serde_json::from_str(spec::SCHEMA).unwrap();
+    let listed = |pointer: &str| -> Vec<String> {
+        let mut v: Vec<String> = schema
+            .pointer(pointer)
+            .unwrap_or_else(|| panic!("{pointer}"))
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_str().unwrap().to_string())
+            .collect();
+        v.sort_unstable();
+        v
+    };
+    let mut reserved: Vec<String> = crate::variable_names::RESERVED.iter().map(|s| s.to_string()).collect();
+    reserved.sort_unstable();
+    assert_eq!(listed("/$defs/joint/properties/name/not/enum"), reserved);
+    assert_eq!(listed("/$defs/assembly_flange/properties/name/not/enum"), reserved);
+    reserved.push("ground".into());
+    reserved.sort_unstable();
+    assert_eq!(listed("/$defs/assembly_body/properties/name/not/enum"), reserved);
+    let mut types: Vec<String> = JointType::ALL.iter().map(|t| t.word().to_string()).collect();
+    types.sort_unstable();
+    assert_eq!(listed("/$defs/joint/properties/type/enum"), types);
+    assert_eq!(forms::BODY_KEYS.len(), schema["then"]["properties"].as_object().unwrap().len());
+    for key in forms::BODY_KEYS {
+        assert_eq!(schema["then"]["properties"][key], Value::Bool(false), "{key}");
+    }
 }
