@@ -20,6 +20,7 @@ from fmpy.validation import validate_fmu
 import calculix as ccx
 from conftest import EXAMPLES, ROOT, run_builder
 
+sys.path.insert(0, str(ROOT / "examples" / "chain"))
 ASSEMBLIES = EXAMPLES / "assemblies"
 H = 1e-3
 NO_GRAVITY = {"g[3]": 0.0}
@@ -120,3 +121,102 @@ def test_weld_gravity_from_rest_vs_one_piece(built):
     dev = np.abs(ours - theirs).max() / swing
     print(f"\nweld, gravity from rest: tip swing {swing:.4g} m, assembly - one piece {dev:.2e} of it")
     assert dev <= 1e-2
+
+
+# ---------------------------------------------------------------------------------------------
+# mechanisms against rigid-body theory and Exudyn
+
+
+def test_double_pendulum_vs_rigid_theory_and_exudyn(built, link_matrices):
+    """examples/assemblies/double_pendulum.json, 12 s (five periods of the slow mode) at
+    h = 1 ms: elbow and tip (x, z) against the rigid double pendulum of two uniform bars
+    (Lagrange's equations, test_chain.rigid_double_pendulum) and against Exudyn's flexible double
+    pendulum of the same mesh (CalculiX's matrices, Exudyn's own Craig-Bampton modes, joints and
+    generalised-alpha at h = 1 ms), as fractions of the rigid pendulum's swing."""
+    from exudyn_reference import double_pendulum as exudyn_double_pendulum
+    from test_chain import rigid_double_pendulum
+
+    t, ours = simulate(built[0]["double_pendulum"], 12.0,
+                       ["upper.tip.r[1]", "upper.tip.r[3]", "lower.tip.r[1]", "lower.tip.r[3]"])
+    theirs = rigid_double_pendulum([np.pi / 4, np.pi / 4], t, length=1.0)
+    swing = np.ptp(theirs, axis=0)
+    rigid = np.abs(ours - theirs).max(axis=0) / swing
+    deck, workdir, matrices = link_matrices
+    t_ex, exudyn = exudyn_double_pendulum(deck, workdir, seconds=12.0, matrices=matrices)
+    assert exudyn.shape == ours.shape and np.allclose(t_ex, t)
+    against_exudyn = np.abs(ours - exudyn).max(axis=0) / swing
+    early = np.abs(ours[:2001] - exudyn[:2001]).max() / swing.max()
+    print(f"\ndouble pendulum, 12 s: within {rigid} of the rigid pendulum's swing ({swing} m), within "
+          f"{against_exudyn} of Exudyn's ({early:.1e} over the first 2 s)")
+    assert rigid.max() <= 1e-2
+    assert against_exudyn.max() <= 1e-2
+
+
+def test_three_link_chain_vs_rigid_theory_and_exudyn(built, link_matrices):
+    """examples/assemblies/three_link_chain.json, 4 s at h = 1 ms: each link's tip (x, z)
+    against three uniform rigid bars (rigid_mechanisms.rigid_pendulum_chain) and against
+    Exudyn's chain of three flexible links of the same mesh."""
+    import rigid_mechanisms as rm
+    from exudyn_reference import pendulum_chain
+
+    names = [f"link{i}.tip.r[{c}]" for i in (1, 2, 3) for c in (1, 3)]
+    t, ours = simulate(built[0]["three_link_chain"], 4.0, names)
+    theirs = rm.rigid_pendulum_chain(3, [np.pi / 4] * 3, t)
+    swing = np.ptp(theirs, axis=0)
+    rigid = np.abs(ours - theirs).max(axis=0) / swing
+    deck, workdir, matrices = link_matrices
+    _, exudyn = pendulum_chain(deck, workdir, n_links=3, seconds=4.0, matrices=matrices)
+    against_exudyn = np.abs(ours - exudyn).max(axis=0) / swing
+    print(f"\nthree-link chain, 4 s: within {rigid.max():.2e} of the rigid chain's swing, {against_exudyn.max():.2e} "
+          f"of Exudyn's")
+    assert rigid.max() <= 1e-2
+    assert against_exudyn.max() <= 1e-2
+
+
+def test_four_bar_vs_rigid_theory_and_exudyn(built, link_matrices):
+    """examples/assemblies/four_bar.json, 6 s at h = 1 ms (the crank's spin-up and five turns):
+    the rocker's angle, the coupler's far end C (x, z) and the torque the ground applies to the
+    crank (about +y), against the rigid four-bar (rigid_mechanisms.rigid_four_bar) and Exudyn's
+    four-bar with the same flexible coupler and rigid crank and rocker. The torque is compared
+    from t = 0.1 s: a coupler started straight rings in its joints for the first 50 ms."""
+    import rigid_mechanisms as rm
+    from exudyn_reference import four_bar
+
+    t, ours = simulate(built[0]["four_bar"], 6.0,
+                       ["rocker_pivot.angle", "coupler.tip.r[1]", "coupler.tip.r[3]", "drive.t[3]"])
+    theirs = rm.rigid_four_bar(t)
+    swing = np.ptp(theirs, axis=0)
+    late = t >= 0.1
+    rigid = np.abs(ours - theirs).max(axis=0) / swing
+    rigid[3] = np.abs(ours[late, 3] - theirs[late, 3]).max() / swing[3]
+    deck, workdir, matrices = link_matrices
+    _, exudyn = four_bar(deck, workdir, seconds=6.0, matrices=matrices)
+    against = np.abs(ours - exudyn[:, :4]).max(axis=0) / swing
+    against[3] = np.abs(ours[late, 3] - exudyn[late, 3]).max() / swing[3]
+    print(f"\nfour-bar, 6 s: rocker angle, C x, C z, crank torque within {rigid} of the rigid four-bar's swing "
+          f"({swing}), within {against} of Exudyn's")
+    assert rigid[:3].max() <= 1e-3 and rigid[3] <= 2e-2
+    assert against.max() <= 1e-2
+
+
+def test_slider_crank_vs_rigid_theory(built):
+    """examples/assemblies/slider_crank.json, 6 s at h = 1 ms: the slider's position and its
+    normal load on the rod against the rigid rod's kinematics and moment balance
+    (test_chain.rigid_slider_crank). The rod starts straight, not sagging: its ringing decays
+    (stiffness-proportional damping) over the first seconds, so the load is compared from
+    t = 2 s, the position over the whole run."""
+    import slider_crank as sc
+    from test_chain import rigid_slider_crank
+
+    t, ours = simulate(built[0]["slider_crank"], 6.0, ["slide.position", "slide.f[2]"])
+    crank = sc.Crank(0.2, 2 * np.pi, 1.0)
+    x_ref, _ = rigid_slider_crank(crank, t, 1.0)
+    _, load_ref = rigid_slider_crank(crank, t, 1.0)
+    x = 1.2 + ours[:, 0]
+    x_error = np.abs(x - x_ref).max() / np.ptp(x_ref)
+    late = t >= 2.0
+    load_error = np.abs(ours[late, 1] - load_ref[late]).max() / np.ptp(load_ref)
+    print(f"\nslider-crank, 6 s: slider x within {x_error:.2e} of its swing ({np.ptp(x_ref):.3g} m), its load from "
+          f"2 s within {load_error:.2e} of its swing ({np.ptp(load_ref):.3g} N)")
+    assert x_error <= 1e-4
+    assert load_error <= 2e-2

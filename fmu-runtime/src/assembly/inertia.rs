@@ -247,6 +247,50 @@ impl Inertia {
         }
     }
 
+    /// The mass matrix in the velocity slots (the forces' derivative by the accelerations),
+    /// into the (6 + n) x (6 + n) block at `out[0]` with row stride `stride`; `cr_q` must hold
+    /// C_r(q) (from [`Self::deformed`]). Rows of modes without inertia are left zero.
+    pub fn mass_matrix(&self, rot: &Mat3, s: Vec3, j: &Mat3, cr_q: &[f64], out: &mut [f64], stride: usize) {
+        let n = self.n_modes();
+        let nd = self.n_dynamic;
+        let w = 6 + n;
+        for r in 0..w {
+            out[r * stride..r * stride + w].fill(0.0);
+        }
+        // translation: m a + R (w' x S + C_t q'')
+        let s_cross = [0.0, -s[2], s[1], s[2], 0.0, -s[0], -s[1], s[0], 0.0];
+        let r_s = k3::mat_mul(rot, &s_cross);
+        for i in 0..3 {
+            out[i * stride + i] = self.mass;
+            for c in 0..3 {
+                out[i * stride + 3 + c] = -r_s[3 * i + c];
+            }
+            for k in 0..nd {
+                out[i * stride + 6 + k] = (0..3).map(|l| rot[3 * i + l] * self.c_t[l * n + k]).sum();
+            }
+        }
+        // rotation: S x (R^T a) + J w' + C_r q''
+        let s_rt = k3::mat_mul(&s_cross, &joint_transpose(rot));
+        for i in 0..3 {
+            for c in 0..3 {
+                out[(3 + i) * stride + c] = s_rt[3 * i + c];
+                out[(3 + i) * stride + 3 + c] = j[3 * i + c];
+            }
+            for k in 0..nd {
+                out[(3 + i) * stride + 6 + k] = cr_q[i * n + k];
+            }
+        }
+        // modes: C_t^T R^T a + C_r^T w' + q''
+        for k in 0..nd {
+            let row = &mut out[(6 + k) * stride..];
+            for c in 0..3 {
+                row[c] = (0..3).map(|l| rot[3 * c + l] * self.c_t[l * n + k]).sum();
+                row[3 + c] = cr_q[c * n + k];
+            }
+            row[6 + k] = 1.0;
+        }
+    }
+
     /// Kinetic energy of the body at velocities `vel` (module docs' slots).
     pub fn kinetic_energy(&self, rot: &Mat3, q: &[f64], vel: &[f64], cr_q: &mut [f64]) -> f64 {
         let n = q.len();
@@ -276,6 +320,10 @@ impl Inertia {
         }
         -k3::dot(gravity, k3::add(k3::scale(self.mass, r), k3::mul(rot, s)))
     }
+}
+
+fn joint_transpose(m: &Mat3) -> Mat3 {
+    [m[0], m[3], m[6], m[1], m[4], m[7], m[2], m[5], m[8]]
 }
 
 /// The largest omega h of a dynamic mode in an assembly (see [`Inertia::resolve_within`]).

@@ -60,6 +60,11 @@ pub struct Assembly {
     pub angles: Vec<f64>,
     /// The start, for a reset.
     start: (Motion, Inputs),
+    /// The accelerations and multipliers the outputs use (index 1 at the communication point),
+    /// and whether they belong to the present state and inputs.
+    out_acc: Vec<f64>,
+    out_lambda: Vec<f64>,
+    out_valid: bool,
     /// Trial buffers of the inputs at a solver step's end.
     drives_now: Vec<f64>,
     loads_now: Vec<f64>,
@@ -94,6 +99,7 @@ impl Assembly {
         };
         let solver = Solver::new(&system, d.solver);
         let n_joints = system.joints.len();
+        let n_eq = system.n_eq;
         let a = Self {
             system,
             solver,
@@ -104,6 +110,9 @@ impl Assembly {
             start: (motion, inputs),
             drives_now: vec![0.0; nd],
             loads_now: vec![0.0; n_loads],
+            out_acc: vec![0.0; nv],
+            out_lambda: vec![0.0; n_eq],
+            out_valid: false,
         };
         a.check_start()?;
         Ok(a)
@@ -160,6 +169,7 @@ impl Assembly {
 
     /// Back to the state kept in `c` (no allocation).
     pub fn restore(&mut self, c: &Checkpoint) {
+        self.out_valid = false;
         copy_motion(&mut self.motion, &c.motion);
         copy_inputs(&mut self.inputs, &c.inputs);
         self.angles.copy_from_slice(&c.angles);
@@ -169,6 +179,7 @@ impl Assembly {
 
     /// Back to the start (inputs at their start values).
     pub fn reset(&mut self) {
+        self.out_valid = false;
         (self.motion, self.inputs) = self.start.clone();
         self.time = 0.0;
         self.angles.fill(0.0);
@@ -178,6 +189,7 @@ impl Assembly {
     /// Move the whole assembly rigidly so that its motion flange starts where the host's frame
     /// is, then settle the accelerations: the start of a run at `t0`.
     pub fn start_run(&mut self, t0: f64) -> Result<(), AssemblyError> {
+        self.out_valid = false;
         self.time = t0;
         if let Some((name, _, body, marker)) = self.system.flanges.iter().find(|f| f.1 == FlangeRole::Motion).cloned() {
             let p = self.system.marker_pose(&self.motion.pos, body, marker);
@@ -218,6 +230,7 @@ impl Assembly {
 
     /// Advance from the communication point `self.time` by h, in steps of at most the solver's.
     pub fn do_step(&mut self, h: f64) -> Result<(), AssemblyError> {
+        self.out_valid = false;
         let steps = ((h / self.solver.settings.max_step) * (1.0 - 1e-12)).ceil().max(1.0) as usize;
         let hs = h / steps as f64;
         for k in 1..=steps {
@@ -263,6 +276,28 @@ impl Assembly {
         }
     }
 
+    /// The state or the inputs changed: the outputs' accelerations and multipliers are solved
+    /// again when next read.
+    pub fn forget_outputs(&mut self) {
+        self.out_valid = false;
+    }
+
+    /// The accelerations and multipliers of the present state and inputs (index 1).
+    pub fn settle_outputs(&mut self) -> Result<(), AssemblyError> {
+        if self.out_valid {
+            return Ok(());
+        }
+        let now = Instant { t: self.time, host: self.inputs.host.at(0.0), drives: &self.inputs.drives, loads: &self.inputs.loads };
+        self.solver.consistent(&self.system, &self.motion, &now, &mut self.out_acc, &mut self.out_lambda)?;
+        self.out_valid = true;
+        Ok(())
+    }
+
+    /// The accelerations the outputs use (valid after [`Self::settle_outputs`]).
+    pub fn output_accelerations(&self) -> &[f64] {
+        &self.out_acc
+    }
+
     /// The instant of the communication point (inputs at their present values).
     pub fn now(&self) -> Instant<'_> {
         Instant { t: self.time, host: self.inputs.host.at(0.0), drives: &self.inputs.drives, loads: &self.inputs.loads }
@@ -288,9 +323,10 @@ impl Assembly {
         }
     }
 
-    /// A joint's force and torque on its second side, in the first side's joint axes.
+    /// A joint's force and torque on its second side, in the first side's joint axes (after
+    /// [`Self::settle_outputs`]).
     pub fn joint_reaction(&self, j: usize) -> (Vec3, Vec3) {
-        let (f, t, frames) = self.system.joint_wrench(&self.motion.pos, j, &self.now(), &self.motion.lambda);
+        let (f, t, frames) = self.system.joint_wrench(&self.motion.pos, j, &self.now(), &self.out_lambda);
         (k3::mul_t(&frames.fa, f), k3::mul_t(&frames.fa, t))
     }
 
@@ -298,7 +334,7 @@ impl Assembly {
     pub fn mount_reaction(&self) -> (Vec3, Vec3) {
         let j = self.system.joints.iter().position(|j| j.a == Attach::Host);
         j.map_or(([0.0; 3], [0.0; 3]), |j| {
-            let (f, t, _) = self.system.joint_wrench(&self.motion.pos, j, &self.now(), &self.motion.lambda);
+            let (f, t, _) = self.system.joint_wrench(&self.motion.pos, j, &self.now(), &self.out_lambda);
             (f, t)
         })
     }

@@ -72,6 +72,9 @@ struct Work {
     probe: Vec<f64>,
     matrix: Vec<f64>,
     pivots: Vec<usize>,
+    /// The index-1 system of [`Solver::consistent`], apart from the kept iteration matrix.
+    consistent_matrix: Vec<f64>,
+    consistent_pivots: Vec<usize>,
     cr_q: Vec<f64>,
 }
 
@@ -113,6 +116,8 @@ impl Solver {
                 probe: vec![0.0; dim],
                 matrix: vec![0.0; dim * dim],
                 pivots: vec![0; dim],
+                consistent_matrix: vec![0.0; dim * dim],
+                consistent_pivots: vec![0; dim],
                 cr_q: vec![0.0; 3 * system.max_modes().max(1)],
             },
             matrix_step: None,
@@ -131,71 +136,81 @@ impl Solver {
     /// `now` (the start of a run): the equations of motion with the joints' equations twice
     /// differentiated in time.
     pub fn settle_accelerations(&mut self, system: &System, m: &mut Motion, now: &Instant) -> Result<(), AssemblyError> {
+        let (mut acc, mut lambda) = (std::mem::take(&mut m.acc), std::mem::take(&mut m.lambda));
+        let done = self.consistent(system, m, now, &mut acc, &mut lambda);
+        (m.acc, m.lambda) = (acc, lambda);
+        done?;
+        m.pseudo.copy_from_slice(&m.acc);
+        self.invalidate();
+        self.first = true;
+        Ok(())
+    }
+
+    /// The accelerations and multipliers of `m`'s positions and velocities at `now`, from the
+    /// equations of motion and the joints' equations differentiated twice (index 1): the
+    /// step's own (index 3) alternate about these from step to step at spectral radius 1 and
+    /// lag them by O(h) below it, so the outputs that need them (reactions, accelerations) take
+    /// these. Allocates nothing; the kept iteration matrix stays.
+    pub fn consistent(
+        &mut self,
+        system: &System,
+        m: &Motion,
+        now: &Instant,
+        acc: &mut [f64],
+        lambda: &mut [f64],
+    ) -> Result<(), AssemblyError> {
         let (nv, ne) = (system.n_vel, system.n_eq);
         let dim = nv + ne;
         let w = &mut self.work;
-        w.acc.fill(0.0);
-        system.body_forces(&m.pos, &m.vel, &w.acc, &mut w.cr_q, &mut w.forces);
-        let mut base = w.forces.clone();
-        for x in &mut base {
-            *x = -*x;
-        }
-        system.add_applied(&m.pos, now, &mut base);
-        system.constraints(&m.pos, now, &mut w.phi, &mut w.jac);
-        w.matrix.fill(0.0);
-        for j in 0..nv {
-            w.acc.fill(0.0);
-            w.acc[j] = 1.0;
-            system.body_forces(&m.pos, &m.vel, &w.acc, &mut w.cr_q, &mut w.probe[..nv]);
-            for i in 0..nv {
-                w.matrix[i * dim + j] = w.probe[i] + base[i];
+        // phi'' at a = 0: second differences along the present velocities (geodesics of the
+        // poses) and in time
+        let eps = 1e-4;
+        w.probe[..ne].fill(0.0);
+        for sign in [1.0, -1.0] {
+            for (d, v) in w.dx.iter_mut().zip(&m.vel) {
+                *d = sign * eps * v;
+            }
+            system.advance(&m.pos, &w.dx, &mut w.pos);
+            let at = Instant { t: now.t + sign * eps, ..*now };
+            system.constraints(&w.pos, &at, &mut w.phi, &mut w.jac);
+            for k in 0..ne {
+                w.probe[k] += w.phi[k];
             }
         }
+        system.constraints(&m.pos, now, &mut w.phi, &mut w.jac);
+        for k in 0..ne {
+            w.residual[nv + k] = -(w.probe[k] - 2.0 * w.phi[k]) / (eps * eps);
+        }
+        // the forces at a = 0 less the applied ones
+        w.acc.fill(0.0);
+        system.body_forces(&m.pos, &m.vel, &w.acc, &mut w.cr_q, &mut w.forces);
+        w.forces.iter_mut().for_each(|x| *x = -*x);
+        system.add_applied(&m.pos, now, &mut w.forces);
+        w.residual[..nv].copy_from_slice(&w.forces);
+        w.consistent_matrix.fill(0.0);
+        system.mass_matrix(&m.pos, &m.vel, &mut w.cr_q, &mut w.consistent_matrix, dim);
         for k in 0..ne {
             for j in 0..nv {
                 let b = w.jac[k * nv + j];
-                w.matrix[j * dim + nv + k] = -b;
-                w.matrix[(nv + k) * dim + j] = b;
+                w.consistent_matrix[j * dim + nv + k] = -b;
+                w.consistent_matrix[(nv + k) * dim + j] = b;
             }
         }
-        // quasi-static modes have no acceleration: their rows say so
+        // modes without inertia have no acceleration: their rows say so
         for b in &system.bodies {
             for k in b.slot + 6 + b.inertia.n_dynamic..b.slot + 6 + b.n_modes() {
-                w.matrix[k * dim..(k + 1) * dim].fill(0.0);
-                w.matrix[k * dim + k] = 1.0;
-                base[k] = 0.0;
+                w.consistent_matrix[k * dim..(k + 1) * dim].fill(0.0);
+                w.consistent_matrix[k * dim + k] = 1.0;
+                w.residual[k] = 0.0;
             }
         }
-        // phi'' at a = 0: second differences along the present velocities (geodesics of the
-        // poses) and time
-        let eps = 1e-4;
-        let mut second = vec![0.0; ne];
-        let mut moved = m.pos.clone();
-        let mut shifted_phi = vec![0.0; ne];
-        let mut scratch_jac = vec![0.0; ne * nv];
-        for sign in [1.0, -1.0] {
-            let dx: Vec<f64> = m.vel.iter().map(|v| sign * eps * v).collect();
-            system.advance(&m.pos, &dx, &mut moved);
-            let at = Instant { t: now.t + sign * eps, ..*now };
-            system.constraints(&moved, &at, &mut shifted_phi, &mut scratch_jac);
-            for k in 0..ne {
-                second[k] += shifted_phi[k];
-            }
-        }
-        let mut rhs = base;
-        for k in 0..ne {
-            rhs.push(-(second[k] - 2.0 * w.phi[k]) / (eps * eps));
-        }
-        lu_factor(&mut w.matrix, dim, &mut w.pivots).map_err(|_| AssemblyError::Singular { time: now.t })?;
-        lu_solve(&w.matrix, dim, &w.pivots, &mut rhs);
-        if rhs.iter().any(|x| !x.is_finite()) {
+        lu_factor(&mut w.consistent_matrix, dim, &mut w.consistent_pivots).map_err(|_| AssemblyError::Singular { time: now.t })?;
+        lu_solve(&w.consistent_matrix, dim, &w.consistent_pivots, &mut w.residual);
+        if w.residual.iter().any(|x| !x.is_finite()) {
             return Err(AssemblyError::NotFinite { time: now.t });
         }
-        m.acc.copy_from_slice(&rhs[..nv]);
-        m.pseudo.copy_from_slice(&rhs[..nv]);
-        m.lambda.copy_from_slice(&rhs[nv..]);
-        self.matrix_step = None;
-        self.first = true;
+        acc.copy_from_slice(&w.residual[..nv]);
+        lambda.copy_from_slice(&w.residual[nv..]);
         Ok(())
     }
 

@@ -357,6 +357,16 @@ impl System {
         }
     }
 
+    /// Every body's mass matrix into its diagonal block of `out` (row stride `stride`).
+    pub fn mass_matrix(&self, pos: &[f64], vel: &[f64], cr_q: &mut [f64], out: &mut [f64], stride: usize) {
+        for (i, b) in self.bodies.iter().enumerate() {
+            let (_, rot, q) = self.body_pose(pos, i);
+            let v = &vel[b.slot + 6..b.slot + 6 + b.inertia.n_moving];
+            let (s, j, _) = b.inertia.deformed(q, v, cr_q);
+            b.inertia.mass_matrix(&rot, s, &j, cr_q, &mut out[b.slot * stride + b.slot..], stride);
+        }
+    }
+
     /// `pos` moved by the increment `dx` in the velocity slots: r + dr, R exp(dtheta~), q + dq.
     pub fn advance(&self, pos: &[f64], dx: &[f64], out: &mut [f64]) {
         for b in &self.bodies {

@@ -89,10 +89,13 @@ impl AssemblyFmu {
             .ok_or_else(|| ModelError::refused(AssemblyFmuError::NotAVariable(vr)))
     }
 
-    fn value(&mut self, slot: Slot) -> f64 {
+    fn value(&mut self, slot: Slot) -> Result<f64, AssemblyError> {
+        if matches!(slot, Slot::JointReaction(..) | Slot::MountReaction(_) | Slot::Flange(_, _, 4 | 5, _)) {
+            self.assembly.settle_outputs()?;
+        }
         let a = &self.assembly;
         let s = &a.system;
-        match slot {
+        let value = match slot {
             Slot::Gravity(k) => s.gravity[k],
             Slot::DriveInput(i) => a.inputs.drives[i],
             Slot::Load(f, k) => a.inputs.loads[6 * f + k],
@@ -120,8 +123,8 @@ impl AssemblyFmu {
                     1 => s.marker_pose(pos, b, m).frame[k],
                     2 => s.marker_velocity(pos, vel, b, m).0[k],
                     3 => s.marker_velocity(pos, vel, b, m).1[k],
-                    4 => s.marker_rates(pos, vel, Some(&a.motion.acc), b, m).0[k],
-                    _ => s.marker_rates(pos, vel, Some(&a.motion.acc), b, m).1[k],
+                    4 => s.marker_rates(pos, vel, Some(a.output_accelerations()), b, m).0[k],
+                    _ => s.marker_rates(pos, vel, Some(a.output_accelerations()), b, m).1[k],
                 }
             }
             Slot::MountReaction(k) => {
@@ -133,7 +136,8 @@ impl AssemblyFmu {
                 if k < 3 { e[k] } else { e.iter().sum() }
             }
             Slot::Drift => a.drift(),
-        }
+        };
+        Ok(value)
     }
 
     fn write_state(&self, out: &mut Vec<u8>) {
@@ -207,6 +211,7 @@ impl AssemblyFmu {
             }
         }
         a.solver.invalidate();
+        a.forget_outputs();
         Ok(())
     }
 }
@@ -243,7 +248,7 @@ impl Model for AssemblyFmu {
 
     fn get_real(&mut self, vr: u32) -> Result<f64, ModelError> {
         let (slot, _) = self.slot(vr)?;
-        Ok(self.value(slot))
+        self.value(slot).map_err(ModelError::discard)
     }
 
     fn admissible_real(&self, vr: u32, value: f64) -> Result<(), ModelError> {
@@ -283,6 +288,7 @@ impl Model for AssemblyFmu {
             }
             _ => return Err(ModelError::refused(AssemblyFmuError::NotSettable(variable.name.clone()))),
         }
+        a.forget_outputs();
         Ok(())
     }
 

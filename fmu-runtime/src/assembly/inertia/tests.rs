@@ -184,3 +184,33 @@ fn rigid_inertia_moves_to_the_origin() {
     assert_eq!(body.first_moment, [2.0, 4.0, 0.0]);
     assert!(Inertia::rigid("p", 0.0, [0.0; 3], [0.0; 9], &[]).is_err());
 }
+
+#[test]
+fn mass_matrix_is_the_forces_derivative() {
+    let n = 3;
+    let c = cloud(6, n, 11);
+    let body = inertia_of(&c);
+    let mut rng = Lcg(3);
+    let rot = crate::kinematics::rotation_of(rng.vec3());
+    let q: Vec<f64> = (0..n).map(|_| 0.3 * rng.next()).collect();
+    let vel: Vec<f64> = (0..6 + n).map(|_| rng.next()).collect();
+    let w = 6 + n;
+    let mut cr_q = vec![0.0; 3 * n];
+    let (s, j, _) = body.deformed(&q, &vel[6..], &mut cr_q);
+    let mut m = vec![0.0; w * w];
+    body.mass_matrix(&rot, s, &j, &cr_q, &mut m, w);
+    let mut f0 = vec![0.0; w];
+    let mut f1 = vec![0.0; w];
+    let zero = vec![0.0; w];
+    body.forces(&rot, &q, &vel, &zero, [0.0; 3], &mut cr_q, &mut f0);
+    for col in 0..w {
+        let mut acc = vec![0.0; w];
+        acc[col] = 1.0;
+        body.forces(&rot, &q, &vel, &acc, [0.0; 3], &mut cr_q, &mut f1);
+        for row in 0..w {
+            let d = f1[row] - f0[row];
+            // the forces are linear in the accelerations: exact to round-off
+            assert!((d - m[row * w + col]).abs() < 1e-12, "({row}, {col}): {d} vs {}", m[row * w + col]);
+        }
+    }
+}
