@@ -507,7 +507,7 @@ fn unknown_keys_get_the_nearest_valid_one_and_body_keys_are_refused() {
 
 /// The body inputs of the examples are still bodies, and `is_assembly` tells the two apart.
 #[test]
-fn the_examples_are_bodies_and_is_assembly_tells_them_apart() {
+fn the_examples_parse_and_is_assembly_tells_them_apart() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
     let mut files = Vec::new();
     for entry in std::fs::read_dir(&root).unwrap() {
@@ -520,13 +520,24 @@ fn the_examples_are_bodies_and_is_assembly_tells_them_apart() {
     }
     files.retain(|p| p.extension().is_some_and(|e| e == "json"));
     assert!(files.len() >= 8, "{files:?}");
+    let mut assemblies = 0;
     for f in &files {
         let text = std::fs::read_to_string(f).unwrap();
-        assert!(!is_assembly(&text), "{}", f.display());
-        Spec::from_str(f, &text).unwrap_or_else(|e| panic!("{e}"));
-        let e = AssemblySpec::from_str(f, &text).unwrap_err().to_string();
-        assert!(e.contains("has no \"assembly\""), "{e}");
+        // examples/assemblies holds assemblies, every other example is a body
+        let in_assemblies = f.parent().is_some_and(|d| d.ends_with("assemblies"));
+        assert_eq!(is_assembly(&text), in_assemblies, "{}", f.display());
+        if in_assemblies {
+            AssemblySpec::from_str(f, &text).unwrap_or_else(|e| panic!("{e}"));
+            let e = Spec::from_str(f, &text).unwrap_err().to_string();
+            assert!(e.contains("this file is an assembly's input"), "{e}");
+            assemblies += 1;
+        } else {
+            Spec::from_str(f, &text).unwrap_or_else(|e| panic!("{e}"));
+            let e = AssemblySpec::from_str(f, &text).unwrap_err().to_string();
+            assert!(e.contains("has no \"assembly\""), "{e}");
+        }
     }
+    assert!(assemblies >= 5, "{files:?}");
     let text = good().to_string();
     assert!(is_assembly(&text));
     let e = Spec::from_str(Path::new("arm.json"), &text).unwrap_err().to_string();
