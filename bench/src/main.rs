@@ -19,7 +19,15 @@
 //! timings are reported against the figures but not checked: machines differ. `--short`
 //! (CI): the 20-mode FMU only, fewer batches, a 0.1 s window for the full model and the hard
 //! cases without the 300-mode build; the same targets but the spin-up's.
+//!
+//! Assemblies (`assembly`, in every run; `--only-assemblies` runs them alone): the double
+//! pendulum and the welded links of examples/assemblies, per-step p50/p99/max through the C API
+//! with and without the outputs a user reads, no heap allocation per step (a target), and the
+//! double pendulum against examples/chain/chain_master.py and Exudyn when the tests' Python is
+//! found (`--python PATH` names another; the 100x over chain_master is reported, not
+//! checked).
 
+mod assembly;
 mod fmi;
 mod hard_cases;
 mod newmark;
@@ -546,6 +554,12 @@ struct Cli {
     /// Build the FMUs in DIR and keep them (default: a temporary folder, removed at the end)
     #[arg(long, value_name = "DIR")]
     keep: Option<PathBuf>,
+    /// Run the assembly section alone (examples/assemblies; its allocation target only)
+    #[arg(long)]
+    only_assemblies: bool,
+    /// The Python with FMPy and Exudyn that runs chain_master and Exudyn for the assembly comparison [default: tests/.venv/bin/python of this workspace, skipped when absent]
+    #[arg(long, value_name = "PATH")]
+    python: Option<PathBuf>,
 }
 
 /// A comma-separated list of mode counts; empty entries are skipped, so "" is no FMU at all.
@@ -568,6 +582,8 @@ struct Options {
     keep: Option<PathBuf>,
     /// CI mode: fewer cases, same targets.
     short: bool,
+    only_assemblies: bool,
+    python: Option<PathBuf>,
 }
 
 impl From<Cli> for Options {
@@ -582,6 +598,8 @@ impl From<Cli> for Options {
             skip_full: cli.skip_full,
             keep: cli.keep,
             short: cli.short,
+            only_assemblies: cli.only_assemblies,
+            python: cli.python,
         }
     }
 }
@@ -610,6 +628,12 @@ fn run() -> Result<(), String> {
 }
 
 fn run_in(opts: &Options, work: &Path) -> Result<(), String> {
+    if opts.only_assemblies {
+        println!("# fmu-bench: FMI 2.0 runtime speed (assemblies)\n");
+        println!("machine: {}\n", machine());
+        let targets = assembly::run(work, opts.short, opts.python.as_deref())?;
+        return report_targets(&targets);
+    }
     println!("# fmu-bench: FMI 2.0 runtime speed (beam, Craig-Bampton)\n");
     println!(
         "machine: {}; timings are medians of {} batches, (min-max) in brackets, ns per call\n",
@@ -765,6 +789,7 @@ fn run_in(opts: &Options, work: &Path) -> Result<(), String> {
     }
     let (what, measured, ok) = stress_outputs::run(work, opts.repeats)?;
     targets.push(Target { what, measured, limit: format!("<= {}", stress_outputs::PER_POINT_LIMIT), ok });
+    targets.extend(assembly::run(work, opts.short, opts.python.as_deref())?);
     let hard = hard_cases::run(opts.short)?;
     targets.push(Target {
         what: "hard cases (tables above)".into(),
@@ -773,13 +798,18 @@ fn run_in(opts: &Options, work: &Path) -> Result<(), String> {
         ok: hard,
     });
 
+    report_targets(&targets)
+}
+
+/// The targets' table; a miss is an error (the bench exits non-zero).
+fn report_targets(targets: &[Target]) -> Result<(), String> {
     println!("## Targets\n");
     println!(
         "Ratios of two measurements of this run on this machine, allocation counts and the hard cases' accuracy; a miss makes the bench exit non-zero.\n"
     );
     println!("| target | measured | required | verdict |");
     println!("|---|---:|---:|---|");
-    for t in &targets {
+    for t in targets {
         println!("| {} | {} | {} | {} |", t.what, t.measured, t.limit, if t.ok { "pass" } else { "MISSED" });
     }
     println!();
@@ -996,6 +1026,9 @@ mod tests {
         );
         let o = options(&["--short"]);
         assert_eq!((o.modes, o.fixed_modes, o.repeats, o.short), (vec![20], vec![], 5, true));
+        assert!(!o.only_assemblies && o.python.is_none());
+        let o = options(&["--only-assemblies", "--python", "py", "--short"]);
+        assert_eq!((o.only_assemblies, o.python, o.short), (true, Some(PathBuf::from("py")), true));
     }
 
     #[test]
