@@ -15,7 +15,7 @@ Accuracy: each trajectory's elbow and tip (x, z) against the rigid double pendul
 bars of the links' size (tests/test_chain.py `rigid_double_pendulum`), max over the window as a
 fraction of the rigid swing per column; the assembly FMU's own trajectory (--assembly, a CSV of
 t, elbow x, z, tip x, z from t = 0 that fmu-bench writes) is measured the same way, over its
-whole window and over chain_master's.
+whole window and over chain_master's and Exudyn's.
 
 Prints one JSON object on stdout (progress on stderr). Run from anywhere with the tests' Python:
 
@@ -134,6 +134,9 @@ def main() -> int:
         n = out["chain_master"]["steps"] + 1
         out["assembly"] = {"seconds": (len(rows) - 1) * H, "error_vs_rigid": against_rigid(positions),
                            "error_vs_rigid_chain_window": against_rigid(positions[:n])}
+        if "steps" in out.get("exudyn", {}):
+            n = out["exudyn"]["steps"] + 1
+            out["assembly"]["error_vs_rigid_exudyn_window"] = against_rigid(positions[:n])
     print(json.dumps(out))
     return 0
 
