@@ -4,7 +4,14 @@ fn main() {
     let d = AssemblyDescription::from_sealed_bytes(&bytes).unwrap();
     for b in &d.bodies {
         if let BodyModel::Flexible(r) = &b.model {
-            println!("{}: n {} n_dynamic {} cutoff {:.1} Hz, f = {:?}", b.name, r.n_modes(), r.n_dynamic(), r.dynamic_cutoff / 6.283, r.omega.iter().map(|w| (w / 6.283185 * 10.0).round() / 10.0).collect::<Vec<_>>());
+            println!(
+                "{}: n {} n_dynamic {} cutoff {:.1} Hz, f = {:?}",
+                b.name,
+                r.n_modes(),
+                r.n_dynamic(),
+                r.dynamic_cutoff / 6.283,
+                r.omega.iter().map(|w| (w / 6.283185 * 10.0).round() / 10.0).collect::<Vec<_>>()
+            );
         }
     }
 }

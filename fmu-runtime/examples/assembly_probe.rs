@@ -16,5 +16,14 @@ fn main() {
         iters += a.solver.last_iterations;
     }
     times.sort_by(|a, b| a.partial_cmp(b).unwrap());
-    println!("n_vel {} n_eq {} p50 {:.1} us p99 {:.1} max {:.1}; iterations/step {:.2}, matrices {}", a.system.n_vel, a.system.n_eq, times[n / 2], times[n * 99 / 100], times[n - 1], iters as f64 / n as f64, a.solver.matrices_formed);
+    println!(
+        "n_vel {} n_eq {} p50 {:.1} us p99 {:.1} max {:.1}; iterations/step {:.2}, matrices {}",
+        a.system.n_vel,
+        a.system.n_eq,
+        times[n / 2],
+        times[n * 99 / 100],
+        times[n - 1],
+        iters as f64 / n as f64,
+        a.solver.matrices_formed
+    );
 }

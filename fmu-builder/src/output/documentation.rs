@@ -1056,7 +1056,9 @@ with spectral radius {3} on the bodies' poses, the joints' equations at position
             esc(&b.name)
         );
     }
-    h.push_str("</table>\n<h2>Joints</h2>\n<table>\n<tr><th>joint</th><th>type</th><th>between</th><th>drive</th></tr>\n");
+    h.push_str(
+        "</table>\n<h2>Joints</h2>\n<table>\n<tr><th>joint</th><th>type</th><th>between</th><th>drive</th></tr>\n",
+    );
     let side = |s: &Side| match s {
         Side::Ground => "ground".to_string(),
         Side::Body { body, marker } => {
