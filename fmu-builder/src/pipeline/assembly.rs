@@ -66,7 +66,7 @@ fn describe(spec: &AssemblySpec) -> Result<(AssemblyDescription, Vec<(String, Re
                 );
                 if !reduced_by_input.contains_key(&key) {
                     let source: PathBuf = body_file.clone().unwrap_or_else(|| file.clone());
-                    let built = phases::phase(&format!("body '{}': reduction", b.name), || {
+                    let built = phases::phase(format!("body '{}': reduction", b.name), || {
                         reduce_spec((**body).clone(), &source)
                     })?;
                     reduced_by_input.insert(key.clone(), (built.reduced, built.report));
@@ -81,7 +81,7 @@ fn describe(spec: &AssemblySpec) -> Result<(AssemblyDescription, Vec<(String, Re
                          of an assembly turns with its joints, so its input must keep the rotating-frame terms",
                     ));
                 }
-                BodyModel::Flexible(reduced.clone())
+                BodyModel::Flexible(Box::new(reduced.clone()))
             }
             BodyKind::Rigid(r) => {
                 let [xx, yy, zz, xy, yz, zx] = r.inertia;

@@ -17,7 +17,7 @@ const KIND: &str = "assembly";
 
 #[derive(Debug, Clone, PartialEq)]
 pub enum BodyModel {
-    Flexible(ReducedBody),
+    Flexible(Box<ReducedBody>),
     Rigid { mass: f64, centre: Vec3, inertia_at_centre: Mat3, flanges: Vec<(String, Vec3)> },
 }
 
@@ -294,7 +294,7 @@ impl AssemblyDescription {
                     flanges,
                 }
             } else {
-                BodyModel::Flexible(ReducedBody::from_container(&c.nested(&format!("{p}flexible.")))?)
+                BodyModel::Flexible(Box::new(ReducedBody::from_container(&c.nested(&format!("{p}flexible.")))?))
             };
             bodies.push(BodyDescription {
                 name: c.text(&format!("{p}name"))?.to_owned(),
