@@ -215,6 +215,10 @@ pub struct SolverSpec {
     /// Most iterations per step, in [2, 100].
     #[serde(default = "SolverSpec::default_max_iterations")]
     pub max_iterations: usize,
+    /// The longest step the solver takes [s], > 0; a longer communication step is split
+    /// (default: the experiment's step_size, at most 1 ms).
+    #[serde(default)]
+    pub max_step: Option<f64>,
 }
 
 impl SolverSpec {
@@ -235,6 +239,7 @@ impl Default for SolverSpec {
             spectral_radius: Self::default_spectral_radius(),
             tolerance: Self::default_tolerance(),
             max_iterations: Self::default_max_iterations(),
+            max_step: None,
         }
     }
 }

@@ -179,10 +179,7 @@ fn build_assembly(job: &Job, input: &Input) -> Result<()> {
     if let Some((option, _)) = refused.iter().find(|(_, asked)| *asked) {
         return Err(BuildError::CommandLine {
             option: option.to_string(),
-            message: format!(
-                "{} is an assembly: build each body's input on its own for this",
-                input.path.display()
-            ),
+            message: format!("{} is an assembly: build each body's input on its own for this", input.path.display()),
         });
     }
     let profile = Profile::new(job.timings);

@@ -673,6 +673,82 @@ pub fn relative_error_plot(fr: &FrequencyResponse) -> String {
     line_plot(&spec, &series, &annotations)
 }
 
+/// The documentation page of an assembly: its bodies (each flexible one's reduction in figures),
+/// joints, external flanges and variables.
+pub fn assembly_html(
+    spec: &crate::input::assembly::AssemblySpec,
+    d: &fmu_runtime::assembly::description::AssemblyDescription,
+    table: &fmu_runtime::interface::assembly::AssemblyTable,
+    reports: &[(String, Report)],
+) -> String {
+    use fmu_runtime::assembly::description::{BodyModel, Side};
+    let esc = |s: &str| s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;");
+    let mut h = String::new();
+    let _ = write!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{0}</title></head><body>\n<h1>{0}</h1>\n\
+<p>An assembly of {1} bodies and {2} joints, solved together inside the FMU (Co-Simulation): generalised-alpha \
+with spectral radius {3} on the bodies' poses, the joints' equations at position level in every step of at most \
+{4} s, Newton's method to {5:e}.</p>\n",
+        esc(&spec.name),
+        d.bodies.len(),
+        d.joints.len(),
+        d.solver.spectral_radius,
+        d.solver.max_step,
+        d.solver.tolerance
+    );
+    h.push_str("<h2>Bodies</h2>\n<table>\n<tr><th>body</th><th>kind</th><th>mass [kg]</th><th>modes</th><th>flange compliance error</th></tr>\n");
+    for b in &d.bodies {
+        let (kind, mass, modes) = match &b.model {
+            BodyModel::Flexible(r) => ("flexible", r.mass, r.n_modes().to_string()),
+            BodyModel::Rigid { mass, .. } => ("rigid", *mass, "-".to_string()),
+        };
+        let compliance = reports
+            .iter()
+            .find(|(n, _)| *n == b.name)
+            .map_or("-".to_string(), |(_, r)| format!("{:.2e}", r.accuracy.compliance_max_relative_error));
+        let _ = writeln!(
+            h,
+            "<tr><td>{}</td><td>{kind}</td><td>{mass:.6}</td><td>{modes}</td><td>{compliance}</td></tr>",
+            esc(&b.name)
+        );
+    }
+    h.push_str(
+        "</table>\n<h2>Joints</h2>\n<table>\n<tr><th>joint</th><th>type</th><th>between</th><th>drive</th></tr>\n",
+    );
+    let side = |s: &Side| match s {
+        Side::Ground => "ground".to_string(),
+        Side::Body { body, marker } => {
+            format!("{}.{}", d.bodies[*body].name, d.bodies[*body].flange_names()[*marker])
+        }
+    };
+    for j in &d.joints {
+        let drive = j.drive.map_or("-".to_string(), |dr| format!("{:?} by {:?}", dr.quantity, dr.function));
+        let _ = writeln!(
+            h,
+            "<tr><td>{}</td><td>{}</td><td>{} - {}</td><td>{}</td></tr>",
+            esc(&j.name),
+            j.kind.name(),
+            esc(&side(&j.first)),
+            esc(&side(&j.second)),
+            esc(&drive)
+        );
+    }
+    h.push_str("</table>\n<h2>Variables</h2>\n<table>\n<tr><th>name</th><th>causality</th><th>unit</th><th>description</th></tr>\n");
+    for v in &table.variables {
+        let _ = writeln!(
+            h,
+            "<tr><td>{}</td><td>{:?}</td><td>{}</td><td>{}</td></tr>",
+            esc(&v.name),
+            v.causality,
+            v.unit.unwrap_or(""),
+            esc(&v.description)
+        );
+    }
+    h.push_str("</table>\n</body></html>\n");
+    h
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1014,78 +1090,4 @@ mod tests {
             }
         }
     }
-}
-
-/// The documentation page of an assembly: its bodies (each flexible one's reduction in figures),
-/// joints, external flanges and variables.
-pub fn assembly_html(
-    spec: &crate::input::assembly::AssemblySpec,
-    d: &fmu_runtime::assembly::description::AssemblyDescription,
-    table: &fmu_runtime::interface::assembly::AssemblyTable,
-    reports: &[(String, Report)],
-) -> String {
-    use fmu_runtime::assembly::description::{BodyModel, Side};
-    let esc = |s: &str| s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;");
-    let mut h = String::new();
-    let _ = write!(
-        h,
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{0}</title></head><body>\n<h1>{0}</h1>\n\
-<p>An assembly of {1} bodies and {2} joints, solved together inside the FMU (Co-Simulation): generalised-alpha \
-with spectral radius {3} on the bodies' poses, the joints' equations at position level in every step of at most \
-{4} s, Newton's method to {5:e}.</p>\n",
-        esc(&spec.name),
-        d.bodies.len(),
-        d.joints.len(),
-        d.solver.spectral_radius,
-        d.solver.max_step,
-        d.solver.tolerance
-    );
-    h.push_str("<h2>Bodies</h2>\n<table>\n<tr><th>body</th><th>kind</th><th>mass [kg]</th><th>modes</th><th>flange compliance error</th></tr>\n");
-    for b in &d.bodies {
-        let (kind, mass, modes) = match &b.model {
-            BodyModel::Flexible(r) => ("flexible", r.mass, r.n_modes().to_string()),
-            BodyModel::Rigid { mass, .. } => ("rigid", *mass, "-".to_string()),
-        };
-        let compliance = reports
-            .iter()
-            .find(|(n, _)| *n == b.name)
-            .map_or("-".to_string(), |(_, r)| format!("{:.2e}", r.accuracy.compliance_max_relative_error));
-        let _ = writeln!(
-            h,
-            "<tr><td>{}</td><td>{kind}</td><td>{mass:.6}</td><td>{modes}</td><td>{compliance}</td></tr>",
-            esc(&b.name)
-        );
-    }
-    h.push_str("</table>\n<h2>Joints</h2>\n<table>\n<tr><th>joint</th><th>type</th><th>between</th><th>drive</th></tr>\n");
-    let side = |s: &Side| match s {
-        Side::Ground => "ground".to_string(),
-        Side::Body { body, marker } => {
-            format!("{}.{}", d.bodies[*body].name, d.bodies[*body].flange_names()[*marker])
-        }
-    };
-    for j in &d.joints {
-        let drive = j.drive.map_or("-".to_string(), |dr| format!("{:?} by {:?}", dr.quantity, dr.function));
-        let _ = writeln!(
-            h,
-            "<tr><td>{}</td><td>{}</td><td>{} - {}</td><td>{}</td></tr>",
-            esc(&j.name),
-            j.kind.name(),
-            esc(&side(&j.first)),
-            esc(&side(&j.second)),
-            esc(&drive)
-        );
-    }
-    h.push_str("</table>\n<h2>Variables</h2>\n<table>\n<tr><th>name</th><th>causality</th><th>unit</th><th>description</th></tr>\n");
-    for v in &table.variables {
-        let _ = writeln!(
-            h,
-            "<tr><td>{}</td><td>{:?}</td><td>{}</td><td>{}</td></tr>",
-            esc(&v.name),
-            v.causality,
-            v.unit.unwrap_or(""),
-            esc(&v.description)
-        );
-    }
-    h.push_str("</table>\n</body></html>\n");
-    h
 }

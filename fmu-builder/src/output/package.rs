@@ -175,7 +175,8 @@ pub fn write_assembly_fmu(
     if !binaries.iter().any(|(p, _)| *p == Platform::Linux64) {
         binaries.insert(0, (Platform::Linux64, RUNTIME_SO));
     }
-    let input = serde_json::to_string_pretty(spec).map_err(|e| BuildError::Internal(format!("serialising the input: {e}")))?;
+    let input =
+        serde_json::to_string_pretty(spec).map_err(|e| BuildError::Internal(format!("serialising the input: {e}")))?;
     let archive = fmu::FmuArchive {
         model_description: xml,
         model_identifier: &id,

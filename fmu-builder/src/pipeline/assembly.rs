@@ -59,10 +59,14 @@ fn describe(spec: &AssemblySpec) -> Result<(AssemblyDescription, Vec<(String, Re
         let model = match &b.kind {
             BodyKind::Flexible { spec: body, file: body_file } => {
                 // the same input (file and content) is reduced once
-                let key = format!("{}\n{}", body_file.as_deref().unwrap_or(file).display(), serde_json::to_string(body).unwrap_or_default());
+                let key = format!(
+                    "{}\n{}",
+                    body_file.as_deref().unwrap_or(file).display(),
+                    serde_json::to_string(body).unwrap_or_default()
+                );
                 if !reduced_by_input.contains_key(&key) {
                     let source: PathBuf = body_file.clone().unwrap_or_else(|| file.clone());
-                    let built = phases::phase(&format!("body '{}': reduction", b.name), || {
+                    let built = phases::phase(format!("body '{}': reduction", b.name), || {
                         reduce_spec((**body).clone(), &source)
                     })?;
                     reduced_by_input.insert(key.clone(), (built.reduced, built.report));
@@ -77,7 +81,7 @@ fn describe(spec: &AssemblySpec) -> Result<(AssemblyDescription, Vec<(String, Re
                          of an assembly turns with its joints, so its input must keep the rotating-frame terms",
                     ));
                 }
-                BodyModel::Flexible(reduced.clone())
+                BodyModel::Flexible(Box::new(reduced.clone()))
             }
             BodyKind::Rigid(r) => {
                 let [xx, yy, zz, xy, yz, zx] = r.inertia;
@@ -102,7 +106,10 @@ fn describe(spec: &AssemblySpec) -> Result<(AssemblyDescription, Vec<(String, Re
             spectral_radius: spec.solver.spectral_radius,
             tolerance: spec.solver.tolerance,
             max_iterations: spec.solver.max_iterations,
-            max_step: spec.experiment.as_ref().and_then(|e| e.step_size).unwrap_or(1e-3).min(1e-3),
+            max_step: spec
+                .solver
+                .max_step
+                .unwrap_or_else(|| spec.experiment.as_ref().and_then(|e| e.step_size).unwrap_or(1e-3).min(1e-3)),
         },
     };
     for (k, j) in spec.joints.iter().enumerate() {
@@ -137,8 +144,13 @@ fn describe(spec: &AssemblySpec) -> Result<(AssemblyDescription, Vec<(String, Re
         description.joints.push(JointDescription { name: j.name.clone(), kind, first, second, axes, drive });
     }
     for (k, f) in spec.flanges.iter().enumerate() {
-        let Side::Body { body, marker } = side_of(&description, file, &f.at, &format!("assembly.flanges[{k}].at"))? else {
-            return Err(field(file, format!("assembly.flanges[{k}].at"), "an external flange is on a body, not the ground"));
+        let Side::Body { body, marker } = side_of(&description, file, &f.at, &format!("assembly.flanges[{k}].at"))?
+        else {
+            return Err(field(
+                file,
+                format!("assembly.flanges[{k}].at"),
+                "an external flange is on a body, not the ground",
+            ));
         };
         let role = if f.role == Role::Motion { FlangeRole::Motion } else { FlangeRole::Force };
         description.flanges.push(ExternalFlange { name: f.name.clone(), role, body, marker });

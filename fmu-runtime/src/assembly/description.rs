@@ -17,7 +17,7 @@ const KIND: &str = "assembly";
 
 #[derive(Debug, Clone, PartialEq)]
 pub enum BodyModel {
-    Flexible(ReducedBody),
+    Flexible(Box<ReducedBody>),
     Rigid { mass: f64, centre: Vec3, inertia_at_centre: Mat3, flanges: Vec<(String, Vec3)> },
 }
 
@@ -56,9 +56,17 @@ pub enum DriveFunction {
     Input,
     Constant(f64),
     /// Rate speed (1 - cos(pi t / time)) / 2 until `time`, then `speed`; the value its integral.
-    SpinUp { speed: f64, time: f64 },
+    SpinUp {
+        speed: f64,
+        time: f64,
+    },
     /// offset + amplitude sin(2 pi frequency t + phase), phase in rad.
-    Sine { amplitude: f64, frequency: f64, phase: f64, offset: f64 },
+    Sine {
+        amplitude: f64,
+        frequency: f64,
+        phase: f64,
+        offset: f64,
+    },
 }
 
 impl DriveFunction {
@@ -286,7 +294,7 @@ impl AssemblyDescription {
                     flanges,
                 }
             } else {
-                BodyModel::Flexible(ReducedBody::from_container(&c.nested(&format!("{p}flexible.")))?)
+                BodyModel::Flexible(Box::new(ReducedBody::from_container(&c.nested(&format!("{p}flexible.")))?))
             };
             bodies.push(BodyDescription {
                 name: c.text(&format!("{p}name"))?.to_owned(),
@@ -381,9 +389,12 @@ impl AssemblyDescription {
 
     /// The body and marker of a flange reference `body.flange`.
     pub fn find_flange(&self, body: &str, flange: &str) -> Result<Side, AssemblyError> {
-        let (i, b) = self.bodies.iter().enumerate().find(|(_, b)| b.name == body).ok_or_else(|| {
-            AssemblyError::Format(format!("no body '{body}'"))
-        })?;
+        let (i, b) = self
+            .bodies
+            .iter()
+            .enumerate()
+            .find(|(_, b)| b.name == body)
+            .ok_or_else(|| AssemblyError::Format(format!("no body '{body}'")))?;
         let names = b.flange_names();
         let marker = names.iter().position(|n| *n == flange).ok_or_else(|| AssemblyError::Body {
             body: body.into(),

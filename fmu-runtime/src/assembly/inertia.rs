@@ -17,9 +17,9 @@
 //! with a_B = R^T (a - g), each equal to the generalised external and joint forces. The unit test
 //! puts these against the same principle summed over a cloud of particles.
 
+use super::error::AssemblyError;
 use crate::body::dense::shape_dot;
 use crate::kinematics::{self as k3, Mat3, Vec3};
-use super::error::AssemblyError;
 use crate::reduced::ReducedBody;
 
 /// A flange of a body where joints and external loads attach.
@@ -83,9 +83,11 @@ impl Inertia {
         })?;
         let n = body.n_modes();
         let mut markers = vec![Marker { name: body.mount.clone(), position: [0.0; 3], shapes: vec![0.0; 6 * n] }];
-        markers.extend(
-            body.flanges.iter().map(|f| Marker { name: f.name.clone(), position: f.position, shapes: f.shapes.clone() }),
-        );
+        markers.extend(body.flanges.iter().map(|f| Marker {
+            name: f.name.clone(),
+            position: f.position,
+            shapes: f.shapes.clone(),
+        }));
         Ok(Self {
             mass: body.mass,
             first_moment: body.first_moment,

@@ -242,7 +242,8 @@ mod tests {
     #[test]
     fn gradients_match_central_differences() {
         let h = 1e-6;
-        for kind in [JointKind::Weld, JointKind::Revolute, JointKind::Prismatic, JointKind::Spherical, JointKind::Universal]
+        for kind in
+            [JointKind::Weld, JointKind::Revolute, JointKind::Prismatic, JointKind::Spherical, JointKind::Universal]
         {
             for drive in [None, Some(0.4)] {
                 if drive.is_some() && !matches!(kind, JointKind::Revolute | JointKind::Prismatic) {
@@ -260,7 +261,11 @@ mod tests {
                     for i in 0..e.len {
                         let fd = (up.value[i] - down.value[i]) / (2.0 * h);
                         // central differences at h = 1e-6 of functions of size 1: about 1e-10
-                        assert!((fd - e.grad[i][k]).abs() < 1e-8, "{kind:?} eq {i} coord {k}: {fd} vs {}", e.grad[i][k]);
+                        assert!(
+                            (fd - e.grad[i][k]).abs() < 1e-8,
+                            "{kind:?} eq {i} coord {k}: {fd} vs {}",
+                            e.grad[i][k]
+                        );
                     }
                 }
             }
@@ -271,7 +276,8 @@ mod tests {
     fn coincident_frames_satisfy_every_joint() {
         let fa = rotation_of([0.3, -0.2, 0.5]);
         let f = Frames { pa: [1.0, 2.0, 3.0], fa, pb: [1.0, 2.0, 3.0], fb: fa };
-        for kind in [JointKind::Weld, JointKind::Revolute, JointKind::Prismatic, JointKind::Spherical, JointKind::Universal]
+        for kind in
+            [JointKind::Weld, JointKind::Revolute, JointKind::Prismatic, JointKind::Spherical, JointKind::Universal]
         {
             let e = equations(kind, &f, [0.0; 3], Some(0.0));
             assert!(e.value[..e.len].iter().all(|v| v.abs() < 1e-15), "{kind:?}");

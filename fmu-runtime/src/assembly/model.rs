@@ -156,7 +156,12 @@ impl Assembly {
 
     /// A checkpoint of the present state (allocates: made once).
     pub fn checkpoint(&self) -> Checkpoint {
-        Checkpoint { motion: self.motion.clone(), inputs: self.inputs.clone(), angles: self.angles.clone(), time: self.time }
+        Checkpoint {
+            motion: self.motion.clone(),
+            inputs: self.inputs.clone(),
+            angles: self.angles.clone(),
+            time: self.time,
+        }
     }
 
     /// Copy the present state into `c` (no allocation).
@@ -197,7 +202,12 @@ impl Assembly {
             let moved = k3::sub(host.r, p.p).iter().any(|x| x.abs() > 1e-12)
                 || host.rot.iter().zip(&p.frame).any(|(a, b)| (a - b).abs() > 1e-12);
             if moved {
-                if self.system.joints.iter().any(|j| matches!(j.a, Attach::Ground { .. }) || matches!(j.b, Attach::Ground { .. })) {
+                if self
+                    .system
+                    .joints
+                    .iter()
+                    .any(|j| matches!(j.a, Attach::Ground { .. }) || matches!(j.b, Attach::Ground { .. }))
+                {
                     return Err(AssemblyError::Joint {
                         joint: format!("{name}.mount"),
                         reason: "the host's start frame differs from the flange's, and joints to the ground keep the \
@@ -287,7 +297,12 @@ impl Assembly {
         if self.out_valid {
             return Ok(());
         }
-        let now = Instant { t: self.time, host: self.inputs.host.at(0.0), drives: &self.inputs.drives, loads: &self.inputs.loads };
+        let now = Instant {
+            t: self.time,
+            host: self.inputs.host.at(0.0),
+            drives: &self.inputs.drives,
+            loads: &self.inputs.loads,
+        };
         self.solver.consistent(&self.system, &self.motion, &now, &mut self.out_acc, &mut self.out_lambda)?;
         self.out_valid = true;
         Ok(())

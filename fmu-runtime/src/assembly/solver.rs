@@ -127,6 +127,32 @@ impl Solver {
         }
     }
 
+    /// What a saved state needs beside the motion to continue bit for bit: whether the next
+    /// step is a run's first, the step the kept iteration matrix was formed for (None: none),
+    /// and that matrix's factors.
+    pub fn kept(&self) -> (bool, Option<f64>, &[f64], &[usize]) {
+        (self.first, self.matrix_step, &self.work.matrix, &self.work.pivots)
+    }
+
+    /// Take what [`Self::kept`] gave; `matrix` and `pivots` of this solver's sizes (the caller
+    /// checked them: pivots below the dimension).
+    pub fn restore_kept(&mut self, first: bool, matrix_step: Option<f64>, matrix: &[f64], pivots: &[usize]) {
+        self.first = first;
+        self.matrix_step = matrix_step;
+        self.work.matrix.copy_from_slice(matrix);
+        self.work.pivots.copy_from_slice(pivots);
+    }
+
+    /// Whether the next step is a run's first (a restored state without a kept matrix).
+    pub fn set_first(&mut self, first: bool) {
+        self.first = first;
+    }
+
+    /// The iteration system's dimension (velocity slots and joint equations).
+    pub fn dimension(&self) -> usize {
+        self.work.pivots.len()
+    }
+
     /// Forget the kept iteration matrix (after the state was replaced).
     pub fn invalidate(&mut self) {
         self.matrix_step = None;
@@ -135,7 +161,12 @@ impl Solver {
     /// Accelerations and multipliers consistent with the positions and velocities of `m` at
     /// `now` (the start of a run): the equations of motion with the joints' equations twice
     /// differentiated in time.
-    pub fn settle_accelerations(&mut self, system: &System, m: &mut Motion, now: &Instant) -> Result<(), AssemblyError> {
+    pub fn settle_accelerations(
+        &mut self,
+        system: &System,
+        m: &mut Motion,
+        now: &Instant,
+    ) -> Result<(), AssemblyError> {
         let (mut acc, mut lambda) = (std::mem::take(&mut m.acc), std::mem::take(&mut m.lambda));
         let done = self.consistent(system, m, now, &mut acc, &mut lambda);
         (m.acc, m.lambda) = (acc, lambda);
@@ -204,7 +235,8 @@ impl Solver {
                 w.residual[k] = 0.0;
             }
         }
-        lu_factor(&mut w.consistent_matrix, dim, &mut w.consistent_pivots).map_err(|_| AssemblyError::Singular { time: now.t })?;
+        lu_factor(&mut w.consistent_matrix, dim, &mut w.consistent_pivots)
+            .map_err(|_| AssemblyError::Singular { time: now.t })?;
         lu_solve(&w.consistent_matrix, dim, &w.consistent_pivots, &mut w.residual);
         if w.residual.iter().any(|x| !x.is_finite()) {
             return Err(AssemblyError::NotFinite { time: now.t });
@@ -345,7 +377,8 @@ impl Solver {
         for attempt in 0..2 {
             self.work.acc.copy_from_slice(&m.acc);
             self.work.lambda.copy_from_slice(&m.lambda);
-            if attempt == 1 || self.matrix_step != Some(h) {
+            // a master's steps that differ by round-off (libcosim's nanosecond clock) keep it
+            if attempt == 1 || self.matrix_step.is_none_or(|kept| (kept - h).abs() > 1e-6 * h) {
                 self.form_matrix(system, m, h, now)?;
             }
             if self.iterate(system, m, h, now)? {

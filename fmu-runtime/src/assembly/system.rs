@@ -415,7 +415,14 @@ impl System {
     }
 
     /// A flange's world (v, w) from `vel`, or its (a, z) from `acc` with `vel` (the rate terms).
-    pub fn marker_rates(&self, pos: &[f64], vel: &[f64], acc: Option<&[f64]>, body: usize, marker: usize) -> (Vec3, Vec3) {
+    pub fn marker_rates(
+        &self,
+        pos: &[f64],
+        vel: &[f64],
+        acc: Option<&[f64]>,
+        body: usize,
+        marker: usize,
+    ) -> (Vec3, Vec3) {
         let b = &self.bodies[body];
         let n = b.n_modes();
         let pose = self.marker_pose(pos, body, marker);

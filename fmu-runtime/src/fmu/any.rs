@@ -9,7 +9,7 @@ use fmi2::{Interface, Model, ModelError, VarInfo};
 
 #[derive(Debug, Clone)]
 pub enum AnyFmu {
-    Body(BodyFmu),
+    Body(Box<BodyFmu>),
     Assembly(Box<AssemblyFmu>),
 }
 
@@ -28,7 +28,7 @@ impl Model for AnyFmu {
         if resources.is_some_and(|dir| dir.join(ASSEMBLY_FILE).exists()) {
             return AssemblyFmu::instantiate(resources, interface).map(|a| AnyFmu::Assembly(Box::new(a)));
         }
-        BodyFmu::instantiate(resources, interface).map(AnyFmu::Body)
+        BodyFmu::instantiate(resources, interface).map(|b| AnyFmu::Body(Box::new(b)))
     }
     fn guid(&self) -> &str {
         each!(self, m => m.guid())

@@ -15,6 +15,12 @@ use std::fmt;
 use std::sync::Arc;
 
 /// Version of an assembly's serialized state.
+/// Layout, little-endian: version (u32); position entries, multipliers, drive inputs and loads
+/// (u32 each, checked against the assembly); then f64s: time, start time, g[3], positions,
+/// velocities, accelerations, pseudo-accelerations, multipliers, revolute angles, the host
+/// frame's r[3] R[9] v[3] w[3] a[3] z[3], drive inputs and their rates, loads and their rates;
+/// then the solver's: first step (u8), a kept iteration matrix (u8) and, where kept, its step
+/// (f64), factors (f64, dimension^2) and pivots (u32, dimension).
 pub const ASSEMBLY_STATE_VERSION: u32 = 1;
 
 #[derive(Debug, Clone)]
@@ -26,6 +32,9 @@ pub struct AssemblyFmu {
     step_start: Checkpoint,
     start_time: f64,
     scratch: Vec<f64>,
+    /// Where a restored state's iteration matrix is read to.
+    matrix_buffer: Vec<f64>,
+    pivot_buffer: Vec<usize>,
 }
 
 /// Why a variable or a call is refused.
@@ -64,6 +73,7 @@ impl AssemblyFmu {
         let assembly = Assembly::new(description)?;
         let table = Arc::new(AssemblyTable::new(description, &assembly));
         let scratch = vec![0.0; 3 * assembly.system.max_modes().max(1)];
+        let dim = assembly.solver.dimension();
         Ok(Self {
             table,
             guid: description.guid.clone(),
@@ -71,6 +81,8 @@ impl AssemblyFmu {
             assembly,
             start_time: 0.0,
             scratch,
+            matrix_buffer: vec![0.0; dim * dim],
+            pivot_buffer: vec![0; dim],
         })
     }
 
@@ -160,6 +172,18 @@ impl AssemblyFmu {
         for v in [&a.inputs.drives, &a.inputs.drive_rates, &a.inputs.loads, &a.inputs.load_rates] {
             w.f64s(v);
         }
+        // the kept iteration matrix decides Newton's path to its tolerance: a restored state
+        // continues bit for bit only with it
+        let (first, step, matrix, pivots) = a.solver.kept();
+        w.bool(first);
+        w.bool(step.is_some());
+        if let Some(h) = step {
+            w.f64(h);
+            w.f64s(matrix);
+            for p in pivots {
+                w.u32(*p as u32);
+            }
+        }
     }
 
     fn read_state(&mut self, bytes: &[u8]) -> Result<(), DecodeError> {
@@ -199,6 +223,24 @@ impl AssemblyFmu {
         r.f64s_into(&mut a.inputs.drive_rates, "drive input rates")?;
         r.f64s_into(&mut a.inputs.loads, "loads")?;
         r.f64s_into(&mut a.inputs.load_rates, "load rates")?;
+        let first = r.bool("first step")?;
+        let dim = a.solver.dimension();
+        let (mut matrix, mut pivots) =
+            (std::mem::take(&mut self.matrix_buffer), std::mem::take(&mut self.pivot_buffer));
+        let step = if r.bool("kept iteration matrix")? {
+            let h = r.f64("kept matrix's step")?;
+            r.f64s_into(&mut matrix, "kept matrix")?;
+            for (i, p) in pivots.iter_mut().enumerate() {
+                let v = r.u32("kept pivots")? as usize;
+                if v < i || v >= dim {
+                    return Err(DecodeError::invalid(AssemblyFmuError::OtherAssembly));
+                }
+                *p = v;
+            }
+            Some(h)
+        } else {
+            None
+        };
         r.finish("assembly state")?;
         for b in &a.system.bodies {
             let rot: k3::Mat3 = std::array::from_fn(|i| a.motion.pos[b.at + 3 + i]);
@@ -211,6 +253,11 @@ impl AssemblyFmu {
             }
         }
         a.solver.invalidate();
+        match step {
+            Some(h) => a.solver.restore_kept(first, Some(h), &matrix, &pivots),
+            None => a.solver.set_first(first),
+        }
+        (self.matrix_buffer, self.pivot_buffer) = (matrix, pivots);
         a.forget_outputs();
         Ok(())
     }

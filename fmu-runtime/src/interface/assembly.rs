@@ -79,7 +79,8 @@ impl AssemblyTable {
     pub fn new(d: &AssemblyDescription, a: &Assembly) -> Self {
         let mut t = Vec::new();
         let mut add = |name: String, description: String, causality, unit: &'static str, start: Option<f64>, slot| {
-            let variability = if causality == Causality::Parameter { Variability::Fixed } else { Variability::Continuous };
+            let variability =
+                if causality == Causality::Parameter { Variability::Fixed } else { Variability::Continuous };
             t.push(AssemblyVariable {
                 vr: t.len() as u32 + 1,
                 name,
@@ -116,7 +117,14 @@ impl AssemblyTable {
             } else {
                 format!("driving {what} of joint {} about (along) its axis, on its second side", joint.name)
             };
-            add(format!("{}.drive_{what}", joint.name), description, Causality::Input, unit, Some(0.0), Slot::DriveInput(i));
+            add(
+                format!("{}.drive_{what}", joint.name),
+                description,
+                Causality::Input,
+                unit,
+                Some(0.0),
+                Slot::DriveInput(i),
+            );
         }
         let mut force_flange = 0;
         for (name, role, body, marker) in &s.flanges {
@@ -186,12 +194,40 @@ impl AssemblyTable {
             }
             match joint.kind {
                 JointKind::Revolute => {
-                    add(format!("{}.angle", joint.name), "angle of the second side about the axis".into(), Causality::Output, "rad", None, Slot::JointValue(j));
-                    add(format!("{}.rate", joint.name), "angular rate about the axis".into(), Causality::Output, "rad/s", None, Slot::JointRate(j));
+                    add(
+                        format!("{}.angle", joint.name),
+                        "angle of the second side about the axis".into(),
+                        Causality::Output,
+                        "rad",
+                        None,
+                        Slot::JointValue(j),
+                    );
+                    add(
+                        format!("{}.rate", joint.name),
+                        "angular rate about the axis".into(),
+                        Causality::Output,
+                        "rad/s",
+                        None,
+                        Slot::JointRate(j),
+                    );
                 }
                 JointKind::Prismatic => {
-                    add(format!("{}.position", joint.name), "position of the second side along the axis".into(), Causality::Output, "m", None, Slot::JointValue(j));
-                    add(format!("{}.rate", joint.name), "rate along the axis".into(), Causality::Output, "m/s", None, Slot::JointRate(j));
+                    add(
+                        format!("{}.position", joint.name),
+                        "position of the second side along the axis".into(),
+                        Causality::Output,
+                        "m",
+                        None,
+                        Slot::JointValue(j),
+                    );
+                    add(
+                        format!("{}.rate", joint.name),
+                        "rate along the axis".into(),
+                        Causality::Output,
+                        "m/s",
+                        None,
+                        Slot::JointRate(j),
+                    );
                 }
                 _ => {}
             }
@@ -212,7 +248,14 @@ impl AssemblyTable {
                 let stem = format!("{}.{}", body.name, marker.name);
                 for q in 0..4 {
                     for (k, n) in component_names(&stem, q).into_iter().enumerate() {
-                        add(n, format!("flange {}, world", QUANTITIES[q].2), Causality::Output, QUANTITIES[q].1, None, Slot::Flange(b, m, q, k));
+                        add(
+                            n,
+                            format!("flange {}, world", QUANTITIES[q].2),
+                            Causality::Output,
+                            QUANTITIES[q].1,
+                            None,
+                            Slot::Flange(b, m, q, k),
+                        );
                     }
                 }
             }
@@ -225,7 +268,14 @@ impl AssemblyTable {
             };
             add(format!("energy.{what}"), description, Causality::Output, "J", None, Slot::Energy(k));
         }
-        add("joints.drift".into(), "largest violation of a joint's equations (m, or rad)".into(), Causality::Output, "m", None, Slot::Drift);
+        add(
+            "joints.drift".into(),
+            "largest violation of a joint's equations (m, or rad)".into(),
+            Causality::Output,
+            "m",
+            None,
+            Slot::Drift,
+        );
         Self { variables: t }
     }
 

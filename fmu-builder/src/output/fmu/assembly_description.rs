@@ -10,10 +10,10 @@ use fmu_runtime::interface::assembly::AssemblyTable;
 use quick_xml::Writer;
 use quick_xml::events::{BytesDecl, Event};
 
+use super::FmuError;
 use super::model_description::{
     ModelInfo, W, attrs, causality_name, check_info, variability_name, write_log_categories, write_units,
 };
-use super::FmuError;
 
 type Result<T> = std::result::Result<T, FmuError>;
 

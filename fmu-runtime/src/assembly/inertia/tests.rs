@@ -108,9 +108,7 @@ fn particle_forces(c: &Cloud, rot: &Mat3, q: &[f64], vel: &[f64], acc: &[f64], g
     let (w, a, w_d) = (vel3(vel, 3), vel3(acc, 0), vel3(acc, 3));
     let mut out = vec![0.0; 6 + n];
     for p in 0..c.masses.len() {
-        let mode_sum = |x: &[f64]| {
-            (0..n).fold([0.0; 3], |s, k| k3::add(s, k3::scale(x[k], c.shapes[k][p])))
-        };
+        let mode_sum = |x: &[f64]| (0..n).fold([0.0; 3], |s, k| k3::add(s, k3::scale(x[k], c.shapes[k][p])));
         let rho = k3::add(c.x[p], mode_sum(q));
         let (u_d, u_dd) = (mode_sum(&vel[6..]), mode_sum(&acc[6..]));
         let acc_body = k3::add(

@@ -73,7 +73,8 @@ fn lagrange(seconds: f64, dt: f64) -> Vec<[f64; 4]> {
     let mut y = [std::f64::consts::FRAC_PI_4; 2].iter().chain(&[0.0, 0.0]).copied().collect::<Vec<_>>();
     let mut out = Vec::new();
     let steps = (seconds / dt).round() as usize;
-    let point = |y: &[f64]| [L * y[0].sin(), -L * y[0].cos(), L * (y[0].sin() + y[1].sin()), -L * (y[0].cos() + y[1].cos())];
+    let point =
+        |y: &[f64]| [L * y[0].sin(), -L * y[0].cos(), L * (y[0].sin() + y[1].sin()), -L * (y[0].cos() + y[1].cos())];
     out.push(point(&y));
     for _ in 0..steps {
         let s = |y: &[f64], k: &[f64; 4], f: f64| -> [f64; 4] { std::array::from_fn(|i| y[i] + f * dt * k[i]) };
@@ -109,7 +110,10 @@ fn run(settings: SolverSettings, h: f64, seconds: f64) -> (Vec<[f64; 4]>, Vec<f6
 }
 
 fn max_error(ours: &[[f64; 4]], theirs: &[[f64; 4]], every: usize) -> f64 {
-    ours.iter().enumerate().map(|(k, p)| (0..4).map(|i| (p[i] - theirs[k * every][i]).abs()).fold(0.0, f64::max)).fold(0.0, f64::max)
+    ours.iter()
+        .enumerate()
+        .map(|(k, p)| (0..4).map(|i| (p[i] - theirs[k * every][i]).abs()).fold(0.0, f64::max))
+        .fold(0.0, f64::max)
 }
 
 #[test]
