@@ -54,8 +54,9 @@ def against_rigid(positions: np.ndarray) -> list[float]:
 
 def per_step(durations: list[float]) -> dict:
     d = np.asarray(durations) * 1e6
-    return {"p50_us": float(np.percentile(d, 50)), "p99_us": float(np.percentile(d, 99)),
-            "max_us": float(d.max()), "mean_us": float(d.mean())}
+    p50 = float(np.percentile(d, 50))
+    return {"p50_us": p50, "p99_us": float(np.percentile(d, 99)), "max_us": float(d.max()),
+            "mean_us": float(d.mean()), "slow": int(np.count_nonzero(d > 4.0 * p50))}
 
 
 def chain_master(link: Path, seconds: float) -> dict:

@@ -5,7 +5,8 @@
 //! every fmi2DoStep timed on its own: p50, p99 and max per step and the loop's wall time per
 //! simulated second; then a fresh instance the same way with what a user reads after each step
 //! (fmi2GetReal of four positions and one joint reaction: the reaction makes the FMU solve its
-//! index-1 system at the communication point), timed step and read apart.
+//! index-1 system at the communication point), timed step and read apart. Every call's time is
+//! written to `<case>_step_times.csv` in the work folder (`--keep DIR` keeps it).
 //!
 //! Heap allocations per step (a target, 0): the same FMU through the runtime's C functions
 //! linked into this binary (`Fmu::open_in_process`, as for the bodies), stepped with the same
@@ -61,16 +62,21 @@ const CASES: [Case; 2] = [
     },
 ];
 
-/// Per-call times [ns] of one loop, sorted, and the loop's wall time [s].
+/// Per-call times [ns] of one loop, in call order and sorted, and the loop's wall time [s].
 struct Timed {
+    in_order: Vec<f64>,
     sorted: Vec<f64>,
     wall_s: f64,
 }
 
+/// A step slower than this many times the median counts as slow (the tail's size).
+const SLOW: f64 = 4.0;
+
 impl Timed {
-    fn new(mut per_call: Vec<f64>, wall_s: f64) -> Self {
-        per_call.sort_by(f64::total_cmp);
-        Self { sorted: per_call, wall_s }
+    fn new(in_order: Vec<f64>, wall_s: f64) -> Self {
+        let mut sorted = in_order.clone();
+        sorted.sort_by(f64::total_cmp);
+        Self { in_order, sorted, wall_s }
     }
     fn quantile(&self, q: f64) -> f64 {
         let n = self.sorted.len();
@@ -79,14 +85,21 @@ impl Timed {
     fn mean(&self) -> f64 {
         self.sorted.iter().sum::<f64>() / self.sorted.len() as f64
     }
+    /// Calls slower than SLOW times the median.
+    fn slow(&self) -> usize {
+        let limit = SLOW * self.quantile(0.5);
+        self.sorted.iter().filter(|&&x| x > limit).count()
+    }
+    /// p50 | p99 | max | mean [us] | slow calls
     fn cells(&self) -> String {
         let us = |x: f64| format!("{:.1}", x * 1e-3);
         format!(
-            "{} | {} | {} | {}",
+            "{} | {} | {} | {} | {}",
             us(self.quantile(0.5)),
             us(self.quantile(0.99)),
             us(self.sorted[self.sorted.len() - 1]),
-            us(self.mean())
+            us(self.mean()),
+            self.slow()
         )
     }
 }
@@ -187,6 +200,13 @@ fn bench_case(case: &Case, work: &Path, steps: usize) -> Result<Row, String> {
         }
         (Timed::new(both, wall_s), Timed::new(reads, wall_s), positions)
     };
+    // every call's time, for a look at the tail (kept with --keep)
+    let times = work.join(format!("{}_step_times.csv", case.file));
+    let mut text = String::from("step,do_step_ns,do_step_and_read_ns,read_ns\n");
+    for k in 0..steps {
+        text += &format!("{},{},{},{}\n", k + 1, step.in_order[k], step_and_read.in_order[k], read.in_order[k]);
+    }
+    std::fs::write(&times, text).map_err(|e| format!("{}: {e}", times.display()))?;
     let allocations = count_allocations(&dir, &vrs)?;
     eprintln!(
         "timed {}: fmi2DoStep p50 {:.1} us, with outputs {:.1} us, {allocations} allocations in {COUNTED_STEPS} steps",
@@ -329,9 +349,9 @@ pub fn run(work: &Path, short: bool, python: Option<&Path>) -> Result<Vec<Target
         steps as f64 * H
     );
     println!(
-        "| assembly | calls per step | p50 [us] | p99 [us] | max [us] | mean [us] | ms per simulated second | allocations |"
+        "| assembly | calls per step | p50 [us] | p99 [us] | max [us] | mean [us] | calls > {SLOW} x p50 | ms per simulated second | allocations |"
     );
-    println!("|---|---|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|");
     for r in &rows {
         println!(
             "| {} | fmi2DoStep | {} | {:.1} | - |",
@@ -375,9 +395,9 @@ pub fn run(work: &Path, short: bool, python: Option<&Path>) -> Result<Vec<Target
         let exudyn_window_error =
             if exudyn_ok { max_of(&m["assembly"]["error_vs_rigid_exudyn_window"]) } else { f64::NAN };
         println!(
-            "| solver | simulated [s] | p50 [us] | p99 [us] | max [us] | mean [us] | ms per simulated second | error vs rigid, first {chain_s} s | error vs rigid, first {exudyn_s} s |"
+            "| solver | simulated [s] | p50 [us] | p99 [us] | max [us] | mean [us] | steps > {SLOW} x p50 | ms per simulated second | error vs rigid, first {chain_s} s | error vs rigid, first {exudyn_s} s |"
         );
-        println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+        println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
         println!(
             "| assembly FMU, fmi2DoStep + outputs | {:.1} | {} | {:.1} | {:.2e} | {:.2e} |",
             pendulum.steps as f64 * H,
@@ -393,25 +413,26 @@ pub fn run(work: &Path, short: bool, python: Option<&Path>) -> Result<Vec<Target
             fmu_step_only * 1e3
         );
         println!(
-            "| chain_master (Python, 2 body FMUs, {:.2} FMU steps per step) | {chain_s} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} | {:.2e} | |",
+            "| chain_master (Python, 2 body FMUs, {:.2} FMU steps per step) | {chain_s} | {:.0} | {:.0} | {:.0} | {:.0} | {} | {:.0} | {:.2e} | |",
             f(c, "evaluations_per_step"),
             f(c, "p50_us"),
             f(c, "p99_us"),
             f(c, "max_us"),
             f(c, "mean_us"),
+            c["slow"],
             chain_per_s * 1e3,
             chain_error
         );
         if exudyn_ok {
             println!(
-                "| Exudyn (SolveDynamic) | {exudyn_s} | - | - | - | {:.0} | {:.0} | | {:.2e} |",
+                "| Exudyn (SolveDynamic) | {exudyn_s} | - | - | - | {:.0} | - | {:.0} | | {:.2e} |",
                 f(e, "mean_us"),
                 f(e, "solve_s_per_sim_s") * 1e3,
                 max_of(&e["error_vs_rigid"]),
             );
         } else {
             println!(
-                "| Exudyn | - | - | - | - | - | - | | {} |",
+                "| Exudyn | - | - | - | - | - | - | - | | {} |",
                 e.get("error").and_then(|x| x.as_str()).unwrap_or("not run")
             );
         }
