@@ -387,3 +387,24 @@ def test_a_gap_at_a_joint_is_refused_with_its_name(tmp_path):
                                          {"name": "j", "type": "weld", "between": ["a.tip", "b.base"]}]},
                    "joint 'j'", before_reduction=False)
     assert "apart" in text
+
+
+def test_an_ssp_of_an_assembly_runs_in_fmpy(built, tmp_path):
+    """examples/assemblies/make_ssp.py packages the double pendulum as an SSP; FMPy's SSP runner
+    (its own fixed-step master) gives simulate_fmu's numbers (it labels each row with the step's
+    start and records the outputs after the step)."""
+    from fmpy.ssp.simulation import simulate_ssp
+    import subprocess
+
+    fmu = built[0]["double_pendulum"]
+    ssp = tmp_path / "DoublePendulum.ssp"
+    outputs = ["lower.tip.r[1]", "lower.tip.r[3]", "elbow.angle"]
+    args = [sys.executable, str(ASSEMBLIES / "make_ssp.py"), str(fmu), "-o", str(ssp)]
+    for o in outputs:
+        args += ["--output", o]
+    subprocess.run(args, check=True, capture_output=True)
+    rows = simulate_ssp(str(ssp), stop_time=1.0, step_size=H)
+    got = np.column_stack([rows[f"assembly.{o}"] for o in outputs])
+    _, ref = simulate(fmu, 1.0, outputs)
+    assert got.shape == ref[1:].shape
+    assert np.abs(got - ref[1:]).max() <= 1e-12 * np.abs(ref).max()
