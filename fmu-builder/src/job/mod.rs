@@ -197,7 +197,7 @@ fn build_assembly(job: &Job, input: &Input) -> Result<()> {
     destinations::check(&[Destination::file("-o", &output)], &inputs, job.force)?;
     let built = observed(job, &profile, || pipeline::assembly::build_assembly(spec, &output, &[]))?;
     if !job.quiet {
-        print!("{}", crate::output::summary::assembly_text(&built));
+        print!("{}", crate::output::summary::assembly_text(&built.description, built.experiment));
         if let Some(mib) = profile::process_peak_mib() {
             println!("peak memory {mib:.0} MiB");
         }

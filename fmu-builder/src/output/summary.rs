@@ -138,10 +138,9 @@ fn accuracy(s: &mut String, r: &Report) {
 }
 
 /// What an assembly's build printed: its bodies, joints and the FMU's variables.
-pub fn assembly_text(b: &crate::pipeline::assembly::BuiltAssembly) -> String {
+pub fn assembly_text(d: &fmu_runtime::assembly::description::AssemblyDescription, (stop, step): (f64, f64)) -> String {
     use fmu_runtime::assembly::description::BodyModel;
     use std::fmt::Write;
-    let d = &b.description;
     let mut s = String::new();
     let _ = writeln!(s, "assembly {}: {} bodies, {} joints", d.model_name, d.bodies.len(), d.joints.len());
     for body in &d.bodies {
@@ -160,7 +159,7 @@ pub fn assembly_text(b: &crate::pipeline::assembly::BuiltAssembly) -> String {
     let _ = writeln!(
         s,
         "Co-Simulation: generalised-alpha (spectral radius {}), steps of at most {} s; DefaultExperiment stop {} s, step {} s",
-        d.solver.spectral_radius, d.solver.max_step, b.experiment.0, b.experiment.1
+        d.solver.spectral_radius, d.solver.max_step, stop, step
     );
     s
 }

@@ -112,8 +112,16 @@ fn describe(spec: &AssemblySpec) -> Result<(AssemblyDescription, Vec<(String, Re
                 .unwrap_or_else(|| spec.experiment.as_ref().and_then(|e| e.step_size).unwrap_or(1e-3).min(1e-3)),
         },
     };
+    add_joints(spec, &mut description)?;
+    description.seal();
+    Ok((description, reports))
+}
+
+/// The joints and external flanges of `spec`, the bodies of `description` placed.
+fn add_joints(spec: &AssemblySpec, description: &mut AssemblyDescription) -> Result<()> {
+    let file = &spec.file;
     for (k, j) in spec.joints.iter().enumerate() {
-        let side = |s: usize| side_of(&description, file, &j.between[s], &format!("assembly.joints[{k}].between[{s}]"));
+        let side = |s: usize| side_of(description, file, &j.between[s], &format!("assembly.joints[{k}].between[{s}]"));
         let (first, second) = (side(0)?, side(1)?);
         let kind = match j.joint_type {
             JointType::Weld => JointKind::Weld,
@@ -155,8 +163,7 @@ fn describe(spec: &AssemblySpec) -> Result<(AssemblyDescription, Vec<(String, Re
         let role = if f.role == Role::Motion { FlangeRole::Motion } else { FlangeRole::Force };
         description.flanges.push(ExternalFlange { name: f.name.clone(), role, body, marker });
     }
-    description.seal();
-    Ok((description, reports))
+    Ok(())
 }
 
 fn side_of(d: &AssemblyDescription, file: &Path, r: &FlangeRef, at: &str) -> Result<Side> {

@@ -152,8 +152,13 @@ impl Inertia {
         })
     }
 
-    /// S(q) = m c(q), C_r(q) (3 x n into `cr_q`), J(q) and J'(q, q'); `qd` may hold only the
-    /// dynamic modes' rates (the others are zero).
+    /// Scratch the body's equations need: C_r(q) (3 n) and O_ab q (9 n).
+    pub fn scratch_len(n: usize) -> usize {
+        12 * n.max(1)
+    }
+
+    /// S(q) = m c(q), C_r(q) (3 x n into `cr_q`, then O_ab q, 9 x n), J(q) and J'(q, q');
+    /// `qd` may hold only the moving modes' rates (the others are zero).
     pub fn deformed(&self, q: &[f64], qd: &[f64], cr_q: &mut [f64]) -> (Vec3, Mat3, Mat3) {
         let n = q.len();
         let nn = n * n;
@@ -177,9 +182,12 @@ impl Inertia {
                     lin += q[k] * (o_pr[k] + o_rp[k]);
                     lin_rate += qd_k * (o_pr[k] + o_rp[k]);
                     let oq = shape_dot(&o_mat[k * n..(k + 1) * n], q);
-                    let oqd = shape_dot(&o_mat[k * n..(k + 1) * n], qd);
+                    cr_q[3 * n + (3 * p + r) * n + k] = oq;
                     quad += q[k] * oq;
-                    quad_rate += qd_k * oq + q[k] * oqd;
+                    quad_rate += qd_k * oq;
+                    if !qd.is_empty() {
+                        quad_rate += q[k] * shape_dot(&o_mat[k * n..(k + 1) * n], qd);
+                    }
                 }
                 j[3 * p + r] -= lin + quad;
                 j_rate[3 * p + r] = -(lin_rate + quad_rate);
@@ -241,7 +249,7 @@ impl Inertia {
                     let ab = 3 * i + b;
                     let ww = w[i] * w[b];
                     if ww != 0.0 {
-                        f += ww * (self.o_vec[ab * n + k] + shape_dot(&self.o_mat[ab * nn + k * n..][..n], q));
+                        f += ww * (self.o_vec[ab * n + k] + cr_q[3 * n + ab * n + k]);
                     }
                 }
             }

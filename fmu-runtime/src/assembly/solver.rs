@@ -20,6 +20,7 @@
 
 use super::description::SolverSettings;
 use super::error::AssemblyError;
+use super::inertia::Inertia;
 use super::system::{Instant, System};
 use crate::body::dense::{lu_factor, lu_solve};
 
@@ -66,6 +67,9 @@ struct Work {
     lambda: Vec<f64>,
     dx: Vec<f64>,
     forces: Vec<f64>,
+    /// The bodies' forces of the last full residual: a difference column of one body's
+    /// acceleration evaluates that body's again, the others' are these.
+    base_forces: Vec<f64>,
     phi: Vec<f64>,
     jac: Vec<f64>,
     residual: Vec<f64>,
@@ -110,6 +114,7 @@ impl Solver {
                 lambda: vec![0.0; ne],
                 dx: vec![0.0; nv],
                 forces: vec![0.0; nv],
+                base_forces: vec![0.0; nv],
                 phi: vec![0.0; ne],
                 jac: vec![0.0; ne * nv],
                 residual: vec![0.0; dim],
@@ -118,7 +123,7 @@ impl Solver {
                 pivots: vec![0; dim],
                 consistent_matrix: vec![0.0; dim * dim],
                 consistent_pivots: vec![0; dim],
-                cr_q: vec![0.0; 3 * system.max_modes().max(1)],
+                cr_q: vec![0.0; Inertia::scratch_len(system.max_modes())],
             },
             matrix_step: None,
             first: false,
@@ -249,17 +254,47 @@ impl Solver {
     /// The residual at the trial accelerations and multipliers in `work.acc`, `work.lambda`:
     /// fills work's pos, vel, pseudo, phi, jac and `out`.
     fn residual(&mut self, system: &System, m: &Motion, h: f64, now: &Instant, out_probe: bool) {
+        self.residual_of(system, m, h, now, out_probe, None);
+    }
+
+    /// The positions, velocities and pseudo-accelerations of the trial accelerations.
+    fn trial_motion(&mut self, system: &System, m: &Motion, h: f64) {
         let c = self.coefficients;
-        let (nv, ne) = (system.n_vel, system.n_eq);
         let w = &mut self.work;
-        for i in 0..nv {
+        for i in 0..system.n_vel {
             let p = ((1.0 - c.alpha_f) * w.acc[i] + c.alpha_f * m.acc[i] - c.alpha_m * m.pseudo[i]) / (1.0 - c.alpha_m);
             w.pseudo[i] = p;
             w.dx[i] = h * m.vel[i] + h * h * ((0.5 - c.beta) * m.pseudo[i] + c.beta * p);
             w.vel[i] = m.vel[i] + h * ((1.0 - c.gamma) * m.pseudo[i] + c.gamma * p);
         }
         system.advance(&m.pos, &w.dx, &mut w.pos);
-        system.body_forces(&w.pos, &w.vel, &w.acc, &mut w.cr_q, &mut w.forces);
+    }
+
+    /// [`Self::residual`]; `only`: the body whose acceleration alone changed since the last full
+    /// residual (the other bodies' forces are taken from it).
+    fn residual_of(
+        &mut self,
+        system: &System,
+        m: &Motion,
+        h: f64,
+        now: &Instant,
+        out_probe: bool,
+        only: Option<usize>,
+    ) {
+        let c = self.coefficients;
+        let (nv, ne) = (system.n_vel, system.n_eq);
+        self.trial_motion(system, m, h);
+        let w = &mut self.work;
+        match only {
+            Some(b) => {
+                w.forces.copy_from_slice(&w.base_forces);
+                system.body_force(b, &w.pos, &w.vel, &w.acc, &mut w.cr_q, &mut w.forces);
+            }
+            None => {
+                system.body_forces(&w.pos, &w.vel, &w.acc, &mut w.cr_q, &mut w.forces);
+                w.base_forces.copy_from_slice(&w.forces);
+            }
+        }
         for x in &mut w.forces {
             *x = -*x;
         }
@@ -300,13 +335,15 @@ impl Solver {
         // the accelerations' columns by forward differences: a step that moves the positions by
         // about 1e-8 (forces are linear in the accelerations, nonlinear in the positions)
         let delta = 1e-8 / (h * h * self.coefficients.position_gain());
-        for j in 0..nv {
-            let keep = self.work.acc[j];
-            self.work.acc[j] = keep + delta;
-            self.residual(system, m, h, now, true);
-            self.work.acc[j] = keep;
-            for i in 0..dim {
-                self.work.matrix[i * dim + j] = (self.work.probe[i] - self.work.residual[i]) / delta;
+        for (b, body) in system.bodies.iter().enumerate() {
+            for j in body.slot..body.slot + 6 + body.n_modes() {
+                let keep = self.work.acc[j];
+                self.work.acc[j] = keep + delta;
+                self.residual_of(system, m, h, now, true, Some(b));
+                self.work.acc[j] = keep;
+                for i in 0..dim {
+                    self.work.matrix[i * dim + j] = (self.work.probe[i] - self.work.residual[i]) / delta;
+                }
             }
         }
         let w = &mut self.work;
@@ -342,8 +379,11 @@ impl Solver {
                 return Ok(false);
             }
             self.last_iterations = it + 1;
-            if size <= tol {
-                self.residual(system, m, h, now, false);
+            // the error left after this update is about theta / (1 - theta) of it, theta the
+            // iteration's contraction (Hairer and Wanner's stopping rule)
+            let theta = size / last;
+            if size <= tol || (it > 0 && theta < 0.9 && theta / (1.0 - theta) * size <= tol) {
+                self.trial_motion(system, m, h);
                 return Ok(true);
             }
             // a kept matrix that no longer contracts well is formed again

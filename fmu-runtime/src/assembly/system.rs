@@ -349,12 +349,18 @@ impl System {
 
     /// Every body's inertial, elastic and damping forces less its weight (`out`, n_vel).
     pub fn body_forces(&self, pos: &[f64], vel: &[f64], acc: &[f64], cr_q: &mut [f64], out: &mut [f64]) {
-        for (i, b) in self.bodies.iter().enumerate() {
-            let (_, rot, q) = self.body_pose(pos, i);
-            let w = 6 + b.n_modes();
-            let s = b.slot;
-            b.inertia.forces(&rot, q, &vel[s..s + w], &acc[s..s + w], self.gravity, cr_q, &mut out[s..s + w]);
+        for i in 0..self.bodies.len() {
+            self.body_force(i, pos, vel, acc, cr_q, out);
         }
+    }
+
+    /// Body `i`'s part of [`Self::body_forces`].
+    pub fn body_force(&self, i: usize, pos: &[f64], vel: &[f64], acc: &[f64], cr_q: &mut [f64], out: &mut [f64]) {
+        let b = &self.bodies[i];
+        let (_, rot, q) = self.body_pose(pos, i);
+        let w = 6 + b.n_modes();
+        let s = b.slot;
+        b.inertia.forces(&rot, q, &vel[s..s + w], &acc[s..s + w], self.gravity, cr_q, &mut out[s..s + w]);
     }
 
     /// Every body's mass matrix into its diagonal block of `out` (row stride `stride`).

@@ -72,7 +72,7 @@ impl AssemblyFmu {
     pub fn new(description: &AssemblyDescription) -> Result<Self, AssemblyError> {
         let assembly = Assembly::new(description)?;
         let table = Arc::new(AssemblyTable::new(description, &assembly));
-        let scratch = vec![0.0; 3 * assembly.system.max_modes().max(1)];
+        let scratch = vec![0.0; crate::assembly::inertia::Inertia::scratch_len(assembly.system.max_modes())];
         let dim = assembly.solver.dimension();
         Ok(Self {
             table,

@@ -142,7 +142,7 @@ fn forces_equal_dalembert_over_particles() {
     let vel: Vec<f64> = (0..6 + n).map(|_| rng.next()).collect();
     let acc: Vec<f64> = (0..6 + n).map(|_| rng.next()).collect();
     let gravity = [0.3, -0.2, -9.81];
-    let mut cr_q = vec![0.0; 3 * n];
+    let mut cr_q = vec![0.0; Inertia::scratch_len(n)];
     let mut ours = vec![0.0; 6 + n];
     body.forces(&rot, &q, &vel, &acc, gravity, &mut cr_q, &mut ours);
     let theirs = particle_forces(&c, &rot, &q, &vel, &acc, gravity);
@@ -170,7 +170,7 @@ fn kinetic_energy_equals_the_particles() {
         let pv = k3::add(v, k3::mul(&rot, k3::add(k3::cross(w, rho), u_d)));
         theirs += 0.5 * c.masses[p] * k3::dot(pv, pv);
     }
-    let ours = body.kinetic_energy(&rot, &q, &vel, &mut vec![0.0; 3 * n]);
+    let ours = body.kinetic_energy(&rot, &q, &vel, &mut vec![0.0; Inertia::scratch_len(n)]);
     assert!((ours - theirs).abs() <= 1e-13 * theirs, "{ours} vs {theirs}");
 }
 
@@ -193,7 +193,7 @@ fn mass_matrix_is_the_forces_derivative() {
     let q: Vec<f64> = (0..n).map(|_| 0.3 * rng.next()).collect();
     let vel: Vec<f64> = (0..6 + n).map(|_| rng.next()).collect();
     let w = 6 + n;
-    let mut cr_q = vec![0.0; 3 * n];
+    let mut cr_q = vec![0.0; Inertia::scratch_len(n)];
     let (s, j, _) = body.deformed(&q, &vel[6..], &mut cr_q);
     let mut m = vec![0.0; w * w];
     body.mass_matrix(&rot, s, &j, &cr_q, &mut m, w);

@@ -93,7 +93,7 @@ fn lagrange(seconds: f64, dt: f64) -> Vec<[f64; 4]> {
 fn run(settings: SolverSettings, h: f64, seconds: f64) -> (Vec<[f64; 4]>, Vec<f64>, Assembly) {
     let mut a = Assembly::new(&double_pendulum(settings)).unwrap();
     a.start_run(0.0).unwrap();
-    let mut cr = vec![0.0; 3];
+    let mut cr = vec![0.0; 12];
     let mut points = Vec::new();
     let mut energy = Vec::new();
     let steps = (seconds / h).round() as usize;
