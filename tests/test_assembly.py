@@ -95,7 +95,11 @@ def test_weld_tip_load_vs_one_piece_and_calculix(built):
     the weld's and the tip's lateral and vertical motion against the one-piece FMU (same start
     values, FMPy), as a fraction of each one's swing, and the two lowest frequencies from the
     tip's periods against CalculiX's frequencies of the one-piece mesh (clamped base, rigid
-    weld section and tip)."""
+    weld section and tip). Measured: 7.1e-4 of the swing (the step load excites modes up to
+    300 Hz that the 1 ms step carries to second order: 3.9e-4 at h = 0.25 ms); the periods
+    1.8e-4 and 8.0e-4 off CalculiX's frequencies (the one-piece FMU's own periods are as far:
+    the estimate from a damped, forced response). Tolerances: the issue's 1e-3 of the swing;
+    2e-3 on the frequencies."""
     fmus, one_piece, deck, d = built
     t, ours = simulate(fmus["two_link_weld"], 2.0, WELD_OUT, {**NO_GRAVITY, **TIP_LOAD})
     _, theirs = simulate(one_piece, 2.0, ONE_PIECE_OUT, {**NO_GRAVITY, **TIP_LOAD})
@@ -113,14 +117,16 @@ def test_weld_tip_load_vs_one_piece_and_calculix(built):
 
 def test_weld_gravity_from_rest_vs_one_piece(built):
     """Both links at rest under gravity from t = 0 (the scene where a master with a one-step delay
-    diverges within 0.033 s), 1 s at h = 1 ms, against the one-piece FMU."""
+    diverges within 0.033 s), 1 s at h = 1 ms, against the one-piece FMU. Measured 2.5e-4 of
+    the tip's swing; tolerance 2.5e-3."""
     fmus, one_piece, _, _ = built
     _, ours = simulate(fmus["two_link_weld"], 1.0, WELD_OUT)
-    _, theirs = simulate(one_piece, 1.0, ONE_PIECE_OUT)
+    # a body FMU's gravity starts at zero, an assembly's at the input's (-9.81 m/s^2 along z)
+    _, theirs = simulate(one_piece, 1.0, ONE_PIECE_OUT, {"g[3]": -9.81})
     swing = np.ptp(theirs[:, 3])
     dev = np.abs(ours - theirs).max() / swing
     print(f"\nweld, gravity from rest: tip swing {swing:.4g} m, assembly - one piece {dev:.2e} of it")
-    assert dev <= 1e-2
+    assert dev <= 2.5e-3
 
 
 # ---------------------------------------------------------------------------------------------
@@ -132,7 +138,9 @@ def test_double_pendulum_vs_rigid_theory_and_exudyn(built, link_matrices):
     h = 1 ms: elbow and tip (x, z) against the rigid double pendulum of two uniform bars
     (Lagrange's equations, test_chain.rigid_double_pendulum) and against Exudyn's flexible double
     pendulum of the same mesh (CalculiX's matrices, Exudyn's own Craig-Bampton modes, joints and
-    generalised-alpha at h = 1 ms), as fractions of the rigid pendulum's swing."""
+    generalised-alpha at h = 1 ms), as fractions of the rigid pendulum's swing. Measured 7.8e-4
+    against the rigid pendulum (the links bend by 1e-3 m), 9.9e-4 against Exudyn (9.4e-5 over
+    the first 2 s; the motion is chaotic). Tolerances 1e-2, ten times."""
     from exudyn_reference import double_pendulum as exudyn_double_pendulum
     from test_chain import rigid_double_pendulum
 
@@ -155,7 +163,8 @@ def test_double_pendulum_vs_rigid_theory_and_exudyn(built, link_matrices):
 def test_three_link_chain_vs_rigid_theory_and_exudyn(built, link_matrices):
     """examples/assemblies/three_link_chain.json, 4 s at h = 1 ms: each link's tip (x, z)
     against three uniform rigid bars (rigid_mechanisms.rigid_pendulum_chain) and against
-    Exudyn's chain of three flexible links of the same mesh."""
+    Exudyn's chain of three flexible links of the same mesh. Measured 7.5e-4 and 2.4e-4 of the
+    swing; tolerances 1e-2 and 3e-3."""
     import rigid_mechanisms as rm
     from exudyn_reference import pendulum_chain
 
@@ -170,7 +179,7 @@ def test_three_link_chain_vs_rigid_theory_and_exudyn(built, link_matrices):
     print(f"\nthree-link chain, 4 s: within {rigid.max():.2e} of the rigid chain's swing, {against_exudyn.max():.2e} "
           f"of Exudyn's")
     assert rigid.max() <= 1e-2
-    assert against_exudyn.max() <= 1e-2
+    assert against_exudyn.max() <= 3e-3
 
 
 def test_four_bar_vs_rigid_theory_and_exudyn(built, link_matrices):
@@ -178,7 +187,11 @@ def test_four_bar_vs_rigid_theory_and_exudyn(built, link_matrices):
     the rocker's angle, the coupler's far end C (x, z) and the torque the ground applies to the
     crank (about +y), against the rigid four-bar (rigid_mechanisms.rigid_four_bar) and Exudyn's
     four-bar with the same flexible coupler and rigid crank and rocker. The torque is compared
-    from t = 0.1 s: a coupler started straight rings in its joints for the first 50 ms."""
+    from t = 0.1 s: a coupler started straight rings in its joints for the first 50 ms.
+    Measured: rocker angle and C 2.1e-6 of their swing from the rigid four-bar, 8.5e-8 from
+    Exudyn; torque 3.4e-4 from the rigid four-bar, 1.3e-3 from Exudyn (whose index-3 reactions
+    alternate by 1e-3 from step to step). Tolerances: positions 2e-5 and 1e-6, torque 3.4e-3 and
+    1.3e-2."""
     import rigid_mechanisms as rm
     from exudyn_reference import four_bar
 
@@ -195,8 +208,8 @@ def test_four_bar_vs_rigid_theory_and_exudyn(built, link_matrices):
     against[3] = np.abs(ours[late, 3] - exudyn[late, 3]).max() / swing[3]
     print(f"\nfour-bar, 6 s: rocker angle, C x, C z, crank torque within {rigid} of the rigid four-bar's swing "
           f"({swing}), within {against} of Exudyn's")
-    assert rigid[:3].max() <= 1e-3 and rigid[3] <= 2e-2
-    assert against.max() <= 1e-2
+    assert rigid[:3].max() <= 2e-5 and rigid[3] <= 3.4e-3
+    assert against[:3].max() <= 1e-6 and against[3] <= 1.3e-2
 
 
 def test_slider_crank_vs_rigid_theory(built):
@@ -204,7 +217,8 @@ def test_slider_crank_vs_rigid_theory(built):
     normal load on the rod against the rigid rod's kinematics and moment balance
     (test_chain.rigid_slider_crank). The rod starts straight, not sagging: its ringing decays
     (stiffness-proportional damping) over the first seconds, so the load is compared from
-    t = 2 s, the position over the whole run."""
+    t = 2 s, the position over the whole run. Measured: position 8.5e-7 of its swing (the rod's
+    axial compliance), load 6.8e-4. Tolerances 1e-5 and 6.8e-3."""
     import slider_crank as sc
     from test_chain import rigid_slider_crank
 
@@ -218,8 +232,8 @@ def test_slider_crank_vs_rigid_theory(built):
     load_error = np.abs(ours[late, 1] - load_ref[late]).max() / np.ptp(load_ref)
     print(f"\nslider-crank, 6 s: slider x within {x_error:.2e} of its swing ({np.ptp(x_ref):.3g} m), its load from "
           f"2 s within {load_error:.2e} of its swing ({np.ptp(load_ref):.3g} N)")
-    assert x_error <= 1e-4
-    assert load_error <= 2e-2
+    assert x_error <= 1e-5
+    assert load_error <= 6.8e-3
 
 
 # ---------------------------------------------------------------------------------------------
@@ -265,13 +279,14 @@ def test_undamped_links_keep_their_energy_over_a_hundred_periods(built, max_step
 
 def test_joints_hold_at_position_level(built):
     """The largest violation of any joint's equations over each example's run (joints.drift):
-    index 3 holds them to Newton's tolerance at every step, whatever the motion."""
+    index 3 holds them to Newton's tolerance at every step, whatever the motion. Measured at
+    most 2.0e-11; tolerance 2e-10."""
     worst = {}
     for name, seconds in [("double_pendulum", 4.0), ("four_bar", 2.0), ("slider_crank", 2.0), ("three_link_chain", 2.0)]:
         _, drift = simulate(built[0][name], seconds, ["joints.drift"])
         worst[name] = drift.max()
     print(f"\njoint drift (largest violation, m or rad): {worst}")
-    assert max(worst.values()) <= 1e-8
+    assert max(worst.values()) <= 2e-10
 
 
 def test_libcosim_and_ecos_give_fmpys_results(built):
@@ -392,7 +407,8 @@ def test_a_gap_at_a_joint_is_refused_with_its_name(tmp_path):
 def test_an_ssp_of_an_assembly_runs_in_fmpy(built, tmp_path):
     """examples/assemblies/make_ssp.py packages the double pendulum as an SSP; FMPy's SSP runner
     (its own fixed-step master) gives simulate_fmu's numbers (it labels each row with the step's
-    start and records the outputs after the step)."""
+    start and records the outputs after the step). Its clock is a running sum of the step, so
+    its steps differ from 1 ms by an ulp: measured 7e-12 of the largest value; tolerance 1e-10."""
     from fmpy.ssp.simulation import simulate_ssp
     import subprocess
 
@@ -407,4 +423,4 @@ def test_an_ssp_of_an_assembly_runs_in_fmpy(built, tmp_path):
     got = np.column_stack([rows[f"assembly.{o}"] for o in outputs])
     _, ref = simulate(fmu, 1.0, outputs)
     assert got.shape == ref[1:].shape
-    assert np.abs(got - ref[1:]).max() <= 1e-12 * np.abs(ref).max()
+    assert np.abs(got - ref[1:]).max() <= 1e-10 * np.abs(ref).max()
