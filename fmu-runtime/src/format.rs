@@ -222,6 +222,20 @@ impl Container {
         name_based_uuid(&unnamed.to_bytes())
     }
 
+    /// The container of an FMU's resource file: its stored GUID must be its content's, so a
+    /// file changed after the build (however consistent) is refused rather than run under the
+    /// modelDescription.xml of another model.
+    pub fn from_sealed_bytes(bytes: &[u8]) -> Result<Self, FormatError> {
+        let c = Self::from_bytes(bytes)?;
+        let (stored, computed) = (c.text(GUID_ENTRY)?, c.content_guid());
+        if stored != computed {
+            return Err(FormatError::Malformed(format!(
+                "its content does not match its GUID {stored} (the content's is {computed}): the file was changed after the build"
+            )));
+        }
+        Ok(c)
+    }
+
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, FormatError> {
         let mut r = Reader { bytes, pos: 0 };
         if r.take(8).map_err(|_| FormatError::BadMagic)? != MAGIC {

@@ -3,7 +3,7 @@
 //! Everything is resolved in the body frame B, whose origin is the mount flange's reference point
 //! and whose axes are the world axes of the undeformed part.
 
-use crate::format::{Container, FormatError, GUID_ENTRY};
+use crate::format::{Container, FormatError};
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct FlangeShapes {
@@ -283,14 +283,7 @@ impl ReducedBody {
     /// file changed after the build (however consistent) is refused rather than run under the
     /// modelDescription.xml of another model.
     pub fn from_sealed_bytes(bytes: &[u8]) -> Result<Self, FormatError> {
-        let c = Container::from_bytes(bytes)?;
-        let (stored, computed) = (c.text(GUID_ENTRY)?, c.content_guid());
-        if stored != computed {
-            return Err(FormatError::Malformed(format!(
-                "its content does not match its GUID {stored} (the content's is {computed}): the file was changed after the build"
-            )));
-        }
-        Self::from_container(&c)
+        Self::from_container(&Container::from_sealed_bytes(bytes)?)
     }
 }
 

@@ -88,14 +88,7 @@ pub fn write_fmu(
         .map_err(|e| BuildError::Internal(format!("serialising the input: {e}")))?;
     let report_json = serde_json::to_vec_pretty(&report.as_packaged())
         .map_err(|e| BuildError::Internal(format!("serialising the report: {e}")))?;
-    let required = fmi2_functions::required(&xml);
-    for binary in others {
-        binary.check(&required)?;
-    }
-    let mut binaries: Vec<(Platform, &[u8])> = others.iter().map(|b| (b.platform, b.data.as_slice())).collect();
-    if !binaries.iter().any(|(p, _)| *p == Platform::Linux64) {
-        binaries.insert(0, (Platform::Linux64, RUNTIME_SO));
-    }
+    let binaries = runtime_binaries(&xml, others)?;
     let archive = fmu::FmuArchive {
         model_description: xml,
         model_identifier: &id,
@@ -111,6 +104,20 @@ pub fn write_fmu(
         fmu::FmuError::Archive { path, message } => BuildError::File { path, message },
         other => BuildError::Numerical(other.to_string()),
     })
+}
+
+/// The FMU's binaries: `others`, each checked against the functions `xml` needs, and the
+/// builder's own linux64 runtime unless one of them replaces it.
+fn runtime_binaries<'a>(xml: &str, others: &'a [PlatformBinary]) -> Result<Vec<(Platform, &'a [u8])>> {
+    let required = fmi2_functions::required(xml);
+    for binary in others {
+        binary.check(&required)?;
+    }
+    let mut binaries: Vec<(Platform, &[u8])> = others.iter().map(|b| (b.platform, b.data.as_slice())).collect();
+    if !binaries.iter().any(|(p, _)| *p == Platform::Linux64) {
+        binaries.insert(0, (Platform::Linux64, RUNTIME_SO));
+    }
+    Ok(binaries)
 }
 
 /// The FMU's generation time: `SOURCE_DATE_EPOCH` (seconds since 1970, UTC) when set, as
@@ -167,14 +174,7 @@ pub fn write_assembly_fmu(
             "{e}: a body's, joint's or external flange's name collides with another variable of the FMU; rename it"
         ))
     })?;
-    let required = fmi2_functions::required(&xml);
-    for binary in others {
-        binary.check(&required)?;
-    }
-    let mut binaries: Vec<(Platform, &[u8])> = others.iter().map(|b| (b.platform, b.data.as_slice())).collect();
-    if !binaries.iter().any(|(p, _)| *p == Platform::Linux64) {
-        binaries.insert(0, (Platform::Linux64, RUNTIME_SO));
-    }
+    let binaries = runtime_binaries(&xml, others)?;
     let input =
         serde_json::to_string_pretty(spec).map_err(|e| BuildError::Internal(format!("serialising the input: {e}")))?;
     let archive = fmu::FmuArchive {

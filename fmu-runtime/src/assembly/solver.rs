@@ -339,7 +339,7 @@ impl Solver {
             for j in body.slot..body.slot + 6 + body.n_modes() {
                 let keep = self.work.acc[j];
                 self.work.acc[j] = keep + delta;
-                self.residual_of(system, m, h, now, true, None);
+                self.residual_of(system, m, h, now, true, Some(b));
                 self.work.acc[j] = keep;
                 for i in 0..dim {
                     self.work.matrix[i * dim + j] = (self.work.probe[i] - self.work.residual[i]) / delta;

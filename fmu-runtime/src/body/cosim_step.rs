@@ -145,7 +145,8 @@ impl FlexibleBody {
         if needed.is_nan() || needed > most as f64 {
             // the longest step within the budget, rounded down to four digits so that it fits
             let longest = most as f64 * SUBSTEP_ANGLE / spin;
-            let unit = 10f64.powi(longest.log10().floor() as i32 - 3);
+            // saturating: a spin that overflows makes the longest step 0, whose log is -inf
+            let unit = 10f64.powi((longest.log10().floor() as i32).saturating_sub(3));
             let longest = (longest / unit).floor() * unit;
             return Err(StepError::NotTaken(BodyError::TooManySubsteps { h, spin, needed, most, longest }));
         }

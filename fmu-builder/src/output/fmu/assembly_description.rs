@@ -12,7 +12,8 @@ use quick_xml::events::{BytesDecl, Event};
 
 use super::FmuError;
 use super::model_description::{
-    ModelInfo, W, attrs, causality_name, check_info, variability_name, write_log_categories, write_units,
+    ModelInfo, W, attrs, causality_name, check_info, root_attributes, variability_name, write_default_experiment,
+    write_log_categories, write_units,
 };
 
 type Result<T> = std::result::Result<T, FmuError>;
@@ -35,16 +36,7 @@ pub fn assembly_description_xml(info: &ModelInfo, table: &AssemblyTable) -> Resu
 
 fn write_document(w: &mut W, info: &ModelInfo, table: &AssemblyTable, units: &[(&str, [i32; 4])]) -> io::Result<()> {
     w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
-    let root = [
-        ("fmiVersion", "2.0".to_string()),
-        ("modelName", info.model_name.clone()),
-        ("guid", info.guid.clone()),
-        ("description", info.description.clone()),
-        ("generationTool", info.generation_tool.clone()),
-        ("generationDateAndTime", info.generation_date_time.clone()),
-        ("variableNamingConvention", "structured".to_string()),
-        ("numberOfEventIndicators", "0".to_string()),
-    ];
+    let root = root_attributes(info);
     w.create_element("fmiModelDescription").with_attributes(attrs(&root)).write_inner_content(|w| {
         let cs = [
             ("modelIdentifier", info.model_identifier.clone()),
@@ -61,14 +53,7 @@ fn write_document(w: &mut W, info: &ModelInfo, table: &AssemblyTable, units: &[(
         w.create_element("CoSimulation").with_attributes(attrs(&cs)).write_empty()?;
         write_units(w, units)?;
         write_log_categories(w)?;
-        let e = &info.default_experiment;
-        let experiment = [
-            ("startTime", format!("{:?}", e.start)),
-            ("stopTime", format!("{:?}", e.stop)),
-            ("tolerance", format!("{:?}", e.tolerance)),
-            ("stepSize", format!("{:?}", e.step)),
-        ];
-        w.create_element("DefaultExperiment").with_attributes(attrs(&experiment)).write_empty()?;
+        write_default_experiment(w, info)?;
         w.create_element("ModelVariables").write_inner_content(|w| {
             for v in &table.variables {
                 let sv = [

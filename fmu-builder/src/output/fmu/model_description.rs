@@ -330,29 +330,12 @@ pub(super) fn attrs<'a>(pairs: &'a [(&'a str, String)]) -> impl Iterator<Item = 
 
 fn write_document(w: &mut W, info: &ModelInfo, plan: &Plan) -> io::Result<()> {
     w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
-    let root = [
-        ("fmiVersion", "2.0".to_string()),
-        ("modelName", info.model_name.clone()),
-        ("guid", info.guid.clone()),
-        ("description", info.description.clone()),
-        ("generationTool", info.generation_tool.clone()),
-        ("generationDateAndTime", info.generation_date_time.clone()),
-        ("variableNamingConvention", "structured".to_string()),
-        ("numberOfEventIndicators", "0".to_string()),
-    ];
+    let root = root_attributes(info);
     w.create_element("fmiModelDescription").with_attributes(attrs(&root)).write_inner_content(|w| {
         write_interfaces(w, &info.model_identifier)?;
         write_units(w, &plan.units)?;
         write_log_categories(w)?;
-        let e = &info.default_experiment;
-        // finite: checked in check_info
-        let experiment = [
-            ("startTime", format!("{:?}", e.start)),
-            ("stopTime", format!("{:?}", e.stop)),
-            ("tolerance", format!("{:?}", e.tolerance)),
-            ("stepSize", format!("{:?}", e.step)),
-        ];
-        w.create_element("DefaultExperiment").with_attributes(attrs(&experiment)).write_empty()?;
+        write_default_experiment(w, info)?;
         w.create_element("ModelVariables")
             .write_inner_content(|w| plan.rows.iter().try_for_each(|r| write_variable(w, r)))?;
         write_model_structure(w, plan)
@@ -385,6 +368,33 @@ fn write_interfaces(w: &mut W, model_identifier: &str) -> io::Result<()> {
         ("maxOutputDerivativeOrder", max_order.as_str()),
     ];
     w.create_element("CoSimulation").with_attributes(common.into_iter().chain(cs)).write_empty()?;
+    Ok(())
+}
+
+/// The root element's attributes: the model's identity and the naming convention.
+pub(super) fn root_attributes(info: &ModelInfo) -> [(&'static str, String); 8] {
+    [
+        ("fmiVersion", "2.0".to_string()),
+        ("modelName", info.model_name.clone()),
+        ("guid", info.guid.clone()),
+        ("description", info.description.clone()),
+        ("generationTool", info.generation_tool.clone()),
+        ("generationDateAndTime", info.generation_date_time.clone()),
+        ("variableNamingConvention", "structured".to_string()),
+        ("numberOfEventIndicators", "0".to_string()),
+    ]
+}
+
+/// The DefaultExperiment element (its numbers finite: checked in check_info).
+pub(super) fn write_default_experiment(w: &mut W, info: &ModelInfo) -> io::Result<()> {
+    let e = &info.default_experiment;
+    let experiment = [
+        ("startTime", format!("{:?}", e.start)),
+        ("stopTime", format!("{:?}", e.stop)),
+        ("tolerance", format!("{:?}", e.tolerance)),
+        ("stepSize", format!("{:?}", e.step)),
+    ];
+    w.create_element("DefaultExperiment").with_attributes(attrs(&experiment)).write_empty()?;
     Ok(())
 }
 
