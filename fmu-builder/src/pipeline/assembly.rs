@@ -152,7 +152,7 @@ fn add_joints(spec: &AssemblySpec, description: &mut AssemblyDescription) -> Res
         description.joints.push(JointDescription { name: j.name.clone(), kind, first, second, axes, drive });
     }
     for (k, f) in spec.flanges.iter().enumerate() {
-        let Side::Body { body, marker } = side_of(&description, file, &f.at, &format!("assembly.flanges[{k}].at"))?
+        let Side::Body { body, marker } = side_of(description, file, &f.at, &format!("assembly.flanges[{k}].at"))?
         else {
             return Err(field(
                 file,
