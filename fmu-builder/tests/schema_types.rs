@@ -121,7 +121,7 @@ fn assembly_documents() -> Vec<Value> {
                 {"name": "cardan", "type": "universal", "between": ["crank.pin", "ground"], "axes": [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]}
             ],
             "flanges": [{"name": "load", "role": "force", "at": "free.f"}, {"name": "mount", "role": "motion", "at": "free.f"}],
-            "solver": {"spectral_radius": 0.8, "tolerance": 1e-9, "max_iterations": 12}
+            "solver": {"spectral_radius": 0.8, "tolerance": 1e-9, "max_iterations": 12, "max_step": 0.0005}
         },
         "experiment": {"stop_time": 2.0, "tolerance": 1e-6}
     });
