@@ -58,8 +58,8 @@ pub struct Assembly {
     pub time: f64,
     /// Revolute joints' angles, followed through whole turns (others: 0).
     pub angles: Vec<f64>,
-    /// The start, for a reset.
-    start: (Motion, Inputs),
+    /// The start, for a reset (gravity is a parameter the host may set before initialising).
+    start: (Motion, Inputs, [f64; 3]),
     /// The accelerations and multipliers the outputs use (index 1 at the communication point),
     /// and whether they belong to the present state and inputs.
     out_acc: Vec<f64>,
@@ -107,7 +107,7 @@ impl Assembly {
             inputs: inputs.clone(),
             time: 0.0,
             angles: vec![0.0; n_joints],
-            start: (motion, inputs),
+            start: (motion, inputs, d.gravity),
             drives_now: vec![0.0; nd],
             loads_now: vec![0.0; n_loads],
             out_acc: vec![0.0; nv],
@@ -185,7 +185,7 @@ impl Assembly {
     /// Back to the start (inputs at their start values).
     pub fn reset(&mut self) {
         self.out_valid = false;
-        (self.motion, self.inputs) = self.start.clone();
+        (self.motion, self.inputs, self.system.gravity) = self.start.clone();
         self.time = 0.0;
         self.angles.fill(0.0);
         self.solver.invalidate();

@@ -244,3 +244,19 @@ fn a_driven_crank_needs_the_torque_of_its_inertia_and_weight() {
         }
     }
 }
+
+#[test]
+fn a_reset_returns_to_the_start_and_its_parameters() {
+    let mut a = Assembly::new(&double_pendulum(SolverSettings::default())).unwrap();
+    let start = a.motion.pos.clone();
+    a.system.gravity = [0.0, 0.0, -1.0];
+    a.start_run(0.0).unwrap();
+    for _ in 0..50 {
+        a.do_step(1e-3).unwrap();
+    }
+    assert_ne!(a.motion.pos, start);
+    a.reset();
+    assert_eq!(a.motion.pos, start);
+    assert_eq!(a.system.gravity, [0.0, 0.0, -G]);
+    assert_eq!(a.time, 0.0);
+}
