@@ -24,7 +24,7 @@
 //! pendulum and the welded links of examples/assemblies, per-step p50/p99/max through the C API
 //! with and without the outputs a user reads, no heap allocation per step (a target), and the
 //! double pendulum against examples/chain/chain_master.py and Exudyn when the tests' Python is
-//! found (`--python PATH` names another; the 100x over chain_master is reported, not
+//! found (`--python PATH` names another; the 100x target over chain_master is reported, not
 //! checked).
 
 mod assembly;

@@ -3,7 +3,6 @@
 //! flanges and the solver's settings, in one file of the shared container format
 //! ([`crate::format`]), each body's entries nested under `body.<i>.`.
 
-use super::error::AssemblyError;
 use super::joint::JointKind;
 use crate::format::{Container, FormatError, GUID_ENTRY};
 use crate::kinematics::{Mat3, Vec3};
@@ -378,22 +377,6 @@ impl AssemblyDescription {
     /// The assembly of an FMU's file: the stored GUID must be the content's.
     pub fn from_sealed_bytes(bytes: &[u8]) -> Result<Self, FormatError> {
         Self::from_container(&Container::from_sealed_bytes(bytes)?)
-    }
-
-    /// The body and marker of a flange reference `body.flange`.
-    pub fn find_flange(&self, body: &str, flange: &str) -> Result<Side, AssemblyError> {
-        let (i, b) = self
-            .bodies
-            .iter()
-            .enumerate()
-            .find(|(_, b)| b.name == body)
-            .ok_or_else(|| AssemblyError::Format(format!("no body '{body}'")))?;
-        let names = b.flange_names();
-        let marker = names.iter().position(|n| *n == flange).ok_or_else(|| AssemblyError::Body {
-            body: body.into(),
-            reason: format!("no flange '{flange}' (its flanges: {})", names.join(", ")),
-        })?;
-        Ok(Side::Body { body: i, marker })
     }
 }
 

@@ -2,7 +2,7 @@
 //! inputs, external loads, each with an optional rate over the step), its start, its step split
 //! into the solver's steps, and the values its outputs read.
 
-use super::description::{AssemblyDescription, DriveQuantity, FlangeRole};
+use super::description::{AssemblyDescription, FlangeRole};
 use super::error::AssemblyError;
 use super::joint::{self, JointKind, axis};
 use super::solver::{Motion, Solver};
@@ -368,11 +368,6 @@ impl Assembly {
     /// Kinetic, strain and gravity energy.
     pub fn energies(&self, cr_q: &mut [f64]) -> [f64; 3] {
         self.system.energies(&self.motion.pos, &self.motion.vel, cr_q)
-    }
-
-    /// Whether a drive input sets a motion (angle or position) rather than a load.
-    pub fn drive_input_is_motion(&self, i: usize) -> bool {
-        self.system.drive_inputs[i].1 == DriveQuantity::Motion
     }
 }
 

@@ -233,20 +233,32 @@ impl System {
         ([p[0], p[1], p[2]], std::array::from_fn(|i| p[3 + i]), &p[12..12 + b.n_modes()])
     }
 
-    fn attach_frame(&self, pos: &[f64], a: &Attach, host: &HostPose) -> (Vec3, Mat3) {
+    /// Where a joint frame is, and the flange's pose under it (None for the ground and the host).
+    fn attach_frame(&self, pos: &[f64], a: &Attach, host: &HostPose) -> (Vec3, Mat3, Option<MarkerPose>) {
         match a {
-            Attach::Ground { position, frame } => (*position, *frame),
-            Attach::Host => (host.r, host.rot),
+            Attach::Ground { position, frame } => (*position, *frame, None),
+            Attach::Host => (host.r, host.rot, None),
             Attach::Body { body, marker, frame } => {
                 let p = self.marker_pose(pos, *body, *marker);
-                (p.p, k3::mat_mul(&p.frame, frame))
+                (p.p, k3::mat_mul(&p.frame, frame), Some(p))
             }
         }
     }
 
     pub fn frames_of(&self, pos: &[f64], a: &Attach, b: &Attach, host: &HostPose) -> Frames {
-        let ((pa, fa), (pb, fb)) = (self.attach_frame(pos, a, host), self.attach_frame(pos, b, host));
-        Frames { pa, fa, pb, fb }
+        self.frames_and_poses(pos, a, b, host).0
+    }
+
+    /// The joint frames and the flange poses under them.
+    fn frames_and_poses(
+        &self,
+        pos: &[f64],
+        a: &Attach,
+        b: &Attach,
+        host: &HostPose,
+    ) -> (Frames, [Option<MarkerPose>; 2]) {
+        let ((pa, fa, pose_a), (pb, fb, pose_b)) = (self.attach_frame(pos, a, host), self.attach_frame(pos, b, host));
+        (Frames { pa, fa, pb, fb }, [pose_a, pose_b])
     }
 
     /// The driven value of a joint's drive at `now`.
@@ -256,10 +268,15 @@ impl System {
 
     /// Joint `j`'s equations at `pos`.
     pub fn joint_equations(&self, pos: &[f64], j: usize, now: &Instant) -> Equations {
+        self.equations_and_poses(pos, j, now).0
+    }
+
+    /// Joint `j`'s equations and the poses of its flanges.
+    fn equations_and_poses(&self, pos: &[f64], j: usize, now: &Instant) -> (Equations, [Option<MarkerPose>; 2]) {
         let joint = &self.joints[j];
-        let frames = self.frames_of(pos, &joint.a, &joint.b, &now.host);
+        let (frames, poses) = self.frames_and_poses(pos, &joint.a, &joint.b, &now.host);
         let drive = joint.motion_drive().map(|_| self.drive_value(joint, now));
-        joint::equations(joint.kind, &frames, joint.offset, drive)
+        (joint::equations(joint.kind, &frames, joint.offset, drive), poses)
     }
 
     /// Adds scale * (gp . dp + gt . dtheta) of a flange's motion, in its body's velocity slots,
@@ -294,10 +311,9 @@ impl System {
     pub fn constraints(&self, pos: &[f64], now: &Instant, phi: &mut [f64], jac: &mut [f64]) {
         jac.fill(0.0);
         for (j, joint) in self.joints.iter().enumerate() {
-            let e = self.joint_equations(pos, j, now);
+            let (e, poses) = self.equations_and_poses(pos, j, now);
             for (side, attach) in [(0, &joint.a), (1, &joint.b)] {
-                if let Attach::Body { body, marker, .. } = *attach {
-                    let pose = self.marker_pose(pos, body, marker);
+                if let (Attach::Body { body, marker, .. }, Some(pose)) = (*attach, poses[side]) {
                     let slot = self.bodies[body].slot;
                     let width = 6 + self.bodies[body].n_modes();
                     for k in 0..e.len {

@@ -3,7 +3,7 @@
 //! to integrate that differential-algebraic system itself, which FMI 2.0's ODE interface cannot
 //! hand over (see docs/CONNECTING.md).
 
-use super::resource::{LoadError, read_resource};
+use super::resource::load_resource;
 use crate::assembly::AssemblyError;
 use crate::assembly::description::{ASSEMBLY_FILE, AssemblyDescription};
 use crate::assembly::model::{Assembly, Checkpoint};
@@ -268,11 +268,7 @@ impl Model for AssemblyFmu {
         if interface == Interface::ModelExchange {
             return Err(ModelError::failed(AssemblyFmuError::NoModelExchange));
         }
-        let dir = resources.ok_or(ModelError::failed(LoadError::NoResourceLocation))?;
-        let path = dir.join(ASSEMBLY_FILE);
-        let bytes = read_resource(&path).map_err(ModelError::failed)?;
-        let d = AssemblyDescription::from_sealed_bytes(&bytes)
-            .map_err(|source| ModelError::failed(LoadError::Malformed { path, source }))?;
+        let d = load_resource(resources, ASSEMBLY_FILE, AssemblyDescription::from_sealed_bytes)?;
         Self::new(&d).map_err(ModelError::failed)
     }
 

@@ -5,7 +5,7 @@
 //! anything else leaves the model's state unknown (Failed).
 
 use super::error::VariableError;
-use super::resource::{LoadError, read_resource};
+use super::resource::load_resource;
 use super::values::admissible;
 use super::{
     BodyFmu, CAN_INTERPOLATE_INPUTS, FRAME_STATES, MAX_OUTPUT_DERIVATIVE_ORDER, PROVIDES_DIRECTIONAL_DERIVATIVE,
@@ -25,11 +25,7 @@ fn evaluation(e: impl Into<VariableError>) -> ModelError {
 
 impl Model for BodyFmu {
     fn instantiate(resources: Option<&std::path::Path>, interface: Interface) -> Result<Self, ModelError> {
-        let dir = resources.ok_or(ModelError::failed(LoadError::NoResourceLocation))?;
-        let path = dir.join(RESOURCE_FILE);
-        let bytes = read_resource(&path).map_err(ModelError::failed)?;
-        let reduced = ReducedBody::from_sealed_bytes(&bytes)
-            .map_err(|source| ModelError::failed(LoadError::Malformed { path, source }))?;
+        let reduced = load_resource(resources, RESOURCE_FILE, ReducedBody::from_sealed_bytes)?;
         Ok(Self::for_interface(reduced, interface))
     }
 

@@ -55,6 +55,19 @@ impl std::error::Error for LoadError {
     }
 }
 
+/// A model file in the FMU's resources folder, read and parsed by `parse` (the sealed-container
+/// reader of a body or an assembly); every failure is the instance's (fmi2Instantiate fails).
+pub(super) fn load_resource<T>(
+    resources: Option<&Path>,
+    file: &str,
+    parse: impl FnOnce(&[u8]) -> Result<T, FormatError>,
+) -> Result<T, fmi2::ModelError> {
+    let dir = resources.ok_or(fmi2::ModelError::failed(LoadError::NoResourceLocation))?;
+    let path = dir.join(file);
+    let bytes = read_resource(&path).map_err(fmi2::ModelError::failed)?;
+    parse(&bytes).map_err(|source| fmi2::ModelError::failed(LoadError::Malformed { path, source }))
+}
+
 /// The reduced-model file's bytes: a regular file (a FIFO would block fmi2Instantiate, a link
 /// to a device would read without end) of at most [`MAX_RESOURCE_BYTES`].
 pub(super) fn read_resource(path: &Path) -> Result<Vec<u8>, LoadError> {

@@ -3,7 +3,7 @@
 
 use super::*;
 use crate::assembly::description::{
-    BodyDescription, BodyModel, Drive, DriveFunction, JointDescription, Side, SolverSettings,
+    BodyDescription, BodyModel, Drive, DriveFunction, DriveQuantity, JointDescription, Side, SolverSettings,
 };
 
 const L: f64 = 1.0;
