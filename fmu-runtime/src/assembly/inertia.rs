@@ -18,7 +18,7 @@
 //! puts these against the same principle summed over a cloud of particles.
 
 use super::error::AssemblyError;
-use crate::body::dense::shape_dot;
+use crate::body::dense::dot;
 use crate::kinematics::{self as k3, Mat3, Vec3};
 use crate::reduced::ReducedBody;
 
@@ -164,33 +164,34 @@ impl Inertia {
         let nn = n * n;
         let mut s = self.first_moment;
         for a in 0..3 {
-            s[a] += shape_dot(&self.c_t[a * n..(a + 1) * n], q);
+            s[a] += dot(&self.c_t[a * n..(a + 1) * n], q);
             let g = &self.g[a * nn..(a + 1) * nn];
             for col in 0..n {
-                cr_q[a * n + col] = self.c_r[a * n + col] + shape_dot(&g[col * n..(col + 1) * n], q);
+                cr_q[a * n + col] = self.c_r[a * n + col] + dot(&g[col * n..(col + 1) * n], q);
             }
         }
+        let o_q = &mut cr_q[3 * n..12 * n];
+        for ab in 0..9 {
+            let o_mat = &self.o_mat[ab * nn..(ab + 1) * nn];
+            for k in 0..n {
+                o_q[ab * n + k] = dot(&o_mat[k * n..(k + 1) * n], q);
+            }
+        }
+        // O_rp = O_pr^T (M commutes with the axes' cross products), so q^T O_pr q is symmetric in
+        // p, r and d/dt (q^T O_pr q) = q'^T O_pr q + q'^T O_rp q: no product with q' is needed
         let mut j = self.inertia;
         let mut j_rate = [0.0; 9];
         for p in 0..3 {
             for r in 0..3 {
-                let (o_pr, o_rp) = (&self.o_vec[(3 * p + r) * n..][..n], &self.o_vec[(3 * r + p) * n..][..n]);
-                let o_mat = &self.o_mat[(3 * p + r) * nn..(3 * p + r + 1) * nn];
-                let (mut lin, mut lin_rate, mut quad, mut quad_rate) = (0.0, 0.0, 0.0, 0.0);
-                for k in 0..n {
-                    let qd_k = qd.get(k).copied().unwrap_or(0.0);
-                    lin += q[k] * (o_pr[k] + o_rp[k]);
-                    lin_rate += qd_k * (o_pr[k] + o_rp[k]);
-                    let oq = shape_dot(&o_mat[k * n..(k + 1) * n], q);
-                    cr_q[3 * n + (3 * p + r) * n + k] = oq;
-                    quad += q[k] * oq;
-                    quad_rate += qd_k * oq;
-                    if !qd.is_empty() {
-                        quad_rate += q[k] * shape_dot(&o_mat[k * n..(k + 1) * n], qd);
-                    }
-                }
-                j[3 * p + r] -= lin + quad;
-                j_rate[3 * p + r] = -(lin_rate + quad_rate);
+                let (pr, rp) = (3 * p + r, 3 * r + p);
+                let (o_pr, o_rp) = (&self.o_vec[pr * n..][..n], &self.o_vec[rp * n..][..n]);
+                let (oq_pr, oq_rp) = (&o_q[pr * n..][..n], &o_q[rp * n..][..n]);
+                let lin = dot(q, o_pr) + dot(q, o_rp);
+                let lin_rate = dot(qd, o_pr) + dot(qd, o_rp);
+                let quad = dot(q, oq_pr);
+                let quad_rate = dot(qd, oq_pr) + dot(qd, oq_rp);
+                j[pr] -= lin + quad;
+                j_rate[pr] = -(lin_rate + quad_rate);
             }
         }
         (s, j, j_rate)
@@ -217,8 +218,8 @@ impl Inertia {
         let (a, w_d, qdd) = (vel3(acc, 0), vel3(acc, 3), &acc[6..6 + nd]);
         let a_b = k3::mul_t(rot, k3::sub(a, gravity));
         let (s, j, j_rate) = self.deformed(q, qd, cr_q);
-        let ct = |x: &[f64]| -> Vec3 { std::array::from_fn(|i| shape_dot(&self.c_t[i * n..(i + 1) * n], x)) };
-        let cr = |x: &[f64]| -> Vec3 { std::array::from_fn(|i| shape_dot(&cr_q[i * n..(i + 1) * n], x)) };
+        let ct = |x: &[f64]| -> Vec3 { std::array::from_fn(|i| dot(&self.c_t[i * n..(i + 1) * n], x)) };
+        let cr = |x: &[f64]| -> Vec3 { std::array::from_fn(|i| dot(&cr_q[i * n..(i + 1) * n], x)) };
         let (ct_qd, ct_qdd, cr_qd, cr_qdd) = (ct(qd), ct(qdd), cr(qd), cr(qdd));
         // translation, world
         let body_part = k3::add(
@@ -244,7 +245,7 @@ impl Inertia {
             }
             for i in 0..3 {
                 f += self.c_t[i * n + k] * a_b[i] + cr_q[i * n + k] * w_d[i];
-                f += 2.0 * w[i] * shape_dot(&self.g[i * nn + k * n..][..n], qd);
+                f += 2.0 * w[i] * dot(&self.g[i * nn + k * n..][..n], qd);
                 for b in 0..3 {
                     let ab = 3 * i + b;
                     let ww = w[i] * w[b];
@@ -306,8 +307,8 @@ impl Inertia {
         let n = q.len();
         let (v, w, qd) = (vel3(vel, 0), vel3(vel, 3), &vel[6..6 + self.n_dynamic]);
         let (s, j, _) = self.deformed(q, qd, cr_q);
-        let ct_qd: Vec3 = std::array::from_fn(|i| shape_dot(&self.c_t[i * n..(i + 1) * n], qd));
-        let cr_qd: Vec3 = std::array::from_fn(|i| shape_dot(&cr_q[i * n..(i + 1) * n], qd));
+        let ct_qd: Vec3 = std::array::from_fn(|i| dot(&self.c_t[i * n..(i + 1) * n], qd));
+        let cr_qd: Vec3 = std::array::from_fn(|i| dot(&cr_q[i * n..(i + 1) * n], qd));
         let v_b = k3::mul_t(rot, v);
         0.5 * self.mass * k3::dot(v, v)
             + k3::dot(v_b, k3::add(k3::cross(w, s), ct_qd))
@@ -326,7 +327,7 @@ impl Inertia {
         let n = q.len();
         let mut s = self.first_moment;
         for (a, s) in s.iter_mut().enumerate() {
-            *s += shape_dot(&self.c_t[a * n..(a + 1) * n], q);
+            *s += dot(&self.c_t[a * n..(a + 1) * n], q);
         }
         -k3::dot(gravity, k3::add(k3::scale(self.mass, r), k3::mul(rot, s)))
     }

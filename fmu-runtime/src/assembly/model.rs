@@ -70,6 +70,9 @@ pub struct Assembly {
     loads_now: Vec<f64>,
 }
 
+/// Halvings of a solver step whose Newton iteration fails (see `Assembly::advance`).
+const HALVINGS: u32 = 4;
+
 impl Assembly {
     pub fn new(d: &AssemblyDescription) -> Result<Self, AssemblyError> {
         let (system, pos) = System::new(d)?;
@@ -243,22 +246,8 @@ impl Assembly {
         self.out_valid = false;
         let steps = ((h / self.solver.settings.max_step) * (1.0 - 1e-12)).ceil().max(1.0) as usize;
         let hs = h / steps as f64;
-        for k in 1..=steps {
-            let tau = hs * k as f64;
-            for i in 0..self.drives_now.len() {
-                self.drives_now[i] = self.inputs.drives[i] + tau * self.inputs.drive_rates[i];
-            }
-            for i in 0..self.loads_now.len() {
-                self.loads_now[i] = self.inputs.loads[i] + tau * self.inputs.load_rates[i];
-            }
-            let now = Instant {
-                t: self.time + tau,
-                host: self.inputs.host.at(tau),
-                drives: &self.drives_now,
-                loads: &self.loads_now,
-            };
-            self.solver.step(&self.system, &mut self.motion, hs, &now)?;
-            Self::update_angles(&self.system, &self.motion.pos, &now.host, &mut self.angles);
+        for k in 0..steps {
+            self.advance(hs * k as f64, hs, 0)?;
         }
         // the inputs' values at the new communication point, as the host would set them
         for i in 0..self.drives_now.len() {
@@ -273,6 +262,38 @@ impl Assembly {
         host.w = k3::add(host.w, k3::scale(h, host.z));
         (host.r, host.rot) = (pose.r, pose.rot);
         self.time += h;
+        Ok(())
+    }
+
+    /// One solver step of `len` from `tau` after the communication point; where Newton fails
+    /// (a whip faster than the step resolves), two steps of half the length instead, down to
+    /// 2^-HALVINGS of it.
+    fn advance(&mut self, tau: f64, len: f64, depth: u32) -> Result<(), AssemblyError> {
+        match self.solve_to(tau + len, len) {
+            Err(AssemblyError::NotConverged { .. }) if depth < HALVINGS => {
+                self.advance(tau, 0.5 * len, depth + 1)?;
+                self.advance(tau + 0.5 * len, 0.5 * len, depth + 1)
+            }
+            done => done,
+        }
+    }
+
+    /// One solver step of `len` ending `tau` after the communication point.
+    fn solve_to(&mut self, tau: f64, len: f64) -> Result<(), AssemblyError> {
+        for i in 0..self.drives_now.len() {
+            self.drives_now[i] = self.inputs.drives[i] + tau * self.inputs.drive_rates[i];
+        }
+        for i in 0..self.loads_now.len() {
+            self.loads_now[i] = self.inputs.loads[i] + tau * self.inputs.load_rates[i];
+        }
+        let now = Instant {
+            t: self.time + tau,
+            host: self.inputs.host.at(tau),
+            drives: &self.drives_now,
+            loads: &self.loads_now,
+        };
+        self.solver.step(&self.system, &mut self.motion, len, &now)?;
+        Self::update_angles(&self.system, &self.motion.pos, &now.host, &mut self.angles);
         Ok(())
     }
 

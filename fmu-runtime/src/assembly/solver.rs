@@ -76,9 +76,15 @@ struct Work {
     probe: Vec<f64>,
     matrix: Vec<f64>,
     pivots: Vec<usize>,
-    /// The index-1 system of [`Solver::consistent`], apart from the kept iteration matrix.
+    /// The index-1 system of [`Solver::consistent`], apart from the kept iteration matrix: in
+    /// all slots, then over `inertial` alone (its factors).
     consistent_matrix: Vec<f64>,
+    compact_matrix: Vec<f64>,
+    compact_rhs: Vec<f64>,
     consistent_pivots: Vec<usize>,
+    /// The slots with inertia (every body's frame and dynamic modes) and the joints' equations:
+    /// a mode without inertia has no acceleration, so its row and column drop out there.
+    inertial: Vec<usize>,
     cr_q: Vec<f64>,
 }
 
@@ -103,6 +109,8 @@ impl Solver {
     pub fn new(system: &System, settings: SolverSettings) -> Self {
         let (nv, ne, np) = (system.n_vel, system.n_eq, system.n_pos);
         let dim = nv + ne;
+        let inertial: Vec<usize> =
+            system.bodies.iter().flat_map(|b| b.slot..b.slot + 6 + b.inertia.n_dynamic).chain(nv..dim).collect();
         Self {
             settings,
             coefficients: Coefficients::of(settings.spectral_radius),
@@ -122,7 +130,10 @@ impl Solver {
                 matrix: vec![0.0; dim * dim],
                 pivots: vec![0; dim],
                 consistent_matrix: vec![0.0; dim * dim],
-                consistent_pivots: vec![0; dim],
+                compact_matrix: vec![0.0; inertial.len() * inertial.len()],
+                compact_rhs: vec![0.0; inertial.len()],
+                consistent_pivots: vec![0; inertial.len()],
+                inertial,
                 cr_q: vec![0.0; Inertia::scratch_len(system.max_modes())],
             },
             matrix_step: None,
@@ -232,17 +243,21 @@ impl Solver {
                 w.consistent_matrix[(nv + k) * dim + j] = b;
             }
         }
-        // modes without inertia have no acceleration: their rows say so
-        for b in &system.bodies {
-            for k in b.slot + 6 + b.inertia.n_dynamic..b.slot + 6 + b.n_modes() {
-                w.consistent_matrix[k * dim..(k + 1) * dim].fill(0.0);
-                w.consistent_matrix[k * dim + k] = 1.0;
-                w.residual[k] = 0.0;
+        let m = w.inertial.len();
+        for (r, &i) in w.inertial.iter().enumerate() {
+            let row = &w.consistent_matrix[i * dim..(i + 1) * dim];
+            for (c, &j) in w.inertial.iter().enumerate() {
+                w.compact_matrix[r * m + c] = row[j];
             }
+            w.compact_rhs[r] = w.residual[i];
         }
-        lu_factor(&mut w.consistent_matrix, dim, &mut w.consistent_pivots)
+        lu_factor(&mut w.compact_matrix, m, &mut w.consistent_pivots)
             .map_err(|_| AssemblyError::Singular { time: now.t })?;
-        lu_solve(&w.consistent_matrix, dim, &w.consistent_pivots, &mut w.residual);
+        lu_solve(&w.compact_matrix, m, &w.consistent_pivots, &mut w.compact_rhs);
+        w.residual.fill(0.0);
+        for (r, &i) in w.inertial.iter().enumerate() {
+            w.residual[i] = w.compact_rhs[r];
+        }
         if w.residual.iter().any(|x| !x.is_finite()) {
             return Err(AssemblyError::NotFinite { time: now.t });
         }
@@ -354,7 +369,14 @@ impl Solver {
     }
 
     /// Newton from the last step's accelerations and multipliers; Ok(true) when converged.
-    fn iterate(&mut self, system: &System, m: &Motion, h: f64, now: &Instant) -> Result<bool, AssemblyError> {
+    fn iterate(
+        &mut self,
+        system: &System,
+        m: &Motion,
+        h: f64,
+        now: &Instant,
+        fresh: bool,
+    ) -> Result<bool, AssemblyError> {
         let (nv, ne) = (system.n_vel, system.n_eq);
         let dim = nv + ne;
         let gain = h * h * self.coefficients.position_gain();
@@ -388,8 +410,10 @@ impl Solver {
                 self.trial_motion(system, m, h);
                 return Ok(true);
             }
-            // a kept matrix that no longer contracts well is formed again
-            if it >= 2 && (size > 0.5 * last || dl > 0.5 * last_dl) {
+            // a kept matrix that no longer contracts well is formed again; with a fresh one
+            // Newton goes on while it contracts at all (a fast whip's first iterations do slowly)
+            let stalled = if fresh { size >= last && dl >= last_dl } else { size > 0.5 * last || dl > 0.5 * last_dl };
+            if it >= 2 && stalled {
                 return Ok(false);
             }
             (last, last_dl) = (size, dl);
@@ -420,10 +444,11 @@ impl Solver {
             self.work.acc.copy_from_slice(&m.acc);
             self.work.lambda.copy_from_slice(&m.lambda);
             // a master's steps that differ by round-off (libcosim's nanosecond clock) keep it
-            if attempt == 1 || self.matrix_step.is_none_or(|kept| (kept - h).abs() > 1e-6 * h) {
+            let fresh = attempt == 1 || self.matrix_step.is_none_or(|kept| (kept - h).abs() > 1e-6 * h);
+            if fresh {
                 self.form_matrix(system, m, h, now)?;
             }
-            if self.iterate(system, m, h, now)? {
+            if self.iterate(system, m, h, now, fresh)? {
                 let w = &self.work;
                 if w.pos.iter().chain(&w.vel).chain(&w.acc).chain(&w.lambda).any(|x| !x.is_finite()) {
                     return Err(AssemblyError::NotFinite { time: now.t - h });
@@ -438,6 +463,9 @@ impl Solver {
                 }
                 system.zero_modes_from(&mut m.vel, |b| b.n_moving);
                 return Ok(());
+            }
+            if fresh {
+                break;
             }
         }
         let residual = self.work.residual.iter().fold(0.0f64, |a, x| a.max(x.abs()));

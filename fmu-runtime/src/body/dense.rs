@@ -17,7 +17,7 @@ pub(crate) fn shape_dot<T: Scalar>(s: &[f64], x: &[T]) -> T {
 /// processor keeps in flight (one chain waits on each add: the quasi-static right-hand sides,
 /// rows of n values for each algebraic mode, took most of a spinning Model Exchange evaluation).
 #[inline]
-pub(super) fn dot<T: Scalar>(a: &[T], b: &[T]) -> T {
+pub(crate) fn dot<T: Scalar>(a: &[T], b: &[T]) -> T {
     four_sums(a, b, |x, y| x * y)
 }
 
@@ -74,14 +74,10 @@ pub(crate) fn lu_solve<T: Scalar>(a: &[T], n: usize, pivots: &[usize], b: &mut [
     for (col, &piv) in pivots[..n].iter().enumerate() {
         b.swap(col, piv);
     }
-    for col in 0..n {
-        for i in col + 1..n {
-            let f = a[i * n + col];
-            if !f.is_zero() {
-                let v = f * b[col];
-                b[i] -= v;
-            }
-        }
+    // row by row: contiguous rows of the row-major factor (a column walk strides by n)
+    for i in 1..n {
+        let s = dot(&a[i * n..i * n + i], &b[..i]);
+        b[i] -= s;
     }
     for col in (0..n).rev() {
         let s = dot(&a[col * n + col + 1..(col + 1) * n], &b[col + 1..n]);
