@@ -265,16 +265,25 @@ def test_undamped_links_keep_their_energy_over_a_hundred_periods(built, max_step
     slowest mode (2.04 Hz). Kinetic + strain + gravity energy after the first step against its
     value there, as a fraction of the peak strain energy (Exudyn's generalised-alpha at
     spectral radius 1 holds 5e-8 on two such links). The scheme conserves a linear system's
-    energy exactly; what moves is second order in the step (the bodies' mass matrices and the
-    joints' equations depend on the pose), and bounded: measured 1.2e-6 with solver steps of
-    1 ms, 2.9e-7 with 0.5 ms (solver.max_step). Tolerances 1.2e-5 and 3e-6."""
-    fmu = undamped_weld(built[3] / f"undamped_{max_step}", max_step=max_step)
-    t, e = simulate(fmu, 50.0, ["energy.total", "energy.strain"])
+    energy exactly and the equations are a Lagrangian's (the modes without inertia included:
+    their equation is the Lagrangian's derivative in their coordinate); what moves is second
+    order in the step and bounded: measured 4.4e-8 with solver steps of 1 ms, 1.2e-8 with
+    0.5 ms (solver.max_step). With the mode-acceleration load on those modes instead it was
+    1.2e-6 and 2.9e-7. Tolerances 4e-7 and 1.2e-7. The swing's frequency (the vertical mode)
+    against CalculiX's of the one-piece mesh: measured 2.5e-5 and 6.0e-5 off; tolerance 6e-4."""
+    fmus, _, deck, d = built
+    fmu = undamped_weld(d / f"undamped_{max_step}", max_step=max_step)
+    t, e = simulate(fmu, 50.0, ["energy.total", "energy.strain", "lower.tip.r[3]"])
     drift = np.abs(e[1:, 0] - e[1, 0]).max()
     peak = e[:, 1].max()
+    analysis = (ccx.rigid_body(deck, "base") + ccx.rigid_body(deck, "joint") + ccx.rigid_body(deck, "tip")
+                + ccx.clamp(deck, "base") + ccx.frequency_step(4))
+    f_ccx = ccx.run_ccx(deck, analysis, d / f"ccx_freq_{max_step}").frequencies_hz[1]
+    f_ours = 1 / mean_period(t, e[:, 2])
     print(f"\nundamped weld, 50 s, solver steps {max_step} s: energy within {drift / peak:.2e} of the peak strain "
-          f"energy ({peak:.3e} J)")
-    assert drift <= (1.2e-5 if max_step == 1e-3 else 3e-6) * peak
+          f"energy ({peak:.3e} J); vertical swing {f_ours:.6f} Hz, CalculiX {f_ccx:.6f} Hz ({abs(f_ours / f_ccx - 1):.1e})")
+    assert drift <= (4e-7 if max_step == 1e-3 else 1.2e-7) * peak
+    assert abs(f_ours / f_ccx - 1) <= 6e-4
 
 
 def test_joints_hold_at_position_level(built):
@@ -311,16 +320,17 @@ def test_libcosim_and_ecos_give_fmpys_results(built):
     """Two assemblies in libcosim and in Ecos at h = 1 ms for 1 s, start values only, against
     FMPy's FMU2Slave with the same calls: one FMU, every master, the same numbers to round-off.
     Ecos steps exactly 1 ms and agrees bit for bit. libcosim's nanosecond clock gives steps an
-    ulp or two off 1 ms. On the driven four-bar that moves the crank torque by 3.6e-9 of its
-    swing (an index-1 solve at each point) and the positions by 3e-15: tolerance 5e-8. The
-    double pendulum is chaotic: it carries those ulps to 9.1e-9 of the swing in its positions by
-    1 s (tolerance 1e-7), and its reactions, which the stiff modes' accelerations dominate, to
-    2e-5, so only its positions are compared with libcosim."""
+    ulp or two off 1 ms (each still one solver step). On the driven four-bar that moves the
+    crank torque by 3.6e-9 of its swing (an index-1 solve at each point) and the positions by
+    3e-15: tolerance 5e-8. The chaotic double pendulum carries those ulps to 3.5e-11 of the
+    swing in its positions by 1 s and to 3.6e-8 in the elbow's reaction, which the stiff
+    modes' accelerations dominate: tolerance 4e-7."""
     from test_cosim_masters import run_ecos, run_fmpy, run_libcosim
 
+    pendulum = ["upper.tip.r[1]", "upper.tip.r[3]", "lower.tip.r[1]", "lower.tip.r[3]", "elbow.f[1]", "elbow.f[3]"]
     cases = [
         ("four_bar", ["coupler.tip.r[1]", "coupler.tip.r[3]", "drive.t[3]", "rocker_pivot.angle"], 5e-8),
-        ("double_pendulum", ["upper.tip.r[1]", "upper.tip.r[3]", "lower.tip.r[1]", "lower.tip.r[3]"], 1e-7),
+        ("double_pendulum", pendulum, 4e-7),
     ]
     for case, outputs, tolerance in cases:
         fmu = built[0][case]
@@ -330,13 +340,9 @@ def test_libcosim_and_ecos_give_fmpys_results(built):
         dev = (np.abs(got - ref).max(axis=0) / scale).max()
         print(f"\nlibcosim: {case} within {dev:.1e} of FMPy's run")
         assert dev <= tolerance
-    # Ecos: every output, reactions included, bit for bit
-    outputs = ["upper.tip.r[1]", "upper.tip.r[3]", "lower.tip.r[1]", "lower.tip.r[3]", "elbow.f[1]", "elbow.t[2]"]
-    fmu = built[0]["double_pendulum"]
-    ref = run_fmpy(fmu, {}, None, outputs, steps=1000)
-    got = run_ecos(fmu, {}, None, outputs, steps=1000)
-    print(f"\necos: double pendulum within {np.abs(got - ref).max():.1e} of FMPy's run")
-    assert np.array_equal(got, ref)
+        got = run_ecos(fmu, {}, None, outputs, steps=1000)
+        print(f"ecos: {case} within {np.abs(got - ref).max():.1e} of FMPy's run")
+        assert np.array_equal(got, ref)
 
 
 def test_fmu_state_restores_and_serializes(built):
@@ -439,7 +445,8 @@ def test_an_ssp_of_an_assembly_runs_in_fmpy(built, tmp_path):
     """examples/assemblies/make_ssp.py packages the double pendulum as an SSP; FMPy's SSP runner
     (its own fixed-step master) gives simulate_fmu's numbers (it labels each row with the step's
     start and records the outputs after the step). Its clock is a running sum of the step, so
-    its steps differ from 1 ms by an ulp: measured 7e-12 of the largest value; tolerance 1e-10."""
+    its steps differ from 1 ms by an ulp, which the chaotic pendulum carries from 1e-16 at
+    0.1 s to 1.9e-8 of the largest value by 1 s (elbow.angle); tolerance 2e-7."""
     from fmpy.ssp.simulation import simulate_ssp
     import subprocess
 
@@ -454,7 +461,7 @@ def test_an_ssp_of_an_assembly_runs_in_fmpy(built, tmp_path):
     got = np.column_stack([rows[f"assembly.{o}"] for o in outputs])
     _, ref = simulate(fmu, 1.0, outputs)
     assert got.shape == ref[1:].shape
-    assert np.abs(got - ref[1:]).max() <= 1e-10 * np.abs(ref).max()
+    assert np.abs(got - ref[1:]).max() <= 2e-7 * np.abs(ref).max()
 
 
 def test_weld_static_sag_vs_calculix(built):

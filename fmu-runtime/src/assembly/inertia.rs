@@ -235,6 +235,10 @@ impl Inertia {
         );
         out[..3].copy_from_slice(&trans);
         out[3..6].copy_from_slice(&rotation);
+        // dT/dq (T without the algebraic modes' rates) of the frame's motion and the weight:
+        // C_t^T (w x v_B - R^T g)
+        let algebraic_load =
+            k3::add(k3::cross(w, k3::mul_t(rot, vel3(vel, 0))), k3::mul_t(rot, k3::scale(-1.0, gravity)));
         for k in 0..n {
             let mut f = self.stiffness[k] * q[k];
             if k < nd {
@@ -243,9 +247,17 @@ impl Inertia {
             if k < nm {
                 f += self.damping[k] * qd[k];
             }
+            // an algebraic mode has no rate, so no momentum of its own: its equation is the
+            // Lagrangian's derivative in its coordinate alone (its momentum's rate, the inertial
+            // load C_t^T R^T a + C_r^T w' + w G q', drops out), which keeps the energy of an
+            // undamped assembly where the mode-acceleration load would feed it
+            let (load, coriolis) = if k < nm { (a_b, 2.0) } else { (algebraic_load, 1.0) };
             for i in 0..3 {
-                f += self.c_t[i * n + k] * a_b[i] + cr_q[i * n + k] * w_d[i];
-                f += 2.0 * w[i] * dot(&self.g[i * nn + k * n..][..n], qd);
+                f += self.c_t[i * n + k] * load[i];
+                if k < nm {
+                    f += cr_q[i * n + k] * w_d[i];
+                }
+                f += coriolis * w[i] * dot(&self.g[i * nn + k * n..][..n], qd);
                 for b in 0..3 {
                     let ab = 3 * i + b;
                     let ww = w[i] * w[b];
