@@ -15,7 +15,9 @@
 //! ```
 //!
 //! with a_B = R^T (a - g), each equal to the generalised external and joint forces. The unit test
-//! puts these against the same principle summed over a cloud of particles.
+//! puts these against the same principle summed over a cloud of particles. An algebraic mode
+//! (no inertia, no damping: [`Inertia::n_moving`]) has no rate; its row is
+//! Lambda q + C_t^T (w x v_B - R^T g) + sum_a w_a G_a q' + sum_ab w_a w_b (o_ab + O_ab q).
 
 use super::error::AssemblyError;
 use crate::body::dense::dot;
@@ -49,7 +51,10 @@ pub struct Inertia {
     pub n_dynamic: usize,
     /// Modes n_dynamic..n_moving relax: no inertia, their damping kept (an overdamped mode
     /// creeps toward its equilibrium at omega^2 / d; solved algebraically it would jump). The
-    /// modes above n_moving are algebraic.
+    /// modes above n_moving (undamped ones) are algebraic: without a rate they have no
+    /// momentum, and their equation is the Lagrangian's derivative in their coordinate (the
+    /// weight, the frame's w x v_B, the spin's terms), so an undamped assembly keeps its energy;
+    /// the mode-acceleration load (the momentum's rate C_t^T R^T a + C_r^T w') would feed it.
     pub n_moving: usize,
     /// d_k of q''_k + d_k q'_k + omega_k^2 q_k [1/s].
     pub damping: Vec<f64>,
