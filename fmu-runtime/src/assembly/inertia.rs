@@ -203,7 +203,8 @@ impl Inertia {
     }
 
     /// The body's inertial, elastic and damping forces minus its weight, in the velocity slots
-    /// (module docs), into `out` (6 + n). `cr_q` is scratch of 3 n.
+    /// (module docs), into `out` (6 + n). `cr_q` is scratch of 3 n; it is left holding C_r(q),
+    /// and S(q), J(q) are returned (what [`Self::mass_matrix`] takes).
     #[allow(clippy::too_many_arguments)]
     pub fn forces(
         &self,
@@ -214,7 +215,7 @@ impl Inertia {
         gravity: Vec3,
         cr_q: &mut [f64],
         out: &mut [f64],
-    ) {
+    ) -> (Vec3, Mat3) {
         let n = q.len();
         let nn = n * n;
         // the origin's velocity drops out: its terms cancel between momentum and its rate
@@ -273,6 +274,7 @@ impl Inertia {
             }
             out[6 + k] = f;
         }
+        (s, j)
     }
 
     /// The mass matrix in the velocity slots (the forces' derivative by the accelerations),

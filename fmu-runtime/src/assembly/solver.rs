@@ -219,7 +219,7 @@ impl Solver {
             }
             system.advance(&m.pos, &w.dx, &mut w.pos);
             let at = Instant { t: now.t + sign * eps, ..*now };
-            system.constraints(&w.pos, &at, &mut w.phi, &mut w.jac);
+            system.constraint_values(&w.pos, &at, &mut w.phi);
             for k in 0..ne {
                 w.probe[k] += w.phi[k];
             }
@@ -230,12 +230,11 @@ impl Solver {
         }
         // the forces at a = 0 less the applied ones
         w.acc.fill(0.0);
-        system.body_forces(&m.pos, &m.vel, &w.acc, &mut w.cr_q, &mut w.forces);
+        w.consistent_matrix.fill(0.0);
+        system.forces_and_mass(&m.pos, &m.vel, &w.acc, &mut w.cr_q, &mut w.forces, &mut w.consistent_matrix, dim);
         w.forces.iter_mut().for_each(|x| *x = -*x);
         system.add_applied(&m.pos, now, &mut w.forces);
         w.residual[..nv].copy_from_slice(&w.forces);
-        w.consistent_matrix.fill(0.0);
-        system.mass_matrix(&m.pos, &m.vel, &mut w.cr_q, &mut w.consistent_matrix, dim);
         for k in 0..ne {
             for j in 0..nv {
                 let b = w.jac[k * nv + j];

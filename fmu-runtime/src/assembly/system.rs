@@ -329,6 +329,14 @@ impl System {
         }
     }
 
+    /// The joints' equations alone, without their Jacobian.
+    pub fn constraint_values(&self, pos: &[f64], now: &Instant, phi: &mut [f64]) {
+        for (j, joint) in self.joints.iter().enumerate() {
+            let (e, _) = self.equations_and_poses(pos, j, now);
+            phi[joint.row..joint.row + e.len].copy_from_slice(&e.value[..e.len]);
+        }
+    }
+
     /// The forces the inputs apply (external force flanges, load drives) in the velocity slots,
     /// added to `out`.
     pub fn add_applied(&self, pos: &[f64], now: &Instant, out: &mut [f64]) {
@@ -379,13 +387,32 @@ impl System {
         b.inertia.forces(&rot, q, &vel[s..s + w], &acc[s..s + w], self.gravity, cr_q, &mut out[s..s + w]);
     }
 
-    /// Every body's mass matrix into its diagonal block of `out` (row stride `stride`).
-    pub fn mass_matrix(&self, pos: &[f64], vel: &[f64], cr_q: &mut [f64], out: &mut [f64], stride: usize) {
+    /// [`Self::body_forces`], and every body's mass matrix into its diagonal block of `matrix`
+    /// (row stride `stride`) from the same deformed inertia.
+    #[allow(clippy::too_many_arguments)]
+    pub fn forces_and_mass(
+        &self,
+        pos: &[f64],
+        vel: &[f64],
+        acc: &[f64],
+        cr_q: &mut [f64],
+        forces: &mut [f64],
+        matrix: &mut [f64],
+        stride: usize,
+    ) {
         for (i, b) in self.bodies.iter().enumerate() {
             let (_, rot, q) = self.body_pose(pos, i);
-            let v = &vel[b.slot + 6..b.slot + 6 + b.inertia.n_moving];
-            let (s, j, _) = b.inertia.deformed(q, v, cr_q);
-            b.inertia.mass_matrix(&rot, s, &j, cr_q, &mut out[b.slot * stride + b.slot..], stride);
+            let (w, at) = (6 + b.n_modes(), b.slot);
+            let (s, j) = b.inertia.forces(
+                &rot,
+                q,
+                &vel[at..at + w],
+                &acc[at..at + w],
+                self.gravity,
+                cr_q,
+                &mut forces[at..at + w],
+            );
+            b.inertia.mass_matrix(&rot, s, &j, cr_q, &mut matrix[at * stride + at..], stride);
         }
     }
 
