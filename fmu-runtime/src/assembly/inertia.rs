@@ -321,6 +321,39 @@ impl Inertia {
         }
     }
 
+    /// The forces' derivative by the accelerations in a step that moves the positions by
+    /// `pos_gain` and the rates by `vel_gain` per unit acceleration: the mass matrix, the
+    /// relaxing modes' inertial load (their rows' C_t^T R^T a + C_r^T w'), and the modes'
+    /// stiffness and damping. The rotation's and the spin's terms are left out (of order |w| h and
+    /// (|a - g| / l) h^2 against the inertia): an iteration matrix, not the Jacobian. Into the
+    /// (6 + n) block at `out[0]`, row stride `stride`; `cr_q` must hold C_r(q).
+    #[allow(clippy::too_many_arguments)]
+    pub fn iteration_block(
+        &self,
+        rot: &Mat3,
+        s: Vec3,
+        j: &Mat3,
+        cr_q: &[f64],
+        pos_gain: f64,
+        vel_gain: f64,
+        out: &mut [f64],
+        stride: usize,
+    ) {
+        let n = self.n_modes();
+        self.mass_matrix(rot, s, j, cr_q, out, stride);
+        for k in self.n_dynamic..self.n_moving {
+            let row = &mut out[(6 + k) * stride..];
+            for c in 0..3 {
+                row[c] = (0..3).map(|l| rot[3 * c + l] * self.c_t[l * n + k]).sum();
+                row[3 + c] = cr_q[c * n + k];
+            }
+        }
+        for k in 0..n {
+            let damping = if k < self.n_moving { self.damping[k] } else { 0.0 };
+            out[(6 + k) * stride + 6 + k] += pos_gain * self.stiffness[k] + vel_gain * damping;
+        }
+    }
+
     /// Kinetic energy of the body at velocities `vel` (module docs' slots).
     pub fn kinetic_energy(&self, rot: &Mat3, q: &[f64], vel: &[f64], cr_q: &mut [f64]) -> f64 {
         let n = q.len();

@@ -13,10 +13,13 @@
 //!
 //! Second order; with spectral radius 1 (trapezoidal) a linear undamped system keeps its energy
 //! exactly, lower radii damp what the step does not resolve. The joints hold at position level
-//! at every step (to Newton's tolerance): no drift. The iteration matrix comes from finite
-//! differences of the residual in the accelerations (the multipliers' columns exactly) and is
-//! kept over steps while Newton converges fast with it (modified Newton); it is formed again when
-//! an iteration stalls. Every buffer is allocated when the solver is made.
+//! at every step (to Newton's tolerance): no drift. The iteration matrix is the bodies' mass
+//! matrices with their modes' stiffness and damping scaled by the step, and the joints'
+//! Jacobian (the rotation's and the spin's terms, of order |w| h against the inertia, left
+//! out); it is kept over steps while Newton converges fast with it (modified Newton) and formed
+//! again when an iteration stalls. Where Newton stalls with a fresh one too, the matrix comes
+//! from finite differences of the whole residual (ten times the work). Every buffer is allocated
+//! when the solver is made.
 
 use super::description::SolverSettings;
 use super::error::AssemblyError;
@@ -367,6 +370,32 @@ impl Solver {
         Ok(())
     }
 
+    /// The iteration matrix from the bodies' equations at the present trial (work.acc,
+    /// work.lambda), factored: [`System::iteration_blocks`] and the joints' Jacobian, about a
+    /// tenth of [`Self::form_matrix`]'s work, which it stands in for until Newton stalls with it.
+    fn form_model_matrix(&mut self, system: &System, m: &Motion, h: f64, now: &Instant) -> Result<(), AssemblyError> {
+        let (nv, ne) = (system.n_vel, system.n_eq);
+        let dim = nv + ne;
+        self.residual(system, m, h, now, false);
+        let c = self.coefficients;
+        let pos_gain = h * h * c.position_gain();
+        let vel_gain = h * c.gamma * (1.0 - c.alpha_f) / (1.0 - c.alpha_m);
+        let w = &mut self.work;
+        w.matrix.fill(0.0);
+        system.iteration_blocks(&w.pos, &w.vel, &mut w.cr_q, pos_gain, vel_gain, &mut w.matrix, dim);
+        for k in 0..ne {
+            for j in 0..nv {
+                let b = w.jac[k * nv + j];
+                w.matrix[j * dim + nv + k] = -b;
+                w.matrix[(nv + k) * dim + j] = b;
+            }
+        }
+        lu_factor(&mut w.matrix, dim, &mut w.pivots).map_err(|_| AssemblyError::Singular { time: now.t })?;
+        self.matrix_step = Some(h);
+        self.matrices_formed += 1;
+        Ok(())
+    }
+
     /// Newton from the last step's accelerations and multipliers; Ok(true) when converged.
     fn iterate(
         &mut self,
@@ -439,13 +468,17 @@ impl Solver {
     }
 
     fn step_with_kept(&mut self, system: &System, m: &mut Motion, h: f64, now: &Instant) -> Result<(), AssemblyError> {
-        for attempt in 0..2 {
+        // the kept matrix, then one from the bodies' equations, then one by differences
+        for attempt in 0..3 {
             self.work.acc.copy_from_slice(&m.acc);
             self.work.lambda.copy_from_slice(&m.lambda);
             // a master's steps that differ by round-off (libcosim's nanosecond clock) keep it
-            let fresh = attempt == 1 || self.matrix_step.is_none_or(|kept| (kept - h).abs() > 1e-6 * h);
-            if fresh {
+            let stale = self.matrix_step.is_none_or(|kept| (kept - h).abs() > 1e-6 * h);
+            let fresh = attempt > 0 || stale;
+            if attempt == 2 {
                 self.form_matrix(system, m, h, now)?;
+            } else if fresh {
+                self.form_model_matrix(system, m, h, now)?;
             }
             if self.iterate(system, m, h, now, fresh)? {
                 let w = &self.work;
@@ -463,7 +496,7 @@ impl Solver {
                 system.zero_modes_from(&mut m.vel, |b| b.n_moving);
                 return Ok(());
             }
-            if fresh {
+            if attempt == 2 {
                 break;
             }
         }

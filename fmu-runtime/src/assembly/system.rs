@@ -416,6 +416,26 @@ impl System {
         }
     }
 
+    /// Every body's [`Inertia::iteration_block`] into its diagonal block of `matrix`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn iteration_blocks(
+        &self,
+        pos: &[f64],
+        vel: &[f64],
+        cr_q: &mut [f64],
+        pos_gain: f64,
+        vel_gain: f64,
+        matrix: &mut [f64],
+        stride: usize,
+    ) {
+        for (i, b) in self.bodies.iter().enumerate() {
+            let (_, rot, q) = self.body_pose(pos, i);
+            let (s, j, _) = b.inertia.deformed(q, &vel[b.slot + 6..b.slot + 6 + b.inertia.n_moving], cr_q);
+            let block = &mut matrix[b.slot * stride + b.slot..];
+            b.inertia.iteration_block(&rot, s, &j, cr_q, pos_gain, vel_gain, block, stride);
+        }
+    }
+
     /// `pos` moved by the increment `dx` in the velocity slots: r + dr, R exp(dtheta~), q + dq.
     pub fn advance(&self, pos: &[f64], dx: &[f64], out: &mut [f64]) {
         for b in &self.bodies {
