@@ -22,9 +22,11 @@ pub(super) enum Change {
 
 /// Everything a [`FlexibleBody`](super::FlexibleBody) computes from its coordinates and inputs,
 /// and the scratch it computes it in. None of it is state: a body rebuilt from its saved state
-/// recomputes it on demand, bit-identically. Every setter of coordinates or inputs calls
-/// [`invalidate`](Self::invalidate) (through the body's `coordinates_mut` and `inputs_mut`), the
-/// only place the cache's flags are cleared; the evaluation sets them.
+/// recomputes it on demand, bit-identically. [`invalidate`](Self::invalidate) is the only place
+/// the cache's flags are cleared: the body's setters of coordinates and inputs (`coords_mut`,
+/// `inputs_mut`, `set_quasi_static`) call it, and so do the few solves that write the
+/// coordinates in place (a step, once at its end, and each of a free body's substeps; the static
+/// start; the quasi-static shift). The evaluation sets the flags again (`evaluated`).
 #[derive(Debug, Clone)]
 pub(super) struct Derived<T> {
     pub(super) eval: Evaluation<T>,

@@ -8,15 +8,26 @@
 //! loads (linear in them). The coupling terms (everything off the modal diagonal) are gathered in
 //! two r x r matrices whenever the inputs change.
 //!
-//! Files, one job each: this one holds the types, construction, saved state, accessors and the
-//! evaluation shared by every body (dispatch and flange kinematics); `mounted` the equations of
-//! a body on a prescribed mount (input check, modal load, coupling terms); `reaction` the mount
-//! reaction; `free_floating` the free body's accelerations and invariants; `cosim_step`
-//! Co-Simulation stepping (input rates, exact and predictor-corrector steps, the free body's
-//! substeps); `step_workspace` the step's scratch, lent down its functions; `input_jump`
-//! Co-Simulation's quasi-static modes across load changes; `quasi_static` Model Exchange's solve
-//! of the modes above the cutoff; `statics` the static start; `dense` the dense kernels (dot
-//! products and the small in-place solver); `error` why the equations fail, by failure class.
+//! `FlexibleBody` is a façade over four parts, each in a file of its own: `coordinates` (q, q'
+//! and a free body's frame: what the equations integrate), `inputs` (what the host sets: mount
+//! motion, flange loads, parameters, input rates, its view of a mount a step moved),
+//! `derived` (everything computed from those two, behind one cache that only the body's
+//! `coords_mut` and `inputs_mut` make stale, through `Derived::invalidate`) and `stepper`
+//! (Co-Simulation's machinery: the exact transitions, their reference, the stepped inputs, the
+//! step's scratch). A saved state (`BodyState`) holds the coordinates and inputs as they are.
+//!
+//! The equations, one job per file: this one holds the types, construction, saved state,
+//! accessors and the evaluation shared by every body (dispatch and flange kinematics);
+//! `mounted` the equations of a body on a prescribed mount (input check, modal load, coupling
+//! terms); `reaction` the mount reaction; `stress` the stresses at the recovery points;
+//! `free_floating` the free body's accelerations and invariants; `cosim_step` Co-Simulation
+//! stepping (input rates, exact and predictor-corrector steps, the free body's substeps);
+//! `step_workspace` the step's scratch, lent down its functions; `input_jump` Co-Simulation's
+//! quasi-static modes across load changes; `quasi_static` Model Exchange's solve of the modes
+//! above the cutoff (and `ModeSplit`, which modes are dynamic); `statics` the static start;
+//! `coupling_terms` the coupling as coefficients times matrices, and `coupling_bound` their
+//! norms; `dense` the dense kernels (dot products and the small in-place solver); `error` why
+//! the equations fail, by failure class.
 
 mod coordinates;
 mod cosim_step;
@@ -196,11 +207,11 @@ pub struct CouplingReference {
 /// is `f64` only.
 ///
 /// A façade over four parts, each with one job: the [`Coordinates`] it integrates, the
-/// [`BodyInputs`] the host sets, the [`Derived`] values computed from those two (behind one
-/// cache, made stale only through [`coords_mut`](Self::coords_mut) and
-/// [`inputs_mut`](Self::inputs_mut)), and the [`Stepper`] that advances it in Co-Simulation;
-/// beside them the immutable model (the reduced body and its coupling terms) and how its modes
-/// are split ([`ModeSplit`]).
+/// [`BodyInputs`] the host sets, the `Derived` values computed from those two (behind one
+/// cache, made stale through `Derived::invalidate` by the setters `coords_mut` and
+/// `inputs_mut`), and the `Stepper` that advances it in Co-Simulation; beside them the
+/// immutable model (the reduced body and its coupling terms) and how its modes are split
+/// (`ModeSplit`).
 #[derive(Debug, Clone)]
 pub struct FlexibleBody<T = f64> {
     body: Arc<ReducedBody>,
