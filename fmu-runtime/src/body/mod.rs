@@ -218,10 +218,17 @@ pub struct FlexibleBody<T = f64> {
     /// The matrices the coupling's coefficients multiply, with their norms (`coupling_terms`):
     /// made once per reduced body and shared by its copies; used by evaluation and step alike.
     coupling_terms: Arc<CouplingTerms>,
+    /// Which modes are dynamic, and whether the others are solved (Model Exchange).
     split: ModeSplit,
+    /// What the equations integrate; written through `coords_mut` (or by an evaluation's own
+    /// solve of the quasi-static modes).
     coords: Coordinates<T>,
+    /// What the host sets; written through `inputs_mut` (or, for a free body's mount, by the
+    /// evaluation).
     inputs: BodyInputs<T>,
+    /// Computed from `coords` and `inputs` on demand, never saved.
     derived: Derived<T>,
+    /// Co-Simulation's machinery (empty in the dual copy).
     stepper: Stepper,
 }
 
