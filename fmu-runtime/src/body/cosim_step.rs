@@ -5,7 +5,7 @@
 use super::mounted::coupling_coefficients;
 use super::step_workspace::{CoupledWork, FreeWork, StepStart, StepWorkspace};
 use super::{
-    BodyError, Coupling, FlangeLoad, FlexibleBody, FrameState, InputRates, MountMotion, REAL_LIMIT, StepError,
+    BodyError, Change, Coupling, FlangeLoad, FlexibleBody, FrameState, InputRates, MountMotion, REAL_LIMIT, StepError,
     UNSTABLE_STIFFNESS,
 };
 use crate::coupled_propagator::Prepared;
@@ -53,16 +53,16 @@ struct HeldMount {
 impl FlexibleBody {
     /// Rates of the mount inputs over the next step (its rotation matrix's rate entry by entry).
     pub fn mount_rate_mut(&mut self) -> &mut MountMotion {
-        self.rates.any = true;
-        &mut self.rates.mount
+        self.inputs.rates.any = true;
+        &mut self.inputs.rates.mount
     }
     /// Rates of a flange's force and torque over the next step.
     pub fn load_rate_mut(&mut self, flange: usize) -> &mut FlangeLoad {
-        self.rates.any = true;
-        &mut self.rates.loads[flange]
+        self.inputs.rates.any = true;
+        &mut self.inputs.rates.loads[flange]
     }
     pub fn input_rates(&self) -> &InputRates {
-        &self.rates
+        &self.inputs.rates
     }
 
     /// Advance by h with the inputs held (or ramped at their rates) over the step: exact
@@ -80,23 +80,26 @@ impl FlexibleBody {
         if !(h > 0.0 && h.is_finite()) {
             return Err(StepError::Inputs(BodyError::StepSize(h)));
         }
-        if self.frame.is_some() {
+        if self.coords.frame.is_some() {
             self.free_substeps_within_budget(h)?;
         }
         // the step's scratch, lent down its functions (taking it out leaves an empty one behind:
         // no allocation)
-        let mut ws = std::mem::take(&mut self.step_work);
+        let mut ws = std::mem::take(&mut self.stepper.work);
         let result = self.step_in(&mut ws, h);
-        self.step_work = ws;
+        self.stepper.work = ws;
+        // taken, refused or undone, the step wrote coordinates and inputs in place: whatever was
+        // derived before it is stale
+        self.derived.invalidate(Change::Inputs);
         result
     }
 
     /// The step in the scratch `ws` lends: kept at its start, undone if it fails.
     fn step_in(&mut self, ws: &mut StepWorkspace, h: f64) -> Result<(), StepError> {
-        if !ws.fits(self.q.len(), self.loads.len()) {
+        if !ws.fits(self.coords.q.len(), self.inputs.loads.len()) {
             return Err(StepError::NotTaken(BodyError::WorkspaceMismatch {
-                modes: self.q.len(),
-                flanges: self.loads.len(),
+                modes: self.coords.q.len(),
+                flanges: self.inputs.loads.len(),
             }));
         }
         self.keep_step_start(&mut ws.start);
@@ -109,27 +112,23 @@ impl FlexibleBody {
 
     fn step_from_start(&mut self, ws: &mut StepWorkspace, h: f64) -> Result<(), StepError> {
         let not_taken = StepError::NotTaken;
-        if self.frame.is_some() {
+        if self.coords.frame.is_some() {
             self.follow_input_change(&mut ws.jump).map_err(not_taken)?;
             // free bodies hold their flange loads over the step; the inputs still end the step
             // at their interpolated values
             self.step_free(&mut ws.free, h).map_err(not_taken)?;
-            if self.rates.any {
+            if self.inputs.rates.any {
                 self.extrapolate_inputs(h);
             }
             self.record_stepped_inputs();
             return Ok(());
         }
         // what the last step moved and the host did not set since: the host's values
-        if let Some(rot) = self.host_mount.rot.take() {
-            self.mount.rot = rot;
-            self.coupling.valid = false;
-            self.eval.valid = false;
+        if let Some(rot) = self.inputs.host.rot.take() {
+            self.inputs_mut().mount.rot = rot;
         }
-        if let Some(w) = self.host_mount.w.take() {
-            self.mount.w = w;
-            self.coupling.valid = false;
-            self.eval.valid = false;
+        if let Some(w) = self.inputs.host.w.take() {
+            self.inputs_mut().mount.w = w;
         }
         self.check_inputs().map_err(StepError::Inputs)?;
         self.follow_input_change(&mut ws.jump).map_err(not_taken)?;
@@ -139,7 +138,7 @@ impl FlexibleBody {
     /// Substeps of a free body's step of h at its present spin, and Err if more than one call
     /// may take (before anything is done).
     fn free_substeps_within_budget(&self, h: f64) -> Result<usize, StepError> {
-        let spin = self.frame.map_or(0.0, |f| k3::dot(f.w_body, f.w_body).sqrt());
+        let spin = self.coords.frame.map_or(0.0, |f| k3::dot(f.w_body, f.w_body).sqrt());
         let needed = (h * spin / SUBSTEP_ANGLE).ceil();
         let most = self.max_free_substeps();
         if needed.is_nan() || needed > most as f64 {
@@ -155,46 +154,23 @@ impl FlexibleBody {
 
     /// The substep budget of one call for this body's size (see [`SUBSTEP_WORK`]).
     pub fn max_free_substeps(&self) -> usize {
-        (SUBSTEP_WORK / substep_work(self.q.len())) as usize
+        (SUBSTEP_WORK / substep_work(self.coords.q.len())) as usize
     }
 
     /// Everything the step changes, copied into the step's preallocated [`StepStart`].
     fn keep_step_start(&self, s: &mut StepStart) {
-        s.q.copy_from_slice(&self.q);
-        s.qd.copy_from_slice(&self.qd);
-        s.mount = self.mount;
-        s.loads.copy_from_slice(&self.loads);
-        s.frame = self.frame;
-        s.rate_mount = self.rates.mount;
-        s.rate_loads.copy_from_slice(&self.rates.loads);
-        s.rates_any = self.rates.any;
-        s.host_mount = self.host_mount;
-        s.stepped_valid = self.stepped.valid;
-        s.stepped_a = self.stepped.a;
-        s.stepped_z = self.stepped.z;
-        s.stepped_loads.copy_from_slice(&self.stepped.loads);
-        s.stepped_params = self.stepped.params;
+        s.coords.copy_from(&self.coords);
+        s.inputs.copy_from(&self.inputs);
+        s.stepped.copy_from(&self.stepper.stepped);
     }
 
-    /// The body as [`keep_step_start`](Self::keep_step_start) found it; caches are recomputed.
+    /// The body as [`keep_step_start`](Self::keep_step_start) found it; the caches are made
+    /// stale by `step` when it returns.
     fn restore_step_start(&mut self, s: &StepStart) {
-        self.q.copy_from_slice(&s.q);
-        self.qd.copy_from_slice(&s.qd);
-        self.mount = s.mount;
-        self.loads.copy_from_slice(&s.loads);
-        self.frame = s.frame;
-        self.rates.mount = s.rate_mount;
-        self.rates.loads.copy_from_slice(&s.rate_loads);
-        self.rates.any = s.rates_any;
-        self.host_mount = s.host_mount;
-        self.stepped.valid = s.stepped_valid;
-        self.stepped.a = s.stepped_a;
-        self.stepped.z = s.stepped_z;
-        self.stepped.loads.copy_from_slice(&s.stepped_loads);
-        self.stepped.params = s.stepped_params;
-        self.warning = None;
-        self.coupling.valid = false;
-        self.eval.valid = false;
+        self.coords.copy_from(&s.coords);
+        self.inputs.copy_from(&s.inputs);
+        self.stepper.stepped.copy_from(&s.stepped);
+        self.stepper.warning = None;
     }
 
     /// Err naming the first input or state the step left non-finite or beyond [`REAL_LIMIT`]
@@ -203,21 +179,22 @@ impl FlexibleBody {
     fn check_step_end(&self, h: f64) -> Result<(), StepError> {
         let out_of_range = |v: f64| !(v.abs() <= REAL_LIMIT);
         // a spin above a critical speed makes the deformation grow without bound: say so
-        let unstable = self.frame.is_none() && self.coupled.has_storage() && !self.coupled.definite();
+        let unstable =
+            self.coords.frame.is_none() && self.stepper.coupled.has_storage() && !self.stepper.coupled.definite();
         let fail = |what: String, value: f64| {
             Err(StepError::NotTaken(BodyError::StepEndOutOfRange { what, value, h, unstable }))
         };
         // a free body's mount is its frame's motion, no input
-        let m = &self.mount;
+        let m = &self.inputs.mount;
         let mount = &self.body.mount;
         let inputs = [("r", &m.r[..]), ("R", &m.rot), ("v", &m.v), ("w", &m.w), ("a", &m.a), ("z", &m.z)];
-        for (name, x) in inputs.into_iter().filter(|_| self.frame.is_none()) {
+        for (name, x) in inputs.into_iter().filter(|_| self.coords.frame.is_none()) {
             if let Some(i) = x.iter().position(|v| out_of_range(*v)) {
                 let entry = if name == "R" { format!("{},{}", i / 3 + 1, i % 3 + 1) } else { format!("{}", i + 1) };
                 return fail(format!("the input {mount}.{name}[{entry}]"), x[i]);
             }
         }
-        for (flange, load) in self.body.flanges.iter().zip(&self.loads) {
+        for (flange, load) in self.body.flanges.iter().zip(&self.inputs.loads) {
             for (name, x) in [("f", &load.f), ("t", &load.t)] {
                 if let Some(i) = x.iter().position(|v| out_of_range(*v)) {
                     return fail(format!("the input {}.{name}[{}]", flange.name, i + 1), x[i]);
@@ -225,12 +202,12 @@ impl FlexibleBody {
             }
         }
         // the state after the inputs: an input carried out of range by its rate is the cause
-        for (name, x) in [("q", &self.q), ("qd", &self.qd)] {
+        for (name, x) in [("q", &self.coords.q), ("qd", &self.coords.qd)] {
             if let Some(j) = x.iter().position(|v| out_of_range(*v)) {
                 return fail(format!("the modal state {name}[{}]", j + 1), x[j]);
             }
         }
-        if let Some(f) = &self.frame {
+        if let Some(f) = &self.coords.frame {
             for (name, x) in [("r", &f.r[..]), ("Q", &f.quat), ("v", &f.v), ("W", &f.w_body)] {
                 if let Some(i) = x.iter().position(|v| out_of_range(*v)) {
                     return fail(format!("the frame state frame.{name}[{}]", i + 1), x[i]);
@@ -246,7 +223,7 @@ impl FlexibleBody {
         // w' = z) wherever the host gave no rate; the host's next inputs replace that motion
         let held = self.kinematic_mount_rates();
         self.modal_load();
-        let ramp = self.rates.any;
+        let ramp = self.inputs.rates.any;
         if ramp {
             self.modal_load_rate();
         }
@@ -260,15 +237,32 @@ impl FlexibleBody {
             self.coupling_at_step_end(work, h);
         }
         // a coupling that starts at zero (spin-up from rest) still couples within the step
-        let coupled = self.coupling.active || (moving && work.coupling_end.active);
+        let coupled = self.derived.coupling.active || (moving && work.coupling_end.active);
         if coupled {
             self.advance_coupled(work, ramp, moving, h)?;
         } else {
-            self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, h);
+            self.stepper.propagator.prepare(
+                &self.body.omega,
+                self.inputs.params.alpha,
+                self.inputs.params.beta,
+                &self.body.modal_damping,
+                h,
+            );
             if ramp {
-                self.propagator.advance_ramp(&self.body.omega, &self.load, &self.load_rate, &mut self.q, &mut self.qd);
+                self.stepper.propagator.advance_ramp(
+                    &self.body.omega,
+                    &self.derived.load,
+                    &self.derived.load_rate,
+                    &mut self.coords.q,
+                    &mut self.coords.qd,
+                );
             } else {
-                self.propagator.advance(&self.body.omega, &self.load, &mut self.q, &mut self.qd);
+                self.stepper.propagator.advance(
+                    &self.body.omega,
+                    &self.derived.load,
+                    &mut self.coords.q,
+                    &mut self.coords.qd,
+                );
             }
         }
         if ramp {
@@ -278,9 +272,12 @@ impl FlexibleBody {
         } else {
             self.record_stepped_inputs();
         }
-        self.eval.valid = false;
-        if coupled && !(self.q.iter().chain(&self.qd).all(|v| v.is_finite())) {
-            return Err(if self.coupled.definite() { BodyError::StepNotFinite { h } } else { BodyError::Unstable });
+        if coupled && !(self.coords.q.iter().chain(&self.coords.qd).all(|v| v.is_finite())) {
+            return Err(if self.stepper.coupled.definite() {
+                BodyError::StepNotFinite { h }
+            } else {
+                BodyError::Unstable
+            });
         }
         Ok(())
     }
@@ -288,8 +285,8 @@ impl FlexibleBody {
     /// The coupling's coefficients at the step's end, where the inputs' rates carry the mount
     /// and the loads.
     fn coupling_at_step_end(&self, work: &mut CoupledWork, h: f64) {
-        let mut end = self.mount;
-        let r = &self.rates.mount;
+        let mut end = self.inputs.mount;
+        let r = &self.inputs.rates.mount;
         for i in 0..3 {
             end.w[i] += h * r.w[i];
             end.z[i] += h * r.z[i];
@@ -298,7 +295,7 @@ impl FlexibleBody {
         for i in 0..9 {
             end.rot[i] += h * r.rot[i];
         }
-        for ((e, l), rate) in work.loads_end.iter_mut().zip(&self.loads).zip(&self.rates.loads) {
+        for ((e, l), rate) in work.loads_end.iter_mut().zip(&self.inputs.loads).zip(&self.inputs.rates.loads) {
             *e = FlangeLoad { f: k3::add(l.f, k3::scale(h, rate.f)), t: k3::add(l.t, k3::scale(h, rate.t)) };
         }
         let end_rot = k3::nearest_rotation(&end.rot);
@@ -307,7 +304,7 @@ impl FlexibleBody {
             &end_rot,
             &end,
             &work.loads_end,
-            self.params.g,
+            self.inputs.params.g,
             &mut work.coupling_end,
         );
     }
@@ -327,43 +324,59 @@ impl FlexibleBody {
         moving: bool,
         h: f64,
     ) -> Result<(), WorkspaceTooSmall> {
-        let prepared = self.coupled.is_prepared(h, self.params.alpha, self.params.beta);
+        let prepared = self.stepper.coupled.is_prepared(h, self.inputs.params.alpha, self.inputs.params.beta);
         // a steady spin meets its own transition again (the same coefficients make the same
         // matrices)
         let held_exactly = !moving
             && prepared
-            && self.reference_coef_known
-            && self.coupling_terms.same_coupling(&self.coupling.coef, &self.reference_coef);
+            && self.stepper.reference_coef_known
+            && self.coupling_terms.same_coupling(&self.derived.coupling.coef, &self.stepper.reference_coef);
         let drift_ok = |c: &Coupling<f64>| {
-            self.reference_coef_known
-                && h * self.coupling_terms.drift_bound(&c.coef, &self.reference_coef) <= REFERENCE_DRIFT
+            self.stepper.reference_coef_known
+                && h * self.coupling_terms.drift_bound(&c.coef, &self.stepper.reference_coef) <= REFERENCE_DRIFT
         };
-        let current = held_exactly || prepared && drift_ok(&self.coupling) && (!moving || drift_ok(&work.coupling_end));
+        let current =
+            held_exactly || prepared && drift_ok(&self.derived.coupling) && (!moving || drift_ok(&work.coupling_end));
         let renewed_for_this_step = !current && self.renew_reference(work, moving, prepared, h)?;
-        let rate: &[f64] = if ramp { &self.load_rate } else { &work.zeros };
+        let rate: &[f64] = if ramp { &self.derived.load_rate } else { &work.zeros };
         let ws = &mut work.propagator;
         // a transition made for this step (held or midpoint coupling) needs no correction
         if held_exactly || renewed_for_this_step {
-            return self.coupled.advance(&self.body.omega, &self.load, rate, &mut self.q, &mut self.qd, ws);
+            return self.stepper.coupled.advance(
+                &self.body.omega,
+                &self.derived.load,
+                rate,
+                &mut self.coords.q,
+                &mut self.coords.qd,
+                ws,
+            );
         }
         // Heun: the residual coupling force held at its start value, then ramped to its value at
         // the predicted end. The step is linear in the load, so the corrector adds only the
         // ramp's difference to the predictor's end (G2 (f1 - rate), a 2n x n product) instead of
         // taking the step again (2n x 4n)
-        let end = if moving { &work.coupling_end } else { &self.coupling };
+        let end = if moving { &work.coupling_end } else { &self.derived.coupling };
         let terms = &self.coupling_terms;
-        let reference = &self.reference_coef;
-        terms.drift_force(&self.body, &self.coupling.coef, reference, h, &self.q, &self.qd, &mut work.f0);
-        for (f0, load) in work.f0.iter_mut().zip(&self.load) {
+        let reference = &self.stepper.reference_coef;
+        terms.drift_force(
+            &self.body,
+            &self.derived.coupling.coef,
+            reference,
+            h,
+            &self.coords.q,
+            &self.coords.qd,
+            &mut work.f0,
+        );
+        for (f0, load) in work.f0.iter_mut().zip(&self.derived.load) {
             *f0 = load - *f0;
         }
-        self.coupled.advance(&self.body.omega, &work.f0, rate, &mut self.q, &mut self.qd, ws)?;
-        terms.drift_force(&self.body, &end.coef, reference, h, &self.q, &self.qd, &mut work.f1);
-        for (((f1, rate), load), f0) in work.f1.iter_mut().zip(rate).zip(&self.load).zip(&work.f0) {
+        self.stepper.coupled.advance(&self.body.omega, &work.f0, rate, &mut self.coords.q, &mut self.coords.qd, ws)?;
+        terms.drift_force(&self.body, &end.coef, reference, h, &self.coords.q, &self.coords.qd, &mut work.f1);
+        for (((f1, rate), load), f0) in work.f1.iter_mut().zip(rate).zip(&self.derived.load).zip(&work.f0) {
             let f_end = load + h * rate - *f1;
             *f1 = (f_end - f0) / h - rate;
         }
-        self.coupled.add_ramp(&self.body.omega, &work.f1, &mut self.q, &mut self.qd, ws)
+        self.stepper.coupled.add_ramp(&self.body.omega, &work.f1, &mut self.coords.q, &mut self.coords.qd, ws)
     }
 
     /// A new reference transition, in the propagator's scratch `work.propagator`: at the step's
@@ -381,17 +394,20 @@ impl FlexibleBody {
         h: f64,
     ) -> Result<bool, WorkspaceTooSmall> {
         if moving {
-            for (m, (a, b)) in work.coef_mid.iter_mut().zip(self.coupling.coef.iter().zip(&work.coupling_end.coef)) {
+            for (m, (a, b)) in
+                work.coef_mid.iter_mut().zip(self.derived.coupling.coef.iter().zip(&work.coupling_end.coef))
+            {
                 *m = 0.5 * (a + b);
             }
         } else {
-            work.coef_mid.copy_from_slice(&self.coupling.coef);
+            work.coef_mid.copy_from_slice(&self.derived.coupling.coef);
         }
         let steady = prepared
-            && self.reference_coef_known
-            && h * self.coupling_terms.drift_bound(&work.coef_mid, &self.reference_coef) <= 2.0 * REFERENCE_DRIFT;
+            && self.stepper.reference_coef_known
+            && h * self.coupling_terms.drift_bound(&work.coef_mid, &self.stepper.reference_coef)
+                <= 2.0 * REFERENCE_DRIFT;
         if steady {
-            for (m, o) in work.coef_mid.iter_mut().zip(&self.reference_coef) {
+            for (m, o) in work.coef_mid.iter_mut().zip(&self.stepper.reference_coef) {
                 *m += 0.5 * (*m - o);
             }
         }
@@ -400,28 +416,28 @@ impl FlexibleBody {
         // the extrapolated matrices
         self.coupling_terms.fill(&self.body, &work.coef_mid, &mut work.c_d_mid, &mut work.c_k_mid);
         let (c_d, c_k): (&[f64], &[f64]) = (&work.c_d_mid, &work.c_k_mid);
-        let was_definite = self.coupled.definite();
-        let prepared = self.coupled.prepare(
+        let was_definite = self.stepper.coupled.definite();
+        let prepared = self.stepper.coupled.prepare(
             &self.body.omega,
-            self.params.alpha,
-            self.params.beta,
+            self.inputs.params.alpha,
+            self.inputs.params.beta,
             &self.body.modal_damping,
             c_d,
             c_k,
             h,
             &mut work.propagator,
         )?;
-        self.reference_coef.copy_from_slice(&work.coef_mid);
-        self.reference_coef_known = true;
-        if prepared == Prepared::Computed && was_definite && !self.coupled.definite() {
-            self.warning = Some(UNSTABLE_STIFFNESS);
+        self.stepper.reference_coef.copy_from_slice(&work.coef_mid);
+        self.stepper.reference_coef_known = true;
+        if prepared == Prepared::Computed && was_definite && !self.stepper.coupled.definite() {
+            self.stepper.warning = Some(UNSTABLE_STIFFNESS);
         }
         Ok(!steady)
     }
 
     /// A warning about the last step, once: the FMI layer logs it.
     pub fn take_warning(&mut self) -> Option<&'static str> {
-        self.warning.take()
+        self.stepper.warning.take()
     }
 
     /// dp/dt of the modal load for the input rates: every body-frame input x_B = A^T x changes
@@ -429,9 +445,9 @@ impl FlexibleBody {
     /// (the derivative of the projection onto the rotations); the centrifugal part as
     /// d(w_i w_k)/dt.
     fn modal_load_rate(&mut self) {
-        let a = &self.rot;
-        let r = &self.rates;
-        let n = self.q.len();
+        let a = &self.derived.rot;
+        let r = &self.inputs.rates;
+        let n = self.coords.q.len();
         let m = {
             let at_rdot: Mat3 = std::array::from_fn(|ij| {
                 let (i, j) = (ij / 3, ij % 3);
@@ -444,19 +460,19 @@ impl FlexibleBody {
             k3::mat_mul(a, &skew)
         };
         let body_rate = |x: Vec3, rate: Vec3| k3::add(k3::mul_t(a, rate), k3::mul_t(&m, x));
-        let a_b = body_rate(k3::sub(self.mount.a, self.params.g), r.mount.a);
+        let a_b = body_rate(k3::sub(self.inputs.mount.a, self.inputs.params.g), r.mount.a);
         for j in 0..n {
-            self.load_rate[j] =
+            self.derived.load_rate[j] =
                 -(self.body.c_t[j] * a_b[0] + self.body.c_t[n + j] * a_b[1] + self.body.c_t[2 * n + j] * a_b[2]);
         }
         if let Some(rot) = &self.body.rotation {
-            let w = k3::mul_t(a, self.mount.w);
-            let dw = body_rate(self.mount.w, r.mount.w);
-            let dz = body_rate(self.mount.z, r.mount.z);
+            let w = k3::mul_t(a, self.inputs.mount.w);
+            let dw = body_rate(self.inputs.mount.w, r.mount.w);
+            let dz = body_rate(self.inputs.mount.z, r.mount.z);
             for i in 0..3 {
                 if dz[i] != 0.0 {
                     let c_a = &self.body.c_r[i * n..(i + 1) * n];
-                    for (rate, c_a) in self.load_rate.iter_mut().zip(c_a) {
+                    for (rate, c_a) in self.derived.load_rate.iter_mut().zip(c_a) {
                         *rate -= dz[i] * c_a;
                     }
                 }
@@ -464,21 +480,21 @@ impl FlexibleBody {
                     let dww = dw[i] * w[k] + w[i] * dw[k];
                     if dww != 0.0 {
                         let o = &rot.o_vec[(3 * i + k) * n..(3 * i + k + 1) * n];
-                        for (rate, o) in self.load_rate.iter_mut().zip(o) {
+                        for (rate, o) in self.derived.load_rate.iter_mut().zip(o) {
                             *rate -= dww * o;
                         }
                     }
                 }
             }
         }
-        for ((flange, rate), load) in self.body.flanges.iter().zip(&r.loads).zip(&self.loads) {
+        for ((flange, rate), load) in self.body.flanges.iter().zip(&r.loads).zip(&self.inputs.loads) {
             let f_b = body_rate(load.f, rate.f);
             let t_b = body_rate(load.t, rate.t);
             let wrench = [f_b[0], f_b[1], f_b[2], t_b[0], t_b[1], t_b[2]];
             for (row, w) in wrench.iter().enumerate() {
                 if *w != 0.0 {
                     let shape = &flange.shapes[row * n..(row + 1) * n];
-                    for (rate, s) in self.load_rate.iter_mut().zip(shape) {
+                    for (rate, s) in self.derived.load_rate.iter_mut().zip(shape) {
                         *rate += s * w;
                     }
                 }
@@ -494,10 +510,10 @@ impl FlexibleBody {
     /// alone. Returns the inputs as the host set them: the host's values stay what fmi2GetReal
     /// returns after the step.
     fn kinematic_mount_rates(&mut self) -> HeldMount {
-        let m = self.mount;
-        let r = &mut self.rates.mount;
+        let m = self.inputs.mount;
+        let r = &mut self.inputs.rates.mount;
         let unset = |x: &[f64]| x.iter().all(|v| *v == 0.0);
-        let host_rates = self.rates.any;
+        let host_rates = self.inputs.rates.any;
         let mut held = HeldMount { mount: m, rot: false, w: false, steady: false };
         if unset(&r.rot) && !unset(&m.w) {
             let w = m.w;
@@ -516,7 +532,7 @@ impl FlexibleBody {
         }
         held.steady = held.rot && !held.w && !host_rates;
         if held.rot || held.w {
-            self.rates.any = true;
+            self.inputs.rates.any = true;
         }
         held
     }
@@ -529,12 +545,12 @@ impl FlexibleBody {
         match &self.body.stiffening {
             None => true,
             Some(st) => {
-                let turning_acceleration =
-                    st.translation.is_some() && k3::sub(self.mount.a, self.params.g).iter().any(|x| *x != 0.0);
+                let turning_acceleration = st.translation.is_some()
+                    && k3::sub(self.inputs.mount.a, self.inputs.params.g).iter().any(|x| *x != 0.0);
                 let loaded = st
                     .flanges
                     .iter()
-                    .zip(&self.loads)
+                    .zip(&self.inputs.loads)
                     .any(|(k, l)| !k.is_empty() && l.f.iter().chain(&l.t).any(|x| *x != 0.0));
                 !turning_acceleration && !loaded
             }
@@ -549,34 +565,32 @@ impl FlexibleBody {
     /// late. The host's own values are kept for the next step (`host_mount`), so a host that
     /// holds the mount's pose while giving its spin steps as before.
     fn advance_held_mount(&mut self, held: &HeldMount, h: f64) {
-        let driven = self.host_mount;
+        let driven = self.inputs.host;
         if held.rot {
             if driven.rot_driven {
-                let mean = k3::scale(0.5 * h, k3::add(held.mount.w, self.mount.w));
-                self.mount.rot = k3::mat_mul(&k3::rotation_of(mean), &held.mount.rot);
-                self.host_mount.rot = Some(held.mount.rot);
+                let mean = k3::scale(0.5 * h, k3::add(held.mount.w, self.inputs.mount.w));
+                self.inputs.mount.rot = k3::mat_mul(&k3::rotation_of(mean), &held.mount.rot);
+                self.inputs.host.rot = Some(held.mount.rot);
             } else {
-                self.mount.rot = held.mount.rot;
+                self.inputs.mount.rot = held.mount.rot;
             }
         }
         if held.w {
             if driven.w_driven {
-                self.host_mount.w = Some(held.mount.w);
+                self.inputs.host.w = Some(held.mount.w);
             } else {
-                self.mount.w = held.mount.w;
+                self.inputs.mount.w = held.mount.w;
             }
         }
-        self.host_mount.rot_driven = false;
-        self.host_mount.w_driven = false;
-        self.coupling.valid = false;
-        self.eval.valid = false;
+        self.inputs.host.rot_driven = false;
+        self.inputs.host.w_driven = false;
     }
 
     /// After a step with input rates the inputs hold their interpolated end values (what the
     /// host's interpolation says they are at t + h); the rates are used up.
     fn extrapolate_inputs(&mut self, h: f64) {
-        let r = &mut self.rates;
-        let m = &mut self.mount;
+        let r = &mut self.inputs.rates;
+        let m = &mut self.inputs.mount;
         for i in 0..3 {
             m.r[i] += h * r.mount.r[i];
             m.v[i] += h * r.mount.v[i];
@@ -587,7 +601,7 @@ impl FlexibleBody {
         for i in 0..9 {
             m.rot[i] += h * r.mount.rot[i];
         }
-        for (load, rate) in self.loads.iter_mut().zip(&r.loads) {
+        for (load, rate) in self.inputs.loads.iter_mut().zip(&r.loads) {
             for i in 0..3 {
                 load.f[i] += h * rate.f[i];
                 load.t[i] += h * rate.t[i];
@@ -598,8 +612,6 @@ impl FlexibleBody {
             *rate = FlangeLoad::default();
         }
         r.any = false;
-        self.coupling.valid = false;
-        self.eval.valid = false;
     }
 }
 
@@ -611,33 +623,37 @@ impl FlexibleBody {
     fn step_free(&mut self, work: &mut FreeWork, h: f64) -> Result<(), BodyError> {
         let substeps = self.free_substeps_within_budget(h).map_err(StepError::into_error)?;
         let hs = h / substeps as f64;
-        self.propagator.prepare(&self.body.omega, self.params.alpha, self.params.beta, &self.body.modal_damping, hs);
-        let result = self.free_substeps(work, substeps, hs);
-        self.eval.valid = false;
-        result
+        self.stepper.propagator.prepare(
+            &self.body.omega,
+            self.inputs.params.alpha,
+            self.inputs.params.beta,
+            &self.body.modal_damping,
+            hs,
+        );
+        self.free_substeps(work, substeps, hs)
     }
 
     fn free_substeps(&mut self, w: &mut FreeWork, substeps: usize, hs: f64) -> Result<(), BodyError> {
-        let n = self.q.len();
+        let n = self.coords.q.len();
         for _ in 0..substeps {
-            let start = self.frame.ok_or(BodyError::NotFreeFloating)?;
-            w.q0.copy_from_slice(&self.q);
-            w.qd0.copy_from_slice(&self.qd);
+            let start = self.coords.frame.ok_or(BodyError::NotFreeFloating)?;
+            w.q0.copy_from_slice(&self.coords.q);
+            w.qd0.copy_from_slice(&self.coords.qd);
             // rates at the start, then at the predicted end
-            self.eval.valid = false;
+            self.derived.invalidate(Change::Coordinates);
             self.evaluate()?;
-            let rate0 = self.frame_rate;
+            let rate0 = self.derived.frame_rate;
             self.coupling_load(&mut w.load0);
             self.advance_free(&start, &rate0, &rate0, &w.load0, hs)?;
-            self.eval.valid = false;
+            self.derived.invalidate(Change::Coordinates);
             self.evaluate()?;
-            let rate1 = self.frame_rate;
+            let rate1 = self.derived.frame_rate;
             self.coupling_load(&mut w.load1);
             for j in 0..n {
                 w.load1[j] = 0.5 * (w.load0[j] + w.load1[j]);
             }
-            self.q.copy_from_slice(&w.q0);
-            self.qd.copy_from_slice(&w.qd0);
+            self.coords.q.copy_from_slice(&w.q0);
+            self.coords.qd.copy_from_slice(&w.qd0);
             self.advance_free(&start, &rate0, &rate1, &w.load1, hs)?;
         }
         Ok(())
@@ -645,10 +661,12 @@ impl FlexibleBody {
 
     /// The part of q'' beyond the modal diagonal at the last evaluation.
     fn coupling_load(&self, out: &mut [f64]) {
-        let (alpha, beta) = (self.params.alpha, self.params.beta);
+        let (alpha, beta) = (self.inputs.params.alpha, self.inputs.params.beta);
         for (j, out) in out.iter_mut().enumerate() {
             let w2 = self.body.omega[j] * self.body.omega[j];
-            *out = self.eval.qdd[j] + (alpha + beta * w2 + self.body.modal_damping[j]) * self.qd[j] + w2 * self.q[j];
+            *out = self.derived.eval.qdd[j]
+                + (alpha + beta * w2 + self.body.modal_damping[j]) * self.coords.qd[j]
+                + w2 * self.coords.q[j];
         }
     }
 
@@ -662,10 +680,10 @@ impl FlexibleBody {
         load: &[f64],
         hs: f64,
     ) -> Result<(), BodyError> {
-        self.propagator.advance(&self.body.omega, load, &mut self.q, &mut self.qd);
+        self.stepper.propagator.advance(&self.body.omega, load, &mut self.coords.q, &mut self.coords.qd);
         let w_dot = k3::scale(0.5, k3::add(a.w_body, b.w_body));
         let accel = k3::scale(0.5, k3::add(a.v, b.v));
-        let f = self.frame.as_mut().ok_or(BodyError::NotFreeFloating)?;
+        let f = self.coords.frame.as_mut().ok_or(BodyError::NotFreeFloating)?;
         let w_mid = k3::add(start.w_body, k3::scale(0.5 * hs, w_dot));
         f.w_body = k3::add(start.w_body, k3::scale(hs, w_dot));
         f.v = k3::add(start.v, k3::scale(hs, accel));

@@ -10,11 +10,10 @@ use crate::scalar::{Scalar, c};
 impl FlexibleBody {
     /// Put a free-floating body at its initial pose and velocity.
     pub fn start_frame(&mut self) {
-        if let Some(f) = self.frame.as_mut() {
-            let i = self.initial_frame;
+        let i = self.inputs.initial_frame;
+        if let Some(f) = self.coords_mut().frame.as_mut() {
             let rot = k3::rotation_of(i.phi);
             *f = FrameState { r: i.r, quat: k3::quaternion_of(&rot), v: i.v, w_body: k3::mul_t(&rot, i.w) };
-            self.eval.valid = false;
         }
     }
 }
@@ -23,7 +22,7 @@ impl<T: Scalar> FlexibleBody<T> {
     /// Rates of the frame state (d/dt r, quaternion, v, body angular velocity).
     pub fn frame_rate(&mut self) -> Result<FrameState<T>, BodyError> {
         self.evaluate()?;
-        Ok(self.frame_rate)
+        Ok(self.derived.frame_rate)
     }
 
     /// Accelerations of a free-floating body: the frame's translational motion is the centre of
@@ -32,51 +31,54 @@ impl<T: Scalar> FlexibleBody<T> {
     ///   [C_r^T   I   ] [q''] = [p - D q' - K q - 2 sum W_a G_a q' - sum W_a W_b (O_ab q + o_ab)]
     /// with h = J W + C_r q' (floating-frame invariants, exact in q to second order).
     pub(super) fn free_accelerations(&mut self) -> Result<(), BodyError> {
-        let frame = self.frame.ok_or(BodyError::NotFreeFloating)?;
-        let n = self.q.len();
+        let frame = self.coords.frame.ok_or(BodyError::NotFreeFloating)?;
+        let n = self.coords.q.len();
         let b = self.body.clone();
         let rot_terms = b.rotation.as_ref().ok_or(BodyError::RotationInvariantsNeeded)?;
         let a = k3::rotation_of_quaternion(unit_quaternion(frame.quat)?);
         let w = frame.w_body;
-        let total_force: Vec3<T> = self.loads.iter().fold([T::zero(); 3], |acc, l| k3::add(acc, l.f));
+        let total_force: Vec3<T> = self.inputs.loads.iter().fold([T::zero(); 3], |acc, l| k3::add(acc, l.f));
         let accel = k3::add(k3::scale(c(1.0 / b.mass), total_force), self.gravity());
-        self.mount = MountMotion { r: frame.r, rot: a, v: frame.v, w: k3::mul(&a, w), a: accel, z: [T::zero(); 3] };
-        self.rot = a;
+        self.inputs.mount =
+            MountMotion { r: frame.r, rot: a, v: frame.v, w: k3::mul(&a, w), a: accel, z: [T::zero(); 3] };
+        self.derived.rot = a;
         // modal load of the flange loads and the centrifugal o_ab terms (C_t = 0, c_a = 0 here)
         self.modal_load();
         // the modes that carry the dynamics: all of them, or (Model Exchange) those below the cutoff
-        let nd = if self.quasi_static { self.n_dynamic } else { n };
+        let nd = if self.split.quasi_static { self.split.n_dynamic } else { n };
         if nd < n {
             self.free_quasi_static(w)?;
         }
         self.modal_right_hand_side(rot_terms, w, nd);
         let (j, j_rate) = self.inertia_in_deformation(rot_terms);
-        let cr_qd: Vec3<T> = [0, 1, 2].map(|i| dot(&self.cr_q[i * n..(i + 1) * n], &self.qd));
+        let cr_qd: Vec3<T> = [0, 1, 2].map(|i| dot(&self.derived.cr_q[i * n..(i + 1) * n], &self.coords.qd));
         let h = k3::add(k3::mul(&j, w), cr_qd);
         let torque = self.flange_torque(&a);
         let rhs_w = k3::sub(k3::sub(torque, k3::cross(w, h)), k3::mul(&j_rate, w));
         // quasi-static modes have no acceleration: they neither load the frame nor take its share
-        self.eval.qdd[nd..].fill(T::zero());
+        self.derived.eval.qdd[nd..].fill(T::zero());
         // Schur complement over the accelerated modes: (J - C_r C_r^T) W' = rhs_w - C_r rhs_q
         let mut s = j;
         let mut rhs = rhs_w;
         for p in 0..3 {
-            let cp = &self.cr_q[p * n..p * n + nd];
-            rhs[p] -= dot(cp, &self.eval.qdd[..nd]);
+            let cp = &self.derived.cr_q[p * n..p * n + nd];
+            rhs[p] -= dot(cp, &self.derived.eval.qdd[..nd]);
             for q_ in 0..3 {
-                let cq = &self.cr_q[q_ * n..q_ * n + nd];
+                let cq = &self.derived.cr_q[q_ * n..q_ * n + nd];
                 s[3 * p + q_] -= dot(cp, cq);
             }
         }
         let mut w_dot = rhs;
         solve_dense(&mut s, &mut w_dot, 3, &mut [0; 3]).map_err(|()| BodyError::SingularInertia)?;
         for r in 0..nd {
-            let f = self.cr_q[r] * w_dot[0] + self.cr_q[n + r] * w_dot[1] + self.cr_q[2 * n + r] * w_dot[2];
-            self.eval.qdd[r] -= f;
+            let f = self.derived.cr_q[r] * w_dot[0]
+                + self.derived.cr_q[n + r] * w_dot[1]
+                + self.derived.cr_q[2 * n + r] * w_dot[2];
+            self.derived.eval.qdd[r] -= f;
         }
-        self.mount.z = k3::mul(&a, w_dot);
+        self.inputs.mount.z = k3::mul(&a, w_dot);
         let quat_rate = quaternion_rate(frame.quat, w);
-        self.frame_rate = FrameState { r: frame.v, quat: quat_rate, v: accel, w_body: w_dot };
+        self.derived.frame_rate = FrameState { r: frame.v, quat: quat_rate, v: accel, w_body: w_dot };
         Ok(())
     }
 
@@ -84,21 +86,23 @@ impl<T: Scalar> FlexibleBody<T> {
     /// p - D q' - K q - 2 sum W_a G_a q' - sum W_a W_b O_ab q, into the accelerations of the
     /// first `nd` modes.
     fn modal_right_hand_side(&mut self, rot_terms: &RotationTerms, w: Vec3<T>, nd: usize) {
-        let n = self.q.len();
+        let n = self.coords.q.len();
         let nn = n * n;
-        let (alpha, beta) = (self.params.alpha, self.params.beta);
+        let (alpha, beta) = (self.inputs.params.alpha, self.inputs.params.beta);
         // the quasi-static rows stay at zero acceleration: no right-hand side for them
         let b = &self.body;
-        let rhs_q = &mut self.eval.qdd[..nd];
+        let rhs_q = &mut self.derived.eval.qdd[..nd];
         for (j, rhs) in rhs_q.iter_mut().enumerate() {
             let w2 = b.omega[j] * b.omega[j];
-            *rhs = self.load[j] - self.qd[j] * (alpha + beta * w2 + b.modal_damping[j]) - self.q[j] * w2;
+            *rhs = self.derived.load[j]
+                - self.coords.qd[j] * (alpha + beta * w2 + b.modal_damping[j])
+                - self.coords.q[j] * w2;
         }
         for i in 0..3 {
             let g = &rot_terms.g[i * nn..(i + 1) * nn];
             if !w[i].is_zero() {
                 for r in 0..nd {
-                    let s = shape_dot(&g[r * n..(r + 1) * n], &self.qd);
+                    let s = shape_dot(&g[r * n..(r + 1) * n], &self.coords.qd);
                     rhs_q[r] -= w[i] * 2.0 * s;
                 }
             }
@@ -107,7 +111,7 @@ impl<T: Scalar> FlexibleBody<T> {
                 if !ww.is_zero() {
                     let o = &rot_terms.o_mat[(3 * i + k) * nn..(3 * i + k + 1) * nn];
                     for r in 0..nd {
-                        let s = shape_dot(&o[r * n..(r + 1) * n], &self.q);
+                        let s = shape_dot(&o[r * n..(r + 1) * n], &self.coords.q);
                         rhs_q[r] -= ww * s;
                     }
                 }
@@ -118,14 +122,14 @@ impl<T: Scalar> FlexibleBody<T> {
     /// C_r(q) (into `cr_q`), J(q) and J'(q) at the present deformation and its rate.
     fn inertia_in_deformation(&mut self, rot_terms: &RotationTerms) -> (Mat3<T>, Mat3<T>) {
         let b = self.body.clone();
-        let n = self.q.len();
+        let n = self.coords.q.len();
         let nn = n * n;
         for i in 0..3 {
             let g = &rot_terms.g[i * nn..(i + 1) * nn];
             for col in 0..n {
                 // (G_a q)_c
-                let s = shape_dot(&g[col * n..(col + 1) * n], &self.q);
-                self.cr_q[i * n + col] = s + c(b.c_r[i * n + col]);
+                let s = shape_dot(&g[col * n..(col + 1) * n], &self.coords.q);
+                self.derived.cr_q[i * n + col] = s + c(b.c_r[i * n + col]);
             }
         }
         let mut j: Mat3<T> = b.inertia.map(c);
@@ -137,12 +141,12 @@ impl<T: Scalar> FlexibleBody<T> {
                 let o_mat = &rot_terms.o_mat[(3 * p + q_) * nn..(3 * p + q_ + 1) * nn];
                 let (mut lin, mut lin_rate, mut quad, mut quad_rate) = (T::zero(), T::zero(), T::zero(), T::zero());
                 for r in 0..n {
-                    lin += self.q[r] * (o_pq[r] + o_qp[r]);
-                    lin_rate += self.qd[r] * (o_pq[r] + o_qp[r]);
-                    let oq = shape_dot(&o_mat[r * n..(r + 1) * n], &self.q);
-                    let oqd = shape_dot(&o_mat[r * n..(r + 1) * n], &self.qd);
-                    quad += self.q[r] * oq;
-                    quad_rate += self.qd[r] * oq + self.q[r] * oqd;
+                    lin += self.coords.q[r] * (o_pq[r] + o_qp[r]);
+                    lin_rate += self.coords.qd[r] * (o_pq[r] + o_qp[r]);
+                    let oq = shape_dot(&o_mat[r * n..(r + 1) * n], &self.coords.q);
+                    let oqd = shape_dot(&o_mat[r * n..(r + 1) * n], &self.coords.qd);
+                    quad += self.coords.q[r] * oq;
+                    quad_rate += self.coords.qd[r] * oq + self.coords.q[r] * oqd;
                 }
                 j[3 * p + q_] -= lin + quad;
                 j_rate[3 * p + q_] = -(lin_rate + quad_rate);
@@ -153,10 +157,10 @@ impl<T: Scalar> FlexibleBody<T> {
 
     /// Torque of the flange loads about the centre of mass, body frame.
     fn flange_torque(&self, a: &Mat3<T>) -> Vec3<T> {
-        let n = self.q.len();
+        let n = self.coords.q.len();
         let mut torque = [T::zero(); 3];
-        for (flange, load) in self.body.flanges.iter().zip(&self.loads) {
-            let u: Vec3<T> = [0, 1, 2].map(|r| shape_dot(&flange.shapes[r * n..(r + 1) * n], &self.q));
+        for (flange, load) in self.body.flanges.iter().zip(&self.inputs.loads) {
+            let u: Vec3<T> = [0, 1, 2].map(|r| shape_dot(&flange.shapes[r * n..(r + 1) * n], &self.coords.q));
             let f_b = k3::mul_t(a, load.f);
             torque = k3::add(torque, k3::add(k3::cross(k3::add(flange.position.map(c), u), f_b), k3::mul_t(a, load.t)));
         }
@@ -171,12 +175,12 @@ impl<T: Scalar> FlexibleBody<T> {
         if w.iter().all(|x| x.is_zero()) {
             return self.solve_quasi_static(None, None);
         }
-        let (n, nd) = (self.q.len(), self.n_dynamic);
+        let (n, nd) = (self.coords.q.len(), self.split.n_dynamic);
         let nn = n * n;
         let b = self.body.clone();
         let rot_terms = b.rotation.as_ref().ok_or(BodyError::RotationInvariantsNeeded)?;
-        let mut c_k = std::mem::take(&mut self.qs_work.c_k);
-        let mut c_d = std::mem::take(&mut self.qs_work.c_d);
+        let mut c_k = std::mem::take(&mut self.derived.qs_work.c_k);
+        let mut c_d = std::mem::take(&mut self.derived.qs_work.c_d);
         c_k.fill(T::zero());
         c_d.fill(T::zero());
         for a in 0..3 {
@@ -193,16 +197,16 @@ impl<T: Scalar> FlexibleBody<T> {
             }
         }
         let solved = self.solve_quasi_static(Some((&c_k, &c_d)), None);
-        self.qs_work.c_k = c_k;
-        self.qs_work.c_d = c_d;
+        self.derived.qs_work.c_k = c_k;
+        self.derived.qs_work.c_d = c_d;
         solved
     }
 
     /// Energy and momenta of a free-floating body (gravity's potential included).
     pub fn invariants(&mut self) -> Result<Invariants<T>, BodyError> {
         self.evaluate()?;
-        let frame = self.frame.ok_or(BodyError::InvariantsOfMountedBody)?;
-        let n = self.q.len();
+        let frame = self.coords.frame.ok_or(BodyError::InvariantsOfMountedBody)?;
+        let n = self.coords.q.len();
         let b = &self.body;
         let rot_terms = b.rotation.as_ref().ok_or(BodyError::RotationInvariantsMissing)?;
         let nn = n * n;
@@ -214,24 +218,25 @@ impl<T: Scalar> FlexibleBody<T> {
                 let o_mat = &rot_terms.o_mat[(3 * p + q_) * nn..(3 * p + q_ + 1) * nn];
                 let mut v = T::zero();
                 for r in 0..n {
-                    v += self.q[r] * (o_pq[r] + o_qp[r]);
-                    v += self.q[r] * shape_dot(&o_mat[r * n..(r + 1) * n], &self.q);
+                    v += self.coords.q[r] * (o_pq[r] + o_qp[r]);
+                    v += self.coords.q[r] * shape_dot(&o_mat[r * n..(r + 1) * n], &self.coords.q);
                 }
                 j[3 * p + q_] -= v;
             }
         }
         let w = frame.w_body;
-        let cr_qd: Vec3<T> = [0, 1, 2].map(|i| dot(&self.cr_q[i * n..(i + 1) * n], &self.qd));
+        let cr_qd: Vec3<T> = [0, 1, 2].map(|i| dot(&self.derived.cr_q[i * n..(i + 1) * n], &self.coords.qd));
         let jw = k3::mul(&j, w);
         let h = k3::add(jw, cr_qd);
         let v2 = k3::dot(frame.v, frame.v);
         let mut energy = v2 * (0.5 * b.mass) + k3::dot(w, jw) * 0.5 + k3::dot(w, cr_qd);
         for r in 0..n {
-            energy += self.qd[r] * 0.5 * self.qd[r] + self.q[r] * (0.5 * b.omega[r] * b.omega[r]) * self.q[r];
+            energy += self.coords.qd[r] * 0.5 * self.coords.qd[r]
+                + self.coords.q[r] * (0.5 * b.omega[r] * b.omega[r]) * self.coords.q[r];
         }
         energy -= k3::dot(self.gravity(), frame.r) * b.mass;
         let momentum = k3::scale(c(b.mass), frame.v);
-        let angular_momentum = k3::add(k3::cross(frame.r, momentum), k3::mul(&self.mount.rot, h));
+        let angular_momentum = k3::add(k3::cross(frame.r, momentum), k3::mul(&self.inputs.mount.rot, h));
         Ok(Invariants { energy, momentum, angular_momentum })
     }
 }

@@ -12,27 +12,9 @@
 //! spin is not a jump (comparing it with the step's extrapolation would make every host that
 //! holds w while z is set bounce the modes each step).
 
+use super::inputs::SteppedInputs;
 use super::step_workspace::JumpWork;
-use super::{BodyError, FlangeLoad, FlexibleBody, Parameters, StateMismatch, SteppedState};
-use crate::kinematics::Vec3;
-
-/// The loads a Co-Simulation step ended with (host-given rates applied); the shift's scratch is
-/// the step's [`JumpWork`].
-#[derive(Debug, Clone, Default)]
-pub(super) struct SteppedInputs {
-    pub(super) valid: bool,
-    /// The mount's acceleration a and angular acceleration z.
-    pub(super) a: Vec3,
-    pub(super) z: Vec3,
-    pub(super) loads: Vec<FlangeLoad>,
-    pub(super) params: Option<Parameters>,
-}
-
-impl SteppedInputs {
-    pub(super) fn new(flanges: usize) -> Self {
-        Self { valid: false, a: [0.0; 3], z: [0.0; 3], loads: vec![FlangeLoad::default(); flanges], params: None }
-    }
-}
+use super::{BodyError, Change, FlexibleBody, StateMismatch, SteppedState};
 
 impl FlexibleBody {
     /// Put the quasi-static modes in equilibrium with the present inputs and dynamic modes, at
@@ -47,17 +29,17 @@ impl FlexibleBody {
 
     /// The loads as the last step (or the initialisation) left them.
     pub(super) fn record_stepped_inputs(&mut self) {
-        let s = &mut self.stepped;
-        s.a = self.mount.a;
-        s.z = self.mount.z;
-        s.loads.copy_from_slice(&self.loads);
-        s.params = Some(self.params);
+        let s = &mut self.stepper.stepped;
+        s.a = self.inputs.mount.a;
+        s.z = self.inputs.mount.z;
+        s.loads.copy_from_slice(&self.inputs.loads);
+        s.params = Some(self.inputs.params);
         s.valid = true;
     }
 
     /// The loads last stepped with, for a saved state (None before the first step).
     pub fn stepped_inputs(&self) -> Option<SteppedState> {
-        let s = &self.stepped;
+        let s = &self.stepper.stepped;
         match (s.valid, s.params) {
             (true, Some(params)) => Some(SteppedState { a: s.a, z: s.z, loads: s.loads.clone(), params }),
             _ => None,
@@ -66,10 +48,10 @@ impl FlexibleBody {
 
     /// Restore the loads last stepped with (a loaded state); their sizes are checked.
     pub fn set_stepped_inputs(&mut self, state: &SteppedState) -> Result<(), BodyError> {
-        if state.loads.len() != self.loads.len() {
-            return Err(StateMismatch::SteppedLoads { found: state.loads.len(), n: self.loads.len() }.into());
+        if state.loads.len() != self.inputs.loads.len() {
+            return Err(StateMismatch::SteppedLoads { found: state.loads.len(), n: self.inputs.loads.len() }.into());
         }
-        let s = &mut self.stepped;
+        let s = &mut self.stepper.stepped;
         s.a = state.a;
         s.z = state.z;
         s.loads.copy_from_slice(&state.loads);
@@ -84,45 +66,48 @@ impl FlexibleBody {
     /// for the state before the shift and the old equilibrium.
     pub(super) fn follow_input_change(&mut self, copies: &mut JumpWork) -> Result<(), BodyError> {
         let range = self.algebraic_range();
-        if range.is_empty() || !self.stepped.valid {
+        if range.is_empty() || !self.stepper.stepped.valid {
             return Ok(());
         }
-        let s = &self.stepped;
-        if s.a == self.mount.a && s.z == self.mount.z && s.loads == self.loads && s.params == Some(self.params) {
+        let s = &self.stepper.stepped;
+        if s.a == self.inputs.mount.a
+            && s.z == self.inputs.mount.z
+            && s.loads == self.inputs.loads
+            && s.params == Some(self.inputs.params)
+        {
             return Ok(());
         }
-        let mut stepped = std::mem::take(&mut self.stepped);
-        copies.q.copy_from_slice(&self.q);
-        copies.qd.copy_from_slice(&self.qd);
+        let mut stepped = std::mem::take(&mut self.stepper.stepped);
+        copies.q.copy_from_slice(&self.coords.q);
+        copies.qd.copy_from_slice(&self.coords.qd);
         // the equilibrium under the old inputs: swapped in, solved, swapped back
         self.swap_inputs(&mut stepped);
         let old = self.equilibrate_quasi_static(false);
-        copies.equilibrium[range.clone()].copy_from_slice(&self.q[range.clone()]);
+        copies.equilibrium[range.clone()].copy_from_slice(&self.coords.q[range.clone()]);
         self.swap_inputs(&mut stepped);
-        self.q.copy_from_slice(&copies.q);
+        self.coords.q.copy_from_slice(&copies.q);
         let new = old.and_then(|_| self.equilibrate_quasi_static(false));
         if new.is_ok() {
             for j in range {
-                self.q[j] = copies.q[j] + (self.q[j] - copies.equilibrium[j]);
+                self.coords.q[j] = copies.q[j] + (self.coords.q[j] - copies.equilibrium[j]);
             }
         } else {
-            self.q.copy_from_slice(&copies.q);
+            self.coords.q.copy_from_slice(&copies.q);
         }
-        self.qd.copy_from_slice(&copies.qd);
-        self.stepped = stepped;
-        self.eval.valid = false;
+        self.coords.qd.copy_from_slice(&copies.qd);
+        self.stepper.stepped = stepped;
+        self.derived.invalidate(Change::Coordinates);
         new
     }
 
     fn swap_inputs(&mut self, s: &mut SteppedInputs) {
-        std::mem::swap(&mut self.mount.a, &mut s.a);
-        std::mem::swap(&mut self.mount.z, &mut s.z);
-        std::mem::swap(&mut self.loads, &mut s.loads);
+        let inputs = self.inputs_mut();
+        std::mem::swap(&mut inputs.mount.a, &mut s.a);
+        std::mem::swap(&mut inputs.mount.z, &mut s.z);
+        std::mem::swap(&mut inputs.loads, &mut s.loads);
         if let Some(p) = s.params.as_mut() {
-            std::mem::swap(&mut self.params, p);
+            std::mem::swap(&mut inputs.params, p);
         }
-        self.coupling.valid = false;
-        self.eval.valid = false;
     }
 }
 

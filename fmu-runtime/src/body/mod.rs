@@ -8,43 +8,59 @@
 //! loads (linear in them). The coupling terms (everything off the modal diagonal) are gathered in
 //! two r x r matrices whenever the inputs change.
 //!
-//! Files, one job each: this one holds the types, construction, saved state, accessors and the
-//! evaluation shared by every body (dispatch and flange kinematics); `mounted` the equations of
-//! a body on a prescribed mount (input check, modal load, coupling terms); `reaction` the mount
-//! reaction; `free_floating` the free body's accelerations and invariants; `cosim_step`
-//! Co-Simulation stepping (input rates, exact and predictor-corrector steps, the free body's
-//! substeps); `step_workspace` the step's scratch, lent down its functions; `input_jump`
-//! Co-Simulation's quasi-static modes across load changes; `quasi_static` Model Exchange's solve
-//! of the modes above the cutoff; `statics` the static start; `dense` the dense kernels (dot
-//! products and the small in-place solver); `error` why the equations fail, by failure class.
+//! `FlexibleBody` is a façade over four parts, each in a file of its own: `coordinates` (q, q'
+//! and a free body's frame: what the equations integrate), `inputs` (what the host sets: mount
+//! motion, flange loads, parameters, input rates, its view of a mount a step moved),
+//! `derived` (everything computed from those two, behind one cache that only the body's
+//! `coords_mut` and `inputs_mut` make stale, through `Derived::invalidate`) and `stepper`
+//! (Co-Simulation's machinery: the exact transitions, their reference, the stepped inputs, the
+//! step's scratch). A saved state (`BodyState`) holds the coordinates and inputs as they are.
+//!
+//! The equations, one job per file: this one holds the types, construction, saved state,
+//! accessors and the evaluation shared by every body (dispatch and flange kinematics);
+//! `mounted` the equations of a body on a prescribed mount (input check, modal load, coupling
+//! terms); `reaction` the mount reaction; `stress` the stresses at the recovery points;
+//! `free_floating` the free body's accelerations and invariants; `cosim_step` Co-Simulation
+//! stepping (input rates, exact and predictor-corrector steps, the free body's substeps);
+//! `step_workspace` the step's scratch, lent down its functions; `input_jump` Co-Simulation's
+//! quasi-static modes across load changes; `quasi_static` Model Exchange's solve of the modes
+//! above the cutoff (and `ModeSplit`, which modes are dynamic); `statics` the static start;
+//! `coupling_terms` the coupling as coefficients times matrices, and `coupling_bound` their
+//! norms; `dense` the dense kernels (dot products and the small in-place solver); `error` why
+//! the equations fail, by failure class.
 
+mod coordinates;
 mod cosim_step;
 mod coupling_bound;
 mod coupling_terms;
+pub use coordinates::Coordinates;
 pub use cosim_step::SUBSTEP_ANGLE;
 pub(crate) mod dense;
+mod derived;
 mod error;
 pub use error::{BodyError, OutOfRange, StateMismatch, StepError};
 mod free_floating;
 mod input_jump;
+mod inputs;
+pub(crate) use inputs::HostMount;
+pub use inputs::{BodyInputs, InputRates};
 mod mounted;
 mod quasi_static;
 mod reaction;
 mod statics;
 mod step_workspace;
+mod stepper;
 mod stress;
 
-use crate::coupled_propagator::CoupledPropagator;
 use crate::kinematics::{self as k3, Mat3, Vec3};
-use crate::propagator::ModalPropagator;
 use crate::reduced::ReducedBody;
 use crate::scalar::{Dual, Scalar, c};
 use coupling_terms::CouplingTerms;
 pub(crate) use coupling_terms::term_count;
-use input_jump::SteppedInputs;
-use quasi_static::QuasiStaticWork;
+use derived::{Change, Coupling, Derived};
+use quasi_static::ModeSplit;
 use std::sync::Arc;
-use step_workspace::StepWorkspace;
+use stepper::Stepper;
 
 /// Prescribed motion of the mount flange, resolved in the world frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -105,24 +121,6 @@ pub struct FlangeMotion<T = f64> {
     pub phi: Vec3<T>,
 }
 
-/// Everything that follows from state and inputs at one instant.
-#[derive(Debug, Clone, Default)]
-struct Evaluation<T> {
-    valid: bool,
-    qdd: Vec<T>,
-    flanges: Vec<FlangeMotion<T>>,
-    /// The mount reaction is evaluated on demand: hosts that read only flange outputs skip its
-    /// n^2 terms.
-    reaction_valid: bool,
-    mount_force: Vec3<T>,
-    mount_torque: Vec3<T>,
-    /// Counts the evaluations: results computed on demand remember the one they belong to.
-    generation: u64,
-    /// Stresses at the recovery points (xx .. zx, von Mises), each with the generation it was
-    /// computed at (0: never): a host reads a point's seven outputs one by one.
-    stresses: Vec<([T; 7], u64)>,
-}
-
 /// Rigid-body state of a free-floating body: centre-of-mass position and velocity (world), unit
 /// quaternion (w, x, y, z) of the body frame, angular velocity in the body frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -164,21 +162,16 @@ pub struct Invariants<T = f64> {
     pub angular_momentum: Vec3<T>,
 }
 
-/// Everything of a [`FlexibleBody`] that evolves or can be set: what a saved state holds. The
-/// rest is the immutable reduced body and caches that are functions of these (recomputed on
-/// demand, so a body rebuilt from its state continues bit-identically).
+/// Everything of a [`FlexibleBody`] that evolves or can be set: what a saved state holds, its
+/// coordinates and inputs as the body holds them. The rest is the immutable reduced body, caches
+/// that are functions of these (recomputed on demand, so a body rebuilt from its state continues
+/// bit-identically) and the step's machinery, of which the two parts later steps depend on come
+/// along.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BodyState {
-    pub mount: MountMotion,
-    pub loads: Vec<FlangeLoad>,
-    pub params: Parameters,
-    pub q: Vec<f64>,
-    pub qd: Vec<f64>,
-    /// Some exactly for free-floating bodies.
-    pub frame: Option<FrameState>,
-    pub initial_frame: InitialFrame,
-    /// Input derivatives set for the next step and not yet used.
-    pub rates: InputRates,
+    pub coordinates: Coordinates,
+    /// The host's inputs (the mount as the host set it, not the pose a step turned it to).
+    pub inputs: BodyInputs,
     /// The coupling the exact coupled transition was last made for: later steps depend on it,
     /// so a body restored from this state continues bit-identically.
     pub coupling_reference: Option<CouplingReference>,
@@ -209,84 +202,34 @@ pub struct CouplingReference {
     pub coef: Option<Vec<f64>>,
 }
 
-/// Terms that couple the modes, for the present inputs: q'' = ... - C_d q' - C_k q.
-#[derive(Debug, Clone, Default)]
-struct Coupling<T> {
-    /// The coefficients (and `active`) are those of the present inputs.
-    valid: bool,
-    active: bool,
-    /// The rows of C_d, C_k from this one on are those of the coefficients (None: no row). They
-    /// are filled only where needed: the rows of Model Exchange's algebraic modes, all of them for
-    /// the static start.
-    rows_from: Option<usize>,
-    c_d: Vec<T>,
-    c_k: Vec<T>,
-    /// (C_d q' + C_k q) of an evaluation (n).
-    force: Vec<T>,
-    /// Body-frame angular velocity, angular acceleration and a_B of the present inputs.
-    w: Vec3<T>,
-    z: Vec3<T>,
-    a: Vec3<T>,
-    /// The coefficients c_d and c_k combine the body's matrices with (see `coupling_terms`).
-    coef: Vec<T>,
-}
-
 /// The body's equations over the scalar `T`: `f64` for the model, [`Dual`] for the exact
 /// directional derivatives of everything it evaluates (see [`FlexibleBody::to_dual`]). Stepping
 /// is `f64` only.
+///
+/// A façade over four parts, each with one job: the [`Coordinates`] it integrates, the
+/// [`BodyInputs`] the host sets, the `Derived` values computed from those two (behind one
+/// cache, made stale through `Derived::invalidate` by the setters `coords_mut` and
+/// `inputs_mut`), and the `Stepper` that advances it in Co-Simulation; beside them the
+/// immutable model (the reduced body and its coupling terms) and how its modes are split
+/// (`ModeSplit`).
 #[derive(Debug, Clone)]
 pub struct FlexibleBody<T = f64> {
     body: Arc<ReducedBody>,
-    mount: MountMotion<T>,
-    loads: Vec<FlangeLoad<T>>,
-    params: Parameters,
-    q: Vec<T>,
-    qd: Vec<T>,
-    /// Modal load p, workspace.
-    load: Vec<T>,
-    eval: Evaluation<T>,
-    coupling: Coupling<T>,
-    /// The mount orientation in use: the input made exactly orthonormal.
-    rot: Mat3<T>,
-    /// Free-floating bodies only: the rigid-body state, its initial value and its rates.
-    frame: Option<FrameState<T>>,
-    pub initial_frame: InitialFrame,
-    frame_rate: FrameState<T>,
-    /// 3 x n workspace: C_r(q) = C_r + [G_a q]^T
-    cr_q: Vec<T>,
-    propagator: ModalPropagator,
-    /// Exact transition of the coupled modes (mounted bodies with rotation or stiffening terms).
-    coupled: CoupledPropagator,
-    /// The coefficients of the coupling `coupled` was made for, where known (every renewal sets
-    /// them), and the matrices they multiply with their norms (`coupling_terms`), made once per
-    /// reduced body and shared by its copies.
-    reference_coef: Vec<f64>,
-    reference_coef_known: bool,
+    /// The matrices the coupling's coefficients multiply, with their norms (`coupling_terms`):
+    /// made once per reduced body and shared by its copies; used by evaluation and step alike.
     coupling_terms: Arc<CouplingTerms>,
-    /// A warning of the last step for the host's log.
-    warning: Option<&'static str>,
-    /// First derivatives of the inputs for the next step (fmi2SetRealInputDerivatives), and
-    /// the modal load's rate they give.
-    rates: InputRates,
-    load_rate: Vec<f64>,
-    /// Modes 0..n_dynamic are below the dynamic cutoff; with `quasi_static` (Model Exchange) the
-    /// others are solved algebraically at every evaluation instead of integrated.
-    n_dynamic: usize,
-    /// Quasi-static modes nd..nd + n_relaxing settle through their damping (first-order states
-    /// in Model Exchange); the rest are algebraic.
-    n_relaxing: usize,
-    quasi_static: bool,
-    /// Set while the quasi-static modes are put in equilibrium (relaxing ones included).
-    settling: bool,
-    qs_work: QuasiStaticWork<T>,
-    /// Co-Simulation: the inputs of the last step, to move the algebraic modes when they change.
-    stepped: SteppedInputs,
-    /// Co-Simulation: the host's view of the mount's orientation and spin where the last step
-    /// moved them by their kinematics (see `cosim_step`), and which of them the host drives.
-    host_mount: HostMount,
-    /// Co-Simulation: the step's scratch (its start, to undo it; the coupled propagator's
-    /// workspace; ...), allocated here once and lent to the step's functions. Not state.
-    step_work: StepWorkspace,
+    /// Which modes are dynamic, and whether the others are solved (Model Exchange).
+    split: ModeSplit,
+    /// What the equations integrate; written through `coords_mut` (or by an evaluation's own
+    /// solve of the quasi-static modes).
+    coords: Coordinates<T>,
+    /// What the host sets; written through `inputs_mut` (or, for a free body's mount, by the
+    /// evaluation).
+    inputs: BodyInputs<T>,
+    /// Computed from `coords` and `inputs` on demand, never saved.
+    derived: Derived<T>,
+    /// Co-Simulation's machinery (empty in the dual copy).
+    stepper: Stepper,
 }
 
 /// Largest magnitude of a Real the host sets (and of a rate it gives, and of a state a step may
@@ -295,29 +238,6 @@ pub struct FlexibleBody<T = f64> {
 /// stay finite. A value past it is a unit or host error that would otherwise surface as NaN
 /// outputs many calls later.
 pub const REAL_LIMIT: f64 = 1e100;
-
-/// A Co-Simulation host that sets the mount's orientation (or spin) between steps drives it:
-/// after a step the FMU reports the state the step produced in the pose the step turned the
-/// mount to, which the host's next value replaces (what co-simulation masters read before they
-/// set the next inputs). A host that holds them (set once, before initialisation ends) keeps its
-/// own values, as Model Exchange does. `rot`, `w`: the host's values while `mount` holds the
-/// step's end pose, until the host sets an entry (the others stay the host's) or the next step
-/// starts from them.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub(crate) struct HostMount {
-    pub rot: Option<Mat3>,
-    pub w: Option<Vec3>,
-    pub rot_driven: bool,
-    pub w_driven: bool,
-}
-
-/// Time derivatives of the inputs over the next step (first-order hold); zero means held.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct InputRates {
-    pub mount: MountMotion,
-    pub loads: Vec<FlangeLoad>,
-    pub any: bool,
-}
 
 /// Why a body spinning above its critical speed misbehaves, for the host's log.
 pub const UNSTABLE_STIFFNESS: &str = "the effective stiffness of the body (elastic plus centrifugal and geometric terms at the present spin and loads) is not positive definite: the spin is above a critical speed of this body, whose deformation can grow without bound (declare geometric_stiffening in the scene if the real part is stiffened by its rotation)";
@@ -333,56 +253,25 @@ impl FlexibleBody {
     fn with_coupling_terms(body: Arc<ReducedBody>, coupling_terms: Arc<CouplingTerms>) -> Self {
         let n = body.n_modes();
         let nf = body.flanges.len();
-        let params = Parameters { g: [0.0; 3], alpha: body.alpha, beta: body.beta };
+        let split = ModeSplit::of(&body);
         Self {
-            mount: MountMotion::default(),
-            loads: vec![FlangeLoad::default(); nf],
-            params,
-            q: vec![0.0; n],
-            qd: vec![0.0; n],
-            load: vec![0.0; n],
-            eval: Evaluation {
-                valid: false,
-                qdd: vec![0.0; n],
-                flanges: vec![FlangeMotion::default(); nf],
-                reaction_valid: false,
-                mount_force: [0.0; 3],
-                mount_torque: [0.0; 3],
-                generation: 0,
-                stresses: vec![([0.0; 7], 0); body.stress_points.len()],
+            coords: Coordinates {
+                q: vec![0.0; n],
+                qd: vec![0.0; n],
+                frame: body.free_floating.then(FrameState::default),
             },
-            coupling: Coupling {
-                c_d: vec![0.0; n * n],
-                c_k: vec![0.0; n * n],
-                force: vec![0.0; n],
-                coef: vec![0.0; term_count(nf)],
-                ..Coupling::default()
-            },
-            rot: k3::IDENTITY,
-            frame: body.free_floating.then(FrameState::default),
-            initial_frame: InitialFrame::default(),
-            frame_rate: FrameState::default(),
-            cr_q: vec![0.0; 3 * n],
-            propagator: ModalPropagator::with_modes(n),
-            coupled: if body.modes_couple() { CoupledPropagator::with_modes(n) } else { CoupledPropagator::default() },
-            reference_coef: vec![0.0; term_count(nf)],
-            reference_coef_known: false,
-            coupling_terms,
-            warning: None,
-            rates: InputRates {
-                mount: MountMotion { rot: [0.0; 9], ..MountMotion::default() },
+            inputs: BodyInputs {
+                mount: MountMotion::default(),
                 loads: vec![FlangeLoad::default(); nf],
-                any: false,
+                params: Parameters { g: [0.0; 3], alpha: body.alpha, beta: body.beta },
+                initial_frame: InitialFrame::default(),
+                rates: InputRates::held(nf),
+                host: HostMount::default(),
             },
-            load_rate: vec![0.0; n],
-            n_dynamic: body.n_dynamic(),
-            n_relaxing: body.n_relaxing(),
-            quasi_static: false,
-            settling: false,
-            qs_work: QuasiStaticWork::new(n, body.n_dynamic(), body.free_floating, term_count(nf)),
-            stepped: SteppedInputs::new(nf),
-            host_mount: HostMount::default(),
-            step_work: StepWorkspace::for_body(&body),
+            derived: Derived::for_body(&body, split.n_dynamic),
+            stepper: Stepper::for_body(&body),
+            split,
+            coupling_terms,
             body,
         }
     }
@@ -391,78 +280,24 @@ impl FlexibleBody {
     /// Seed a direction in the `.d` parts (through `mount_mut`, `load_mut`, `q_mut`, ...) and
     /// evaluate: every result's `.d` is then its exact directional derivative.
     pub fn to_dual(&self) -> FlexibleBody<Dual> {
-        let n = self.n_modes();
-        let zeros = |len: usize| vec![Dual::default(); len];
         FlexibleBody {
             body: Arc::clone(&self.body),
-            mount: self.mount.map(Dual::from),
-            loads: self.loads.iter().map(|l| FlangeLoad { f: l.f.map(Dual::from), t: l.t.map(Dual::from) }).collect(),
-            params: self.params,
-            q: self.q.iter().map(|&x| Dual::from(x)).collect(),
-            qd: self.qd.iter().map(|&x| Dual::from(x)).collect(),
-            load: zeros(n),
-            eval: Evaluation {
-                valid: false,
-                qdd: zeros(n),
-                flanges: vec![FlangeMotion::default(); self.eval.flanges.len()],
-                reaction_valid: false,
-                mount_force: [Dual::default(); 3],
-                mount_torque: [Dual::default(); 3],
-                generation: 0,
-                stresses: vec![([Dual::default(); 7], 0); self.eval.stresses.len()],
-            },
-            coupling: Coupling {
-                c_d: zeros(n * n),
-                c_k: zeros(n * n),
-                force: zeros(n),
-                coef: zeros(term_count(self.loads.len())),
-                ..Coupling::default()
-            },
-            rot: k3::IDENTITY.map(Dual::from),
-            frame: self.frame.map(|f| f.map(Dual::from)),
-            initial_frame: self.initial_frame,
-            frame_rate: FrameState::default(),
-            cr_q: zeros(3 * n),
-            propagator: ModalPropagator::with_modes(0),
-            coupled: CoupledPropagator::default(),
-            reference_coef: Vec::new(),
-            reference_coef_known: false,
             coupling_terms: Arc::clone(&self.coupling_terms),
-            warning: None,
-            rates: self.rates.clone(),
-            load_rate: Vec::new(),
-            n_dynamic: self.n_dynamic,
-            n_relaxing: self.n_relaxing,
-            quasi_static: self.quasi_static,
-            settling: false,
-            qs_work: QuasiStaticWork::new(n, self.n_dynamic, self.frame.is_some(), term_count(self.loads.len())),
+            split: ModeSplit { settling: false, ..self.split },
+            coords: self.coords.map(Dual::from),
+            inputs: self.inputs.to_dual(),
+            derived: Derived::for_body(&self.body, self.split.n_dynamic),
             // stepping is f64 only
-            stepped: SteppedInputs::default(),
-            host_mount: HostMount::default(),
-            step_work: StepWorkspace::default(),
+            stepper: Stepper::none(),
         }
     }
 
     pub fn state(&self) -> BodyState {
         BodyState {
+            coordinates: self.coords.clone(),
             // the host's mount: a restored body starts its next step where this one would
-            mount: MountMotion {
-                rot: self.host_mount.rot.unwrap_or(self.mount.rot),
-                w: self.host_mount.w.unwrap_or(self.mount.w),
-                ..self.mount
-            },
-            loads: self.loads.clone(),
-            params: self.params,
-            q: self.q.clone(),
-            qd: self.qd.clone(),
-            frame: self.frame,
-            initial_frame: self.initial_frame,
-            rates: self.rates.clone(),
-            coupling_reference: self.coupled.key().map(|(h, alpha, beta)| {
-                let (c_d, c_k) = self.coupled.reference();
-                let coef = self.reference_coef_known.then(|| self.reference_coef.clone());
-                CouplingReference { h, alpha, beta, c_d: c_d.to_vec(), c_k: c_k.to_vec(), coef }
-            }),
+            inputs: self.inputs.as_saved(),
+            coupling_reference: self.stepper.coupling_reference(),
             stepped_inputs: self.stepped_inputs(),
         }
     }
@@ -470,46 +305,44 @@ impl FlexibleBody {
     /// A new body of the same reduced body in `state`, its caches empty; Err if the state's
     /// sizes do not fit this body.
     pub fn with_state(&self, state: BodyState) -> Result<Self, BodyError> {
-        let (n, nf) = (self.n_modes(), self.loads.len());
-        if state.q.len() != n || state.qd.len() != n {
-            return Err(StateMismatch::Modes { q: state.q.len(), qd: state.qd.len(), n }.into());
+        let (n, nf) = (self.n_modes(), self.inputs.loads.len());
+        let BodyState { coordinates, inputs, coupling_reference, stepped_inputs } = state;
+        if coordinates.q.len() != n || coordinates.qd.len() != n {
+            return Err(StateMismatch::Modes { q: coordinates.q.len(), qd: coordinates.qd.len(), n }.into());
         }
-        if state.loads.len() != nf || state.rates.loads.len() != nf {
-            return Err(StateMismatch::Flanges { found: state.loads.len(), n: nf }.into());
+        if inputs.loads.len() != nf || inputs.rates.loads.len() != nf {
+            return Err(StateMismatch::Flanges { found: inputs.loads.len(), n: nf }.into());
         }
-        if state.frame.is_some() != self.frame.is_some() {
-            return Err(StateMismatch::Kind { free: state.frame.is_some(), body_free: self.frame.is_some() }.into());
+        let (free, body_free) = (coordinates.frame.is_some(), self.coords.frame.is_some());
+        if free != body_free {
+            return Err(StateMismatch::Kind { free, body_free }.into());
         }
         let mut b = FlexibleBody::with_coupling_terms(Arc::clone(&self.body), Arc::clone(&self.coupling_terms));
-        b.quasi_static = self.quasi_static;
-        b.mount = state.mount;
-        b.loads = state.loads;
-        b.params = state.params;
-        b.q = state.q;
-        b.qd = state.qd;
-        b.frame = state.frame;
-        b.initial_frame = state.initial_frame;
-        b.rates = state.rates;
-        if let Some(st) = &state.stepped_inputs {
+        b.split.quasi_static = self.split.quasi_static;
+        b.coords = coordinates;
+        // a saved state holds the host's mount, no view of one a step moved
+        b.inputs = BodyInputs { host: HostMount::default(), ..inputs };
+        if let Some(st) = &stepped_inputs {
             b.set_stepped_inputs(st)?;
         }
-        if let Some(r) = state.coupling_reference {
+        if let Some(r) = coupling_reference {
             let nn = n * n;
             let valid = r.c_d.len() == nn && r.c_k.len() == nn && r.h > 0.0 && r.h.is_finite();
-            if !valid || !b.coupled.has_storage() {
+            if !valid || !b.stepper.coupled.has_storage() {
                 return Err(StateMismatch::CouplingReference { c_d: r.c_d.len(), c_k: r.c_k.len(), n }.into());
             }
             if !(r.c_d.iter().chain(&r.c_k).chain([&r.alpha, &r.beta]).all(|v| v.is_finite())) {
                 return Err(StateMismatch::CouplingReferenceNotFinite.into());
             }
             let body = Arc::clone(&b.body);
-            let ws = &mut b.step_work.coupled.propagator;
-            b.coupled.prepare(&body.omega, r.alpha, r.beta, &body.modal_damping, &r.c_d, &r.c_k, r.h, ws)?;
+            let s = &mut b.stepper;
+            let ws = &mut s.work.coupled.propagator;
+            s.coupled.prepare(&body.omega, r.alpha, r.beta, &body.modal_damping, &r.c_d, &r.c_k, r.h, ws)?;
             // coefficients of another length or not finite: unknown, and the next step renews
-            if let Some(coef) = r.coef.filter(|c| c.len() == b.reference_coef.len() && c.iter().all(|v| v.is_finite()))
+            if let Some(coef) = r.coef.filter(|c| c.len() == s.reference_coef.len() && c.iter().all(|v| v.is_finite()))
             {
-                b.reference_coef.copy_from_slice(&coef);
-                b.reference_coef_known = true;
+                s.reference_coef.copy_from_slice(&coef);
+                s.reference_coef_known = true;
             }
         }
         Ok(b)
@@ -521,111 +354,124 @@ impl<T: Scalar> FlexibleBody<T> {
         &self.body
     }
     pub fn n_modes(&self) -> usize {
-        self.q.len()
+        self.coords.q.len()
     }
     pub fn q(&self) -> &[T] {
-        &self.q
+        &self.coords.q
     }
     pub fn qd(&self) -> &[T] {
-        &self.qd
+        &self.coords.qd
     }
     pub fn mount(&self) -> &MountMotion<T> {
-        &self.mount
+        &self.inputs.mount
     }
     pub fn loads(&self) -> &[FlangeLoad<T>] {
-        &self.loads
+        &self.inputs.loads
     }
     pub fn parameters(&self) -> &Parameters {
-        &self.params
+        &self.inputs.params
     }
 
     pub fn frame(&self) -> Option<&FrameState<T>> {
-        self.frame.as_ref()
+        self.coords.frame.as_ref()
     }
     pub fn frame_mut(&mut self) -> Option<&mut FrameState<T>> {
-        self.eval.valid = false;
-        self.frame.as_mut()
+        self.coords_mut().frame.as_mut()
+    }
+
+    /// The coordinates for writing: the derived values are stale from here on. Writes made by
+    /// an evaluation itself (the quasi-static modes it solves) go to `coords` directly.
+    pub(super) fn coords_mut(&mut self) -> &mut Coordinates<T> {
+        self.derived.invalidate(Change::Coordinates);
+        &mut self.coords
+    }
+    /// The inputs for writing: the derived values, the coupling included, are stale from here
+    /// on. Writes made by an evaluation itself (a free body's mount, its frame's motion) go to
+    /// `inputs` directly.
+    pub(super) fn inputs_mut(&mut self) -> &mut BodyInputs<T> {
+        self.derived.invalidate(Change::Inputs);
+        &mut self.inputs
     }
 
     pub fn mount_mut(&mut self) -> &mut MountMotion<T> {
-        self.eval.valid = false;
-        self.coupling.valid = false;
-        &mut self.mount
+        &mut self.inputs_mut().mount
     }
     /// Entry k (row-major) of the mount's orientation, as the host sets it: the mount returns to
     /// the host's view of its orientation, this entry changed.
     pub fn set_mount_rotation(&mut self, k: usize, value: T) {
-        if let Some(host) = self.host_mount.rot.take() {
-            self.mount.rot = host.map(c);
+        let inputs = self.inputs_mut();
+        if let Some(host) = inputs.host.rot.take() {
+            inputs.mount.rot = host.map(c);
         }
-        self.host_mount.rot_driven = true;
-        self.mount_mut().rot[k] = value;
+        inputs.host.rot_driven = true;
+        inputs.mount.rot[k] = value;
     }
     /// Component i of the mount's angular velocity, as the host sets it.
     pub fn set_mount_spin(&mut self, i: usize, value: T) {
-        if let Some(host) = self.host_mount.w.take() {
-            self.mount.w = host.map(c);
+        let inputs = self.inputs_mut();
+        if let Some(host) = inputs.host.w.take() {
+            inputs.mount.w = host.map(c);
         }
-        self.host_mount.w_driven = true;
-        self.mount_mut().w[i] = value;
+        inputs.host.w_driven = true;
+        inputs.mount.w[i] = value;
     }
     /// Initialisation is over: what the host set so far are start values, not a drive.
     pub fn start_stepping(&mut self) {
-        self.host_mount.rot_driven = false;
-        self.host_mount.w_driven = false;
+        self.inputs.host.rot_driven = false;
+        self.inputs.host.w_driven = false;
     }
     pub fn load_mut(&mut self, flange: usize) -> &mut FlangeLoad<T> {
-        self.eval.valid = false;
-        self.coupling.valid = false;
-        &mut self.loads[flange]
+        &mut self.inputs_mut().loads[flange]
     }
     pub fn parameters_mut(&mut self) -> &mut Parameters {
-        self.eval.valid = false;
-        self.coupling.valid = false;
-        &mut self.params
+        &mut self.inputs_mut().params
+    }
+    /// A free-floating body's initial pose and velocity (the FMU's parameters): read only when
+    /// its frame is started (`start_frame`), so setting it leaves the derived values as they are.
+    pub fn initial_frame(&self) -> &InitialFrame {
+        &self.inputs.initial_frame
+    }
+    pub fn initial_frame_mut(&mut self) -> &mut InitialFrame {
+        &mut self.inputs.initial_frame
     }
     /// Set the leading modes' q, q' (all of them, or Model Exchange's dynamic ones).
     pub fn set_state(&mut self, q: &[T], qd: &[T]) {
-        self.q[..q.len()].copy_from_slice(q);
-        self.qd[..qd.len()].copy_from_slice(qd);
-        self.eval.valid = false;
+        let coords = self.coords_mut();
+        coords.q[..q.len()].copy_from_slice(q);
+        coords.qd[..qd.len()].copy_from_slice(qd);
     }
     pub fn q_mut(&mut self) -> &mut [T] {
-        self.eval.valid = false;
-        &mut self.q
+        &mut self.coords_mut().q
     }
     pub fn qd_mut(&mut self) -> &mut [T] {
-        self.eval.valid = false;
-        &mut self.qd
+        &mut self.coords_mut().qd
     }
 
     fn gravity(&self) -> Vec3<T> {
-        self.params.g.map(c)
+        self.inputs.params.g.map(c)
     }
 
     /// Everything that follows from the state and inputs (q'', flange motion), once per change.
     fn evaluate(&mut self) -> Result<(), BodyError> {
-        if self.eval.valid {
+        if self.derived.eval.valid {
             return Ok(());
         }
-        if self.frame.is_some() {
+        if self.coords.frame.is_some() {
             self.free_accelerations()?;
         } else {
             self.mounted_accelerations()?;
         }
         self.flange_kinematics();
-        self.eval.reaction_valid = false;
-        self.eval.generation += 1;
-        self.eval.valid = true;
+        self.derived.evaluated();
         Ok(())
     }
 
     /// Position, orientation and their rates of every force flange, from q, q', q'' and the
     /// mount (or the free body's frame) of the evaluation.
     fn flange_kinematics(&mut self) {
-        let n = self.q.len();
-        let m = &self.mount;
-        let a = &self.rot;
+        let n = self.coords.q.len();
+        let m = &self.inputs.mount;
+        let a = &self.derived.rot;
         for (i, flange) in self.body.flanges.iter().enumerate() {
             // the flange's six shape rows (translation, rotation) times q, q' and q''
             let rows = |x: &[T]| {
@@ -633,14 +479,14 @@ impl<T: Scalar> FlexibleBody<T> {
                 T::add_scaled_mat_vec(&flange.shapes[..6 * n], x, T::from(1.0), &mut out);
                 out
             };
-            let (x, xd, xdd) = (rows(&self.q), rows(&self.qd), rows(&self.eval.qdd));
+            let (x, xd, xdd) = (rows(&self.coords.q), rows(&self.coords.qd), rows(&self.derived.eval.qdd));
             let (u, phi) = ([x[0], x[1], x[2]], [x[3], x[4], x[5]]);
             let (ud, phid) = ([xd[0], xd[1], xd[2]], [xd[3], xd[4], xd[5]]);
             let (udd, phidd) = ([xdd[0], xdd[1], xdd[2]], [xdd[3], xdd[4], xdd[5]]);
             let rho = k3::mul(a, k3::add(flange.position.map(c), u));
             let ud_w = k3::mul(a, ud);
             let phid_w = k3::mul(a, phid);
-            let out = &mut self.eval.flanges[i];
+            let out = &mut self.derived.eval.flanges[i];
             out.u = u;
             out.phi = phi;
             out.r = k3::add(m.r, rho);
@@ -661,18 +507,18 @@ impl<T: Scalar> FlexibleBody<T> {
     /// d/dt (q, q') of the leading modes (as many as `dq` holds) into `dq`, `dqd`.
     pub fn derivatives(&mut self, dq: &mut [T], dqd: &mut [T]) -> Result<(), BodyError> {
         self.evaluate()?;
-        dq.copy_from_slice(&self.qd[..dq.len()]);
-        dqd.copy_from_slice(&self.eval.qdd[..dqd.len()]);
+        dq.copy_from_slice(&self.coords.qd[..dq.len()]);
+        dqd.copy_from_slice(&self.derived.eval.qdd[..dqd.len()]);
         Ok(())
     }
 
     pub fn qdd(&mut self) -> Result<&[T], BodyError> {
         self.evaluate()?;
-        Ok(&self.eval.qdd)
+        Ok(&self.derived.eval.qdd)
     }
 
     pub fn flange_motion(&mut self, flange: usize) -> Result<&FlangeMotion<T>, BodyError> {
         self.evaluate()?;
-        Ok(&self.eval.flanges[flange])
+        Ok(&self.derived.eval.flanges[flange])
     }
 }

@@ -18,7 +18,7 @@ pub const ROTATION_TOLERANCE: f64 = 1e-2;
 impl FlexibleBody {
     /// The mount orientation as the host last set it (not the pose a step turned it to).
     pub fn host_rotation(&self) -> [f64; 9] {
-        self.host_mount.rot.unwrap_or(self.mount.rot)
+        self.inputs.host.rot.unwrap_or(self.inputs.mount.rot)
     }
 
     /// Err with the reason unless `rot` is a rotation within [`ROTATION_TOLERANCE`].
@@ -39,16 +39,16 @@ impl<T: Scalar> FlexibleBody<T> {
     /// Refuse a mount orientation off the rotations or a spin the body was not built for; set
     /// the orientation in use.
     pub(super) fn check_inputs(&mut self) -> Result<(), BodyError> {
-        let defect = k3::rotation_defect(&self.mount.rot.map(T::value));
+        let defect = k3::rotation_defect(&self.inputs.mount.rot.map(T::value));
         rotation_refusal(&self.body.mount, defect)?;
         // a derivative goes through the projection even at an exact rotation: a change of R
         // off the rotations moves the body only by its rotational part
-        self.rot = if defect > 1e-14 || T::CARRIES_DERIVATIVE {
-            k3::nearest_rotation(&self.mount.rot)
+        self.derived.rot = if defect > 1e-14 || T::CARRIES_DERIVATIVE {
+            k3::nearest_rotation(&self.inputs.mount.rot)
         } else {
-            self.mount.rot
+            self.inputs.mount.rot
         };
-        let spinning = self.mount.w.iter().chain(&self.mount.z).any(|x| x.value() != 0.0);
+        let spinning = self.inputs.mount.w.iter().chain(&self.inputs.mount.z).any(|x| x.value() != 0.0);
         if self.body.rotation.is_none() && spinning {
             return Err(BodyError::SpinWithoutRotation { mount: self.body.mount.clone() });
         }
@@ -59,42 +59,42 @@ impl<T: Scalar> FlexibleBody<T> {
     /// `first` on.
     pub(super) fn prepare_coupling_rows(&mut self, first: usize) {
         self.prepare_coupling_coefficients();
-        if self.coupling.rows_from.is_none_or(|r| r > first) {
-            fill_coupling_rows(&self.coupling_terms, &self.body, first, &mut self.coupling);
+        if self.derived.coupling.rows_from.is_none_or(|r| r > first) {
+            fill_coupling_rows(&self.coupling_terms, &self.body, first, &mut self.derived.coupling);
         }
     }
 
     /// The coupling's coefficients for the inputs (the Co-Simulation step needs its matrices
     /// only where it renews its transition).
     pub(super) fn prepare_coupling_coefficients(&mut self) {
-        if !self.coupling.valid {
+        if !self.derived.coupling.valid {
             coupling_coefficients(
                 &self.coupling_terms,
-                &self.rot,
-                &self.mount,
-                &self.loads,
-                self.params.g,
-                &mut self.coupling,
+                &self.derived.rot,
+                &self.inputs.mount,
+                &self.inputs.loads,
+                self.inputs.params.g,
+                &mut self.derived.coupling,
             );
         }
     }
 
     /// p = -C_t^T a_B + sum_k Phi_k^T [A^T f_k; A^T t_k]
     pub(super) fn modal_load(&mut self) {
-        let a = &self.rot;
-        let a_b = k3::mul_t(a, k3::sub(self.mount.a, self.params.g.map(c)));
-        let n = self.q.len();
+        let a = &self.derived.rot;
+        let a_b = k3::mul_t(a, k3::sub(self.inputs.mount.a, self.inputs.params.g.map(c)));
+        let n = self.coords.q.len();
         let ct = &self.body.c_t;
         for j in 0..n {
-            self.load[j] = -(a_b[0] * ct[j] + a_b[1] * ct[n + j] + a_b[2] * ct[2 * n + j]);
+            self.derived.load[j] = -(a_b[0] * ct[j] + a_b[1] * ct[n + j] + a_b[2] * ct[2 * n + j]);
         }
         if let Some(rot) = &self.body.rotation {
-            let w = k3::mul_t(a, self.mount.w);
-            let z = k3::mul_t(a, self.mount.z);
+            let w = k3::mul_t(a, self.inputs.mount.w);
+            let z = k3::mul_t(a, self.inputs.mount.z);
             for i in 0..3 {
                 if !z[i].is_zero() {
                     let c_a = &self.body.c_r[i * n..(i + 1) * n];
-                    for (load, c_a) in self.load.iter_mut().zip(c_a) {
+                    for (load, c_a) in self.derived.load.iter_mut().zip(c_a) {
                         *load -= z[i] * *c_a;
                     }
                 }
@@ -102,21 +102,21 @@ impl<T: Scalar> FlexibleBody<T> {
                     let ww = w[i] * w[k];
                     if !ww.is_zero() {
                         let o = &rot.o_vec[(3 * i + k) * n..(3 * i + k + 1) * n];
-                        for (load, o) in self.load.iter_mut().zip(o) {
+                        for (load, o) in self.derived.load.iter_mut().zip(o) {
                             *load -= ww * *o;
                         }
                     }
                 }
             }
         }
-        for (flange, load) in self.body.flanges.iter().zip(&self.loads) {
+        for (flange, load) in self.body.flanges.iter().zip(&self.inputs.loads) {
             let f_b = k3::mul_t(a, load.f);
             let t_b = k3::mul_t(a, load.t);
             let wrench = [f_b[0], f_b[1], f_b[2], t_b[0], t_b[1], t_b[2]];
             for (row, w) in wrench.iter().enumerate() {
                 if !w.is_zero() {
                     let shape = &flange.shapes[row * n..(row + 1) * n];
-                    for (load, s) in self.load.iter_mut().zip(shape) {
+                    for (load, s) in self.derived.load.iter_mut().zip(shape) {
                         *load += *w * *s;
                     }
                 }
@@ -128,39 +128,40 @@ impl<T: Scalar> FlexibleBody<T> {
     pub(super) fn mounted_accelerations(&mut self) -> Result<(), BodyError> {
         self.check_inputs()?;
         self.modal_load();
-        let n = self.q.len();
+        let n = self.coords.q.len();
         // the algebraic modes' solve (Model Exchange) reads the coupling's rows; the accelerated
         // modes' coupling force comes from its terms
-        if self.quasi_static && self.n_dynamic < n {
-            self.prepare_coupling_rows(self.n_dynamic);
+        if self.split.quasi_static && self.split.n_dynamic < n {
+            self.prepare_coupling_rows(self.split.n_dynamic);
         } else {
             self.prepare_coupling_coefficients();
         }
-        if self.quasi_static {
+        if self.split.quasi_static {
             // the coupling's rows are lent to the solve (moving the vectors allocates nothing)
-            let coupling = std::mem::take(&mut self.coupling);
-            let nd = self.n_dynamic;
+            let coupling = std::mem::take(&mut self.derived.coupling);
+            let nd = self.split.n_dynamic;
             let rows = coupling.active.then(|| (&coupling.c_k[nd * n..], &coupling.c_d[nd * n..]));
             let solved = self.solve_quasi_static(rows, Some(&coupling.coef));
-            self.coupling = coupling;
+            self.derived.coupling = coupling;
             solved?;
         }
         // the accelerated modes: all, or (Model Exchange) the dynamic ones; the rest are at rest
-        let na = if self.quasi_static { self.n_dynamic } else { n };
-        let (alpha, beta) = (self.params.alpha, self.params.beta);
+        let na = if self.split.quasi_static { self.split.n_dynamic } else { n };
+        let (alpha, beta) = (self.inputs.params.alpha, self.inputs.params.beta);
         for j in 0..na {
             let w2 = self.body.omega[j] * self.body.omega[j];
-            self.eval.qdd[j] =
-                self.load[j] - self.qd[j] * (alpha + beta * w2 + self.body.modal_damping[j]) - self.q[j] * w2;
+            self.derived.eval.qdd[j] = self.derived.load[j]
+                - self.coords.qd[j] * (alpha + beta * w2 + self.body.modal_damping[j])
+                - self.coords.q[j] * w2;
         }
-        if self.coupling.active {
-            let force = &mut self.coupling.force[..na];
-            self.coupling_terms.force(&self.body, &self.coupling.coef, &self.q, &self.qd, force);
-            for (qdd, f) in self.eval.qdd.iter_mut().zip(force.iter()) {
+        if self.derived.coupling.active {
+            let force = &mut self.derived.coupling.force[..na];
+            self.coupling_terms.force(&self.body, &self.derived.coupling.coef, &self.coords.q, &self.coords.qd, force);
+            for (qdd, f) in self.derived.eval.qdd.iter_mut().zip(force.iter()) {
                 *qdd -= *f;
             }
         }
-        self.eval.qdd[na..].fill(T::zero());
+        self.derived.eval.qdd[na..].fill(T::zero());
         Ok(())
     }
 }

@@ -6,8 +6,29 @@
 //! no frequency above the cutoff. Without coupling terms the solve is diagonal.
 
 use super::dense::{dot, lu_factor, lu_solve};
-use super::{BodyError, FlexibleBody};
+use super::{BodyError, Change, FlexibleBody};
+use crate::reduced::ReducedBody;
 use crate::scalar::{Scalar, c};
+
+/// Which modes carry the dynamics: modes 0..n_dynamic are below the dynamic cutoff; with
+/// `quasi_static` (Model Exchange) the others are solved algebraically at every evaluation
+/// instead of integrated. Fixed by the reduced body except the interface's choice.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct ModeSplit {
+    pub(super) n_dynamic: usize,
+    /// Quasi-static modes nd..nd + n_relaxing settle through their damping (first-order states
+    /// in Model Exchange); the rest are algebraic.
+    pub(super) n_relaxing: usize,
+    pub(super) quasi_static: bool,
+    /// Set while the quasi-static modes are put in equilibrium (relaxing ones included).
+    pub(super) settling: bool,
+}
+
+impl ModeSplit {
+    pub(super) fn of(body: &ReducedBody) -> Self {
+        Self { n_dynamic: body.n_dynamic(), n_relaxing: body.n_relaxing(), quasi_static: false, settling: false }
+    }
+}
 
 /// Workspace of the quasi-static solve, allocated once with the body.
 #[derive(Debug, Clone, Default)]
@@ -54,43 +75,41 @@ impl<T: Scalar> QuasiStaticWork<T> {
 impl<T: Scalar> FlexibleBody<T> {
     /// Number of modes that are states in Model Exchange.
     pub fn n_dynamic(&self) -> usize {
-        self.n_dynamic
+        self.split.n_dynamic
     }
 
     /// Whether the modes above the cutoff are solved algebraically (Model Exchange) rather than
     /// integrated with the others (Co-Simulation's exact propagation).
     pub fn quasi_static(&self) -> bool {
-        self.quasi_static
+        self.split.quasi_static
     }
 
     /// The algebraic modes: quasi-static modes that are no state in Model Exchange.
     pub(super) fn algebraic_range(&self) -> std::ops::Range<usize> {
-        self.n_dynamic + self.n_relaxing..self.q.len()
+        self.split.n_dynamic + self.split.n_relaxing..self.coords.q.len()
     }
 
     /// The quasi-static solve of Model Exchange applied to the body's own state; `settling`: the
     /// relaxing modes are put in equilibrium too instead of keeping their q.
     pub(super) fn equilibrate_quasi_static(&mut self, settling: bool) -> Result<(), BodyError> {
-        if self.n_dynamic == self.q.len() {
+        if self.split.n_dynamic == self.coords.q.len() {
             return Ok(());
         }
-        let was = self.quasi_static;
-        self.quasi_static = true;
-        self.settling = settling;
-        self.eval.valid = false;
+        let was = self.split.quasi_static;
+        self.split.settling = settling;
+        self.set_quasi_static(true);
         let settled = self.evaluate();
-        self.settling = false;
-        self.quasi_static = was;
-        self.eval.valid = false;
+        self.split.settling = false;
+        self.set_quasi_static(was);
         settled
     }
 
     pub fn set_quasi_static(&mut self, on: bool) {
-        self.quasi_static = on;
-        self.eval.valid = false;
+        self.split.quasi_static = on;
+        self.derived.invalidate(Change::Coordinates);
     }
 
-    /// Solve the quasi-static modes from the modal load in `self.load` and the rows s of the
+    /// Solve the quasi-static modes from the modal load in `self.derived.load` and the rows s of the
     /// coupling (`rows`: C_k and C_d, n_s x n each; None: no coupling). The algebraic ones get
     /// q_a from their equilibrium with every other coordinate and q'_a = 0; the relaxing ones
     /// (states in Model Exchange) keep their q_r and get the rate of their damping without
@@ -102,31 +121,32 @@ impl<T: Scalar> FlexibleBody<T> {
         rows: Option<(&[T], &[T])>,
         coef: Option<&[T]>,
     ) -> Result<(), BodyError> {
-        let (n, nd) = (self.q.len(), self.n_dynamic);
+        let (n, nd) = (self.coords.q.len(), self.split.n_dynamic);
         if nd == n {
             return Ok(());
         }
         // settling puts every quasi-static mode in equilibrium, the relaxing ones included
-        let nr = if self.settling { 0 } else { self.n_relaxing };
+        let nr = if self.split.settling { 0 } else { self.split.n_relaxing };
         let known = nd + nr;
         let na = n - known;
         let omega = &self.body.omega;
-        self.qd[nd..].fill(T::zero());
+        self.coords.qd[nd..].fill(T::zero());
         match rows {
             None => {
                 for j in known..n {
-                    self.q[j] = self.load[j] / (omega[j] * omega[j]);
+                    self.coords.q[j] = self.derived.load[j] / (omega[j] * omega[j]);
                 }
             }
             Some((c_k, c_d)) if na > 0 => {
-                let held = self.qs_work.holds(coef, known);
-                let work = &mut self.qs_work;
+                let held = self.derived.qs_work.holds(coef, known);
+                let work = &mut self.derived.qs_work;
                 let a = &mut work.matrix;
                 for i in 0..na {
                     let row = (nr + i) * n;
                     let (rk, rd) = (&c_k[row..row + n], &c_d[row..row + n]);
-                    self.q[known + i] =
-                        self.load[known + i] - dot(&rk[..known], &self.q[..known]) - dot(&rd[..nd], &self.qd[..nd]);
+                    self.coords.q[known + i] = self.derived.load[known + i]
+                        - dot(&rk[..known], &self.coords.q[..known])
+                        - dot(&rd[..nd], &self.coords.qd[..nd]);
                     if !held {
                         a[i * na..(i + 1) * na].copy_from_slice(&rk[known..]);
                         a[i * na + i] += c(omega[known + i] * omega[known + i]);
@@ -143,38 +163,37 @@ impl<T: Scalar> FlexibleBody<T> {
                         work.factored_from = Some(known);
                     }
                 }
-                lu_solve(&a[..na * na], na, &work.pivots[..na], &mut self.q[known..]);
+                lu_solve(&a[..na * na], na, &work.pivots[..na], &mut self.coords.q[known..]);
             }
             Some(_) => {}
         }
-        let (alpha, beta) = (self.params.alpha, self.params.beta);
+        let (alpha, beta) = (self.inputs.params.alpha, self.inputs.params.beta);
         let cutoff = self.body.dynamic_cutoff;
         for l in 0..nr {
             let j = nd + l;
             let w2 = omega[j] * omega[j];
-            let mut force = self.load[j] - self.q[j] * w2;
+            let mut force = self.derived.load[j] - self.coords.q[j] * w2;
             if let Some((c_k, c_d)) = rows {
                 let (rk, rd) = (&c_k[l * n..(l + 1) * n], &c_d[l * n..(l + 1) * n]);
-                force -= dot(rk, &self.q) + dot(&rd[..nd], &self.qd[..nd]);
+                force -= dot(rk, &self.coords.q) + dot(&rd[..nd], &self.coords.qd[..nd]);
             }
             // a mode whose damping was lowered at run time (alpha, beta are parameters)
             // settles at the cutoff's rate at most: the host never sees a faster one
             let d = (alpha + beta * w2 + self.body.modal_damping[j]).max(w2 / cutoff);
-            self.qd[j] = force / d;
+            self.coords.qd[j] = force / d;
         }
         Ok(())
     }
 
     /// Number of relaxing modes (first-order states of Model Exchange after the dynamic ones).
     pub fn n_relaxing(&self) -> usize {
-        self.n_relaxing
+        self.split.n_relaxing
     }
 
     /// Set the relaxing modes' q (Model Exchange's states after the dynamic modes' q, q').
     pub fn set_relaxing(&mut self, q: &[T]) {
-        let nd = self.n_dynamic;
-        self.q[nd..nd + q.len()].copy_from_slice(q);
-        self.eval.valid = false;
+        let nd = self.split.n_dynamic;
+        self.coords_mut().q[nd..nd + q.len()].copy_from_slice(q);
     }
 }
 

@@ -1,35 +1,35 @@
 //! The static start: the body at rest in the equilibrium of the present inputs.
 
 use super::dense::solve_dense;
-use super::{BodyError, FlexibleBody};
+use super::{BodyError, Change, FlexibleBody};
 use crate::scalar::{Scalar, c};
 
 impl<T: Scalar> FlexibleBody<T> {
     /// Put the body at rest in the static equilibrium of the present inputs: q' = 0 and
     /// (K + C_k) q = p, which for a spinning body includes centrifugal softening and stiffening.
     pub fn settle_static(&mut self) -> Result<(), BodyError> {
-        if self.frame.is_some() {
+        if self.coords.frame.is_some() {
             return Err(BodyError::StaticStartOfFreeBody);
         }
         self.check_inputs()?;
         self.modal_load();
         self.prepare_coupling_rows(0);
-        let n = self.q.len();
-        if self.coupling.active {
-            let mut a = self.coupling.c_k.clone();
+        let n = self.coords.q.len();
+        if self.derived.coupling.active {
+            let mut a = self.derived.coupling.c_k.clone();
             for j in 0..n {
                 a[j * n + j] += c(self.body.omega[j] * self.body.omega[j]);
             }
-            let mut x = self.load.clone();
+            let mut x = self.derived.load.clone();
             solve_dense(&mut a, &mut x, n, &mut vec![0; n]).map_err(|()| BodyError::NoStaticEquilibrium)?;
-            self.q.copy_from_slice(&x);
+            self.coords.q.copy_from_slice(&x);
         } else {
             for j in 0..n {
-                self.q[j] = self.load[j] / (self.body.omega[j] * self.body.omega[j]);
+                self.coords.q[j] = self.derived.load[j] / (self.body.omega[j] * self.body.omega[j]);
             }
         }
-        self.qd.fill(T::zero());
-        self.eval.valid = false;
+        self.coords.qd.fill(T::zero());
+        self.derived.invalidate(Change::Coordinates);
         Ok(())
     }
 }

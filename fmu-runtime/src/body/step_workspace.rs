@@ -9,7 +9,11 @@
 //! (an FMU state restored by cloning) has buffers of its own, whatever they hold.
 
 use super::coupling_terms::term_count;
-use super::{Coupling, FlangeLoad, FrameState, HostMount, MountMotion, Parameters};
+use super::inputs::SteppedInputs;
+use super::{
+    BodyInputs, Coordinates, Coupling, FlangeLoad, FrameState, HostMount, InitialFrame, InputRates, MountMotion,
+    Parameters,
+};
 use crate::coupled_propagator::CoupledPropagator;
 use crate::reduced::ReducedBody;
 use crate::workspace::Workspace;
@@ -37,7 +41,7 @@ impl StepWorkspace {
         Self {
             modes: n,
             flanges,
-            start: StepStart::new(n, flanges),
+            start: StepStart::new(n, flanges, body.free_floating),
             jump: JumpWork::new(n),
             coupled: if body.free_floating { CoupledWork::default() } else { CoupledWork::new(n, flanges, couples) },
             free: if body.free_floating { FreeWork::new(n) } else { FreeWork::default() },
@@ -53,34 +57,43 @@ impl StepWorkspace {
 }
 
 /// What a step changes, kept from its start, so that a step that is not taken leaves the body as
-/// it was: the host can read it, save it, or restore an earlier state and go on.
-#[derive(Debug, Clone, Default)]
+/// it was: the host can read it, save it, or restore an earlier state and go on. The body's own
+/// parts, copied whole (their unchanging fields along: one copy, no list of fields to keep in
+/// step with what a step writes).
+#[derive(Debug, Clone)]
 pub(super) struct StepStart {
-    pub(super) q: Vec<f64>,
-    pub(super) qd: Vec<f64>,
-    pub(super) mount: MountMotion,
-    pub(super) loads: Vec<FlangeLoad>,
-    pub(super) frame: Option<FrameState>,
-    pub(super) rate_mount: MountMotion,
-    pub(super) rate_loads: Vec<FlangeLoad>,
-    pub(super) rates_any: bool,
-    pub(super) host_mount: HostMount,
-    pub(super) stepped_valid: bool,
-    pub(super) stepped_a: [f64; 3],
-    pub(super) stepped_z: [f64; 3],
-    pub(super) stepped_loads: Vec<FlangeLoad>,
-    pub(super) stepped_params: Option<Parameters>,
+    pub(super) coords: Coordinates,
+    pub(super) inputs: BodyInputs,
+    pub(super) stepped: SteppedInputs,
+}
+
+impl Default for StepStart {
+    fn default() -> Self {
+        Self {
+            coords: Coordinates { q: Vec::new(), qd: Vec::new(), frame: None },
+            inputs: BodyInputs {
+                mount: MountMotion::default(),
+                loads: Vec::new(),
+                params: Parameters { g: [0.0; 3], alpha: 0.0, beta: 0.0 },
+                initial_frame: InitialFrame::default(),
+                rates: InputRates::default(),
+                host: HostMount::default(),
+            },
+            stepped: SteppedInputs::default(),
+        }
+    }
 }
 
 impl StepStart {
-    fn new(n: usize, flanges: usize) -> Self {
+    fn new(n: usize, flanges: usize, free_floating: bool) -> Self {
         Self {
-            q: vec![0.0; n],
-            qd: vec![0.0; n],
-            loads: vec![FlangeLoad::default(); flanges],
-            rate_loads: vec![FlangeLoad::default(); flanges],
-            stepped_loads: vec![FlangeLoad::default(); flanges],
-            ..Self::default()
+            coords: Coordinates { q: vec![0.0; n], qd: vec![0.0; n], frame: free_floating.then(FrameState::default) },
+            inputs: BodyInputs {
+                loads: vec![FlangeLoad::default(); flanges],
+                rates: InputRates::held(flanges),
+                ..Self::default().inputs
+            },
+            stepped: SteppedInputs::new(flanges),
         }
     }
 }
@@ -172,9 +185,9 @@ mod tests {
         let mut a = FlexibleBody::new(Arc::new(reduced));
         a.mount_mut().w = [0.0, 0.0, 20.0];
         let mut b = a.clone();
-        let scratch = |x: &mut FlexibleBody| x.step_work.coupled.propagator.carve([1]).unwrap()[0].as_ptr();
+        let scratch = |x: &mut FlexibleBody| x.stepper.work.coupled.propagator.carve([1]).unwrap()[0].as_ptr();
         assert_ne!(scratch(&mut a), scratch(&mut b));
-        assert_ne!(a.step_work.start.q.as_ptr(), b.step_work.start.q.as_ptr());
+        assert_ne!(a.stepper.work.start.coords.q.as_ptr(), b.stepper.work.start.coords.q.as_ptr());
         let (mut alone_a, mut alone_b) = (a.clone(), b.clone());
         let run = |x: &mut FlexibleBody, f: f64| {
             x.load_mut(0).f = [0.0, f, 1.0];

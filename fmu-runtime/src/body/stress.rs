@@ -9,22 +9,22 @@ impl<T: Scalar> FlexibleBody<T> {
     /// yy, zz, xy, yz, zx in the body frame (0..6), the von Mises stress (6).
     pub fn stress(&mut self, point: usize, component: usize) -> Result<T, BodyError> {
         self.evaluate()?;
-        let generation = self.eval.generation;
-        if self.eval.stresses[point].1 != generation {
+        let generation = self.derived.eval.generation;
+        if self.derived.eval.stresses[point].1 != generation {
             // the six rows in one pass, six independent sums: one dot product after another
             // waits on each addition (a point cost 450 ns so, 7 outputs read one by one)
-            let n = self.q.len();
+            let n = self.coords.q.len();
             let modes = &self.body.stress_points[point].modes;
             let mut s = [T::zero(); 6];
-            for (j, &q) in self.q.iter().enumerate() {
+            for (j, &q) in self.coords.q.iter().enumerate() {
                 for (r, s) in s.iter_mut().enumerate() {
                     *s += q * modes[r * n + j];
                 }
             }
             let values = [s[0], s[1], s[2], s[3], s[4], s[5], von_mises(s)];
-            self.eval.stresses[point] = (values, generation);
+            self.derived.eval.stresses[point] = (values, generation);
         }
-        Ok(self.eval.stresses[point].0[component])
+        Ok(self.derived.eval.stresses[point].0[component])
     }
 }
 

@@ -4,8 +4,8 @@ use super::BodyFmu;
 use super::error::VariableError;
 use super::values::{admissible, real_value};
 use crate::body::{
-    BodyError, BodyState, CouplingReference, FlangeLoad, FrameState, InitialFrame, InputRates, MountMotion, OutOfRange,
-    Parameters, SteppedState, term_count,
+    BodyError, BodyInputs, BodyState, Coordinates, CouplingReference, FlangeLoad, FrameState, HostMount, InitialFrame,
+    InputRates, MountMotion, OutOfRange, Parameters, SteppedState, term_count,
 };
 use fmi2::bytes::{DecodeError, Reader, Writer};
 use fmi2::{Causality, VarType};
@@ -92,25 +92,25 @@ impl BodyFmu {
         let s = self.body.state();
         let mut w = Writer::new(out);
         w.u32(BODY_STATE_VERSION);
-        w.u32(s.q.len() as u32);
-        w.u32(s.loads.len() as u32);
-        w.bool(s.frame.is_some());
+        w.u32(s.coordinates.q.len() as u32);
+        w.u32(s.inputs.loads.len() as u32);
+        w.bool(s.coordinates.frame.is_some());
         w.bool(self.static_start);
-        write_mount(&mut w, &s.mount);
-        write_loads(&mut w, &s.loads);
-        write_parameters(&mut w, &s.params);
-        w.f64s(&s.q);
-        w.f64s(&s.qd);
-        let i = &s.initial_frame;
+        write_mount(&mut w, &s.inputs.mount);
+        write_loads(&mut w, &s.inputs.loads);
+        write_parameters(&mut w, &s.inputs.params);
+        w.f64s(&s.coordinates.q);
+        w.f64s(&s.coordinates.qd);
+        let i = &s.inputs.initial_frame;
         for v in [&i.r, &i.phi, &i.v, &i.w] {
             w.f64s(v);
         }
-        if let Some(f) = &s.frame {
+        if let Some(f) = &s.coordinates.frame {
             write_frame_state(&mut w, f);
         }
-        w.bool(s.rates.any);
-        write_mount(&mut w, &s.rates.mount);
-        write_loads(&mut w, &s.rates.loads);
+        w.bool(s.inputs.rates.any);
+        write_mount(&mut w, &s.inputs.rates.mount);
+        write_loads(&mut w, &s.inputs.rates.loads);
         w.bool(s.coupling_reference.is_some());
         if let Some(c) = &s.coupling_reference {
             w.f64(c.h);
@@ -202,7 +202,9 @@ fn read_body_state(r: &mut Reader, version: u32, n: usize, nf: usize, free: bool
     let stepped_inputs =
         if version >= 3 && r.bool("stepped inputs flag")? { Some(read_stepped_inputs(r, nf)?) } else { None };
     let rates = InputRates { mount: rate_mount, loads: rate_loads, any };
-    Ok(BodyState { mount, loads, params, q, qd, frame, initial_frame, rates, coupling_reference, stepped_inputs })
+    let coordinates = Coordinates { q, qd, frame };
+    let inputs = BodyInputs { mount, loads, params, initial_frame, rates, host: HostMount::default() };
+    Ok(BodyState { coordinates, inputs, coupling_reference, stepped_inputs })
 }
 
 fn write_mount(w: &mut Writer, m: &MountMotion) {

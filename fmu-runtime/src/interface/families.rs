@@ -265,38 +265,38 @@ pub static FAMILIES: &[Family] = &[
         "initial.r[i]",
         "Initial position of the centre of mass, {axis} component, world frame",
         Role::InitialPosition,
-        Value::Real(read!(|b, at| c(b.initial_frame.r[at.i]))),
+        Value::Real(read!(|b, at| c(b.initial_frame().r[at.i]))),
     )
     .scope(Scope::Free)
     .unit("m")
-    .write(|b, at, x| b.initial_frame.r[at.i] = x),
+    .write(|b, at, x| b.initial_frame_mut().r[at.i] = x),
     parameter(
         "initial.phi[i]",
         "Initial orientation as a rotation vector (from the axes as meshed), {axis} component, world frame",
         Role::InitialRotation,
-        Value::Real(read!(|b, at| c(b.initial_frame.phi[at.i]))),
+        Value::Real(read!(|b, at| c(b.initial_frame().phi[at.i]))),
     )
     .scope(Scope::Free)
     .unit("rad")
-    .write(|b, at, x| b.initial_frame.phi[at.i] = x),
+    .write(|b, at, x| b.initial_frame_mut().phi[at.i] = x),
     parameter(
         "initial.v[i]",
         "Initial velocity of the centre of mass, {axis} component, world frame",
         Role::InitialVelocity,
-        Value::Real(read!(|b, at| c(b.initial_frame.v[at.i]))),
+        Value::Real(read!(|b, at| c(b.initial_frame().v[at.i]))),
     )
     .scope(Scope::Free)
     .unit("m/s")
-    .write(|b, at, x| b.initial_frame.v[at.i] = x),
+    .write(|b, at, x| b.initial_frame_mut().v[at.i] = x),
     parameter(
         "initial.w[i]",
         "Initial angular velocity, {axis} component, world frame",
         Role::InitialSpin,
-        Value::Real(read!(|b, at| c(b.initial_frame.w[at.i]))),
+        Value::Real(read!(|b, at| c(b.initial_frame().w[at.i]))),
     )
     .scope(Scope::Free)
     .unit("rad/s")
-    .write(|b, at, x| b.initial_frame.w[at.i] = x),
+    .write(|b, at, x| b.initial_frame_mut().w[at.i] = x),
     // the modes; modal coordinates carry sqrt(kg) m, left unitless in the XML, so their rates
     // are 1/s and 1/s2
     local("q[k]", "Modal coordinate {mode} ({frequency} Hz{kind})", read!(|b, at| b.q()[at.i]))
