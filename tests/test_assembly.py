@@ -525,3 +525,31 @@ def test_weld_static_sag_vs_calculix(built):
     rel = np.abs(ours[-1] - theirs) / np.abs(theirs)
     print(f"\nweld, static sag [m]: assembly {ours[-1]}, CalculiX {theirs} ({rel})")
     assert np.all(rel <= 7e-4)
+
+
+def test_an_assembly_gives_no_directional_derivatives_in_any_state(tmp_path):
+    """An assembly declares providesDirectionalDerivative="false" and keeps to it wherever the
+    standard allows the call, Initialization Mode included: fmi2Error naming the capability, the
+    instance still usable."""
+    from fmpy import read_model_description
+    from fmpy.fmi1 import FMICallException
+
+    from fmu_access import Fmu
+    from test_fmi_robustness import Recorder, restore_default_logger  # noqa: F401
+
+    path = build("two_link_weld", tmp_path)
+    assert read_model_description(str(path)).coSimulation.providesDirectionalDerivative is False
+    rec = Recorder()
+    f = Fmu(str(path), "CoSimulation", callbacks=rec.callbacks)
+    outputs = [v.valueReference for v in f.md.modelVariables if v.causality == "output" and v.type == "Real"]
+    inputs = [v.valueReference for v in f.md.modelVariables if v.causality == "input" and v.type == "Real"]
+    f.fmu.setupExperiment(startTime=0.0)
+    f.fmu.enterInitializationMode()
+    for state in ["Initialization Mode", "StepComplete"]:
+        with pytest.raises(FMICallException, match=r"fmi2GetDirectionalDerivative failed with status 3"):
+            f.fmu.getDirectionalDerivative(outputs[:1], inputs[:1], [1.0])
+        assert "providesDirectionalDerivative=false" in rec.messages[-1], (state, rec.messages[-1])
+        if state == "Initialization Mode":
+            f.fmu.exitInitializationMode()
+    f.fmu.doStep(0.0, H)
+    f.close()

@@ -128,9 +128,6 @@ pub struct FnSpec {
     pub allowed: StateMask,
     /// Functions of only one interface are refused on instances of the other.
     pub interface: Option<Interface>,
-    /// Where "allowed in:" alone would leave the host guessing (a state the standard
-    /// allows but this layer refuses): the states it concerns and what to say.
-    pub hint: Option<(StateMask, &'static str)>,
 }
 
 impl FnSpec {
@@ -148,26 +145,18 @@ impl FnSpec {
         if self.allowed.contains(state) {
             return None;
         }
-        let hint = match self.hint {
-            Some((states, why)) if states.contains(state) => format!(" ({why})"),
-            _ => String::new(),
-        };
-        Some(format!("{} called in state {state:?}; allowed in: {}{hint}", self.name, self.allowed))
-    }
-
-    const fn with_hint(self, states: StateMask, why: &'static str) -> FnSpec {
-        FnSpec { hint: Some((states, why)), ..self }
+        Some(format!("{} called in state {state:?}; allowed in: {}", self.name, self.allowed))
     }
 }
 
 const fn common(name: &'static str, allowed: StateMask) -> FnSpec {
-    FnSpec { name, allowed, interface: None, hint: None }
+    FnSpec { name, allowed, interface: None }
 }
 const fn me(name: &'static str, allowed: StateMask) -> FnSpec {
-    FnSpec { name, allowed, interface: Some(Interface::ModelExchange), hint: None }
+    FnSpec { name, allowed, interface: Some(Interface::ModelExchange) }
 }
 const fn cs(name: &'static str, allowed: StateMask) -> FnSpec {
-    FnSpec { name, allowed, interface: Some(Interface::CoSimulation), hint: None }
+    FnSpec { name, allowed, interface: Some(Interface::CoSimulation) }
 }
 
 /// Every state in which the instance is alive and not corrupted.
@@ -193,14 +182,6 @@ const GETTERS: StateMask = StateMask::of(&[
     Terminated,
     Error,
 ]);
-/// fmi2GetDirectionalDerivative: the getters' states less InitializationMode. The standard's
-/// tables (3.2.3, 4.2.4) allow InitializationMode too, there for another Jacobian: that of the
-/// ModelStructure/InitialUnknowns with respect to the exact start values (section 2.1.9).
-/// [`Model::directional_derivative`](super::Model::directional_derivative) offers only that of
-/// outputs and state derivatives with respect to inputs and states, which exists once
-/// initialization has ended.
-const AFTER_INITIALIZATION: StateMask =
-    StateMask::of(&[EventMode, ContinuousTimeMode, StepComplete, StepFailed, StepCanceled, Terminated, Error]);
 /// Discrete variables cannot change during continuous-time integration.
 const SET_DISCRETE: StateMask = StateMask::of(&[Instantiated, InitializationMode, EventMode, StepComplete]);
 const CS_STATUS: StateMask = StateMask::of(&[StepComplete, StepInProgress, StepFailed, Terminated]);
@@ -231,11 +212,10 @@ pub const fmi2FreeFMUstate: FnSpec = common("fmi2FreeFMUstate", ANY_BUT_FATAL);
 pub const fmi2SerializedFMUstateSize: FnSpec = common("fmi2SerializedFMUstateSize", ANY_BUT_FATAL);
 pub const fmi2SerializeFMUstate: FnSpec = common("fmi2SerializeFMUstate", ANY_BUT_FATAL);
 pub const fmi2DeSerializeFMUstate: FnSpec = common("fmi2DeSerializeFMUstate", ANY_BUT_FATAL);
-pub const fmi2GetDirectionalDerivative: FnSpec = common("fmi2GetDirectionalDerivative", AFTER_INITIALIZATION)
-    .with_hint(
-        StateMask::of(&[Instantiated, InitializationMode]),
-        "directional derivatives are available after fmi2ExitInitializationMode",
-    );
+/// Wherever the getters are (tables of sections 3.2.3 and 4.2.4), Initialization Mode included:
+/// hosts solving an algebraic loop through the FMU's feedthrough (OMSimulator's KINSOL) ask for
+/// the Jacobian there, at the values the getters give in that mode.
+pub const fmi2GetDirectionalDerivative: FnSpec = common("fmi2GetDirectionalDerivative", GETTERS);
 
 // Model Exchange.
 pub const fmi2EnterEventMode: FnSpec = me("fmi2EnterEventMode", StateMask::of(&[EventMode, ContinuousTimeMode]));
@@ -299,29 +279,28 @@ mod tests {
         assert!(!StepInProgress.can_be_saved_in(Interface::CoSimulation));
     }
 
-    /// The standard allows fmi2GetDirectionalDerivative in InitializationMode; refusing it there
-    /// says why, so the host does not read it as a broken FMU.
+    /// The standard's tables allow fmi2GetDirectionalDerivative wherever the getters are,
+    /// Initialization Mode included (section 2.1.9), and nowhere else.
     #[test]
-    fn directional_derivative_refusal_before_initialization_ends_says_when() {
-        for s in [Instantiated, InitializationMode] {
-            let msg = fmi2GetDirectionalDerivative.refuse(s, Interface::CoSimulation).unwrap();
-            assert_eq!(
-                msg,
-                format!(
-                    "fmi2GetDirectionalDerivative called in state {s:?}; allowed in: EventMode, \
-                     ContinuousTimeMode, StepComplete, StepFailed, StepCanceled, Terminated, Error \
-                     (directional derivatives are available after fmi2ExitInitializationMode)"
-                )
-            );
+    fn directional_derivative_is_allowed_where_the_getters_are() {
+        for s in ALL_STATES {
+            for i in [Interface::ModelExchange, Interface::CoSimulation] {
+                assert_eq!(fmi2GetDirectionalDerivative.refuse(s, i).is_none(), fmi2GetReal.refuse(s, i).is_none());
+            }
         }
-        let msg = fmi2GetDirectionalDerivative.refuse(Fatal, Interface::ModelExchange).unwrap();
-        assert!(!msg.contains("fmi2ExitInitializationMode"), "{msg}");
-        for s in [EventMode, ContinuousTimeMode, Terminated, Error] {
-            assert!(fmi2GetDirectionalDerivative.refuse(s, Interface::ModelExchange).is_none());
+        for s in [InitializationMode, EventMode, ContinuousTimeMode, Terminated, Error] {
+            assert!(fmi2GetDirectionalDerivative.refuse(s, Interface::ModelExchange).is_none(), "{s:?}");
         }
-        for s in [StepComplete, StepFailed, StepCanceled] {
-            assert!(fmi2GetDirectionalDerivative.refuse(s, Interface::CoSimulation).is_none());
+        for s in [InitializationMode, StepComplete, StepFailed, StepCanceled] {
+            assert!(fmi2GetDirectionalDerivative.refuse(s, Interface::CoSimulation).is_none(), "{s:?}");
         }
+        let msg = fmi2GetDirectionalDerivative.refuse(Instantiated, Interface::CoSimulation).unwrap();
+        assert_eq!(
+            msg,
+            "fmi2GetDirectionalDerivative called in state Instantiated; allowed in: InitializationMode, EventMode, \
+             ContinuousTimeMode, StepComplete, StepFailed, StepCanceled, Terminated, Error"
+        );
+        assert!(fmi2GetDirectionalDerivative.refuse(Fatal, Interface::ModelExchange).is_some());
     }
 
     /// The FMU state functions may be called in every state but Fatal (and StepInProgress,
