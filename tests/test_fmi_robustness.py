@@ -28,9 +28,13 @@ def restore_default_logger():
 class Recorder:
     def __init__(self):
         self.messages = []
+        # (status, category, message) of each, for the tests that check how a message came
+        self.entries = []
 
         def log(env, name, status, category, message):
-            self.messages.append(message.decode(errors="replace") if message else "")
+            text = message.decode(errors="replace") if message else ""
+            self.messages.append(text)
+            self.entries.append((status, category.decode(errors="replace") if category else "", text))
 
         self.logger = fmi2CallbackLoggerTYPE(log)
         self.callbacks = fmi2CallbackFunctions()

@@ -20,7 +20,7 @@ use super::logger::{Category, Logger};
 use super::resource::{ResourceError, parse_resource_location};
 use super::serial;
 use super::state::{self as spec, FnSpec, ModelState};
-use super::types::fmi2Status::{fmi2Discard, fmi2Error, fmi2Fatal, fmi2OK, fmi2Warning};
+use super::types::fmi2Status::{fmi2Discard, fmi2Error, fmi2Fatal, fmi2OK};
 use super::types::*;
 use super::{Causality, Interface, Model, ModelError, VarInfo, VarType};
 
@@ -405,9 +405,10 @@ pub unsafe fn fmi2SetupExperiment<M: Model>(
             inst.start_time = startTime;
             inst.time = startTime;
             inst.stop_time = to_bool(stopTimeDefined).then_some(stopTime);
+            // The experiment is set up as asked: the advice goes to the logger only, since
+            // hosts (OMSimulator, fmusim) drop a run on any status but fmi2OK.
             if let Some(advice) = inst.tolerance.and_then(|t| inst.model.tolerance_advice(t)) {
                 inst.logger.advice(&format!("fmi2SetupExperiment: {advice}"));
-                return Ok(fmi2Warning);
             }
             Ok(fmi2OK)
         })
@@ -935,9 +936,10 @@ pub unsafe fn fmi2CompletedIntegratorStep<M: Model>(
             let terminate = out_ref(terminateSimulation, "terminateSimulation")?;
             *enter = fmi2False;
             *terminate = fmi2False;
+            // The step stands: the warning is the logger's, the status fmi2OK, since a host that
+            // stops on fmi2Warning would lose the run the warning is meant to improve.
             if let Some(warning) = inst.model.completed_integrator_step(inst.time) {
                 inst.logger.advice(&format!("fmi2CompletedIntegratorStep: {warning}"));
-                return Ok(fmi2Warning);
             }
             Ok(fmi2OK)
         })
@@ -1176,10 +1178,11 @@ pub unsafe fn fmi2DoStep<M: Model>(
             }
             inst.last_do_step_status = fmi2OK;
             inst.time += h;
+            // The step was taken: fmi2OK, as masters (OMSimulator, fmusim) end the run on any
+            // other status. The warning is logged whatever the debug logging, since the status
+            // no longer carries it.
             if let Some(warning) = inst.model.take_warning() {
-                inst.logger.warning(fmi2Warning, warning);
-                inst.last_do_step_status = fmi2Warning;
-                return Ok(fmi2Warning);
+                inst.logger.advice(&format!("fmi2DoStep: {warning}"));
             }
             Ok(fmi2OK)
         })

@@ -258,13 +258,14 @@ pub trait Model: Sized + Clone {
         Err(ModelError::failed(Unsupported::OutputDerivatives))
     }
     /// The relative tolerance the host integrates with (fmi2SetupExperiment): a warning where
-    /// the model cannot be accurate at it (the layer logs it and answers fmi2Warning).
+    /// the model cannot be accurate at it (the layer logs it, logStatusWarning whatever the debug
+    /// logging, and answers fmi2OK: the experiment is set up as asked).
     fn tolerance_advice(&self, _tolerance: f64) -> Option<String> {
         None
     }
     /// Model Exchange: the host completed an integrator step at `time` (fmi2SetTime's last value).
     /// A warning about how the host integrates (the layer logs it once per call that returns one
-    /// and answers fmi2Warning); the step stands either way.
+    /// and answers fmi2OK, logStatusWarning whatever the debug logging); the step stands either way.
     fn completed_integrator_step(&mut self, _time: f64) -> Option<String> {
         None
     }
@@ -273,7 +274,8 @@ pub trait Model: Sized + Clone {
     /// finite) and the model is as before it; `ModelError::Refused`: the inputs were refused
     /// before anything was done; `ModelError::Failed`: the model's state is unknown.
     fn do_step(&mut self, t: f64, h: f64) -> Result<(), ModelError>;
-    /// A warning about the last successful step (the layer logs it and returns fmi2Warning).
+    /// A warning about the last successful step (the layer logs it, logStatusWarning whatever the
+    /// debug logging, and returns fmi2OK: the step was taken).
     fn take_warning(&mut self) -> Option<&'static str> {
         None
     }

@@ -16,6 +16,10 @@ pub const OTHER_GUID: &str = "{8c4e810f-3df3-4a00-8276-176fa3c9f001}";
 pub const U_LIMIT: f64 = 1e100;
 /// Longer steps are not taken (fmi2Discard, nothing changed).
 pub const MAX_STEP: f64 = 1e3;
+/// A tolerance looser than this is advised against (fmi2SetupExperiment still succeeds).
+pub const LOOSE_TOLERANCE: f64 = 1e-3;
+/// From this time on, completed integrator steps and Co-Simulation steps come with a warning.
+pub const WARN_AFTER: f64 = 50.0;
 
 pub const X: u32 = 0;
 pub const V_: u32 = 1;
@@ -287,6 +291,15 @@ impl Model for Spring {
             ACC => -self.k * self.v - self.d * self.accel(self.x, self.v),
             _ => unreachable!("the layer checks for outputs"),
         })
+    }
+    fn tolerance_advice(&self, tolerance: f64) -> Option<String> {
+        (tolerance > LOOSE_TOLERANCE).then(|| format!("tolerance {tolerance} is looser than {LOOSE_TOLERANCE}"))
+    }
+    fn completed_integrator_step(&mut self, time: f64) -> Option<String> {
+        (time >= WARN_AFTER).then(|| format!("integrated past t = {WARN_AFTER}"))
+    }
+    fn take_warning(&mut self) -> Option<&'static str> {
+        (self.time >= WARN_AFTER).then_some("stepped past the warning time")
     }
     fn do_step(&mut self, t: f64, h: f64) -> Result<(), ModelError> {
         if h > MAX_STEP {

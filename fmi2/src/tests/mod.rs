@@ -1402,3 +1402,64 @@ fn seeds_beyond_the_models_range_are_refused_and_the_instance_stays_usable() {
         unsafe { api::fmi2FreeInstance::<Spring>(c) };
     }
 }
+
+// ---------------------------------------------------------------------------
+// Warnings of calls that succeeded
+// ---------------------------------------------------------------------------
+
+/// Entries logged under logStatusWarning whose text contains `needle`.
+fn warnings(log: &Log, needle: &str) -> usize {
+    log.entries()
+        .iter()
+        .filter(|e| e.category == "logStatusWarning" && e.status == fmi2Warning && e.text.contains(needle))
+        .count()
+}
+
+/// A call that did what it was asked answers fmi2OK, whatever it warns of: hosts (OMSimulator,
+/// fmusim) drop the run on any other status. The warning reaches the logger (logStatusWarning)
+/// with debug logging off, since the status no longer carries it.
+#[test]
+fn warnings_of_successful_calls_are_logged_with_fmi2ok() {
+    let log = Log::default();
+    // Model Exchange: a loose tolerance, then integrator steps the model warns about.
+    let c = instantiate(&log, fmi2ModelExchange);
+    unsafe {
+        assert_eq!(api::fmi2SetupExperiment::<Spring>(c, fmi2True, 1e-2, 0.0, fmi2False, 0.0), fmi2OK);
+        assert_eq!(warnings(&log, "fmi2SetupExperiment: tolerance 0.01 is looser than 0.001"), 1, "{}", log.last());
+        assert_eq!(api::fmi2EnterInitializationMode::<Spring>(c), fmi2OK);
+        assert_eq!(api::fmi2ExitInitializationMode::<Spring>(c), fmi2OK);
+        assert_eq!(api::fmi2EnterContinuousTimeMode::<Spring>(c), fmi2OK);
+        let (mut enter, mut terminate) = (fmi2True, fmi2True);
+        assert_eq!(api::fmi2SetTime::<Spring>(c, 1.0), fmi2OK);
+        assert_eq!(api::fmi2CompletedIntegratorStep::<Spring>(c, fmi2True, &mut enter, &mut terminate), fmi2OK);
+        assert_eq!(warnings(&log, "fmi2CompletedIntegratorStep"), 0);
+        assert_eq!(api::fmi2SetTime::<Spring>(c, WARN_AFTER), fmi2OK);
+        assert_eq!(api::fmi2CompletedIntegratorStep::<Spring>(c, fmi2True, &mut enter, &mut terminate), fmi2OK);
+        assert_eq!((enter, terminate), (fmi2False, fmi2False));
+        assert_eq!(warnings(&log, "fmi2CompletedIntegratorStep: integrated past t = 50"), 1, "{}", log.last());
+        assert_eq!(model_state_of(c), crate::state::ModelState::ContinuousTimeMode);
+        api::fmi2FreeInstance::<Spring>(c);
+    }
+    // A tolerance the model accepts: nothing logged.
+    log.clear();
+    let c = instantiate(&log, fmi2CoSimulation);
+    unsafe {
+        assert_eq!(api::fmi2SetupExperiment::<Spring>(c, fmi2True, 1e-6, 0.0, fmi2False, 0.0), fmi2OK);
+        assert!(log.is_empty(), "{}", log.last());
+        assert_eq!(api::fmi2EnterInitializationMode::<Spring>(c), fmi2OK);
+        assert_eq!(api::fmi2ExitInitializationMode::<Spring>(c), fmi2OK);
+        // Co-Simulation: the step that ends past the warning time is taken and says so in the log.
+        assert_eq!(api::fmi2DoStep::<Spring>(c, 0.0, 40.0, fmi2True), fmi2OK);
+        assert!(log.is_empty(), "{}", log.last());
+        assert_eq!(api::fmi2DoStep::<Spring>(c, 40.0, 20.0, fmi2True), fmi2OK);
+        assert_eq!(warnings(&log, "fmi2DoStep: stepped past the warning time"), 1, "{}", log.last());
+        assert_eq!(model_state_of(c), crate::state::ModelState::StepComplete);
+        let mut status = fmi2Error;
+        assert_eq!(api::fmi2GetStatus::<Spring>(c, fmi2DoStepStatus, &mut status), fmi2OK);
+        assert_eq!(status, fmi2OK);
+        let mut t = 0.0;
+        assert_eq!(api::fmi2GetRealStatus::<Spring>(c, fmi2LastSuccessfulTime, &mut t), fmi2OK);
+        assert_eq!(t, 60.0);
+        api::fmi2FreeInstance::<Spring>(c);
+    }
+}

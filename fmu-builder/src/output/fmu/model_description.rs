@@ -426,7 +426,9 @@ pub(super) fn write_log_categories(w: &mut W) -> io::Result<()> {
         for c in Category::ALL {
             let description = match c {
                 Category::LogAll => "Everything the model reports",
-                Category::LogStatusWarning => "Calls that return fmi2Warning or fmi2Discard",
+                Category::LogStatusWarning => {
+                    "Warnings (the call still succeeds with fmi2OK) and calls that return fmi2Discard"
+                }
                 Category::LogStatusError => "Calls that return fmi2Error (always reported)",
             };
             let name = c.name().to_string_lossy();
