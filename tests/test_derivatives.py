@@ -368,3 +368,30 @@ def test_directional_derivatives_in_initialization_mode(tsquare, kind):
     assert np.count_nonzero(after) > 50
     assert deviation <= 1e-14
     fmu.close()
+
+
+FREE_START = {"initial.r[1]": 0.3, "initial.phi[1]": 0.4, "initial.phi[3]": -1.1, "initial.v[2]": 0.5,
+              "initial.w[1]": 0.5, "initial.w[2]": -2.0, "initial.w[3]": 3.0}
+FREE_LOADS = {"g[3]": -9.81, "end.f[1]": 2.0, "end.f[3]": -1.5, "end.t[2]": 0.05}
+
+
+def test_free_body_in_initialization_mode_starts_from_the_parameters_set_there(free_block):
+    """A free body's initial pose and velocity may be set in Initialization Mode (they are
+    parameters with initial="exact"): the values, derivatives and Jacobian read there are those of
+    the frame they give, the same as after initialisation (Model Exchange, whose frame states a
+    host reads in that mode)."""
+    fmu = Fmu(str(free_block), "ModelExchange")
+    fmu.set(**FREE_LOADS)
+    fmu.fmu.setupExperiment(startTime=0.0)
+    fmu.fmu.enterInitializationMode()
+    fmu.set(**FREE_START)
+    unknowns = names_by(fmu, "output") + derivative_names(fmu)
+    knowns = names_by(fmu, "input") + state_names(fmu)
+    x, values, before = fmu.states(), fmu.get(*unknowns), jacobian(fmu, unknowns, knowns)
+    fmu.fmu.exitInitializationMode()
+    fmu.fmu.newDiscreteStates()
+    fmu.fmu.enterContinuousTimeMode()
+    assert np.array_equal(fmu.states(), x), "the initialisation starts the frame where it was read"
+    assert np.array_equal(fmu.get(*unknowns), values)
+    assert np.array_equal(jacobian(fmu, unknowns, knowns), before)
+    fmu.close()

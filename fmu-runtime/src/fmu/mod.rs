@@ -40,6 +40,10 @@ pub struct BodyFmu {
     steps: crate::explicit_host::StepWatch,
     /// fmi2SetTime's last value (Model Exchange), for the host's step sizes.
     time: f64,
+    /// Between fmi2EnterInitializationMode and fmi2ExitInitializationMode: a free body's
+    /// `initial.*` set then moves its frame at once, so that what the host reads in that mode
+    /// (values, derivatives, directional derivatives) starts from them as the run will.
+    initializing: bool,
 }
 
 impl BodyFmu {
@@ -52,6 +56,7 @@ impl BodyFmu {
             static_start: false,
             steps: Default::default(),
             time: 0.0,
+            initializing: false,
         };
         fmu.steps = crate::explicit_host::StepWatch::new(fmu.n_states());
         fmu

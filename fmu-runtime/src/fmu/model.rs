@@ -109,7 +109,12 @@ impl Model for BodyFmu {
     }
 
     fn set_real(&mut self, vr: u32, value: f64) -> Result<(), ModelError> {
-        self.set_value(vr, value).map_err(ModelError::failed)
+        self.set_value(vr, value).map_err(ModelError::failed)?;
+        // after initialisation the frame evolves on its own and `initial.*` no longer moves it
+        if self.initializing && self.quantity(vr).is_ok_and(|q| q.role().is_some_and(|r| r.is_initial_frame())) {
+            self.body.start_frame();
+        }
+        Ok(())
     }
 
     fn get_integer(&mut self, vr: u32) -> Result<i32, ModelError> {
@@ -193,10 +198,12 @@ impl Model for BodyFmu {
 
     fn enter_initialization(&mut self, _start_time: f64) -> Result<(), ModelError> {
         self.body.start_frame();
+        self.initializing = true;
         Ok(())
     }
 
     fn exit_initialization(&mut self) -> Result<(), ModelError> {
+        self.initializing = false;
         self.body.start_frame();
         self.body.start_stepping();
         if self.static_start {
