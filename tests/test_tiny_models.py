@@ -106,3 +106,21 @@ def test_free_bars_of_a_few_elements_build_and_match_a_dense_solve(tmp_path, ele
     print(f"\n{n} DoFs, {modes} modes: {len(full)} full-model frequencies vs SciPy's, max relative error {error.max():.1e}")
     assert error.max() < 1e-10, (full, flexible[:len(full)])
 
+
+def test_a_mounted_bar_with_modes_0_builds_a_model_that_says_it_is_static_only(tmp_path):
+    """`reduction.modes: 0` on a mounted body builds (its static flange compliance is exact) and
+    the summary says the model is static-only; the Model Exchange line names no infinite cutoff."""
+    spec = bar_spec()
+    spec["flanges"][0]["role"] = "motion"
+    spec["reduction"] = {"modes": 0}
+    # 0.1 m: the static shapes' frequencies lie above what a host resolves, so the cutoff is the
+    # host's and the line once named the scene's infinite one beside it
+    spec["geometry"]["boxes"][0]["max"][0] = 0.1
+    path = tmp_path / "bar.json"
+    path.write_text(json.dumps(spec))
+    proc = run_builder([path, "-o", tmp_path / "Bar.fmu"])
+    assert "static-only model" in proc.stdout, proc.stdout
+    me = [line for line in proc.stdout.splitlines() if "Model Exchange:" in line]
+    assert len(me) == 1 and "quasi-static above" in me[0], proc.stdout
+    assert "inf Hz" not in me[0] and "every mode dynamic" not in me[0], me[0]
+    assert "the scene sets no cutoff" in me[0], me[0]

@@ -132,3 +132,21 @@ pub fn check_basis_not_empty(spec: &Spec, file: &Path) -> Result<()> {
         "the reduced body would have no shape at all: no normal modes are requested (reduction.modes is 0 or missing), the body has no force flange whose static shapes would join the basis, and the scene declares no loads; request modes (reduction.modes >= 1 or reduction.max_frequency), add a force flange, or declare scene.loads",
     ))
 }
+
+/// A free-floating body (no "motion" flange) needs at least one elastic mode: its attachment
+/// shapes alone are quasi-static, and with nothing holding the body the lowest elastic mode they
+/// stand in for is missing, so the reduced model has no frequency range in which it is valid.
+/// A mounted body may be static-only (its flange compliance exact); the summary says so.
+pub fn check_free_body_modes(spec: &Spec, file: &Path) -> Result<()> {
+    let mounted = spec.flanges.iter().any(|f| f.role == Role::Motion);
+    if mounted || spec.reduction.modes != Some(0) {
+        return Ok(());
+    }
+    Err(InputError::field(
+        file,
+        "reduction.modes",
+        "0 modes for a free-floating body (no \"motion\" flange): its static attachment shapes alone leave out the \
+         lowest elastic mode, so the model would be valid in no frequency range; request modes (reduction.modes >= 1 \
+         or reduction.max_frequency), or mount the body with a \"motion\" flange for a static-only model",
+    ))
+}

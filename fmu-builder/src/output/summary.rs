@@ -63,6 +63,14 @@ fn body(s: &mut String, r: &Report) {
         "  {}: {} normal modes + {} static/Krylov shapes = order {}",
         r.method, r.fixed_interface_modes, r.constraint_modes, r.order
     );
+    if r.fixed_interface_modes == 0 && !r.method.to_lowercase().contains("krylov") {
+        // without a normal mode the basis holds static shapes only: say what that model answers
+        let _ = writeln!(
+            s,
+            "  static-only model (no normal modes, static shapes only): exact for static flange loads, with no resonance \
+             of its own; valid well below the body's lowest mode only (request modes for its dynamics)"
+        );
+    }
     if r.backend.kind == "petsc" {
         let b = &r.backend;
         let rows: Vec<String> = b.rows_per_rank.iter().map(usize::to_string).collect();

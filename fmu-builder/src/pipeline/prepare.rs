@@ -4,7 +4,9 @@
 
 use super::against::{Against, GEOMETRY};
 use crate::error::Result;
-use crate::input::reduction_checks::{check_basis_not_empty, check_distributable, check_krylov_size, check_mode_count};
+use crate::input::reduction_checks::{
+    check_basis_not_empty, check_distributable, check_free_body_modes, check_krylov_size, check_mode_count,
+};
 use crate::input::spec::Spec;
 use crate::model::assembly::Uncoupled;
 use crate::model::connectivity;
@@ -55,6 +57,7 @@ fn mode_count(spec: &Spec, part: &Part, file: &Path) -> Result<ModeCount> {
         (None, None) => ModeCount::Count(0),
     };
     check_basis_not_empty(spec, file)?;
+    check_free_body_modes(spec, file)?;
     check_krylov_size(spec, file)?;
     check_distributable(spec, file)?;
     Ok(modes)

@@ -21,7 +21,7 @@ const ROUND_OFF: f64 = 1e-6;
 /// `BAND_MULTIPLE` times the scene band's upper edge; else the highest kept normal mode (fixed-
 /// interface, mounted or free-free), so that constraint modes, residual-flexibility and load shapes
 /// are quasi-static; else (Krylov) `BAND_MULTIPLE` times the highest expansion frequency; with only
-/// the static point every mode stays dynamic (infinite cutoff).
+/// the static point the scene sets no cutoff (infinite: what a host resolves decides).
 pub fn dynamic_cutoff(spec: &Spec, basis: &Basis) -> (f64, &'static str) {
     if let Some(hz) = spec.reduction.dynamic_cutoff {
         return (2.0 * PI * hz, "reduction.dynamic_cutoff");
@@ -44,5 +44,5 @@ pub fn dynamic_cutoff(spec: &Spec, basis: &Basis) -> (f64, &'static str) {
     if highest_point > 0.0 {
         return (BAND_MULTIPLE * 2.0 * PI * highest_point, "ten times the highest expansion point");
     }
-    (f64::INFINITY, "none: every mode dynamic")
+    (f64::INFINITY, "no cutoff (no normal mode, band or expansion point)")
 }

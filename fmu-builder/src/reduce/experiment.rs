@@ -66,12 +66,17 @@ pub fn plan(spec: &Spec, basis: &Basis, reduced: &ReducedBody) -> HostPlan {
     let (cutoff, rule) = if explicit_cutoff || scene_cutoff <= host_cutoff {
         (scene_cutoff, scene_rule.to_string())
     } else {
+        // an infinite scene cutoff (a static-only basis) is no bound to name beside a finite one
+        let below = if scene_cutoff.is_finite() {
+            format!(", below {scene_rule} ({:.4} Hz)", scene_cutoff / (2.0 * PI))
+        } else {
+            format!("; the scene sets {scene_rule}")
+        };
         (
             host_cutoff,
             format!(
                 "what a host resolves at an output interval of {interval:.0e} s, {PERIODS_PER_OUTPUT} periods of \
-                 the fastest dynamic mode, below {scene_rule} ({:.4} Hz)",
-                scene_cutoff / (2.0 * PI)
+                 the fastest dynamic mode{below}"
             ),
         )
     };
