@@ -90,6 +90,14 @@ def mean_period(t, x):
     return (crossings[-1] - crossings[0]) / (len(crossings) - 1)
 
 
+def one_piece_frequencies(deck, folder):
+    """CalculiX's four lowest frequencies [Hz] of the one-piece mesh: base clamped, rigid
+    sections at the weld and the tip, as the links' flanges are."""
+    analysis = (ccx.rigid_body(deck, "base") + ccx.rigid_body(deck, "joint") + ccx.rigid_body(deck, "tip")
+                + ccx.clamp(deck, "base") + ccx.frequency_step(4))
+    return np.array(ccx.run_ccx(deck, analysis, folder).frequencies_hz)
+
+
 def test_weld_tip_load_vs_one_piece_and_calculix(built):
     """A tip load (0, -0.5, -1) N on the lower link from t = 0, no gravity, 2 s at h = 1 ms:
     the weld's and the tip's lateral and vertical motion against the one-piece FMU (same start
@@ -104,9 +112,7 @@ def test_weld_tip_load_vs_one_piece_and_calculix(built):
     t, ours = simulate(fmus["two_link_weld"], 2.0, WELD_OUT, {**NO_GRAVITY, **TIP_LOAD})
     _, theirs = simulate(one_piece, 2.0, ONE_PIECE_OUT, {**NO_GRAVITY, **TIP_LOAD})
     dev = np.abs(ours - theirs).max(axis=0) / np.ptp(theirs, axis=0)
-    analysis = (ccx.rigid_body(deck, "base") + ccx.rigid_body(deck, "joint") + ccx.rigid_body(deck, "tip")
-                + ccx.clamp(deck, "base") + ccx.frequency_step(4))
-    f_ccx = np.array(ccx.run_ccx(deck, analysis, d / "ccx_freq").frequencies_hz[:2])
+    f_ccx = one_piece_frequencies(deck, d / "ccx_freq")[:2]
     f_ours = np.array([1 / mean_period(t, ours[:, c]) for c in (2, 3)])
     rel_f = np.abs(f_ours / f_ccx - 1)
     print(f"\nweld, tip load: weld y, z and tip y, z within {dev} of the one piece's swing; frequencies "
@@ -254,22 +260,24 @@ def test_slider_crank_vs_rigid_theory_and_exudyn(built, link_matrices):
 # energy, hosts, FMU states, refusals
 
 
-def undamped_weld(d, spectral_radius=1.0, max_step=1e-3):
-    """The welded links with no damping at all (alpha = beta = 0), clamped, gravity on."""
+def weld_of_links(d, name, damping, solver=None):
+    """examples/assemblies/two_link_weld.json built as `name` in `d`, its links with the
+    Rayleigh `damping` given and the assembly with the `solver` settings given."""
     d.mkdir(parents=True, exist_ok=True)
     link = json.loads((EXAMPLES / "chain" / "link.json").read_text())
-    link["damping"] = {"alpha": 0.0, "beta": 0.0}
+    link["damping"] = damping
     link.pop("$schema", None)
-    (d / "undamped_link.json").write_text(json.dumps(link))
+    (d / f"{name}_link.json").write_text(json.dumps(link))
     weld = json.loads((ASSEMBLIES / "two_link_weld.json").read_text())
     weld.pop("$schema", None)
-    weld["name"] = "UndampedWeld"
+    weld["name"] = name
     for b in weld["assembly"]["bodies"]:
-        b["flexible"] = "undamped_link.json"
-    weld["assembly"]["solver"] = {"spectral_radius": spectral_radius, "max_step": max_step}
-    source = d / "undamped_weld.json"
+        b["flexible"] = f"{name}_link.json"
+    if solver:
+        weld["assembly"]["solver"] = solver
+    source = d / f"{name}.json"
     source.write_text(json.dumps(weld))
-    return build("UndampedWeld", d, source)
+    return build(name, d, source)
 
 
 @pytest.mark.parametrize("max_step", [1e-3, 5e-4])
@@ -286,13 +294,13 @@ def test_undamped_links_keep_their_energy_over_a_hundred_periods(built, max_step
     1.2e-6 and 2.9e-7. Tolerances 4e-7 and 1.2e-7. The swing's frequency (the vertical mode)
     against CalculiX's of the one-piece mesh: measured 2.5e-5 and 6.0e-5 off; tolerance 6e-4."""
     fmus, _, deck, d = built
-    fmu = undamped_weld(d / f"undamped_{max_step}", max_step=max_step)
+    # no damping at all (alpha = beta = 0), clamped, gravity on
+    fmu = weld_of_links(d / f"undamped_{max_step}", "UndampedWeld", {"alpha": 0.0, "beta": 0.0},
+                        {"spectral_radius": 1.0, "max_step": max_step})
     t, e = simulate(fmu, 50.0, ["energy.total", "energy.strain", "lower.tip.r[3]"])
     drift = np.abs(e[1:, 0] - e[1, 0]).max()
     peak = e[:, 1].max()
-    analysis = (ccx.rigid_body(deck, "base") + ccx.rigid_body(deck, "joint") + ccx.rigid_body(deck, "tip")
-                + ccx.clamp(deck, "base") + ccx.frequency_step(4))
-    f_ccx = ccx.run_ccx(deck, analysis, d / f"ccx_freq_{max_step}").frequencies_hz[1]
+    f_ccx = one_piece_frequencies(deck, d / f"ccx_freq_{max_step}")[1]
     f_ours = 1 / mean_period(t, e[:, 2])
     print(f"\nundamped weld, 50 s, solver steps {max_step} s: energy within {drift / peak:.2e} of the peak strain "
           f"energy ({peak:.3e} J); vertical swing {f_ours:.6f} Hz, CalculiX {f_ccx:.6f} Hz ({abs(f_ours / f_ccx - 1):.1e})")
@@ -505,17 +513,7 @@ def test_weld_static_sag_vs_calculix(built):
     Measured: weld and tip within 3.7e-5 and 6.9e-5 of CalculiX's deflection; tolerance 7e-4."""
     _, _, deck, d = built
     d = d / "settling"
-    d.mkdir(exist_ok=True)
-    link = json.loads((EXAMPLES / "chain" / "link.json").read_text())
-    link["damping"] = {"alpha": 0.0, "beta": 0.01}
-    link.pop("$schema", None)
-    (d / "damped_link.json").write_text(json.dumps(link))
-    weld = json.loads((ASSEMBLIES / "two_link_weld.json").read_text())
-    weld.pop("$schema", None)
-    for b in weld["assembly"]["bodies"]:
-        b["flexible"] = "damped_link.json"
-    (d / "weld.json").write_text(json.dumps(weld))
-    fmu = build("DampedWeld", d, d / "weld.json")
+    fmu = weld_of_links(d, "DampedWeld", {"alpha": 0.0, "beta": 0.01})
     _, ours = simulate(fmu, 10.0, ["upper.tip.r[3]", "lower.tip.r[3]"], step=1e-2)
     analysis = (ccx.rigid_body(deck, "base") + ccx.rigid_body(deck, "joint") + ccx.rigid_body(deck, "tip")
                 + ccx.clamp(deck, "base")

@@ -238,13 +238,7 @@ impl Solver {
         w.forces.iter_mut().for_each(|x| *x = -*x);
         system.add_applied(&m.pos, now, &mut w.forces);
         w.residual[..nv].copy_from_slice(&w.forces);
-        for k in 0..ne {
-            for j in 0..nv {
-                let b = w.jac[k * nv + j];
-                w.consistent_matrix[j * dim + nv + k] = -b;
-                w.consistent_matrix[(nv + k) * dim + j] = b;
-            }
-        }
+        put_joint_blocks(&mut w.consistent_matrix, &w.jac, nv, ne);
         let m = w.inertial.len();
         for (r, &i) in w.inertial.iter().enumerate() {
             let row = &w.consistent_matrix[i * dim..(i + 1) * dim];
@@ -383,13 +377,7 @@ impl Solver {
         let w = &mut self.work;
         w.matrix.fill(0.0);
         system.iteration_blocks(&w.pos, &w.vel, &mut w.cr_q, pos_gain, vel_gain, &mut w.matrix, dim);
-        for k in 0..ne {
-            for j in 0..nv {
-                let b = w.jac[k * nv + j];
-                w.matrix[j * dim + nv + k] = -b;
-                w.matrix[(nv + k) * dim + j] = b;
-            }
-        }
+        put_joint_blocks(&mut w.matrix, &w.jac, nv, ne);
         lu_factor(&mut w.matrix, dim, &mut w.pivots).map_err(|_| AssemblyError::Singular { time: now.t })?;
         self.matrix_step = Some(h);
         self.matrices_formed += 1;
@@ -502,5 +490,18 @@ impl Solver {
         }
         let residual = self.work.residual.iter().fold(0.0f64, |a, x| a.max(x.abs()));
         Err(AssemblyError::NotConverged { time: now.t, residual })
+    }
+}
+
+/// The joints' blocks of a saddle-point matrix (dimension nv + ne, row-major): -B^T in the
+/// multipliers' columns of the body rows, B in the joints' rows.
+fn put_joint_blocks(matrix: &mut [f64], jac: &[f64], nv: usize, ne: usize) {
+    let dim = nv + ne;
+    for k in 0..ne {
+        for j in 0..nv {
+            let b = jac[k * nv + j];
+            matrix[j * dim + nv + k] = -b;
+            matrix[(nv + k) * dim + j] = b;
+        }
     }
 }
