@@ -24,6 +24,19 @@ use crate::body::dense::dot;
 use crate::kinematics::{self as k3, Mat3, Vec3};
 use crate::reduced::ReducedBody;
 
+/// The axis pairs (p, r), p <= r, of [`Inertia::o_sym`].
+pub const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+
+/// [`Inertia::o_sym`] of O_ab (9 x n x n).
+pub fn symmetric_sums(o_mat: &[f64], n: usize) -> Vec<f64> {
+    let nn = n * n;
+    let o = |p: usize, r: usize| &o_mat[(3 * p + r) * nn..][..nn];
+    PAIRS
+        .iter()
+        .flat_map(|&(p, r)| (0..nn).map(move |i| if p == r { o(p, p)[i] } else { o(p, r)[i] + o(r, p)[i] }))
+        .collect()
+}
+
 /// A flange of a body where joints and external loads attach.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Marker {
@@ -61,10 +74,13 @@ pub struct Inertia {
     /// 3 x n: C_t = T^T M Phi, C_r0 = R_X^T M Phi.
     pub c_t: Vec<f64>,
     pub c_r: Vec<f64>,
-    /// G_a (3 x n x n), O_ab (9 x n x n), o_ab (9 x n), as in [`crate::reduced::RotationTerms`].
+    /// G_a (3 x n x n) and o_ab (9 x n), as in [`crate::reduced::RotationTerms`].
     pub g: Vec<f64>,
-    pub o_mat: Vec<f64>,
     pub o_vec: Vec<f64>,
+    /// O_ab's symmetric sums, 6 x n x n in [`PAIRS`]' order: O_pp, then O_pr + O_rp (p < r).
+    /// O_rp = O_pr^T, so every product the equations take with q is one of these: six
+    /// matrix-vector products where the nine O_ab would need nine.
+    pub o_sym: Vec<f64>,
     pub markers: Vec<Marker>,
 }
 
@@ -104,8 +120,8 @@ impl Inertia {
             c_t: body.c_t.clone(),
             c_r: body.c_r.clone(),
             g: rot.g.clone(),
-            o_mat: rot.o_mat.clone(),
             o_vec: rot.o_vec.clone(),
+            o_sym: symmetric_sums(&rot.o_mat, n),
             markers,
         })
     }
@@ -151,15 +167,16 @@ impl Inertia {
             c_t: vec![],
             c_r: vec![],
             g: vec![],
-            o_mat: vec![],
             o_vec: vec![],
+            o_sym: vec![],
             markers: flanges.iter().map(|(n, p)| Marker { name: n.clone(), position: *p, shapes: vec![] }).collect(),
         })
     }
 
-    /// Scratch the body's equations need: C_r(q) (3 n) and O_ab q (9 n).
+    /// Scratch the body's equations need: C_r(q) (3 n) and the symmetric sums' products with q
+    /// (6 n).
     pub fn scratch_len(n: usize) -> usize {
-        12 * n.max(1)
+        9 * n.max(1)
     }
 
     /// S(q) = m c(q), C_r(q) (3 x n into `cr_q`, then O_ab q, 9 x n), J(q) and J'(q, q');
@@ -175,28 +192,29 @@ impl Inertia {
                 cr_q[a * n + col] = self.c_r[a * n + col] + dot(&g[col * n..(col + 1) * n], q);
             }
         }
-        let o_q = &mut cr_q[3 * n..12 * n];
-        for ab in 0..9 {
-            let o_mat = &self.o_mat[ab * nn..(ab + 1) * nn];
+        let o_q = &mut cr_q[3 * n..9 * n];
+        for pair in 0..PAIRS.len() {
+            let o = &self.o_sym[pair * nn..(pair + 1) * nn];
             for k in 0..n {
-                o_q[ab * n + k] = dot(&o_mat[k * n..(k + 1) * n], q);
+                o_q[pair * n + k] = dot(&o[k * n..(k + 1) * n], q);
             }
         }
-        // O_rp = O_pr^T (M commutes with the axes' cross products), so q^T O_pr q is symmetric in
-        // p, r and d/dt (q^T O_pr q) = q'^T O_pr q + q'^T O_rp q: no product with q' is needed
+        // q^T O_pr q = q^T O_rp q (a scalar is its transpose): half the pair's sum, and
+        // d/dt (q^T O_pr q) = q'^T (O_pr + O_rp) q: no product with q' is needed
         let mut j = self.inertia;
         let mut j_rate = [0.0; 9];
-        for p in 0..3 {
-            for r in 0..3 {
-                let (pr, rp) = (3 * p + r, 3 * r + p);
-                let (o_pr, o_rp) = (&self.o_vec[pr * n..][..n], &self.o_vec[rp * n..][..n]);
-                let (oq_pr, oq_rp) = (&o_q[pr * n..][..n], &o_q[rp * n..][..n]);
-                let lin = dot(q, o_pr) + dot(q, o_rp);
-                let lin_rate = dot(qd, o_pr) + dot(qd, o_rp);
-                let quad = dot(q, oq_pr);
-                let quad_rate = dot(qd, oq_pr) + dot(qd, oq_rp);
-                j[pr] -= lin + quad;
-                j_rate[pr] = -(lin_rate + quad_rate);
+        for (pair, &(p, r)) in PAIRS.iter().enumerate() {
+            let oq = &o_q[pair * n..][..n];
+            let (quad, quad_rate) =
+                if p == r { (dot(q, oq), 2.0 * dot(qd, oq)) } else { (0.5 * dot(q, oq), dot(qd, oq)) };
+            for (a, b) in [(p, r), (r, p)] {
+                let ab = 3 * a + b;
+                let (o_pr, o_rp) = (&self.o_vec[ab * n..][..n], &self.o_vec[(3 * b + a) * n..][..n]);
+                j[ab] -= dot(q, o_pr) + dot(q, o_rp) + quad;
+                j_rate[ab] = -(dot(qd, o_pr) + dot(qd, o_rp) + quad_rate);
+                if p == r {
+                    break;
+                }
             }
         }
         (s, j, j_rate)
@@ -265,11 +283,14 @@ impl Inertia {
                 }
                 f += coriolis * w[i] * dot(&self.g[i * nn + k * n..][..n], qd);
                 for b in 0..3 {
-                    let ab = 3 * i + b;
-                    let ww = w[i] * w[b];
-                    if ww != 0.0 {
-                        f += ww * (self.o_vec[ab * n + k] + cr_q[3 * n + ab * n + k]);
-                    }
+                    f += w[i] * w[b] * self.o_vec[(3 * i + b) * n + k];
+                }
+            }
+            // sum_ab w_a w_b O_ab q over the symmetric sums
+            for (pair, &(p, r)) in PAIRS.iter().enumerate() {
+                let ww = w[p] * w[r];
+                if ww != 0.0 {
+                    f += ww * cr_q[3 * n + pair * n + k];
                 }
             }
             out[6 + k] = f;

@@ -96,8 +96,8 @@ pub(crate) fn inertia_of(c: &Cloud) -> Inertia {
         c_t,
         c_r,
         g,
-        o_mat,
         o_vec,
+        o_sym: super::symmetric_sums(&o_mat, n),
         markers: vec![Marker { name: "base".into(), position: [0.0; 3], shapes: vec![0.0; 6 * n] }],
     }
 }
