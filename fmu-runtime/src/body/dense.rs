@@ -53,13 +53,17 @@ pub(crate) fn lu_factor<T: Scalar>(a: &mut [T], n: usize, pivots: &mut [usize]) 
             }
         }
         let d = a[col * n + col];
-        for i in col + 1..n {
-            let f = a[i * n + col] / d;
-            a[i * n + col] = f;
+        // the pivot row apart from the rows below it: slices the compiler vectorises (indexing
+        // both in one slice kept every update a bounds-checked scalar)
+        let (top, below) = a[..n * n].split_at_mut((col + 1) * n);
+        let pivot_row = &top[col * n + col + 1..];
+        for row in below.chunks_exact_mut(n) {
+            let f = row[col] / d;
+            row[col] = f;
             if !f.is_zero() {
-                for k in col + 1..n {
-                    let v = f * a[col * n + k];
-                    a[i * n + k] -= v;
+                for (x, p) in row[col + 1..].iter_mut().zip(pivot_row) {
+                    let v = f * *p;
+                    *x -= v;
                 }
             }
         }
