@@ -1,6 +1,7 @@
 //! Assemblies: several bodies, flexible and rigid, joined by joints and solved together inside
 //! one FMU. `inertia` holds a body's equations of motion.
 
+mod condensed;
 pub mod error;
 pub mod joint;
 

@@ -18,14 +18,15 @@
 //! Jacobian (the rotation's and the spin's terms, of order |w| h against the inertia, left
 //! out); it is kept over steps while Newton converges fast with it (modified Newton) and formed
 //! again when an iteration stalls. Where Newton stalls with a fresh one too, the matrix comes
-//! from finite differences of the whole residual (ten times the work). Every buffer is allocated
-//! when the solver is made.
+//! from finite differences of the whole residual (ten times the work). Both this matrix and the
+//! outputs' index-1 one are factored with the bodies' modes condensed out first
+//! ([`super::condensed`]). Every buffer is allocated when the solver is made.
 
+use super::condensed::Condensation;
 use super::description::SolverSettings;
 use super::error::AssemblyError;
 use super::inertia::Inertia;
 use super::system::{Instant, System};
-use crate::body::dense::{lu_factor, lu_solve};
 
 /// Newton iterations of a step after which the next step forms the iteration matrix again: the
 /// bodies turn away from the poses it was formed at, and its contraction decays over a swing
@@ -84,14 +85,15 @@ struct Work {
     jac: Vec<f64>,
     residual: Vec<f64>,
     probe: Vec<f64>,
+    /// The kept iteration matrix as formed, and its factors with the modes condensed out.
     matrix: Vec<f64>,
-    pivots: Vec<usize>,
+    factors: Condensation,
     /// The index-1 system of [`Solver::consistent`], apart from the kept iteration matrix: in
-    /// all slots, then over `inertial` alone (its factors).
+    /// all slots, then over `inertial` alone (and its factors).
     consistent_matrix: Vec<f64>,
     compact_matrix: Vec<f64>,
     compact_rhs: Vec<f64>,
-    consistent_pivots: Vec<usize>,
+    compact_factors: Condensation,
     /// The slots with inertia (every body's frame and dynamic modes) and the joints' equations:
     /// a mode without inertia has no acceleration, so its row and column drop out there.
     inertial: Vec<usize>,
@@ -121,6 +123,8 @@ impl Solver {
         let dim = nv + ne;
         let inertial: Vec<usize> =
             system.bodies.iter().flat_map(|b| b.slot..b.slot + 6 + b.inertia.n_dynamic).chain(nv..dim).collect();
+        let modes: Vec<usize> = system.bodies.iter().flat_map(|b| b.slot + 6..b.slot + 6 + b.n_modes()).collect();
+        let compact_modes: Vec<usize> = (0..inertial.len()).filter(|&r| modes.contains(&inertial[r])).collect();
         Self {
             settings,
             coefficients: Coefficients::of(settings.spectral_radius),
@@ -138,11 +142,11 @@ impl Solver {
                 residual: vec![0.0; dim],
                 probe: vec![0.0; dim],
                 matrix: vec![0.0; dim * dim],
-                pivots: vec![0; dim],
+                factors: Condensation::new(dim, modes),
                 consistent_matrix: vec![0.0; dim * dim],
                 compact_matrix: vec![0.0; inertial.len() * inertial.len()],
                 compact_rhs: vec![0.0; inertial.len()],
-                consistent_pivots: vec![0; inertial.len()],
+                compact_factors: Condensation::new(inertial.len(), compact_modes),
                 inertial,
                 cr_q: vec![0.0; Inertia::scratch_len(system.max_modes())],
             },
@@ -155,18 +159,17 @@ impl Solver {
 
     /// What a saved state needs beside the motion to continue bit for bit: whether the next
     /// step is a run's first, the step the kept iteration matrix was formed for (None: none),
-    /// and that matrix's factors.
-    pub fn kept(&self) -> (bool, Option<f64>, &[f64], &[usize]) {
-        (self.first, self.matrix_step, &self.work.matrix, &self.work.pivots)
+    /// and that matrix as formed (factoring it again gives the same factors).
+    pub fn kept(&self) -> (bool, Option<f64>, &[f64]) {
+        (self.first, self.matrix_step, &self.work.matrix)
     }
 
-    /// Take what [`Self::kept`] gave; `matrix` and `pivots` of this solver's sizes (the caller
-    /// checked them: pivots below the dimension).
-    pub fn restore_kept(&mut self, first: bool, matrix_step: Option<f64>, matrix: &[f64], pivots: &[usize]) {
+    /// Take what [`Self::kept`] gave (`matrix` of this solver's size); a matrix that does not
+    /// factor is dropped (the next step forms one).
+    pub fn restore_kept(&mut self, first: bool, matrix_step: Option<f64>, matrix: &[f64]) {
         self.first = first;
-        self.matrix_step = matrix_step;
         self.work.matrix.copy_from_slice(matrix);
-        self.work.pivots.copy_from_slice(pivots);
+        self.matrix_step = matrix_step.filter(|_| self.work.factors.factor(&self.work.matrix).is_ok());
     }
 
     /// Whether the next step is a run's first (a restored state without a kept matrix).
@@ -176,7 +179,7 @@ impl Solver {
 
     /// The iteration system's dimension (velocity slots and joint equations).
     pub fn dimension(&self) -> usize {
-        self.work.pivots.len()
+        self.work.residual.len()
     }
 
     /// Forget the kept iteration matrix (after the state was replaced).
@@ -254,9 +257,8 @@ impl Solver {
             }
             w.compact_rhs[r] = w.residual[i];
         }
-        lu_factor(&mut w.compact_matrix, m, &mut w.consistent_pivots)
-            .map_err(|_| AssemblyError::Singular { time: now.t })?;
-        lu_solve(&w.compact_matrix, m, &w.consistent_pivots, &mut w.compact_rhs);
+        w.compact_factors.factor(&w.compact_matrix).map_err(|_| AssemblyError::Singular { time: now.t })?;
+        w.compact_factors.solve(&mut w.compact_rhs);
         w.residual.fill(0.0);
         for (r, &i) in w.inertial.iter().enumerate() {
             w.residual[i] = w.compact_rhs[r];
@@ -365,7 +367,8 @@ impl Solver {
             }
         }
         let w = &mut self.work;
-        lu_factor(&mut w.matrix, dim, &mut w.pivots).map_err(|_| AssemblyError::Singular { time: now.t })?;
+        self.matrix_step = None;
+        w.factors.factor(&w.matrix).map_err(|_| AssemblyError::Singular { time: now.t })?;
         self.matrix_step = Some(h);
         self.matrices_formed += 1;
         Ok(())
@@ -385,7 +388,8 @@ impl Solver {
         w.matrix.fill(0.0);
         system.iteration_blocks(&w.pos, &w.vel, &mut w.cr_q, pos_gain, vel_gain, &mut w.matrix, dim);
         put_joint_blocks(&mut w.matrix, &w.jac, nv, ne);
-        lu_factor(&mut w.matrix, dim, &mut w.pivots).map_err(|_| AssemblyError::Singular { time: now.t })?;
+        self.matrix_step = None;
+        w.factors.factor(&w.matrix).map_err(|_| AssemblyError::Singular { time: now.t })?;
         self.matrix_step = Some(h);
         self.matrices_formed += 1;
         Ok(())
@@ -400,18 +404,20 @@ impl Solver {
         now: &Instant,
         fresh: bool,
     ) -> Result<bool, AssemblyError> {
+        // a matrix just formed left the residual of the step's start in work.residual
         let (nv, ne) = (system.n_vel, system.n_eq);
-        let dim = nv + ne;
         let gain = h * h * self.coefficients.position_gain();
         let tol = self.settings.tolerance;
         let (mut last, mut last_dl) = (f64::INFINITY, f64::INFINITY);
         for it in 0..self.settings.max_iterations {
-            self.residual(system, m, h, now, false);
+            if it > 0 || !fresh {
+                self.residual(system, m, h, now, false);
+            }
             let w = &mut self.work;
             for x in &mut w.residual {
                 *x = -*x;
             }
-            lu_solve(&w.matrix, dim, &w.pivots, &mut w.residual);
+            w.factors.solve(&mut w.residual);
             let mut size = 0.0f64;
             for i in 0..nv {
                 w.acc[i] += w.residual[i];

@@ -20,8 +20,9 @@ use std::sync::Arc;
 /// velocities, accelerations, pseudo-accelerations, multipliers, revolute angles, the host
 /// frame's r[3] R[9] v[3] w[3] a[3] z[3], drive inputs and their rates, loads and their rates;
 /// then the solver's: first step (u8), a kept iteration matrix (u8) and, where kept, its step
-/// (f64), factors (f64, dimension^2) and pivots (u32, dimension).
-pub const ASSEMBLY_STATE_VERSION: u32 = 1;
+/// (f64) and the matrix as formed (f64, dimension^2; version 1: its factors and pivots, u32
+/// each, which a restore drops).
+pub const ASSEMBLY_STATE_VERSION: u32 = 2;
 
 #[derive(Debug, Clone)]
 pub struct AssemblyFmu {
@@ -34,7 +35,6 @@ pub struct AssemblyFmu {
     scratch: Vec<f64>,
     /// Where a restored state's iteration matrix is read to.
     matrix_buffer: Vec<f64>,
-    pivot_buffer: Vec<usize>,
 }
 
 /// Why a variable or a call is refused.
@@ -82,7 +82,6 @@ impl AssemblyFmu {
             start_time: 0.0,
             scratch,
             matrix_buffer: vec![0.0; dim * dim],
-            pivot_buffer: vec![0; dim],
         })
     }
 
@@ -174,15 +173,12 @@ impl AssemblyFmu {
         }
         // the kept iteration matrix decides Newton's path to its tolerance: a restored state
         // continues bit for bit only with it
-        let (first, step, matrix, pivots) = a.solver.kept();
+        let (first, step, matrix) = a.solver.kept();
         w.bool(first);
         w.bool(step.is_some());
         if let Some(h) = step {
             w.f64(h);
             w.f64s(matrix);
-            for p in pivots {
-                w.u32(*p as u32);
-            }
         }
     }
 
@@ -225,19 +221,22 @@ impl AssemblyFmu {
         r.f64s_into(&mut a.inputs.load_rates, "load rates")?;
         let first = r.bool("first step")?;
         let dim = a.solver.dimension();
-        let (mut matrix, mut pivots) =
-            (std::mem::take(&mut self.matrix_buffer), std::mem::take(&mut self.pivot_buffer));
+        let mut matrix = std::mem::take(&mut self.matrix_buffer);
         let step = if r.bool("kept iteration matrix")? {
             let h = r.f64("kept matrix's step")?;
             r.f64s_into(&mut matrix, "kept matrix")?;
-            for (i, p) in pivots.iter_mut().enumerate() {
-                let v = r.u32("kept pivots")? as usize;
-                if v < i || v >= dim {
-                    return Err(DecodeError::invalid(AssemblyFmuError::OtherAssembly));
+            // version 1 kept the matrix's factors and pivots: dropped (the next step forms one)
+            let mut valid = true;
+            if version == 1 {
+                for i in 0..dim {
+                    let v = r.u32("kept pivots")? as usize;
+                    if v < i || v >= dim {
+                        return Err(DecodeError::invalid(AssemblyFmuError::OtherAssembly));
+                    }
                 }
-                *p = v;
+                valid = false;
             }
-            Some(h)
+            Some(h).filter(|_| valid)
         } else {
             None
         };
@@ -254,10 +253,10 @@ impl AssemblyFmu {
         }
         a.solver.invalidate();
         match step {
-            Some(h) => a.solver.restore_kept(first, Some(h), &matrix, &pivots),
+            Some(h) => a.solver.restore_kept(first, Some(h), &matrix),
             None => a.solver.set_first(first),
         }
-        (self.matrix_buffer, self.pivot_buffer) = (matrix, pivots);
+        self.matrix_buffer = matrix;
         a.forget_outputs();
         Ok(())
     }
