@@ -59,7 +59,18 @@ def per_step(durations: list[float]) -> dict:
             "mean_us": float(d.mean()), "slow": int(np.count_nonzero(d > 4.0 * p50))}
 
 
-def chain_master(link: Path, seconds: float) -> dict:
+def against_reference(positions: np.ndarray, reference: Path) -> float:
+    """Max |positions - reference| on the reference's times (a multiple of H apart, from 0) within
+    the positions' window, / the reference's swing there, worst column."""
+    ref = np.loadtxt(reference, delimiter=",", ndmin=2)
+    every = int(round((ref[1, 0] - ref[0, 0]) / H))
+    ours = positions[::every]
+    ref = ref[: len(ours), 1:5]
+    ours = ours[: len(ref)]
+    return float((np.abs(ours - ref).max(axis=0) / np.ptp(ref, axis=0)).max())
+
+
+def chain_master(link: Path, seconds: float, reference: Path | None = None) -> dict:
     import chain_master as cm
     from test_chain import double_pendulum
 
@@ -82,7 +93,8 @@ def chain_master(link: Path, seconds: float) -> dict:
     loop = float(np.sum(durations))
     return {"seconds": seconds, "steps": len(durations), "wall_s": total, "loop_s": loop,
             "loop_s_per_sim_s": loop / seconds, "evaluations_per_step": float(retakes),
-            **per_step(durations), "error_vs_rigid": against_rigid(ours)}
+            **per_step(durations), "error_vs_rigid": against_rigid(ours),
+            **({"error_vs_reference": against_reference(ours, reference)} if reference else {})}
 
 
 def exudyn(deck: Path, seconds: float) -> dict:
@@ -119,10 +131,13 @@ def main() -> int:
     p.add_argument("--deck", type=Path, help="the link's CalculiX deck (fmu-builder --export-inp): runs Exudyn")
     p.add_argument("--exudyn-seconds", type=float, default=2.0, help="Exudyn's simulated time [s]")
     p.add_argument("--assembly", type=Path, help="CSV of the assembly FMU's t, elbow x, z, tip x, z")
+    p.add_argument("--reference", type=Path,
+                   help="CSV of a converged run's t, elbow x, z, tip x, z every few steps from t = 0: "
+                        "chain_master's error against it (error_vs_reference)")
     a = p.parse_args()
     out: dict = {}
     print(f"chain_master: double pendulum, {a.seconds} s ...", file=sys.stderr, flush=True)
-    out["chain_master"] = chain_master(a.link, a.seconds)
+    out["chain_master"] = chain_master(a.link, a.seconds, a.reference)
     if a.deck is not None:
         print(f"Exudyn: double pendulum, {a.exudyn_seconds} s ...", file=sys.stderr, flush=True)
         try:

@@ -28,6 +28,7 @@
 //! checked).
 
 mod assembly;
+mod assembly_steps;
 mod fmi;
 mod hard_cases;
 mod newmark;

@@ -1,0 +1,122 @@
+//! The double pendulum's cost at equal accuracy: the issue compares the assembly FMU with
+//! chain_master per simulated second *at equal or better accuracy*, and the FMU is more accurate
+//! than chain_master at the same step, so the fair comparison lets it take a longer one.
+//!
+//! examples/assemblies/double_pendulum.json is built with `solver.max_step` (and the experiment's
+//! step) set to each of `STEPS` and to `REFERENCE_STEP`, each FMU stepped for `SECONDS` at its
+//! own step with the same outputs read after every step as the main table's loop (four positions
+//! and a joint reaction). Accuracy: the elbow's and the tip's (x, z) against the run at
+//! `REFERENCE_STEP` (a converged solution of the same model: a consistency check of the time
+//! integration, not of the physics), on the times every step hits (`GRID`), max over the window
+//! / the reference's swing per column, worst column. chain_master's trajectory is measured
+//! against the same reference by bench/assembly_masters.py (`--reference`).
+
+use crate::fmi::Fmu;
+use fmi2::types::{fmi2CoSimulation, fmi2Status};
+use std::path::Path;
+use std::time::Instant;
+
+/// The converged reference's step [s].
+pub const REFERENCE_STEP: f64 = 0.25e-3;
+/// The steps timed [s].
+pub const STEPS: [f64; 3] = [1.0e-3, 1.5e-3, 2.0e-3];
+/// Simulated time [s]: chain_master's window.
+pub const SECONDS: f64 = 1.0;
+/// Times every step hits [s].
+pub const GRID: f64 = 6.0e-3;
+
+/// The elbow and the tip (x, z) on the grid, from t = 0.
+pub type Positions = Vec<[f64; 4]>;
+
+pub struct StepRow {
+    pub step: f64,
+    /// the loop's wall time with the outputs read / simulated time [s/s]
+    pub per_simulated_second: f64,
+    pub error: f64,
+}
+
+/// The double pendulum built with solver steps of `h`, in `work`.
+fn build(h: f64, work: &Path) -> Result<std::path::PathBuf, String> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/assemblies");
+    let source = dir.join("double_pendulum.json");
+    let text = std::fs::read_to_string(&source).map_err(|e| format!("{}: {e}", source.display()))?;
+    let mut doc: serde_json::Value = serde_json::from_str(&text).map_err(|e| format!("{}: {e}", source.display()))?;
+    doc["assembly"]["solver"] = serde_json::json!({ "max_step": h });
+    doc["experiment"]["step_size"] = serde_json::json!(h);
+    let input = work.join(format!("double_pendulum_{:.0}us.json", h * 1e6));
+    let output = input.with_extension("fmu");
+    // the bodies' paths are relative to the example's folder: the input stays beside it in name
+    let text = serde_json::to_string(&doc).map_err(|e| e.to_string())?;
+    let spec = fmu_builder::input::assembly::AssemblySpec::from_str(&source, &text)
+        .map_err(|e| format!("{} with max_step {h}: {e}", source.display()))?;
+    fmu_builder::pipeline::assembly::build_assembly(spec, &output, &[])
+        .map_err(|e| format!("building {} with max_step {h}: {e}", source.display()))?;
+    Ok(output)
+}
+
+/// Step the FMU at `h` for SECONDS with the outputs read; the loop's wall time and the positions
+/// on the grid.
+fn run(fmu_path: &Path, h: f64, outputs: &[&str]) -> Result<(f64, Positions), String> {
+    let dir = fmu_path.with_extension("");
+    let fmu = Fmu::open(fmu_path, &dir)?;
+    let vrs = fmu.description.vrs(outputs);
+    let api = &fmu.api;
+    let inst = fmu.instantiate(fmi2CoSimulation, "assembly-step-sweep")?;
+    inst.initialize()?;
+    let steps = (SECONDS / h).round() as usize;
+    let every = (GRID / h).round() as usize;
+    let mut out = vec![0.0; vrs.len()];
+    inst.get(&vrs, &mut out)?;
+    let mut grid = vec![[out[0], out[1], out[2], out[3]]];
+    let mut bad = 0;
+    let start = Instant::now();
+    for k in 1..=steps {
+        let t = (k - 1) as f64 * h;
+        unsafe {
+            bad += ((api.do_step)(inst.c, t, h, 1) != fmi2Status::fmi2OK) as usize;
+            bad += ((api.get_real)(inst.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) != fmi2Status::fmi2OK) as usize;
+        }
+        if k % every == 0 {
+            grid.push([out[0], out[1], out[2], out[3]]);
+        }
+    }
+    let wall = start.elapsed().as_secs_f64();
+    if bad > 0 {
+        return Err(format!("{}: {bad} FMI calls failed", fmu_path.display()));
+    }
+    Ok((wall, grid))
+}
+
+/// max |a - reference| / the reference's swing, worst column.
+pub fn error(a: &Positions, reference: &Positions) -> f64 {
+    (0..4)
+        .map(|c| {
+            let (lo, hi) =
+                reference.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), r| (l.min(r[c]), h.max(r[c])));
+            let worst = a.iter().zip(reference).fold(0.0f64, |m, (x, r)| m.max((x[c] - r[c]).abs()));
+            worst / (hi - lo)
+        })
+        .fold(0.0, f64::max)
+}
+
+/// The reference's positions on the grid (written to `csv` for the masters' script: t, elbow x,
+/// z, tip x, z) and one row per step of `STEPS`.
+pub fn sweep(work: &Path, outputs: &[&str], csv: &Path) -> Result<Vec<StepRow>, String> {
+    let reference_fmu = build(REFERENCE_STEP, work)?;
+    let (_, reference) = run(&reference_fmu, REFERENCE_STEP, outputs)?;
+    let text: String = reference
+        .iter()
+        .enumerate()
+        .map(|(k, r)| format!("{:.6},{:.17e},{:.17e},{:.17e},{:.17e}\n", k as f64 * GRID, r[0], r[1], r[2], r[3]))
+        .collect();
+    std::fs::write(csv, text).map_err(|e| format!("{}: {e}", csv.display()))?;
+    STEPS
+        .iter()
+        .map(|&h| {
+            let fmu = build(h, work)?;
+            let (wall, grid) = run(&fmu, h, outputs)?;
+            eprintln!("step sweep: h = {} ms, {:.1} ms per simulated second", h * 1e3, wall / SECONDS * 1e3);
+            Ok(StepRow { step: h, per_simulated_second: wall / SECONDS, error: error(&grid, &reference) })
+        })
+        .collect()
+}
