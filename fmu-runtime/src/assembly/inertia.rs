@@ -20,6 +20,7 @@
 //! Lambda q + C_t^T (w x v_B - R^T g) + sum_a w_a G_a q' + sum_ab w_a w_b (o_ab + O_ab q).
 
 use super::error::AssemblyError;
+use super::mat_vec::mat_vec;
 use crate::body::dense::dot;
 use crate::kinematics::{self as k3, Mat3, Vec3};
 use crate::reduced::ReducedBody;
@@ -173,10 +174,10 @@ impl Inertia {
         })
     }
 
-    /// Scratch the body's equations need: C_r(q) (3 n) and the symmetric sums' products with q
-    /// (6 n).
+    /// Scratch the body's equations need: C_r(q) (3 n), the symmetric sums' products with q
+    /// (6 n) and G_a q' (3 n).
     pub fn scratch_len(n: usize) -> usize {
-        9 * n.max(1)
+        12 * n.max(1)
     }
 
     /// S(q) = m c(q), C_r(q) (3 x n into `cr_q`, then O_ab q, 9 x n), J(q) and J'(q, q');
@@ -187,17 +188,15 @@ impl Inertia {
         let mut s = self.first_moment;
         for a in 0..3 {
             s[a] += dot(&self.c_t[a * n..(a + 1) * n], q);
-            let g = &self.g[a * nn..(a + 1) * nn];
-            for col in 0..n {
-                cr_q[a * n + col] = self.c_r[a * n + col] + dot(&g[col * n..(col + 1) * n], q);
+            let cr = &mut cr_q[a * n..(a + 1) * n];
+            mat_vec(&self.g[a * nn..(a + 1) * nn], n, q, cr);
+            for (c, c0) in cr.iter_mut().zip(&self.c_r[a * n..(a + 1) * n]) {
+                *c += c0;
             }
         }
         let o_q = &mut cr_q[3 * n..9 * n];
         for pair in 0..PAIRS.len() {
-            let o = &self.o_sym[pair * nn..(pair + 1) * nn];
-            for k in 0..n {
-                o_q[pair * n + k] = dot(&o[k * n..(k + 1) * n], q);
-            }
+            mat_vec(&self.o_sym[pair * nn..(pair + 1) * nn], n, q, &mut o_q[pair * n..(pair + 1) * n]);
         }
         // q^T O_pr q = q^T O_rp q (a scalar is its transpose): half the pair's sum, and
         // d/dt (q^T O_pr q) = q'^T (O_pr + O_rp) q: no product with q' is needed
@@ -242,6 +241,11 @@ impl Inertia {
         let (a, w_d, qdd) = (vel3(acc, 0), vel3(acc, 3), &acc[6..6 + nd]);
         let a_b = k3::mul_t(rot, k3::sub(a, gravity));
         let (s, j, j_rate) = self.deformed(q, qd, cr_q);
+        let (cr_q, g_qd) = cr_q.split_at_mut(9 * n);
+        for a in 0..3 {
+            mat_vec(&self.g[a * nn..(a + 1) * nn], n, qd, &mut g_qd[a * n..(a + 1) * n]);
+        }
+        let cr_q: &[f64] = cr_q;
         let ct = |x: &[f64]| -> Vec3 { std::array::from_fn(|i| dot(&self.c_t[i * n..(i + 1) * n], x)) };
         let cr = |x: &[f64]| -> Vec3 { std::array::from_fn(|i| dot(&cr_q[i * n..(i + 1) * n], x)) };
         let (ct_qd, ct_qdd, cr_qd, cr_qdd) = (ct(qd), ct(qdd), cr(qd), cr(qdd));
@@ -281,7 +285,7 @@ impl Inertia {
                 if k < nm {
                     f += cr_q[i * n + k] * w_d[i];
                 }
-                f += coriolis * w[i] * dot(&self.g[i * nn + k * n..][..n], qd);
+                f += coriolis * w[i] * g_qd[i * n + k];
                 for b in 0..3 {
                     f += w[i] * w[b] * self.o_vec[(3 * i + b) * n + k];
                 }

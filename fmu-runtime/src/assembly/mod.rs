@@ -4,6 +4,7 @@
 mod condensed;
 pub mod error;
 pub mod joint;
+mod mat_vec;
 
 pub use error::AssemblyError;
 pub mod description;
