@@ -20,9 +20,13 @@ use crate::body::dense::{lu_factor, lu_solve};
 #[derive(Debug, Clone)]
 pub struct Condensation {
     dim: usize,
-    /// The slots condensed out (E) and the rest (R), in the full system's numbering.
+    /// The slots condensed out (E) and the rest (R), in the full system's numbering; slots in
+    /// neither are left out (their rows and columns are not read, their solution is 0).
     eliminated: Vec<usize>,
     kept: Vec<usize>,
+    /// Every slot not left out, in order.
+    taken: Vec<usize>,
+    left_out: Vec<usize>,
     /// 1 / K_ee per eliminated slot.
     inv_d: Vec<f64>,
     /// Per eliminated slot, K_Re (column) and K_eR (row) over R: |E| x |R| each.
@@ -38,7 +42,14 @@ pub struct Condensation {
 impl Condensation {
     /// A condensation of a `dim` x `dim` system that eliminates `eliminated` where it can.
     pub fn new(dim: usize, eliminated: Vec<usize>) -> Self {
-        let kept: Vec<usize> = (0..dim).filter(|i| !eliminated.contains(i)).collect();
+        Self::without(dim, eliminated, &[])
+    }
+
+    /// [`Self::new`] of the system without the slots `left_out` (a mode without inertia in the
+    /// index-1 system: no row, no column, no acceleration).
+    pub fn without(dim: usize, eliminated: Vec<usize>, left_out: &[usize]) -> Self {
+        let kept: Vec<usize> = (0..dim).filter(|i| !eliminated.contains(i) && !left_out.contains(i)).collect();
+        let taken: Vec<usize> = (0..dim).filter(|i| !left_out.contains(i)).collect();
         let (e, r) = (eliminated.len(), kept.len());
         Self {
             dim,
@@ -51,6 +62,8 @@ impl Condensation {
             scratch: vec![0.0; dim],
             eliminated,
             kept,
+            taken,
+            left_out: left_out.to_vec(),
         }
     }
 
@@ -62,8 +75,14 @@ impl Condensation {
             d.is_finite() && d != 0.0 && self.eliminated.iter().all(|&j| j == i || matrix[i * n + j] == 0.0)
         });
         if self.dense {
-            self.factors.copy_from_slice(matrix);
-            return lu_factor(&mut self.factors, n, &mut self.pivots);
+            // the rows and columns of the slots not left out
+            let m = self.taken.len();
+            for (a, &i) in self.taken.iter().enumerate() {
+                for (b, &j) in self.taken.iter().enumerate() {
+                    self.factors[a * m + b] = matrix[i * n + j];
+                }
+            }
+            return lu_factor(&mut self.factors[..m * m], m, &mut self.pivots[..m]);
         }
         let r = self.kept.len();
         for (a, &i) in self.kept.iter().enumerate() {
@@ -95,9 +114,19 @@ impl Condensation {
 
     /// b = K^-1 b in place, from [`Self::factor`]'s factors.
     pub fn solve(&mut self, b: &mut [f64]) {
-        let n = self.dim;
+        for &i in &self.left_out {
+            b[i] = 0.0;
+        }
         if self.dense {
-            lu_solve(&self.factors, n, &self.pivots, b);
+            let m = self.taken.len();
+            let x = &mut self.scratch[..m];
+            for (a, &i) in self.taken.iter().enumerate() {
+                x[a] = b[i];
+            }
+            lu_solve(&self.factors[..m * m], m, &self.pivots[..m], x);
+            for (a, &i) in self.taken.iter().enumerate() {
+                b[i] = x[a];
+            }
             return;
         }
         let r = self.kept.len();
@@ -184,6 +213,39 @@ mod tests {
         for i in 0..n {
             let s: f64 = (0..n).map(|j| k[i * n + j] * x[j]).sum();
             assert!((s - b[i]).abs() <= 1e-13);
+        }
+    }
+
+    #[test]
+    fn a_slot_left_out_is_neither_read_nor_solved_for() {
+        let n = 10;
+        let k = example();
+        // slot 7 left out: its row and column replaced by garbage the condensation must not read
+        let mut garbage = k.clone();
+        for i in 0..n {
+            garbage[7 * n + i] = f64::NAN;
+            garbage[i * n + 7] = f64::NAN;
+        }
+        let b: Vec<f64> = (0..n).map(|i| 1.0 + i as f64).collect();
+        // the reference: the dense LU of the system without slot 7
+        let taken: Vec<usize> = (0..n).filter(|&i| i != 7).collect();
+        let m = taken.len();
+        let mut dense: Vec<f64> =
+            taken.iter().flat_map(|&i| taken.iter().map(move |&j| (i, j))).map(|(i, j)| k[i * n + j]).collect();
+        let mut y: Vec<f64> = taken.iter().map(|&i| b[i]).collect();
+        let mut pivots = vec![0; m];
+        lu_factor(&mut dense, m, &mut pivots).unwrap();
+        lu_solve(&dense, m, &pivots, &mut y);
+        for eliminated in [vec![2, 3, 6], vec![]] {
+            let mut c = Condensation::without(n, eliminated.clone(), &[7]);
+            c.factor(&garbage).unwrap();
+            assert!(c.condensed());
+            let mut x = b.clone();
+            c.solve(&mut x);
+            assert_eq!(x[7], 0.0);
+            for (a, &i) in taken.iter().enumerate() {
+                assert!((x[i] - y[a]).abs() <= 1e-13, "{eliminated:?}: slot {i}");
+            }
         }
     }
 

@@ -88,15 +88,12 @@ struct Work {
     /// The kept iteration matrix as formed, and its factors with the modes condensed out.
     matrix: Vec<f64>,
     factors: Condensation,
-    /// The index-1 system of [`Solver::consistent`], apart from the kept iteration matrix: in
-    /// all slots, then over `inertial` alone (and its factors).
+    /// The index-1 system of [`Solver::consistent`], apart from the kept iteration matrix, and
+    /// its factors without the modes that have no inertia (no acceleration: their rows and
+    /// columns drop out). Only the bodies' diagonal blocks and the joints' rows and columns are
+    /// ever written: the rest stays zero from the start.
     consistent_matrix: Vec<f64>,
-    compact_matrix: Vec<f64>,
-    compact_rhs: Vec<f64>,
-    compact_factors: Condensation,
-    /// The slots with inertia (every body's frame and dynamic modes) and the joints' equations:
-    /// a mode without inertia has no acceleration, so its row and column drop out there.
-    inertial: Vec<usize>,
+    consistent_factors: Condensation,
     cr_q: Vec<f64>,
 }
 
@@ -121,10 +118,14 @@ impl Solver {
     pub fn new(system: &System, settings: SolverSettings) -> Self {
         let (nv, ne, np) = (system.n_vel, system.n_eq, system.n_pos);
         let dim = nv + ne;
-        let inertial: Vec<usize> =
-            system.bodies.iter().flat_map(|b| b.slot..b.slot + 6 + b.inertia.n_dynamic).chain(nv..dim).collect();
         let modes: Vec<usize> = system.bodies.iter().flat_map(|b| b.slot + 6..b.slot + 6 + b.n_modes()).collect();
-        let compact_modes: Vec<usize> = (0..inertial.len()).filter(|&r| modes.contains(&inertial[r])).collect();
+        let (mut with_inertia, mut without) = (vec![], vec![]);
+        for b in &system.bodies {
+            for k in 0..b.n_modes() {
+                let list = if k < b.inertia.n_dynamic { &mut with_inertia } else { &mut without };
+                list.push(b.slot + 6 + k);
+            }
+        }
         Self {
             settings,
             coefficients: Coefficients::of(settings.spectral_radius),
@@ -144,10 +145,7 @@ impl Solver {
                 matrix: vec![0.0; dim * dim],
                 factors: Condensation::new(dim, modes),
                 consistent_matrix: vec![0.0; dim * dim],
-                compact_matrix: vec![0.0; inertial.len() * inertial.len()],
-                compact_rhs: vec![0.0; inertial.len()],
-                compact_factors: Condensation::new(inertial.len(), compact_modes),
-                inertial,
+                consistent_factors: Condensation::without(dim, with_inertia, &without),
                 cr_q: vec![0.0; Inertia::scratch_len(system.max_modes())],
             },
             matrix_step: None,
@@ -243,26 +241,13 @@ impl Solver {
         }
         // the forces at a = 0 less the applied ones
         w.acc.fill(0.0);
-        w.consistent_matrix.fill(0.0);
         system.forces_and_mass(&m.pos, &m.vel, &w.acc, &mut w.cr_q, &mut w.forces, &mut w.consistent_matrix, dim);
         w.forces.iter_mut().for_each(|x| *x = -*x);
         system.add_applied(&m.pos, now, &mut w.forces);
         w.residual[..nv].copy_from_slice(&w.forces);
         put_joint_blocks(&mut w.consistent_matrix, &w.jac, nv, ne);
-        let m = w.inertial.len();
-        for (r, &i) in w.inertial.iter().enumerate() {
-            let row = &w.consistent_matrix[i * dim..(i + 1) * dim];
-            for (c, &j) in w.inertial.iter().enumerate() {
-                w.compact_matrix[r * m + c] = row[j];
-            }
-            w.compact_rhs[r] = w.residual[i];
-        }
-        w.compact_factors.factor(&w.compact_matrix).map_err(|_| AssemblyError::Singular { time: now.t })?;
-        w.compact_factors.solve(&mut w.compact_rhs);
-        w.residual.fill(0.0);
-        for (r, &i) in w.inertial.iter().enumerate() {
-            w.residual[i] = w.compact_rhs[r];
-        }
+        w.consistent_factors.factor(&w.consistent_matrix).map_err(|_| AssemblyError::Singular { time: now.t })?;
+        w.consistent_factors.solve(&mut w.residual);
         if w.residual.iter().any(|x| !x.is_finite()) {
             return Err(AssemblyError::NotFinite { time: now.t });
         }
