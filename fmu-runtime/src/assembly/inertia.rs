@@ -200,17 +200,21 @@ impl Inertia {
         }
         // q^T O_pr q = q^T O_rp q (a scalar is its transpose): half the pair's sum, and
         // d/dt (q^T O_pr q) = q'^T (O_pr + O_rp) q: no product with q' is needed
+        let (mut lin, mut lin_rate, mut quad, mut quad_rate) = ([0.0; 9], [0.0; 9], [0.0; 6], [0.0; 6]);
+        mat_vec(&self.o_vec, n, q, &mut lin);
+        mat_vec(&self.o_vec, n, qd, &mut lin_rate);
+        let o_q: &[f64] = o_q;
+        mat_vec(o_q, n, q, &mut quad);
+        mat_vec(o_q, n, qd, &mut quad_rate);
         let mut j = self.inertia;
         let mut j_rate = [0.0; 9];
         for (pair, &(p, r)) in PAIRS.iter().enumerate() {
-            let oq = &o_q[pair * n..][..n];
             let (quad, quad_rate) =
-                if p == r { (dot(q, oq), 2.0 * dot(qd, oq)) } else { (0.5 * dot(q, oq), dot(qd, oq)) };
+                if p == r { (quad[pair], 2.0 * quad_rate[pair]) } else { (0.5 * quad[pair], quad_rate[pair]) };
             for (a, b) in [(p, r), (r, p)] {
-                let ab = 3 * a + b;
-                let (o_pr, o_rp) = (&self.o_vec[ab * n..][..n], &self.o_vec[(3 * b + a) * n..][..n]);
-                j[ab] -= dot(q, o_pr) + dot(q, o_rp) + quad;
-                j_rate[ab] = -(dot(qd, o_pr) + dot(qd, o_rp) + quad_rate);
+                let (ab, ba) = (3 * a + b, 3 * b + a);
+                j[ab] -= lin[ab] + lin[ba] + quad;
+                j_rate[ab] = -(lin_rate[ab] + lin_rate[ba] + quad_rate);
                 if p == r {
                     break;
                 }
