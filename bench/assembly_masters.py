@@ -60,14 +60,14 @@ def per_step(durations: list[float]) -> dict:
 
 
 def against_reference(positions: np.ndarray, reference: Path) -> float:
-    """Max |positions - reference| on the reference's times (a multiple of H apart, from 0) within
-    the positions' window, / the reference's swing there, worst column."""
+    """Max |positions - reference| at the positions' times (every H from 0; the reference's step
+    divides H) within the reference's window, / the reference's swing, worst column."""
     ref = np.loadtxt(reference, delimiter=",", ndmin=2)
-    every = int(round((ref[1, 0] - ref[0, 0]) / H))
-    ours = positions[::every]
-    ref = ref[: len(ours), 1:5]
-    ours = ours[: len(ref)]
-    return float((np.abs(ours - ref).max(axis=0) / np.ptp(ref, axis=0)).max())
+    swing = np.ptp(ref[:, 1:5], axis=0)
+    every = int(round(H / (ref[1, 0] - ref[0, 0])))
+    ref = ref[::every, 1:5]
+    n = min(len(ref), len(positions))
+    return float((np.abs(positions[:n] - ref[:n]).max(axis=0) / swing).max())
 
 
 def chain_master(link: Path, seconds: float, reference: Path | None = None) -> dict:

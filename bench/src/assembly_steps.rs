@@ -7,8 +7,8 @@
 //! own step with the same outputs read after every step as the main table's loop (four positions
 //! and a joint reaction). Accuracy: the elbow's and the tip's (x, z) against the run at
 //! `REFERENCE_STEP` (a converged solution of the same model: a consistency check of the time
-//! integration, not of the physics), on the times every step hits (`GRID`), max over the window
-//! / the reference's swing per column, worst column. chain_master's trajectory is measured
+//! integration, not of the physics), after every step of the run (the reference's step divides
+//! each), max over the window / the reference's swing per column, worst column. chain_master's trajectory is measured
 //! against the same reference by bench/assembly_masters.py (`--reference`).
 
 use crate::fmi::Fmu;
@@ -18,14 +18,12 @@ use std::time::Instant;
 
 /// The converged reference's step [s].
 pub const REFERENCE_STEP: f64 = 0.25e-3;
-/// The steps timed [s].
-pub const STEPS: [f64; 3] = [1.0e-3, 1.5e-3, 2.0e-3];
+/// The steps timed [s], whole multiples of the reference's.
+pub const STEPS: [f64; 4] = [1.0e-3, 1.5e-3, 1.75e-3, 2.0e-3];
 /// Simulated time [s]: chain_master's window.
 pub const SECONDS: f64 = 1.0;
-/// Times every step hits [s].
-pub const GRID: f64 = 6.0e-3;
 
-/// The elbow and the tip (x, z) on the grid, from t = 0.
+/// The elbow and the tip (x, z) after every step, from t = 0.
 pub type Positions = Vec<[f64; 4]>;
 
 pub struct StepRow {
@@ -55,7 +53,7 @@ fn build(h: f64, work: &Path) -> Result<std::path::PathBuf, String> {
 }
 
 /// Step the FMU at `h` for SECONDS with the outputs read; the loop's wall time and the positions
-/// on the grid.
+/// after every step.
 fn run(fmu_path: &Path, h: f64, outputs: &[&str]) -> Result<(f64, Positions), String> {
     let dir = fmu_path.with_extension("");
     let fmu = Fmu::open(fmu_path, &dir)?;
@@ -64,10 +62,10 @@ fn run(fmu_path: &Path, h: f64, outputs: &[&str]) -> Result<(f64, Positions), St
     let inst = fmu.instantiate(fmi2CoSimulation, "assembly-step-sweep")?;
     inst.initialize()?;
     let steps = (SECONDS / h).round() as usize;
-    let every = (GRID / h).round() as usize;
     let mut out = vec![0.0; vrs.len()];
     inst.get(&vrs, &mut out)?;
-    let mut grid = vec![[out[0], out[1], out[2], out[3]]];
+    let mut positions = Vec::with_capacity(steps + 1);
+    positions.push([out[0], out[1], out[2], out[3]]);
     let mut bad = 0;
     let start = Instant::now();
     for k in 1..=steps {
@@ -76,47 +74,50 @@ fn run(fmu_path: &Path, h: f64, outputs: &[&str]) -> Result<(f64, Positions), St
             bad += ((api.do_step)(inst.c, t, h, 1) != fmi2Status::fmi2OK) as usize;
             bad += ((api.get_real)(inst.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) != fmi2Status::fmi2OK) as usize;
         }
-        if k % every == 0 {
-            grid.push([out[0], out[1], out[2], out[3]]);
-        }
+        positions.push([out[0], out[1], out[2], out[3]]);
     }
     let wall = start.elapsed().as_secs_f64();
     if bad > 0 {
         return Err(format!("{}: {bad} FMI calls failed", fmu_path.display()));
     }
-    Ok((wall, grid))
+    Ok((wall, positions))
 }
 
-/// max |a - reference| / the reference's swing, worst column.
-pub fn error(a: &Positions, reference: &Positions) -> f64 {
+/// max |a - reference| at a's times (every `every`-th of the reference's) / the reference's
+/// swing, worst column.
+pub fn error(a: &Positions, reference: &Positions, every: usize) -> f64 {
     (0..4)
         .map(|c| {
             let (lo, hi) =
                 reference.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), r| (l.min(r[c]), h.max(r[c])));
-            let worst = a.iter().zip(reference).fold(0.0f64, |m, (x, r)| m.max((x[c] - r[c]).abs()));
+            let at = reference.iter().step_by(every);
+            let worst = a.iter().zip(at).fold(0.0f64, |m, (x, r)| m.max((x[c] - r[c]).abs()));
             worst / (hi - lo)
         })
         .fold(0.0, f64::max)
 }
 
-/// The reference's positions on the grid (written to `csv` for the masters' script: t, elbow x,
-/// z, tip x, z) and one row per step of `STEPS`.
+/// The reference's positions (written to `csv` for the masters' script: t, elbow x, z, tip x, z
+/// after every reference step) and one row per step of `STEPS`.
 pub fn sweep(work: &Path, outputs: &[&str], csv: &Path) -> Result<Vec<StepRow>, String> {
     let reference_fmu = build(REFERENCE_STEP, work)?;
     let (_, reference) = run(&reference_fmu, REFERENCE_STEP, outputs)?;
     let text: String = reference
         .iter()
         .enumerate()
-        .map(|(k, r)| format!("{:.6},{:.17e},{:.17e},{:.17e},{:.17e}\n", k as f64 * GRID, r[0], r[1], r[2], r[3]))
+        .map(|(k, r)| {
+            format!("{:.6},{:.17e},{:.17e},{:.17e},{:.17e}\n", k as f64 * REFERENCE_STEP, r[0], r[1], r[2], r[3])
+        })
         .collect();
     std::fs::write(csv, text).map_err(|e| format!("{}: {e}", csv.display()))?;
     STEPS
         .iter()
         .map(|&h| {
             let fmu = build(h, work)?;
-            let (wall, grid) = run(&fmu, h, outputs)?;
+            let (wall, positions) = run(&fmu, h, outputs)?;
             eprintln!("step sweep: h = {} ms, {:.1} ms per simulated second", h * 1e3, wall / SECONDS * 1e3);
-            Ok(StepRow { step: h, per_simulated_second: wall / SECONDS, error: error(&grid, &reference) })
+            let every = (h / REFERENCE_STEP).round() as usize;
+            Ok(StepRow { step: h, per_simulated_second: wall / SECONDS, error: error(&positions, &reference, every) })
         })
         .collect()
 }
