@@ -115,6 +115,15 @@ def test_a_typo_inside_a_selector_is_named_in_that_selector(tmp_path):
     assert "flanges[1].nodes.plane.normale" in err and 'did you mean "normal"' in err, err
 
 
+def test_a_misspelt_selector_gets_the_nearest_form(tmp_path):
+    """A slip in the selector's own key ("box_fce") matches no form: the forms are listed, and
+    the key it was meant to be is named."""
+    selector = {"box_fce": {"box": 0, "face": "+x"}}
+    err = errors_of(tmp_path, lambda s: s["flanges"][1].update(nodes=selector))
+    assert "flanges[1].nodes" in err and 'did you mean "box_face" for "box_fce"' in err, err
+    assert '"plane"' in err and '"cylinder"' in err, err
+
+
 def test_a_misspelt_enum_value_gets_the_nearest_one(tmp_path):
     err = errors_of(tmp_path, lambda s: s["flanges"][1].update(role="forse"))
     assert "flanges[1].role" in err and 'did you mean "force"' in err, err

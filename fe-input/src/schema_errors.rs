@@ -278,9 +278,26 @@ fn one_of(
     } else {
         format!("found the keys {}", present.iter().map(|k| format!("\"{k}\"")).collect::<Vec<_>>().join(", "))
     };
+    // a key that names no form but is a slip of one's key ("box_fce" for "box_face")
+    let form_keys: Vec<String> = alternatives
+        .map(|alts| {
+            alts.iter()
+                .filter_map(|alt| alt.get("required").and_then(Value::as_array))
+                .flatten()
+                .filter_map(Value::as_str)
+                .map(str::to_string)
+                .collect()
+        })
+        .unwrap_or_default();
+    let hints: Vec<String> = present
+        .iter()
+        .filter(|k| !form_keys.iter().any(|f| f == *k))
+        .filter_map(|k| nearest(k, &form_keys).map(|near| format!("did you mean \"{near}\" for \"{}\"?", cut(k))))
+        .collect();
+    let hint = if hints.is_empty() { String::new() } else { format!(" ({})", hints.join("; ")) };
     out.push(Problem {
         field: field.to_string(),
-        message: format!("{found}, which matches none of the forms this field takes: {}", forms.join("; ")),
+        message: format!("{found}{hint}, which matches none of the forms this field takes: {}", forms.join("; ")),
     });
 }
 
