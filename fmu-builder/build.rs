@@ -11,8 +11,8 @@
 //! - `FMU_RUNTIME_SO`: a prebuilt one, embedded as it is ("prebuilt, FMU_RUNTIME_SO");
 //! - `fmu-runtime/` in the target folder of this build (the first folder above `OUT_DIR` with
 //!   cargo's CACHEDIR.TAG: `CARGO_TARGET_DIR` and `build.target-dir` included);
-//! - `fmu-runtime/` in the workspace's `target/` (`cargo install --path fmu-builder` builds in a
-//!   temporary target folder).
+//! - `fmu-runtime/` in the workspace's `target/` (where this build's target folder is another:
+//!   `CARGO_TARGET_DIR` or `--target-dir` set for this build only).
 //!
 //! None there is an error that names `cargo xtask runtime`. The file must be a 64-bit ELF shared
 //! object exporting `fmi2Instantiate`. In a source tree, the runtime of the target folder must
