@@ -154,6 +154,24 @@ def test_probable_unit_slips_warn_and_the_build_stands(tmp_path):
     assert proc.returncode == 0 and proc.stderr == "" and proc.stdout == ""
 
 
+def test_a_millimetre_part_is_warned_of_before_the_reduction(tmp_path):
+    """A 50 x 20 x 2 mm steel plate given in millimetres without geometry.length_unit: 54 m
+    across, a size a crane boom has, but 1.57e7 kg (7850 kg/m^3 x 2000 m^3). The warning comes
+    as soon as the mesh is made, before the reduction's phases, and only once."""
+    plate = copy.deepcopy(BASE)
+    plate["geometry"]["boxes"] = [{"min": [0, 0, 0], "max": [50, 20, 2], "elements": [10, 4, 1]}]
+    proc = builder(write(tmp_path, plate, "plate.json"), "-o", tmp_path / "plate.fmu")
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stderr.splitlines()
+    said = [i for i, line in enumerate(lines) if line.startswith("warning:")]
+    assert len(said) == 1, proc.stderr
+    assert "1.570e7 kg" in lines[said[0]] and '"length_unit": "mm"' in lines[said[0]], proc.stderr
+    reduction = next(i for i, line in enumerate(lines) if "reduction basis" in line)
+    assert said[0] < reduction, proc.stderr
+    report = json.loads(__import__("zipfile").ZipFile(tmp_path / "plate.fmu").read("documentation/report.json"))
+    assert any("1.570e7 kg" in w for w in report["warnings"])
+
+
 def test_the_summary_states_what_the_scene_allows_and_refuses(tmp_path):
     spec = copy.deepcopy(BASE)
     spec["scene"] = {"loads": ["gravity"]}

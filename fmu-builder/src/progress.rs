@@ -74,6 +74,17 @@ impl Progress {
         }
     }
 
+    /// A warning the build goes on with, on a line of its own at once.
+    fn warning(&self, what: &str) {
+        match &mut *self.lock() {
+            Sink::Off => {}
+            Sink::Bar(bar) => bar.println(format!("warning: {what}")),
+            Sink::Lines { .. } => {
+                let _ = writeln!(std::io::stderr(), "warning: {what}");
+            }
+        }
+    }
+
     /// Progress within a phase: `what` (e.g. "12 of 46 modes converged"). Plain lines come at
     /// most once a second.
     fn step(&self, what: &str) {
@@ -105,10 +116,15 @@ impl<S: Subscriber + for<'a> LookupSpan<'a>> Layer<S> for Progress {
     }
 
     fn on_event(&self, event: &Event<'_>, _ctx: Context<'_, S>) {
-        if event.metadata().target() == phases::STEP_TARGET {
+        let target = event.metadata().target();
+        if target == phases::STEP_TARGET || target == phases::WARNING_TARGET {
             let mut what = crate::profile::SpanText::default();
             event.record(&mut what);
-            self.step(&what.0);
+            if target == phases::STEP_TARGET {
+                self.step(&what.0);
+            } else {
+                self.warning(&what.0);
+            }
         }
     }
 }

@@ -14,7 +14,9 @@ pub const NAME: &str = "name";
 pub const NOTE_TARGET: &str = "phases::note";
 /// Target of the events telling progress within a phase.
 pub const STEP_TARGET: &str = "phases::step";
-/// The field of both kinds of event.
+/// Target of the events warning of something the build goes on with (a probable unit slip).
+pub const WARNING_TARGET: &str = "phases::warning";
+/// The field of every kind of event.
 pub const MESSAGE: &str = "message";
 
 /// Run `f` as the phase `name`: a span that listeners time and measure.
@@ -39,6 +41,14 @@ pub fn step(what: impl FnOnce() -> String) {
     }
 }
 
+/// A warning the build goes on with, said at once (not only in the summary at the end); `what`
+/// is only called when something listens.
+pub fn warning(what: impl FnOnce() -> String) {
+    if tracing::enabled!(target: "phases::warning", tracing::Level::WARN) {
+        tracing::warn!(target: "phases::warning", message = what().as_str());
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -50,12 +60,14 @@ mod tests {
         assert!(source.contains(&format!("info_span!(\"{PHASE}\", {NAME} = ")));
         assert!(source.contains(&format!("enabled!(target: \"{NOTE_TARGET}\"")));
         assert!(source.contains(&format!("info!(target: \"{STEP_TARGET}\", {MESSAGE} = ")));
+        assert!(source.contains(&format!("warn!(target: \"{WARNING_TARGET}\", {MESSAGE} = ")));
     }
 
     #[test]
     fn without_a_listener_nothing_is_evaluated() {
         note(|| panic!("evaluated without a listener"));
         step(|| panic!("evaluated without a listener"));
+        warning(|| panic!("evaluated without a listener"));
         assert_eq!(phase("p", || 3), 3);
     }
 }

@@ -238,7 +238,8 @@ fn observed<T>(job: &Job, profile: &Profile, work: impl FnOnce() -> T) -> T {
 }
 
 fn print_summary(built: &Built, output: &Path, binaries: &[PlatformBinary]) {
-    for w in &built.report.warnings {
+    // the part's own were said as it was read
+    for w in &built.report.warnings[built.report.said_early.min(built.report.warnings.len())..] {
         eprintln!("warning: {w}");
     }
     print!("{}", crate::output::summary::text(&built.report));

@@ -838,6 +838,7 @@ mod tests {
             backend: Default::default(),
             scene: Default::default(),
             warnings: Vec::new(),
+            said_early: 0,
             pictures: Vec::new(),
             verdict: Default::default(),
             accuracy: Accuracy {

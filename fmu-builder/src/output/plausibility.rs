@@ -16,6 +16,10 @@ const E_RANGE: [f64; 2] = [1e6, 1.5e12];
 const RHO_RANGE: [f64; 2] = [20.0, 25_000.0];
 /// Sizes of parts a system model holds [m]: a watch spring to a crane boom.
 const SIZE_RANGE: [f64; 2] = [1e-4, 100.0];
+/// The heaviest part a system model holds [kg]: a crane boom. A part in millimetres read as
+/// metres weighs 1e9 times its mass: a 50 x 20 x 2 mm steel plate, 50 m across, is within
+/// SIZE_RANGE but weighs 1.6e7 kg.
+const MASS_LIMIT: f64 = 1e5;
 /// Lowest frequencies of elastic parts [Hz]: a slender boom ~0.1, a micro-part ~1e6.
 const FREQUENCY_RANGE: [f64; 2] = [0.1, 1e6];
 
@@ -68,11 +72,34 @@ pub fn scene(spec: &Spec, mount: Option<&str>) -> SceneReport {
 }
 
 /// Warnings for values far outside what engineering parts in SI units have: the part's
-/// materials and extent, and the lowest frequency of the full model (`lowest_hz`; `mounted`:
-/// of the mounted body, else of the free one).
+/// materials, extent and mass ([`part_warnings`], said as soon as the part is read), its notes,
+/// and the lowest frequency of the full model (`lowest_hz`; `mounted`: of the mounted body, else
+/// of the free one).
 pub fn warnings(part: &Part, lowest_hz: Option<f64>, mounted: bool) -> Vec<String> {
+    let mut out = part_warnings(part);
+    out.extend(part.notes.iter().cloned());
+    if let Some(f) = lowest_hz
+        && outside(f, FREQUENCY_RANGE)
+    {
+        out.push(format!(
+            "the lowest frequency of the {} body is {f:.4e} Hz, outside the {} .. {:e} Hz of elastic parts: check the units of E, rho and the mesh",
+            if mounted { "mounted" } else { "free" },
+            FREQUENCY_RANGE[0],
+            FREQUENCY_RANGE[1]
+        ));
+    }
+    out
+}
+
+fn outside(v: f64, r: [f64; 2]) -> bool {
+    v < r[0] || v > r[1]
+}
+
+/// The warnings of [`warnings`] that need only the part as read (materials, extent, mass): the
+/// builder says them before anything costly, where a unit slip would otherwise run a reduction
+/// of the wrong part first.
+pub fn part_warnings(part: &Part) -> Vec<String> {
     let mut out = Vec::new();
-    let outside = |v: f64, r: [f64; 2]| v < r[0] || v > r[1];
     for m in &part.materials {
         let (e, rho) = (m.elasticity.e, m.rho);
         let name = if m.name.is_empty() { "the material".to_string() } else { format!("material {}", m.name) };
@@ -99,34 +126,36 @@ pub fn warnings(part: &Part, lowest_hz: Option<f64>, mounted: bool) -> Vec<Strin
             ));
         }
     }
-    if let Some(size) = (!part.mesh.nodes.is_empty()).then(|| model_size(&part.mesh))
+    let size = (!part.mesh.nodes.is_empty()).then(|| model_size(&part.mesh));
+    // the mass only where a slip could hide in a plausible size: a part across more than a
+    // metre (a millimetre mesh read as metres is a thousand times its size)
+    let mass = if size.is_some_and(|s| s > 1.0) { mesh_mass(part) } else { None };
+    let mm = " (a mesh in millimetres? give its unit: \"geometry\": {\"length_unit\": \"mm\"})";
+    if let Some(size) = size
         && outside(size, SIZE_RANGE)
     {
         // a mesh in millimetres read as metres is a billion times too heavy: the mass says so
         // in a number the user recognises at once
-        let mass = match mesh_mass(part) {
+        let weighs = match mass {
             Some(m) => format!(" and would weigh {m:.3e} kg"),
             None => String::new(),
         };
         let hint = if size > SIZE_RANGE[1] {
-            " (a mesh in millimetres? give its unit: \"geometry\": {\"length_unit\": \"mm\"})"
+            mm
         } else {
             " (a mesh in kilometres, or scaled twice? check geometry.length_unit)"
         };
         out.push(format!(
-            "the part is {size:.4e} m across (its bounding box's diagonal){mass}, outside the {:e} .. {} m of parts a system model holds{hint}; lengths are in metres unless geometry.length_unit says otherwise",
+            "the part is {size:.4e} m across (its bounding box's diagonal){weighs}, outside the {:e} .. {} m of parts a system model holds{hint}; lengths are in metres unless geometry.length_unit says otherwise",
             SIZE_RANGE[0], SIZE_RANGE[1]
         ));
-    }
-    out.extend(part.notes.iter().cloned());
-    if let Some(f) = lowest_hz
-        && outside(f, FREQUENCY_RANGE)
+    } else if let Some(m) = mass
+        && m > MASS_LIMIT
     {
+        let across = size.map(|s| format!(", {s:.4e} m across")).unwrap_or_default();
         out.push(format!(
-            "the lowest frequency of the {} body is {f:.4e} Hz, outside the {} .. {:e} Hz of elastic parts: check the units of E, rho and the mesh",
-            if mounted { "mounted" } else { "free" },
-            FREQUENCY_RANGE[0],
-            FREQUENCY_RANGE[1]
+            "the part would weigh {m:.3e} kg{across}, more than the {:e} kg of parts a system model holds{mm}; lengths are in metres unless geometry.length_unit says otherwise",
+            MASS_LIMIT
         ));
     }
     out

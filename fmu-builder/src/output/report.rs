@@ -183,6 +183,10 @@ pub struct Report {
     pub scene: SceneReport,
     /// Probable unit slips and implausible results (the build stands).
     pub warnings: Vec<String>,
+    /// How many of `warnings`, first, the build said as it read the part (the summary does not
+    /// say them again).
+    #[serde(skip)]
+    pub said_early: usize,
     /// Pictures for the documentation (caption, SVG): not in report.json.
     #[serde(skip)]
     pub pictures: Vec<(String, String)>,
@@ -302,10 +306,12 @@ pub fn report_of(
         backend: BackendReport::default(),
         scene: plausibility::scene(spec, mount),
         warnings: Vec::new(),
+        said_early: 0,
         pictures: Vec::new(),
         verdict: verdict::of(&accuracy, spec.scene.as_ref().and_then(|s| s.tolerance)),
         accuracy,
     };
     report.warnings = plausibility::warnings(part, report.accuracy.full_hz.first().copied(), mount.is_some());
+    report.said_early = plausibility::part_warnings(part).len();
     report
 }

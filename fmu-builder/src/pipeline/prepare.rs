@@ -13,6 +13,7 @@ use crate::model::connectivity;
 use crate::model::flange::{self, Flange};
 use crate::model::part::{self, Part};
 use crate::model::stress::{Recovery, requested_points};
+use crate::output::plausibility;
 use crate::reduce::basis::ModeCount;
 use std::path::{Path, PathBuf};
 
@@ -30,6 +31,10 @@ pub(super) struct Prepared {
 
 pub(super) fn prepare(spec: Spec, file: &Path) -> Result<Prepared> {
     let mut part = phases::phase("mesh or import", || part::part_of(&spec, file))?;
+    // a unit slip said now, before a reduction of the wrong part
+    for w in plausibility::part_warnings(&part) {
+        phases::warning(|| w);
+    }
     let flanges = phases::phase("flange selection", || flange::select_flanges(&spec, file, &part))?;
     // recovery points are checked before anything costly: a misspelt node set fails at once
     let recovery = match spec.outputs.as_ref().and_then(|o| o.stress.as_ref()) {
