@@ -3,9 +3,7 @@
 //! whose lowest frequency no engineering part has; and, stated plainly, what the scene lets the
 //! FMU do and which inputs it will refuse.
 
-use crate::input::element::MAX_NODES_PER_ELEMENT;
 use crate::input::spec::{SceneLoad, Spec};
-use crate::model::fe::element_mass;
 use crate::model::flange::model_size;
 use crate::model::part::Part;
 use serde::Serialize;
@@ -72,11 +70,11 @@ pub fn scene(spec: &Spec, mount: Option<&str>) -> SceneReport {
 }
 
 /// Warnings for values far outside what engineering parts in SI units have: the part's
-/// materials, extent and mass ([`part_warnings`], said as soon as the part is read), its notes,
-/// and the lowest frequency of the full model (`lowest_hz`; `mounted`: of the mounted body, else
-/// of the free one).
-pub fn warnings(part: &Part, lowest_hz: Option<f64>, mounted: bool) -> Vec<String> {
-    let mut out = part_warnings(part);
+/// materials, extent and mass (`early`, [`part_warnings`]: said as soon as the part is
+/// assembled), its notes, and the lowest frequency of the full model (`lowest_hz`; `mounted`: of
+/// the mounted body, else of the free one).
+pub fn warnings(early: Vec<String>, part: &Part, lowest_hz: Option<f64>, mounted: bool) -> Vec<String> {
+    let mut out = early;
     out.extend(part.notes.iter().cloned());
     if let Some(f) = lowest_hz
         && outside(f, FREQUENCY_RANGE)
@@ -95,10 +93,11 @@ fn outside(v: f64, r: [f64; 2]) -> bool {
     v < r[0] || v > r[1]
 }
 
-/// The warnings of [`warnings`] that need only the part as read (materials, extent, mass): the
+/// The warnings of [`warnings`] that need only the part and its `mass` [kg] (the assembled
+/// nodal mass; None for a part given by its matrices): its materials, extent and mass. The
 /// builder says them before anything costly, where a unit slip would otherwise run a reduction
 /// of the wrong part first.
-pub fn part_warnings(part: &Part) -> Vec<String> {
+pub fn part_warnings(part: &Part, mass: Option<f64>) -> Vec<String> {
     let mut out = Vec::new();
     for m in &part.materials {
         let (e, rho) = (m.elasticity.e, m.rho);
@@ -127,9 +126,9 @@ pub fn part_warnings(part: &Part) -> Vec<String> {
         }
     }
     let size = (!part.mesh.nodes.is_empty()).then(|| model_size(&part.mesh));
-    // the mass only where a slip could hide in a plausible size: a part across more than a
-    // metre (a millimetre mesh read as metres is a thousand times its size)
-    let mass = if size.is_some_and(|s| s > 1.0) { mesh_mass(part) } else { None };
+    // the mass checked only where a slip could hide in a plausible size: a part across more
+    // than a metre (a millimetre mesh read as metres is a thousand times its size)
+    let large = size.is_some_and(|s| s > 1.0);
     let mm = " (a mesh in millimetres? give its unit: \"geometry\": {\"length_unit\": \"mm\"})";
     if let Some(size) = size
         && outside(size, SIZE_RANGE)
@@ -150,6 +149,7 @@ pub fn part_warnings(part: &Part) -> Vec<String> {
             SIZE_RANGE[0], SIZE_RANGE[1]
         ));
     } else if let Some(m) = mass
+        && large
         && m > MASS_LIMIT
     {
         let across = size.map(|s| format!(", {s:.4e} m across")).unwrap_or_default();
@@ -159,24 +159,4 @@ pub fn part_warnings(part: &Part) -> Vec<String> {
         ));
     }
     out
-}
-
-/// The mesh's mass [kg] (the sum of its elements' consistent mass matrices), for the size
-/// warning; None for matrix input (no elements) or an element the mass cannot be integrated on.
-fn mesh_mass(part: &Part) -> Option<f64> {
-    let mesh = &part.mesh;
-    if mesh.n_elements() == 0 {
-        return None;
-    }
-    let mut coords = [[0.0; 3]; MAX_NODES_PER_ELEMENT];
-    let mut me = vec![0.0; MAX_NODES_PER_ELEMENT * MAX_NODES_PER_ELEMENT];
-    let mut total = 0.0;
-    for e in 0..mesh.n_elements() {
-        let kind = mesh.kind(e);
-        let n = kind.nodes_per_element();
-        let rho = part.materials.get(mesh.material[e])?.rho;
-        element_mass(kind, mesh.element_coords(e, &mut coords), rho, &mut me[..n * n]).ok()?;
-        total += me[..n * n].iter().sum::<f64>();
-    }
-    Some(total)
 }

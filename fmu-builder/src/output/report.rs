@@ -311,7 +311,8 @@ pub fn report_of(
         verdict: verdict::of(&accuracy, spec.scene.as_ref().and_then(|s| s.tolerance)),
         accuracy,
     };
-    report.warnings = plausibility::warnings(part, report.accuracy.full_hz.first().copied(), mount.is_some());
-    report.said_early = plausibility::part_warnings(part).len();
+    let early = plausibility::part_warnings(part, (!part.from_matrices).then_some(props.mass));
+    report.said_early = early.len();
+    report.warnings = plausibility::warnings(early, part, report.accuracy.full_hz.first().copied(), mount.is_some());
     report
 }

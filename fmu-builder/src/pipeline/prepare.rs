@@ -31,10 +31,6 @@ pub(super) struct Prepared {
 
 pub(super) fn prepare(spec: Spec, file: &Path) -> Result<Prepared> {
     let mut part = phases::phase("mesh or import", || part::part_of(&spec, file))?;
-    // a unit slip said now, before a reduction of the wrong part
-    for w in plausibility::part_warnings(&part) {
-        phases::warning(|| w);
-    }
     let flanges = phases::phase("flange selection", || flange::select_flanges(&spec, file, &part))?;
     // recovery points are checked before anything costly: a misspelt node set fails at once
     let recovery = match spec.outputs.as_ref().and_then(|o| o.stress.as_ref()) {
@@ -50,8 +46,18 @@ pub(super) fn prepare(spec: Spec, file: &Path) -> Result<Prepared> {
         part.free_free()
     })
     .against(file, GEOMETRY)?;
+    // a unit slip said now, before a reduction of the wrong part
+    for w in plausibility::part_warnings(&part, part_mass(&part, &free)) {
+        phases::warning(|| w);
+    }
     let modes = mode_count(&spec, &part, file)?;
     Ok(Prepared { spec, file: file.to_path_buf(), part, flanges, free, modes, recovery })
+}
+
+/// The part's mass [kg] from its assembled nodal mass, as the report's mass properties sum it;
+/// None for a part given by its matrices (their mass is the user's, not the mesh's).
+fn part_mass(part: &Part, free: &Uncoupled) -> Option<f64> {
+    (!part.from_matrices).then(|| free.nodal_mass.val().iter().sum())
 }
 
 /// The modes the input asks for, and the reduction's settings checked against the part.
