@@ -38,6 +38,32 @@ pub fn symmetric_sums(o_mat: &[f64], n: usize) -> Vec<f64> {
         .collect()
 }
 
+/// The matrices the equations multiply q (and G_a also q') by, stacked into one: G_0, G_1,
+/// G_2, then O_ab's symmetric sums in [`PAIRS`]' order (O_pp, then O_pr + O_rp for p < r; O_rp =
+/// O_pr^T, so every product the equations take with q is one of these: six where the nine O_ab
+/// would need nine). Each row is padded with zeros to a multiple of four values, so that all
+/// nine products with q are one matrix-vector product with no remainder columns.
+#[derive(Debug, Clone, PartialEq)]
+pub struct QuadraticTerms {
+    /// 9 n rows of `stride` values.
+    pub rows: Vec<f64>,
+    pub stride: usize,
+}
+
+impl QuadraticTerms {
+    /// From G_a (3 x n x n) and the symmetric sums (6 x n x n, [`symmetric_sums`]).
+    pub fn of(g: &[f64], o_sym: &[f64], n: usize) -> Self {
+        let stride = n.div_ceil(4) * 4;
+        let mut rows = vec![0.0; 9 * n * stride];
+        if n > 0 {
+            for (r, row) in g.chunks_exact(n).chain(o_sym.chunks_exact(n)).enumerate() {
+                rows[r * stride..r * stride + n].copy_from_slice(row);
+            }
+        }
+        Self { rows, stride }
+    }
+}
+
 /// A flange of a body where joints and external loads attach.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Marker {
@@ -75,13 +101,11 @@ pub struct Inertia {
     /// 3 x n: C_t = T^T M Phi, C_r0 = R_X^T M Phi.
     pub c_t: Vec<f64>,
     pub c_r: Vec<f64>,
-    /// G_a (3 x n x n) and o_ab (9 x n), as in [`crate::reduced::RotationTerms`].
-    pub g: Vec<f64>,
+    /// o_ab (9 x n), as in [`crate::reduced::RotationTerms`].
     pub o_vec: Vec<f64>,
-    /// O_ab's symmetric sums, 6 x n x n in [`PAIRS`]' order: O_pp, then O_pr + O_rp (p < r).
-    /// O_rp = O_pr^T, so every product the equations take with q is one of these: six
-    /// matrix-vector products where the nine O_ab would need nine.
-    pub o_sym: Vec<f64>,
+    /// G_a (3 x n x n, as in [`crate::reduced::RotationTerms`]) and O_ab's symmetric sums,
+    /// stacked ([`QuadraticTerms`]).
+    pub quadratic: QuadraticTerms,
     pub markers: Vec<Marker>,
 }
 
@@ -120,9 +144,8 @@ impl Inertia {
             damping: (0..n).map(|j| body.damping_rate(j, alpha, beta)).collect(),
             c_t: body.c_t.clone(),
             c_r: body.c_r.clone(),
-            g: rot.g.clone(),
             o_vec: rot.o_vec.clone(),
-            o_sym: symmetric_sums(&rot.o_mat, n),
+            quadratic: QuadraticTerms::of(&rot.g, &symmetric_sums(&rot.o_mat, n), n),
             markers,
         })
     }
@@ -167,43 +190,47 @@ impl Inertia {
             damping: vec![],
             c_t: vec![],
             c_r: vec![],
-            g: vec![],
             o_vec: vec![],
-            o_sym: vec![],
+            quadratic: QuadraticTerms::of(&[], &[], 0),
             markers: flanges.iter().map(|(n, p)| Marker { name: n.clone(), position: *p, shapes: vec![] }).collect(),
         })
     }
 
     /// Scratch the body's equations need: C_r(q) (3 n), the symmetric sums' products with q
-    /// (6 n) and G_a q' (3 n).
+    /// (6 n), G_a q' (3 n), then q and q' padded to [`QuadraticTerms::stride`].
     pub fn scratch_len(n: usize) -> usize {
-        12 * n.max(1)
+        12 * n.max(1) + 2 * n.div_ceil(4) * 4
+    }
+
+    /// `x` padded with zeros to the stride, at the start of `scratch`.
+    fn padded<'a>(&self, x: &[f64], scratch: &'a mut [f64]) -> &'a [f64] {
+        let pad = &mut scratch[..self.quadratic.stride];
+        pad[..x.len()].copy_from_slice(x);
+        pad[x.len()..].fill(0.0);
+        pad
     }
 
     /// S(q) = m c(q), C_r(q) (3 x n into `cr_q`, then O_ab q, 9 x n), J(q) and J'(q, q');
     /// `qd` may hold only the moving modes' rates (the others are zero).
     pub fn deformed(&self, q: &[f64], qd: &[f64], cr_q: &mut [f64]) -> (Vec3, Mat3, Mat3) {
         let n = q.len();
-        let nn = n * n;
         let mut s = self.first_moment;
         for a in 0..3 {
             s[a] += dot(&self.c_t[a * n..(a + 1) * n], q);
-            let cr = &mut cr_q[a * n..(a + 1) * n];
-            mat_vec(&self.g[a * nn..(a + 1) * nn], n, q, cr);
-            for (c, c0) in cr.iter_mut().zip(&self.c_r[a * n..(a + 1) * n]) {
-                *c += c0;
-            }
         }
-        let o_q = &mut cr_q[3 * n..9 * n];
-        for pair in 0..PAIRS.len() {
-            mat_vec(&self.o_sym[pair * nn..(pair + 1) * nn], n, q, &mut o_q[pair * n..(pair + 1) * n]);
+        // C_r(q) - C_r0 = [G_a q] and the symmetric sums times q: one product
+        let (cr_q, pad) = cr_q.split_at_mut(12 * n);
+        let q_pad = self.padded(q, pad);
+        mat_vec(&self.quadratic.rows, self.quadratic.stride, q_pad, &mut cr_q[..9 * n]);
+        for (c, c0) in cr_q[..3 * n].iter_mut().zip(&self.c_r) {
+            *c += c0;
         }
+        let o_q = &cr_q[3 * n..9 * n];
         // q^T O_pr q = q^T O_rp q (a scalar is its transpose): half the pair's sum, and
         // d/dt (q^T O_pr q) = q'^T (O_pr + O_rp) q: no product with q' is needed
         let (mut lin, mut lin_rate, mut quad, mut quad_rate) = ([0.0; 9], [0.0; 9], [0.0; 6], [0.0; 6]);
         mat_vec(&self.o_vec, n, q, &mut lin);
         mat_vec(&self.o_vec, n, qd, &mut lin_rate);
-        let o_q: &[f64] = o_q;
         mat_vec(o_q, n, q, &mut quad);
         mat_vec(o_q, n, qd, &mut quad_rate);
         let mut j = self.inertia;
@@ -238,18 +265,18 @@ impl Inertia {
         out: &mut [f64],
     ) -> (Vec3, Mat3) {
         let n = q.len();
-        let nn = n * n;
         // the origin's velocity drops out: its terms cancel between momentum and its rate
         let (nd, nm) = (self.n_dynamic, self.n_moving);
         let (w, qd) = (vel3(vel, 3), &vel[6..6 + nm]);
         let (a, w_d, qdd) = (vel3(acc, 0), vel3(acc, 3), &acc[6..6 + nd]);
         let a_b = k3::mul_t(rot, k3::sub(a, gravity));
         let (s, j, j_rate) = self.deformed(q, qd, cr_q);
-        let (cr_q, g_qd) = cr_q.split_at_mut(9 * n);
-        for a in 0..3 {
-            mat_vec(&self.g[a * nn..(a + 1) * nn], n, qd, &mut g_qd[a * n..(a + 1) * n]);
-        }
-        let cr_q: &[f64] = cr_q;
+        let (cr_q, rest) = cr_q.split_at_mut(9 * n);
+        let (g_qd, pad) = rest.split_at_mut(3 * n);
+        let stride = self.quadratic.stride;
+        let qd_pad = self.padded(qd, pad);
+        mat_vec(&self.quadratic.rows[..3 * n * stride], stride, qd_pad, g_qd);
+        let (cr_q, g_qd): (&[f64], &[f64]) = (cr_q, g_qd);
         let ct = |x: &[f64]| -> Vec3 { std::array::from_fn(|i| dot(&self.c_t[i * n..(i + 1) * n], x)) };
         let cr = |x: &[f64]| -> Vec3 { std::array::from_fn(|i| dot(&cr_q[i * n..(i + 1) * n], x)) };
         let (ct_qd, ct_qdd, cr_qd, cr_qdd) = (ct(qd), ct(qdd), cr(qd), cr(qdd));

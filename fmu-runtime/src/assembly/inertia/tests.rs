@@ -95,9 +95,8 @@ pub(crate) fn inertia_of(c: &Cloud) -> Inertia {
         damping: vec![0.0; n],
         c_t,
         c_r,
-        g,
         o_vec,
-        o_sym: super::symmetric_sums(&o_mat, n),
+        quadratic: super::QuadraticTerms::of(&g, &super::symmetric_sums(&o_mat, n), n),
         markers: vec![Marker { name: "base".into(), position: [0.0; 3], shapes: vec![0.0; 6 * n] }],
     }
 }
