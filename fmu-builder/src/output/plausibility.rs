@@ -18,6 +18,10 @@ const SIZE_RANGE: [f64; 2] = [1e-4, 100.0];
 /// metres weighs 1e9 times its mass: a 50 x 20 x 2 mm steel plate, 50 m across, is within
 /// SIZE_RANGE but weighs 1.6e7 kg.
 const MASS_LIMIT: f64 = 1e5;
+/// The most modes a reduction band holds before the build says so ahead of the eigen-solve: a
+/// few thousand modes take minutes on this machine's cores; a part in millimetres read as
+/// metres puts a billion times as many below the same frequency.
+const BAND_MODES: f64 = 5000.0;
 /// Lowest frequencies of elastic parts [Hz]: a slender boom ~0.1, a micro-part ~1e6.
 const FREQUENCY_RANGE: [f64; 2] = [0.1, 1e6];
 
@@ -97,6 +101,34 @@ fn outside(v: f64, r: [f64; 2]) -> bool {
 /// nodal mass; None for a part given by its matrices): its materials, extent and mass. The
 /// builder says them before anything costly, where a unit slip would otherwise run a reduction
 /// of the wrong part first.
+/// The modes of `part` (mass `mass`) below `max_frequency` [Hz], by Weyl's count for an
+/// isotropic solid, V omega^3 / (6 pi^2) (1 / c_L^3 + 2 / c_T^3), with the fastest waves and
+/// the smallest volume among its materials: an estimate from below (slender and thin parts
+/// have more low modes than a solid of their volume), so a warning from it is no false alarm.
+pub fn band_warning(part: &Part, mass: Option<f64>, max_frequency: f64) -> Option<String> {
+    let mass = mass?;
+    let rho = part.materials.iter().map(|m| m.rho).fold(0.0, f64::max);
+    let speeds = |m: &crate::model::assembly::SolidMaterial| {
+        let (e, nu) = (m.elasticity.e, m.elasticity.nu);
+        let shear = (e / (2.0 * m.rho * (1.0 + nu))).sqrt();
+        let pressure = (e * (1.0 - nu) / (m.rho * (1.0 + nu) * (1.0 - 2.0 * nu))).sqrt();
+        (pressure, shear)
+    };
+    let (c_l, c_t) =
+        part.materials.iter().map(speeds).fold((0.0, 0.0), |(a, b), (p, s)| (f64::max(a, p), f64::max(b, s)));
+    if !(rho > 0.0 && c_l > 0.0 && c_t > 0.0 && max_frequency > 0.0) {
+        return None;
+    }
+    let volume = mass / rho;
+    let omega = 2.0 * std::f64::consts::PI * max_frequency;
+    let modes = volume * omega.powi(3) / (6.0 * std::f64::consts::PI.powi(2)) * (1.0 / c_l.powi(3) + 2.0 / c_t.powi(3));
+    (modes.is_finite() && modes > BAND_MODES).then(|| {
+        format!(
+            "the band up to reduction.max_frequency = {max_frequency} Hz holds about {modes:.1e} modes of this part (Weyl's count for a solid of its {volume:.3e} m^3), more than the {BAND_MODES} an eigen-solve takes in minutes: a mesh in millimetres? give its unit (\"geometry\": {{\"length_unit\": \"mm\"}}); or lower max_frequency"
+        )
+    })
+}
+
 pub fn part_warnings(part: &Part, mass: Option<f64>) -> Vec<String> {
     let mut out = Vec::new();
     for m in &part.materials {
