@@ -16,10 +16,13 @@
 //! - `FMU_RUNTIME_ZIG`: the zig executable (else `zig` on the PATH, else the `ziglang` package of
 //!   tests/.venv's Python or of `python3`);
 //! - `FMU_RUNTIME_CARGO_ZIGBUILD`: the cargo-zigbuild executable (else on the PATH or in
-//!   `$CARGO_HOME/bin`).
+//!   `$CARGO_HOME/bin`);
+//! - `FMU_RUNTIME_FETCH`: `auto` (default: tools not found are fetched into `<target>/tools/`,
+//!   zig from PyPI with the machine's pip and cargo-zigbuild from crates.io, see `tools.rs`) or
+//!   `off`.
 //!
-//! The tools are looked for on every run, so the first run after `bash tests/run.sh
-//! --setup-only` (which installs both) links the portable runtime.
+//! The tools are looked for on every run: the README's first command on a fresh machine fetches
+//! them, and one set up later (`bash tests/run.sh --setup-only`) is found the same way.
 
 use std::env;
 use std::ffi::OsString;
@@ -28,6 +31,7 @@ use std::process::{Command, ExitCode};
 
 #[path = "../../fmu-builder/build/runtime_stamp.rs"]
 mod runtime_stamp;
+mod tools;
 
 use runtime_stamp::Record;
 
@@ -50,8 +54,8 @@ fn usage() -> &'static str {
   build                               runtime, then `cargo build --release -p fmu-builder`
   run [--] ARGS                       build, then run target/release/fmu-builder ARGS
 
-Environment: FMU_RUNTIME_PORTABLE=auto|require|off, FMU_RUNTIME_ZIG, FMU_RUNTIME_CARGO_ZIGBUILD
-(docs/PLATFORMS.md)."
+Environment: FMU_RUNTIME_PORTABLE=auto|require|off, FMU_RUNTIME_ZIG, FMU_RUNTIME_CARGO_ZIGBUILD,
+FMU_RUNTIME_FETCH=auto|off (docs/PLATFORMS.md)."
 }
 
 fn main() -> ExitCode {
@@ -173,7 +177,7 @@ impl Workspace {
                 env::consts::OS
             )
         } else {
-            match zig_toolchain(&self.root) {
+            match self.toolchain() {
                 Ok(tools) => match self.build_portable(&tools, profile) {
                     Ok(so) => {
                         let kind =
@@ -193,13 +197,52 @@ impl Workspace {
         if mode == Portable::Auto {
             eprintln!(
                 "warning: fmu-runtime is linked natively, so the FMUs' linux64 binary needs this machine's glibc or newer ({why_native}). \
-                 For one that loads on glibc {GLIBC_BASELINE}+ (RHEL/Rocky 8, Ubuntu 20.04, Debian 11): pip install ziglang (or zig on the PATH) and \
-                 cargo install --locked cargo-zigbuild (bash tests/run.sh --setup-only sets up both), then run `cargo xtask runtime` \
-                 (or `cargo xtask build`) again: it finds them"
+                 For one that loads on glibc {GLIBC_BASELINE}+ (RHEL/Rocky 8, Ubuntu 20.04, Debian 11): let `cargo xtask runtime` fetch zig and \
+                 cargo-zigbuild (FMU_RUNTIME_FETCH=auto, with pip and network), or install them (pip install ziglang=={}, \
+                 cargo install --locked cargo-zigbuild --version {}; bash tests/run.sh --setup-only sets up both), then run `cargo xtask runtime` \
+                 (or `cargo xtask build`) again: it finds them",
+                tools::ZIGLANG,
+                tools::CARGO_ZIGBUILD
             );
         }
         let so = self.build_native(profile)?;
         self.place(&so, "native, glibc of the build machine or newer".to_string(), profile, sources)
+    }
+
+    /// zig and cargo-zigbuild as found, else fetched into `<target>/tools/` ([`tools`]) unless
+    /// FMU_RUNTIME_FETCH=off; or why not (everything that was tried).
+    fn toolchain(&self) -> Result<ZigToolchain, String> {
+        let found = (find_zig(&self.root, &self.target), find_cargo_zigbuild(&self.target));
+        if let (Ok((zig, zig_version)), Ok(cargo_zigbuild)) = found {
+            return Ok(ZigToolchain { zig, zig_version, cargo_zigbuild });
+        }
+        let missing =
+            [found.0.as_ref().err(), found.1.as_ref().err()].into_iter().flatten().cloned().collect::<Vec<_>>();
+        if !tools::fetch_allowed()? {
+            return Err(format!("{} (FMU_RUNTIME_FETCH=off: not fetched)", missing.join("; ")));
+        }
+        let fetched = (|| {
+            let (zig, zig_version) = match found.0 {
+                Ok(z) => z,
+                Err(_) => {
+                    let python = self.python().ok_or("no python3 on the PATH to fetch zig with")?;
+                    let zig = tools::fetch_zig(&self.target, &python)?;
+                    let version = zig_version(&zig).ok_or_else(|| format!("{}: `zig version` fails", zig.display()))?;
+                    (zig, version)
+                }
+            };
+            let cargo_zigbuild = match found.1 {
+                Ok(c) => c,
+                Err(_) => tools::install_cargo_zigbuild(&self.cargo, &self.target)?,
+            };
+            Ok::<_, String>(ZigToolchain { zig, zig_version, cargo_zigbuild })
+        })();
+        fetched.map_err(|e| format!("{}; fetching them failed: {e}", missing.join("; ")))
+    }
+
+    /// The Python whose pip fetches zig: tests/.venv's, else python3 on the PATH.
+    fn python(&self) -> Option<PathBuf> {
+        Some(self.root.join("tests/.venv/bin/python")).filter(|p| p.is_file()).or_else(|| on_path("python3"))
     }
 
     /// A cargo command building the runtime's library: the FMU binary is built the same whatever
@@ -334,14 +377,9 @@ struct ZigToolchain {
     cargo_zigbuild: PathBuf,
 }
 
-/// zig and cargo-zigbuild, or why they were not found (everything that was tried).
-fn zig_toolchain(root: &Path) -> Result<ZigToolchain, String> {
-    let (zig, zig_version) = find_zig(root)?;
-    let cargo_zigbuild = find_cargo_zigbuild()?;
-    Ok(ZigToolchain { zig, zig_version, cargo_zigbuild })
-}
-
-fn find_zig(root: &Path) -> Result<(PathBuf, String), String> {
+/// zig, or why none was found (everything that was tried): FMU_RUNTIME_ZIG, the PATH, the
+/// ziglang package of tests/.venv's Python or of python3, one fetched into `<target>/tools/`.
+fn find_zig(root: &Path, target: &Path) -> Result<(PathBuf, String), String> {
     if let Some(zig) = env::var_os("FMU_RUNTIME_ZIG") {
         let zig = PathBuf::from(zig);
         let version =
@@ -368,6 +406,11 @@ fn find_zig(root: &Path) -> Result<(PathBuf, String), String> {
             None => tried.push(format!("the ziglang package of {}", python.display())),
         }
     }
+    let fetched = tools::local_zig(target);
+    if let Some(version) = zig_version(&fetched) {
+        return Ok((fetched, version));
+    }
+    tried.push(fetched.display().to_string());
     Err(format!("no zig found (tried {})", tried.join(", ")))
 }
 
@@ -387,7 +430,7 @@ fn zig_version(zig: &Path) -> Option<String> {
     Some(String::from_utf8_lossy(&output.stdout).trim().to_string())
 }
 
-fn find_cargo_zigbuild() -> Result<PathBuf, String> {
+fn find_cargo_zigbuild(target: &Path) -> Result<PathBuf, String> {
     if let Some(path) = env::var_os("FMU_RUNTIME_CARGO_ZIGBUILD") {
         let path = PathBuf::from(path);
         return if path.is_file() {
@@ -401,9 +444,11 @@ fn find_cargo_zigbuild() -> Result<PathBuf, String> {
     let cargo_home = env::var_os("CARGO_HOME")
         .map(PathBuf::from)
         .or_else(|| env::var_os("HOME").map(|h| Path::new(&h).join(".cargo")));
+    let fetched = tools::local_cargo_zigbuild(target);
     on_path(&name)
         .or_else(|| Some(cargo_home?.join("bin").join(&name)).filter(|p| p.is_file()))
-        .ok_or_else(|| "no cargo-zigbuild found on the PATH or in $CARGO_HOME/bin".to_string())
+        .or_else(|| Some(fetched.clone()).filter(|p| p.is_file()))
+        .ok_or_else(|| format!("no cargo-zigbuild found on the PATH, in $CARGO_HOME/bin or at {}", fetched.display()))
 }
 
 /// The first `name` in the PATH's folders.
