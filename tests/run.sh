@@ -32,7 +32,9 @@ if [ ! -x tests/.venv/bin/python ]; then
 fi
 tests/.venv/bin/python -m pip install --quiet --upgrade pip
 tests/.venv/bin/python -m pip install --quiet -r tests/requirements.txt
-if ! cargo zigbuild --help >/dev/null 2>&1; then
+# one that `cargo xtask runtime` fetched into the target folder (the README's first command on a
+# fresh machine) serves as well
+if ! cargo zigbuild --help >/dev/null 2>&1 && [ ! -x "${CARGO_TARGET_DIR:-target}/tools/bin/cargo-zigbuild" ]; then
     cargo install --locked cargo-zigbuild --version 0.24.1
 fi
 if [ -n "${CI:-}" ]; then

@@ -221,6 +221,12 @@ impl Workspace {
         if !tools::fetch_allowed()? {
             return Err(format!("{} (FMU_RUNTIME_FETCH=off: not fetched)", missing.join("; ")));
         }
+        // a tool the environment names is the one wanted: its failure is said, not worked around
+        let named = (found.0.is_err() && env::var_os("FMU_RUNTIME_ZIG").is_some())
+            || (found.1.is_err() && env::var_os("FMU_RUNTIME_CARGO_ZIGBUILD").is_some());
+        if named {
+            return Err(missing.join("; "));
+        }
         let fetched = (|| {
             let (zig, zig_version) = match found.0 {
                 Ok(z) => z,

@@ -96,6 +96,13 @@ pub fn install_cargo_zigbuild(cargo: &Path, target: &Path) -> Result<PathBuf, St
     for var in ["CARGO_TARGET_DIR", "RUSTFLAGS", "CARGO_ENCODED_RUSTFLAGS", "CARGO_BUILD_TARGET"] {
         install.env_remove(var);
     }
+    // cargo advises adding an install root missing from the PATH to it: xtask calls the tool by
+    // its path, so the advice would only mislead
+    let bin = root.join("bin");
+    let path = env::var_os("PATH").unwrap_or_default();
+    if let Ok(joined) = env::join_paths(std::iter::once(bin).chain(env::split_paths(&path))) {
+        install.env("PATH", joined);
+    }
     run(&mut install, "cargo install cargo-zigbuild")?;
     Ok(local_cargo_zigbuild(target))
 }
