@@ -130,6 +130,10 @@ def test_default_experiment_is_what_hosts_run(fmus):
         assert tol == (spec.get("experiment") or {}).get("tolerance", 1e-6)
         assert stop * slowest >= 10.0, "ten periods of the slowest mode at least"
         assert stop / step <= 1000.0 + 1e-9
+        # the longest step that shows the slowest mode with ten points a period, unless a
+        # thousandth of the run (FMPy's interval) is longer; said in words in the summary
+        assert step * slowest <= 0.1 + 1e-9 or stop / step >= 500.0 - 1e-9
+        assert report["default_step_rule"], report
         # two periods of the fastest dynamic mode per output interval (and per 1 ms) at most
         assert report["dynamic_cutoff_hz"] * max(step, 1e-3) <= 2.0 * (1 + 1e-9)
 

@@ -824,6 +824,7 @@ mod tests {
                 step_size: 2e-3,
                 tolerance: 1e-6,
             },
+            default_step_rule: "a thousandth of the run".into(),
             explicit_euler_step: 0.0,
             explicit_euler_mode_hz: Some(300.0),
             undamped_dynamic_modes: 2,

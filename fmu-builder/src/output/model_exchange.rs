@@ -50,8 +50,9 @@ pub fn sentences(r: &Report) -> Vec<String> {
         )),
     }
     out.push(format!(
-        "Default experiment: stop {:e} s, step {:e} s, tolerance {:.0e}.",
-        e.stop_time, e.step_size, e.tolerance
+        "Default experiment: stop {:e} s, tolerance {:.0e}, step {:e} s: {}. Co-Simulation is exact at any step, \
+         so a master may take longer ones.",
+        e.stop_time, e.tolerance, e.step_size, r.default_step_rule
     ));
     if r.undamped_dynamic_modes > 0 {
         out.push(format!(

@@ -166,8 +166,9 @@ pub struct Report {
     /// The fastest dynamic mode a host resolves at the default experiment's output interval
     /// (and a 1 s run's 1 ms) [Hz].
     pub host_cutoff_hz: f64,
-    /// The FMU's DefaultExperiment.
+    /// The FMU's DefaultExperiment, and why its step.
     pub default_experiment: ExperimentReport,
+    pub default_step_rule: String,
     /// The longest step at which explicit Euler carries the Model Exchange states [s] (0: none,
     /// a dynamic mode is undamped), and the frequency of the mode that limits it [Hz].
     pub explicit_euler_step: f64,
@@ -280,6 +281,7 @@ pub fn report_of(
         scene_cutoff_hz: host.scene_cutoff.is_finite().then(|| host.scene_cutoff / (2.0 * std::f64::consts::PI)),
         host_cutoff_hz: host.host_cutoff / (2.0 * std::f64::consts::PI),
         default_experiment: ExperimentReport { stop_time: host.stop, step_size: host.step, tolerance: host.tolerance },
+        default_step_rule: host.step_rule.clone(),
         explicit_euler_step: euler.0,
         explicit_euler_mode_hz: euler.1.map(|j| reduced.omega[j] / (2.0 * std::f64::consts::PI)),
         undamped_dynamic_modes: reduced.n_undamped_dynamic(reduced.alpha, reduced.beta),

@@ -28,6 +28,12 @@ pub const USUAL_OUTPUT_INTERVAL: f64 = 1e-3;
 /// co-simulation masters use or tighter (1e-4 .. 1e-6); the dynamic modes a host resolves at it
 /// are accurate to about 1e-3 of the response's swing.
 pub const DEFAULT_TOLERANCE: f64 = 1e-6;
+/// Output points per period of the slowest mode the default step gives at least: a sampled
+/// oscillation shows its shape at ten points a period (at fewer its peaks are cut, at two it
+/// aliases). A shorter step shows nothing more: Co-Simulation is exact at any step, and a Model
+/// Exchange host's own steps between output points do not depend on it up to
+/// USUAL_OUTPUT_INTERVAL.
+pub const POINTS_PER_PERIOD: f64 = 10.0;
 /// Periods of the slowest mode the default run shows (and at least three of its decay times, up
 /// to MOST_PERIODS periods, so a damped body settles within it).
 const SLOWEST_PERIODS: f64 = 10.0;
@@ -44,6 +50,8 @@ pub struct HostPlan {
     pub host_cutoff: f64,
     pub stop: f64,
     pub step: f64,
+    /// Why that step, in words.
+    pub step_rule: String,
     pub tolerance: f64,
 }
 
@@ -55,10 +63,18 @@ pub fn plan(spec: &Spec, basis: &Basis, reduced: &ReducedBody) -> HostPlan {
     let stop = experiment.stop_time.unwrap_or_else(|| default_stop(reduced));
     let explicit_cutoff = spec.reduction.dynamic_cutoff.is_some();
     // a cutoff the input names sets the output step the host needs for it
-    let step = experiment.step_size.unwrap_or_else(|| {
-        let auto = fmpy_output_interval(stop);
-        if explicit_cutoff { auto.min(round_down_125(PERIODS_PER_OUTPUT * 2.0 * PI / scene_cutoff)) } else { auto }
-    });
+    let (step, step_rule) = match experiment.step_size {
+        Some(h) => (h, "the input's experiment.step_size".to_string()),
+        None => {
+            let (auto, why) = default_step(stop, reduced);
+            let fits = round_down_125(PERIODS_PER_OUTPUT * 2.0 * PI / scene_cutoff);
+            if explicit_cutoff && fits < auto {
+                (fits, format!("{PERIODS_PER_OUTPUT} periods of reduction.dynamic_cutoff per output interval"))
+            } else {
+                (auto, why)
+            }
+        }
+    };
     // the output interval the dynamic modes must fit: the DefaultExperiment's, and a 1 s run's
     // (1 ms) unless the input names the step it runs at
     let interval = if experiment.step_size.is_some() { step } else { step.max(USUAL_OUTPUT_INTERVAL) };
@@ -95,7 +111,43 @@ pub fn plan(spec: &Spec, basis: &Basis, reduced: &ReducedBody) -> HostPlan {
         host_cutoff,
         stop,
         step,
+        step_rule,
         tolerance: experiment.tolerance.unwrap_or(DEFAULT_TOLERANCE),
+    }
+}
+
+/// The default output step of a run of `stop` seconds, and why: the longest 1-2-5 step with
+/// POINTS_PER_PERIOD points a period of the slowest mode, at most USUAL_OUTPUT_INTERVAL (beyond
+/// it a Model Exchange host's dynamic modes would have to be fewer), and at least FMPy's
+/// interval for the run (at most a thousand points).
+fn default_step(stop: f64, reduced: &ReducedBody) -> (f64, String) {
+    let fmpy = fmpy_output_interval(stop);
+    let Some(&w1) = reduced.omega.first().filter(|w| **w > 0.0) else {
+        return (fmpy, "FMPy's output interval for the run (a thousandth of it, rounded)".to_string());
+    };
+    let hz = w1 / (2.0 * PI);
+    let resolved = round_down_125(1.0 / (hz * POINTS_PER_PERIOD)).min(USUAL_OUTPUT_INTERVAL);
+    let points = |h: f64| 1.0 / (hz * h);
+    if resolved < fmpy {
+        let why = format!(
+            "a thousandth of the run, as FMPy rounds it (the slowest mode, {hz:.4} Hz, has {:.0} points a period)",
+            points(fmpy)
+        );
+        (fmpy, why)
+    } else if resolved < USUAL_OUTPUT_INTERVAL {
+        let why = format!(
+            "the longest 1-2-5 step with at least {POINTS_PER_PERIOD} output points a period of the slowest mode \
+             ({hz:.4} Hz: {:.0})",
+            points(resolved)
+        );
+        (resolved, why)
+    } else {
+        let why = format!(
+            "the longest step at which a Model Exchange host keeps the dynamic modes (the slowest mode, {hz:.4} Hz, \
+             has {:.0} points a period)",
+            points(resolved)
+        );
+        (resolved, why)
     }
 }
 
