@@ -167,6 +167,22 @@ def test_a_write_past_the_file_size_limit_is_an_error_naming_the_file_and_leaves
     assert not fmu.exists() and hidden(tmp_path) == []
 
 
+def test_an_export_that_fails_after_the_fmu_leaves_no_partial_file(tmp_path):
+    # 1.5 MB: the FMU (0.7 MB) and the report (0.3 MB) fit, the VTK file (2.5 MB) does not,
+    # as a disk that fills after the FMU
+    path = spec_file(tmp_path, SLOW)
+    fmu, report, vtk = tmp_path / "B.fmu", tmp_path / "r.json", tmp_path / "v.vtk"
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (1500 * 1024, 1500 * 1024))
+
+    proc = builder(path, "-o", fmu, "--report", report, "--export-vtk", vtk, "-q", preexec_fn=limit)
+    refused(proc, f"error: --export-vtk: {vtk}: ", "the file size limit (ulimit -f) was reached",
+            "nothing was written there", f"the FMU {fmu} was written")
+    assert fmu.is_file() and json.loads(report.read_text())["model_name"] == "Beam"
+    assert not vtk.exists() and hidden(tmp_path) == []
+
+
 def test_a_second_build_to_an_output_being_written_is_refused_naming_the_first(tmp_path):
     path = spec_file(tmp_path, SLOW)
     fmu = tmp_path / "B.fmu"
