@@ -37,9 +37,9 @@ def spec_file(tmp_path, spec=SMALL, name="part.json"):
     return path
 
 
-def builder(*args, **kw):
+def builder(*args, timeout=300, **kw):
     start = time.monotonic()
-    proc = subprocess.run([str(BUILDER), *map(str, args)], capture_output=True, text=True, timeout=300, **kw)
+    proc = subprocess.run([str(BUILDER), *map(str, args)], capture_output=True, text=True, timeout=timeout, **kw)
     proc.seconds = time.monotonic() - start
     return proc
 
@@ -203,6 +203,13 @@ def test_a_second_build_to_an_output_being_written_is_refused_naming_the_first(t
     assert first.returncode == 0 and second.returncode == 0, err
     assert f"waiting for another build (pid {first.pid} on {socket.gethostname()}) that writes -o {fmu}" in err, err
     assert hidden(tmp_path) == []
+    # a folder export named as the FMU (they would share a lock, and wait for themselves) is
+    # refused before any work
+    new = tmp_path / "C.fmu"
+    proc = builder(path, "-o", new, "--export-matrices", new, "--force", "-q", timeout=60)
+    refused(proc, f"error: --export-matrices {new}: {new} is also written by -o as a file; this option makes a "
+                  "folder there")
+    assert proc.seconds < REFUSED_WITHIN_S and hidden(tmp_path) == []
 
 
 def test_a_killed_builds_petsc_job_folder_is_swept_by_the_next_run(tmp_path):

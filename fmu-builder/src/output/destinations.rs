@@ -115,6 +115,21 @@ pub fn check(destinations: &[Destination], inputs: &[PathBuf], force: bool) -> R
             check_file_place(d, &shown)?;
         } else {
             check_folder_place(d, &shown)?;
+            // the folder itself, against a file output of the same name (either order)
+            if let Some(id) = identity(&d.path) {
+                if let Some((_, other)) = written.iter().find(|(i, _)| *i == id) {
+                    return Err(refuse(
+                        &shown,
+                        format!(
+                            "{} is also written by {} as a file; this option makes a folder there. Give each \
+                             output its own name",
+                            other.path.display(),
+                            other.option
+                        ),
+                    ));
+                }
+                written.push((id, d));
+            }
         }
         for file in d.files() {
             let Some(id) = check_file(d, &file, &shown, &input_ids, &written, force)? else { continue };
@@ -211,10 +226,16 @@ pub fn reserve(
     use std::os::unix::fs::MetadataExt;
     check(destinations, inputs, force)?;
     let mut locks = Vec::new();
+    let mut taken = Vec::new();
     let mut outputs = Vec::new();
     for d in destinations {
         let shown = format!("{} {}", d.option, d.path.display());
-        locks.extend(crate::output::lock::lock(&d.path, &shown, force, quiet)?);
+        // a file and a folder export of one name share a lock: taken twice, it would wait for itself
+        let lock_path = crate::output::lock::lock_path(&d.path);
+        if !taken.contains(&lock_path) {
+            locks.extend(crate::output::lock::lock(&d.path, &shown, force, quiet)?);
+            taken.push(lock_path);
+        }
         for file in d.files() {
             if let Some(name) = file.file_name() {
                 crate::output::temp_files::sweep_stale(folder_of(&file), name);
@@ -314,6 +335,13 @@ mod tests {
         std::fs::write(&fmu, "x").unwrap();
         let e = check(&both, &[], true).unwrap_err().to_string();
         assert!(e.contains("is also written by -o"), "{e}");
+        // a folder export named as the FMU, before or after it
+        let folder = Destination::folder("--export-matrices", &dir.join("C.fmu"), MOUNTED_MATRIX_FILES);
+        let file = Destination::file("-o", &dir.join("C.fmu"));
+        let e = check(&[file.clone(), folder.clone()], &[], true).unwrap_err().to_string();
+        assert!(e.starts_with("--export-matrices ") && e.contains("is also written by -o as a file"), "{e}");
+        let e = check(&[folder, file], &[], true).unwrap_err().to_string();
+        assert!(e.starts_with("-o ") && e.contains("is also written by --export-matrices"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
