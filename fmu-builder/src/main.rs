@@ -26,8 +26,9 @@ struct Args {
     /// Output FMU [default: <name>.fmu beside the input, <name> the input's "name"]
     #[arg(short, long, conflicts_with = "sweep")]
     output: Option<PathBuf>,
-    /// Overwrite outputs that exist (the FMU and the exports); never the input or the files it
-    /// names, which no output may be
+    /// Overwrite outputs that exist (the FMU and the exports), and wait for another build that
+    /// writes one of them to end instead of stopping; never the input or the files it names,
+    /// which no output may be
     #[arg(long)]
     force: bool,
     /// Also package fmu-runtime built on another platform (repeatable): PLATFORM is win32, win64,

@@ -538,7 +538,10 @@ fn generated() -> &'static Generated {
             decks.push(fmu_builder::model::export::abaqus_deck(&part, &[]));
             if element == "hex8" {
                 let out = dir.join("matrices");
-                fmu_builder::model::export::write_free_free_matrices(&out, &part).unwrap();
+                fmu_builder::model::export::write_free_free_matrices(&out, &part, &|p, b| {
+                    std::fs::write(p, b).map_err(|e| fmu_builder::error::BuildError::io(p, e))
+                })
+                .unwrap();
                 for name in ["K.mtx", "M.mtx", "dofs.txt", "nodes.txt"] {
                     matrices.push((name.to_string(), std::fs::read(out.join(name)).unwrap()));
                 }

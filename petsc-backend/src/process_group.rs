@@ -27,6 +27,15 @@ struct Job {
 static JOBS: Mutex<Vec<Job>> = Mutex::new(Vec::new());
 static HANDLER: OnceLock<()> = OnceLock::new();
 static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+/// Set once the handler's thread waits for signals: from then on it ends the process.
+static HANDLING: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether an interruption (SIGINT, SIGTERM, SIGHUP) is this crate's to end the process with,
+/// after the ranks: other handlers (the builder's, which removes its temporary files) must then
+/// not end it first. Async-signal-safe: one atomic load.
+pub fn ends_the_process_on_interruption() -> bool {
+    HANDLING.load(std::sync::atomic::Ordering::SeqCst)
+}
 
 /// Called where the job's end shows as an error (a closed connection, an ended launcher): after
 /// an interruption that end is the handler's doing, and the handler ends the builder with the
@@ -135,6 +144,7 @@ fn install_handler() {
     let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
         return;
     };
+    HANDLING.store(true, std::sync::atomic::Ordering::SeqCst);
     std::thread::spawn(move || {
         if let Some(signal) = signals.forever().next() {
             INTERRUPTED.store(true, std::sync::atomic::Ordering::SeqCst);

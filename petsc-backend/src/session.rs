@@ -144,6 +144,9 @@ impl Session {
     pub fn start(backend: &PetscBackend, k: &Sparse, what: &str) -> Result<Self> {
         let base = backend.job_folder.clone().unwrap_or_else(std::env::temp_dir);
         let folder = job_folder::create(&base)?;
+        if backend.keep_job_folder {
+            job_folder::mark_kept(&folder)?;
+        }
         let started = phases::phase(format!("PETSc back-end: {what}"), || Self::launch(backend, k, what, &folder));
         match started {
             Ok(session) => Ok(session),

@@ -1,9 +1,10 @@
 //! The files written besides the FMU, after it: the report, the mesh as a deck or a VTK file
-//! with the basis' shapes, and the matrices. A failure names the option and says that the FMU
-//! was written.
+//! with the basis' shapes, and the matrices, each through a temporary file and a checked rename
+//! (`output::place`). A failure names the option and says that the FMU was written.
 
 use crate::error::{BuildError, Result};
 use crate::model::{export, vtk};
+use crate::output::place;
 use crate::pipeline::Built;
 use std::path::{Path, PathBuf};
 
@@ -21,21 +22,24 @@ pub(super) fn write(exports: &Exports, built: &Built, fmu: &Path) -> Result<()> 
     let failed = |option: &'static str| {
         move |source: BuildError| BuildError::Export { option, fmu: fmu.to_path_buf(), source: Box::new(source) }
     };
+    let put = &place::write_bytes;
     if let Some(path) = &exports.report {
-        let json = serde_json::to_string_pretty(&built.report).unwrap_or_default();
-        std::fs::write(path, json).map_err(|e| failed("--report")(BuildError::io(path, e)))?;
+        let json = serde_json::to_string_pretty(&built.report)
+            .map_err(|e| BuildError::Internal(format!("serialising the report: {e}")))
+            .map_err(failed("--report"))?;
+        put(path, json.as_bytes()).map_err(failed("--report"))?;
     }
     if let Some(path) = &exports.inp {
-        export::write_abaqus_deck(path, &built.part, &built.flanges).map_err(failed("--export-inp"))?;
+        export::write_abaqus_deck(path, &built.part, &built.flanges, put).map_err(failed("--export-inp"))?;
     }
     if let Some(path) = &exports.vtk {
         write_vtk(path, built).map_err(failed("--export-vtk"))?;
     }
     if let Some(dir) = &exports.free_free {
-        export::write_free_free_matrices(dir, &built.part).map_err(failed("--export-free-free"))?;
+        export::write_free_free_matrices(dir, &built.part, put).map_err(failed("--export-free-free"))?;
     }
     if let Some(dir) = &exports.matrices {
-        export::write_matrix_market(dir, &built.model).map_err(failed("--export-matrices"))?;
+        export::write_matrix_market(dir, &built.model, put).map_err(failed("--export-matrices"))?;
     }
     Ok(())
 }
@@ -50,5 +54,5 @@ fn write_vtk(path: &Path, b: &Built) -> Result<()> {
         .enumerate()
         .map(|(j, w)| format!("shape_{:02}_{:.4}Hz", j + 1, w / (2.0 * std::f64::consts::PI)))
         .collect();
-    vtk::write_vtk(path, &b.spec.name, &b.part, &b.flanges, shapes.as_ref(), &names)
+    vtk::write_vtk(path, &b.spec.name, &b.part, &b.flanges, shapes.as_ref(), &names, &place::write_bytes)
 }

@@ -49,16 +49,20 @@ struct Input {
 
 /// Run `job`: every failure comes back as one error, for the caller to print.
 pub fn run(job: &Job) -> Result<()> {
+    crate::output::temp_files::install_handlers();
+    // the PETSc back-end's default place: a killed build's job folder there goes at the next run
+    petsc_backend::job_folder::sweep_stale(&std::env::temp_dir());
+    destinations::precheck(&named_destinations(job, job.output.as_deref()))?;
     let input = read_input(&job.input)?;
     if crate::input::assembly::is_assembly(&input.text) {
         return build_assembly(job, &input);
     }
     if job.sweep {
-        check_destinations(job, &input, None)?;
+        let _reserved = check_destinations(job, &input, None)?;
         return sweep(job, &input);
     }
     let output = output_path(job, &input)?;
-    check_destinations(job, &input, Some(&output))?;
+    let _reserved = check_destinations(job, &input, Some(&output))?;
     let binaries = platform_binaries(&job.platform_binaries)?;
     build(job, &input, &output, &binaries)
 }
@@ -86,9 +90,8 @@ fn output_path(job: &Job, input: &Input) -> Result<PathBuf> {
     Ok(folder.join(format!("{}.fmu", spec.name)))
 }
 
-/// The FMU and every export, refused before any work when one cannot be written or would
-/// overwrite the input, another output or (without --force) an existing file.
-fn check_destinations(job: &Job, input: &Input, output: Option<&Path>) -> Result<()> {
+/// The FMU (when known) and every export the command line names.
+fn named_destinations(job: &Job, output: Option<&Path>) -> Vec<Destination> {
     let e = &job.exports;
     let mut list: Vec<Destination> = output.map(|o| Destination::file("-o", o)).into_iter().collect();
     let files =
@@ -100,6 +103,14 @@ fn check_destinations(job: &Job, input: &Input, output: Option<&Path>) -> Result
     if let Some(p) = &e.free_free {
         list.push(Destination::folder("--export-free-free", p, destinations::FREE_FREE_FILES));
     }
+    list
+}
+
+/// The FMU and every export, refused before any work when one cannot be written or would
+/// overwrite the input, another output or (without --force) an existing file, then reserved
+/// for this build until the reservation is dropped.
+fn check_destinations(job: &Job, input: &Input, output: Option<&Path>) -> Result<destinations::Reservation> {
+    let list = named_destinations(job, output);
     let mut inputs = Vec::new();
     if input.path != Path::new("<stdin>") {
         inputs.push(input.path.clone());
@@ -111,7 +122,7 @@ fn check_destinations(job: &Job, input: &Input, output: Option<&Path>) -> Result
             no_element_exports(job)?;
         }
     }
-    destinations::check(&list, &inputs, job.force)
+    destinations::reserve(&list, &inputs, job.force, job.quiet)
 }
 
 /// A part given by its matrices has no elements to export.
@@ -154,10 +165,7 @@ fn sweep(job: &Job, input: &Input) -> Result<()> {
     };
     let rows = observed(job, &Profile::new(false), || pipeline::sweep::sweep(&spec, &input.path, &mut print_row))?;
     if let Some(path) = &job.sweep_svg {
-        std::fs::write(path, pipeline::sweep::plot(&rows)).map_err(|e| BuildError::CommandLine {
-            option: format!("--sweep-svg {}", path.display()),
-            message: e.to_string(),
-        })?;
+        crate::output::place::write_bytes(path, pipeline::sweep::plot(&rows).as_bytes())?;
     }
     Ok(())
 }
@@ -194,7 +202,7 @@ fn build_assembly(job: &Job, input: &Input) -> Result<()> {
     if input.path != Path::new("<stdin>") {
         inputs.push(input.path.clone());
     }
-    destinations::check(&[Destination::file("-o", &output)], &inputs, job.force)?;
+    let _reserved = destinations::reserve(&[Destination::file("-o", &output)], &inputs, job.force, job.quiet)?;
     let built = observed(job, &profile, || pipeline::assembly::build_assembly(spec, &output, &[]))?;
     if !job.quiet {
         print!("{}", crate::output::summary::assembly_text(&built.description, built.experiment));

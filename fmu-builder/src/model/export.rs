@@ -98,14 +98,18 @@ pub fn abaqus_deck(part: &Part, flanges: &[Flange]) -> String {
     s
 }
 
-pub fn write_abaqus_deck(path: &Path, part: &Part, flanges: &[Flange]) -> Result<()> {
+/// Writes one file an export made; the caller's, so that the output stage puts it in place
+/// (a temporary file and a checked rename).
+pub type WriteFile<'a> = &'a dyn Fn(&Path, &[u8]) -> Result<()>;
+
+pub fn write_abaqus_deck(path: &Path, part: &Part, flanges: &[Flange], write: WriteFile) -> Result<()> {
     if !part.has_elements() {
         return Err(BuildError::file(
             path,
             "--export-inp needs a part with elements (this one is given by its matrices)",
         ));
     }
-    std::fs::write(path, abaqus_deck(part, flanges)).map_err(|e| BuildError::io(path, e))
+    write(path, abaqus_deck(part, flanges).as_bytes())
 }
 
 fn matrix_market(a: &faer::sparse::SparseColMat<usize, f64>, what: &str) -> String {
@@ -132,7 +136,7 @@ fn matrix_market(a: &faer::sparse::SparseColMat<usize, f64>, what: &str) -> Stri
 /// Market, symmetric), dofs.txt (node id and direction of each row) and nodes.txt (id x y z),
 /// with node ids 1..N in the part's node order. Reading them back as `geometry.matrices` gives
 /// the very model the mesh gives.
-pub fn write_free_free_matrices(dir: &Path, part: &Part) -> Result<()> {
+pub fn write_free_free_matrices(dir: &Path, part: &Part, write_file: WriteFile) -> Result<()> {
     if !part.has_elements() {
         return Err(BuildError::file(
             dir,
@@ -141,10 +145,7 @@ pub fn write_free_free_matrices(dir: &Path, part: &Part) -> Result<()> {
     }
     std::fs::create_dir_all(dir).map_err(|e| BuildError::io(dir, e))?;
     let free = crate::model::assembly::uncoupled(&part.mesh, &part.materials, &|e, m| part.element_error(e, m))?;
-    let write = |name: &str, text: String| {
-        let path = dir.join(name);
-        std::fs::write(&path, text).map_err(|e| BuildError::io(&path, e))
-    };
+    let write = |name: &str, text: String| write_file(&dir.join(name), text.as_bytes());
     write("K.mtx", matrix_market(&free.stiffness, "free-free stiffness [N/m]"))?;
     write("M.mtx", matrix_market(&free.mass, "free-free mass [kg]"))?;
     let mut dofs = String::from("# row of K.mtx and M.mtx: node direction\n");
@@ -162,14 +163,16 @@ pub fn write_free_free_matrices(dir: &Path, part: &Part) -> Result<()> {
 /// The mounted body's matrices (mount held) in Matrix Market coordinate format, with the DoF of
 /// each flange load: K.mtx, M.mtx (symmetric, lower triangle), and flange_dofs.txt (0-based row
 /// of each unit flange load, 6 per force flange: u_x..z, theta_x..z).
-pub fn write_matrix_market(dir: &Path, model: &crate::model::rigid_coupling::Assembled) -> Result<()> {
+pub fn write_matrix_market(
+    dir: &Path,
+    model: &crate::model::rigid_coupling::Assembled,
+    write: WriteFile,
+) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| BuildError::io(dir, e))?;
     let nc = model.dofs.n_clamped();
     for (name, a) in [("K.mtx", &model.stiffness), ("M.mtx", &model.mass)] {
         let b = crate::linalg::sparse::block(a, 0..nc, 0..nc)?;
-        let path = dir.join(name);
-        std::fs::write(&path, matrix_market(&b, &format!("{name} of the mounted body (mount held)")))
-            .map_err(|e| BuildError::io(&path, e))?;
+        write(&dir.join(name), matrix_market(&b, &format!("{name} of the mounted body (mount held)")).as_bytes())?;
     }
     let d = &model.dofs;
     let mut s = String::from(
@@ -182,8 +185,7 @@ pub fn write_matrix_market(dir: &Path, model: &crate::model::rigid_coupling::Ass
             }
         }
     }
-    let path = dir.join("flange_dofs.txt");
-    std::fs::write(&path, s).map_err(|e| BuildError::io(&path, e))
+    write(&dir.join("flange_dofs.txt"), s.as_bytes())
 }
 
 #[cfg(test)]

@@ -86,6 +86,7 @@ pub fn write_vtk(
     flanges: &[Flange],
     fields: MatRef<'_, f64>,
     names: &[String],
+    write: crate::model::export::WriteFile,
 ) -> Result<()> {
     if !part.has_elements() {
         return Err(BuildError::file(
@@ -93,5 +94,5 @@ pub fn write_vtk(
             "--export-vtk needs a part with elements (this one is given by its matrices)",
         ));
     }
-    std::fs::write(path, vtk(title, part, flanges, fields, names)).map_err(|e| BuildError::io(path, e))
+    write(path, vtk(title, part, flanges, fields, names).as_bytes())
 }

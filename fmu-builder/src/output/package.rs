@@ -100,10 +100,7 @@ pub fn write_fmu(
             ("input.json".to_string(), input.clone().into_bytes()),
         ],
     };
-    fmu::write_fmu(output, &archive).map_err(|e| match e {
-        fmu::FmuError::Archive { path, message } => BuildError::File { path, message },
-        other => BuildError::Numerical(other.to_string()),
-    })
+    fmu::write_fmu(output, &archive)
 }
 
 /// The FMU's binaries: `others`, each checked against the functions `xml` needs, and the
@@ -187,8 +184,5 @@ pub fn write_assembly_fmu(
             ("input.json".to_string(), input.into_bytes()),
         ],
     };
-    fmu::write_fmu(output, &archive).map_err(|e| match e {
-        fmu::FmuError::Archive { path, message } => BuildError::File { path, message },
-        other => BuildError::Numerical(other.to_string()),
-    })
+    fmu::write_fmu(output, &archive)
 }

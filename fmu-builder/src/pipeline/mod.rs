@@ -50,8 +50,16 @@ pub fn build_from_text(
 
 /// A missing launcher or a Python without petsc4py is found in a second, not after assembly.
 fn preflight_backend(spec: &mut Spec, input: &Path) -> Result<()> {
+    let backend = spec.reduction.backend.backend(input.parent().unwrap_or(Path::new("")));
+    if let Backend::Petsc(petsc) = &backend {
+        // before anything can fail: a killed build's folder holds its token and the stiffness
+        let base = petsc.job_folder.clone().unwrap_or_else(std::env::temp_dir);
+        for gone in petsc_backend::job_folder::sweep_stale(&base) {
+            phases::note(|| format!("removed {}, the job folder of a build that is gone", gone.display()));
+        }
+    }
     spec.reduction.backend.check_launcher(input)?;
-    let Backend::Petsc(petsc) = spec.reduction.backend.backend(input.parent().unwrap_or(Path::new(""))) else {
+    let Backend::Petsc(petsc) = backend else {
         return Ok(());
     };
     let (python, report) = phases::phase("PETSc back-end: launcher and Python checked", || {

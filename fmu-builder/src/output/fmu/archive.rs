@@ -2,19 +2,21 @@
 //! (no `lib` prefix, executable), `resources/...`, `documentation/...`; deflate, forward slashes.
 //!
 //! The archive is written to a temporary file next to the target and renamed into place only
-//! when complete, so a failed build never leaves a half FMU where an importer would pick it up.
+//! when complete (`output::place`), so a failed build never leaves a half FMU where an importer
+//! would pick it up.
 
 use std::collections::HashSet;
-use std::fs::{self, File, OpenOptions};
-use std::io::{BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::fs::File;
+use std::io::{BufWriter, Seek, SeekFrom, Write};
+use std::path::Path;
 
 use zip::write::SimpleFileOptions;
 use zip::{CompressionMethod, ZipWriter};
 
-use super::{FmuError, is_model_identifier};
-use crate::error::Refusal;
+use super::is_model_identifier;
+use crate::error::{BuildError, Refusal};
 use crate::output::binaries::Platform;
+use crate::output::place;
 
 pub struct FmuArchive<'a> {
     pub model_description: String,
@@ -28,23 +30,9 @@ pub struct FmuArchive<'a> {
 }
 
 /// Writes the FMU at `path`, replacing an existing file only once the new one is complete.
-pub fn write_fmu(path: &Path, a: &FmuArchive) -> Result<(), FmuError> {
-    let fail = |message: String| FmuError::Archive { path: path.to_owned(), message };
-    let entries = entries(a).map_err(|e| fail(e.0))?;
-
-    let file_name = path.file_name().ok_or_else(|| fail("is not a file path".into()))?.to_string_lossy().into_owned();
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
-        _ => PathBuf::from("."),
-    };
-    let (file, tmp) =
-        create_temp(&dir, &file_name).map_err(|e| fail(format!("cannot create a file in {}: {e}", dir.display())))?;
-    let guard = RemoveOnDrop(Some(tmp.clone()));
-
-    write_zip(file, &entries).map_err(|e| fail(e.0))?;
-    fs::rename(&tmp, path).map_err(|e| fail(format!("cannot move {} into place: {e}", tmp.display())))?;
-    guard.disarm();
-    Ok(())
+pub fn write_fmu(path: &Path, a: &FmuArchive) -> Result<(), BuildError> {
+    let entries = entries(a).map_err(|e| BuildError::file(path, e.0))?;
+    place::write_with(path, |file| write_zip(file, &entries).map_err(|e| e.0))
 }
 
 /// One archive entry: full name inside the zip, content, unix mode.
@@ -101,23 +89,8 @@ fn check_relative(name: &str) -> Result<(), &'static str> {
     Ok(())
 }
 
-fn create_temp(dir: &Path, file_name: &str) -> std::io::Result<(File, PathBuf)> {
-    let pid = std::process::id();
-    let mut last = None;
-    // create_new: never clobber a file someone else (a concurrent build) is writing
-    for attempt in 0..100 {
-        let tmp = dir.join(format!(".{file_name}.{pid}.{attempt}.tmp"));
-        match OpenOptions::new().write(true).create_new(true).open(&tmp) {
-            Ok(f) => return Ok((f, tmp)),
-            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => last = Some(e),
-            Err(e) => return Err(e),
-        }
-    }
-    Err(last.unwrap_or_else(|| std::io::Error::other("no free temporary file name")))
-}
-
 fn write_zip(file: File, entries: &[Entry]) -> Result<(), Refusal> {
-    let mut zip = ZipWriter::new(BufWriter::new(file));
+    let mut zip = ZipWriter::new(Target { file: BufWriter::new(file), failed: false, position: 0 });
     let base = SimpleFileOptions::default().compression_method(CompressionMethod::Deflated);
     // Explicit directory entries: some importers extract entry by entry without creating parents.
     let mut dirs: Vec<&str> = Vec::new();
@@ -128,39 +101,74 @@ fn write_zip(file: File, entries: &[Entry]) -> Result<(), Refusal> {
             let d = &e.name[..end];
             if !dirs.contains(&d) {
                 dirs.push(d);
-                zip.add_directory(d, base.unix_permissions(0o755)).map_err(|e| Refusal(format!("adding {d}: {e}")))?;
+                zip.add_directory(d, base.unix_permissions(0o755)).map_err(|e| failed(&format!("adding {d}"), e))?;
             }
         }
         let options = base.unix_permissions(e.mode).large_file(e.data.len() as u64 >= u32::MAX as u64);
-        zip.start_file(e.name.as_str(), options).map_err(|err| Refusal(format!("adding {}: {err}", e.name)))?;
-        zip.write_all(e.data).map_err(|err| Refusal(format!("writing {}: {err}", e.name)))?;
+        zip.start_file(e.name.as_str(), options).map_err(|err| failed(&format!("adding {}", e.name), err))?;
+        zip.write_all(e.data).map_err(|err| failed(&format!("writing {}", e.name), err.into()))?;
     }
-    let buffered = zip.finish().map_err(|e| Refusal(format!("finishing the archive: {e}")))?;
-    let file = buffered.into_inner().map_err(|e| Refusal(format!("flushing the archive: {}", e.error())))?;
-    file.sync_all().map_err(|e| Refusal(format!("syncing the archive: {e}")))
+    let target = zip.finish().map_err(|e| failed("finishing the archive", e))?;
+    if target.failed {
+        return Err(Refusal("a write of the archive failed".into()));
+    }
+    let file = target.file.into_inner().map_err(|e| failed("flushing the archive", e.into_error().into()))?;
+    file.sync_all().map_err(|e| failed("syncing the archive", e.into()))
 }
 
-/// Deletes the temporary file on every early return; disarmed after the rename.
-struct RemoveOnDrop(Option<PathBuf>);
-
-impl RemoveOnDrop {
-    fn disarm(mut self) {
-        self.0 = None;
-    }
+/// The archive's file. After its first failed write or seek it takes everything and keeps
+/// nothing: the zip writer, dropped on the error's way out, finalizes the archive, and would
+/// otherwise print its own failure of that on standard error besides the builder's message.
+struct Target {
+    file: BufWriter<File>,
+    failed: bool,
+    /// Where the zip writer believes it is once the file failed.
+    position: u64,
 }
 
-impl Drop for RemoveOnDrop {
-    fn drop(&mut self) {
-        if let Some(p) = self.0.take() {
-            let _ = fs::remove_file(p);
+impl Write for Target {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if self.failed {
+            self.position += buf.len() as u64;
+            return Ok(buf.len());
         }
+        let written = self.file.write(buf).inspect_err(|_| self.failed = true)?;
+        self.position += written as u64;
+        Ok(written)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        if self.failed { Ok(()) } else { self.file.flush().inspect_err(|_| self.failed = true) }
+    }
+}
+
+impl Seek for Target {
+    fn seek(&mut self, to: SeekFrom) -> std::io::Result<u64> {
+        if !self.failed {
+            self.position = self.file.seek(to).inspect_err(|_| self.failed = true)?;
+            return Ok(self.position);
+        }
+        self.position = match to {
+            SeekFrom::Start(p) => p,
+            SeekFrom::Current(d) | SeekFrom::End(d) => self.position.saturating_add_signed(d),
+        };
+        Ok(self.position)
+    }
+}
+
+/// A failed step of the archive's write; a full disk or the file size limit said as such.
+fn failed(step: &str, e: zip::result::ZipError) -> Refusal {
+    match e {
+        zip::result::ZipError::Io(io) => Refusal(format!("{step}: {}", place::io_words(&io))),
+        other => Refusal(format!("{step}: {other}")),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::fs;
     use std::io::Read;
+    use std::path::PathBuf;
 
     fn scratch(name: &str) -> PathBuf {
         let d = std::env::temp_dir().join(format!("fmu-archive-test-{}-{name}", std::process::id()));

@@ -11,8 +11,6 @@ pub mod model_description;
 pub use archive::{FmuArchive, write_fmu};
 pub use model_description::{DefaultExperiment, ModelInfo, model_description_xml, xs_date_time};
 
-use std::path::PathBuf;
-
 use crate::error::BuildError;
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -21,18 +19,12 @@ pub enum FmuError {
     /// variable or attribute.
     #[error("modelDescription.xml: {0}")]
     Description(String),
-    /// The archive could not be written, or its content would make an invalid FMU.
-    #[error("{}: {message}", .path.display())]
-    Archive { path: PathBuf, message: String },
 }
 
 // So that the build pipeline can use `?` on packaging steps.
 impl From<FmuError> for BuildError {
     fn from(e: FmuError) -> Self {
-        match e {
-            FmuError::Description(_) => BuildError::Internal(e.to_string()),
-            FmuError::Archive { path, message } => BuildError::File { path, message },
-        }
+        BuildError::Internal(e.to_string())
     }
 }
 
