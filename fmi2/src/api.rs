@@ -431,6 +431,14 @@ pub unsafe fn fmi2ExitInitializationMode<M: Model>(c: fmi2Component) -> fmi2Stat
         guarded::<M>(c, &spec::fmi2ExitInitializationMode, |inst| {
             inst.logger.trace(|| "fmi2ExitInitializationMode".into());
             inst.model.exit_initialization().map_err(failure)?;
+            // a host that never states its tolerance (fmusim) is warned where it would have been
+            // at fmi2SetupExperiment with a loose one
+            if inst.interface == Interface::ModelExchange
+                && inst.tolerance.is_none()
+                && let Some(advice) = inst.model.unstated_tolerance_advice()
+            {
+                inst.logger.advice(&format!("fmi2ExitInitializationMode: {advice}"));
+            }
             inst.state = match inst.interface {
                 Interface::ModelExchange => ModelState::EventMode,
                 Interface::CoSimulation => ModelState::StepComplete,

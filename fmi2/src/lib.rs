@@ -263,6 +263,12 @@ pub trait Model: Sized + Clone {
     fn tolerance_advice(&self, _tolerance: f64) -> Option<String> {
         None
     }
+    /// Model Exchange left initialisation without the host stating a tolerance (no
+    /// fmi2SetupExperiment with one): a warning where the model needs one the host may not
+    /// use (the layer logs it as [`Model::tolerance_advice`]'s and answers fmi2OK).
+    fn unstated_tolerance_advice(&self) -> Option<String> {
+        None
+    }
     /// Model Exchange: the host completed an integrator step at `time` (fmi2SetTime's last value).
     /// A warning about how the host integrates (the layer logs it once per call that returns one
     /// and answers fmi2OK, logStatusWarning whatever the debug logging); the step stands either way.

@@ -158,6 +158,21 @@ pub fn tolerance_advice(model_exchange: bool, undamped: usize, tolerance: f64) -
     })
 }
 
+/// The warning for a Model Exchange host that states no tolerance (fmusim calls no
+/// fmi2SetupExperiment with one), where [`tolerance_advice`] would warn at the usual host
+/// default of 1e-4: a body with undamped dynamic modes.
+pub fn unstated_tolerance_advice(model_exchange: bool, undamped: usize) -> Option<String> {
+    tolerance_advice(model_exchange, undamped, 1e-4).map(|_| {
+        format!(
+            "the host stated no tolerance (no fmi2SetupExperiment with one), so it integrates at its own (1e-4 in \
+             most hosts), and this body has {undamped} undamped dynamic modes: an integrator's error in an undamped \
+             mode is never forgotten and grows with every period it rings (about 1e-2 of an output's swing over a \
+             few hundred periods at 1e-4). Give the host a tolerance of {UNDAMPED_TOLERANCE:.0e} or tighter (the \
+             FMU's default experiment names one), or use Co-Simulation, whose step is exact for these modes."
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -260,5 +275,8 @@ mod tests {
         assert!(tolerance_advice(true, 3, 1e-6).is_none());
         assert!(tolerance_advice(true, 0, 1e-3).is_none(), "damped modes forget the error");
         assert!(tolerance_advice(false, 3, 1e-3).is_none(), "Co-Simulation's step is exact");
+        assert!(unstated_tolerance_advice(true, 3).expect("undamped, no tolerance").contains("stated no tolerance"));
+        assert!(unstated_tolerance_advice(true, 0).is_none());
+        assert!(unstated_tolerance_advice(false, 3).is_none());
     }
 }

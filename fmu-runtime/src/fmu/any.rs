@@ -135,6 +135,10 @@ impl Model for AnyFmu {
     fn tolerance_advice(&self, tolerance: f64) -> Option<String> {
         each!(self, m => m.tolerance_advice(tolerance))
     }
+
+    fn unstated_tolerance_advice(&self) -> Option<String> {
+        each!(self, m => m.unstated_tolerance_advice())
+    }
     fn completed_integrator_step(&mut self, time: f64) -> Option<String> {
         each!(self, m => m.completed_integrator_step(time))
     }

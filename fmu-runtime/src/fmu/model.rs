@@ -175,6 +175,12 @@ impl Model for BodyFmu {
         crate::explicit_host::tolerance_advice(self.body.quasi_static(), undamped, tolerance)
     }
 
+    fn unstated_tolerance_advice(&self) -> Option<String> {
+        let p = self.body.parameters();
+        let undamped = self.body.reduced().n_undamped_dynamic(p.alpha, p.beta);
+        crate::explicit_host::unstated_tolerance_advice(self.body.quasi_static(), undamped)
+    }
+
     fn completed_integrator_step(&mut self, time: f64) -> Option<String> {
         let p = self.body.parameters();
         let (alpha, beta) = (p.alpha, p.beta);
