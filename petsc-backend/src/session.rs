@@ -4,9 +4,10 @@
 //! little-endian doubles); a failed request is an error naming what the driver reported.
 
 use crate::PetscBackend;
+use crate::accept::{Acceptor, DriverStream};
 use crate::error::{BackendError, Result};
 use crate::heartbeat::{self, Heartbeats};
-use crate::messages::{self, Answer, Factored, Greeting, PROTOCOL, Request};
+use crate::messages::{self, Answer, Factored, Request};
 use crate::{job_folder, petsc_binary, process_group};
 use faer::sparse::SparseColMat;
 use faer::{MatMut, MatRef};
@@ -25,7 +26,7 @@ pub(super) const DRIVER: &str = include_str!("driver.py");
 type Sparse = SparseColMat<usize, f64>;
 
 struct Connection {
-    reader: BufReader<TcpStream>,
+    reader: BufReader<DriverStream>,
     writer: std::io::BufWriter<TcpStream>,
 }
 
@@ -61,14 +62,12 @@ fn io_error(what: &str) -> impl Fn(std::io::Error) -> BackendError + '_ {
     move |e| BackendError::Unavailable(format!("{what}: {e}"))
 }
 
-/// How long a connection may take to greet before it is dropped: the driver greets at once.
-const GREETING_SECONDS: u64 = 10;
-
 /// How often a wait for the driver looks at the launcher and the ranks.
 const WATCH_INTERVAL: Duration = Duration::from_secs(1);
 
-/// Longest greeting line read from a connection (the driver's is about 150 bytes).
-const GREETING_BYTES: u64 = 4096;
+/// How often a wait for the driver's connection looks at the launcher and the ranks: a failed
+/// job is named at once, and the look (a walk of /proc) stays cheap.
+const CONNECT_WATCH_INTERVAL: Duration = Duration::from_millis(250);
 
 /// The launcher's report (the driver's standard error), for a message: its first lines (mpirun
 /// puts its headline there, "not enough slots"), then its last; or that it said nothing.
@@ -187,7 +186,7 @@ impl Session {
             stderr: stderr_path.clone(),
             launched: launched.clone(),
         };
-        let connected = Self::connect(backend, &listener, port, &token, &watch, what);
+        let connected = Self::connect(backend, listener, port, &token, &watch, what);
         drop(watch);
         let (connection, started) = match connected {
             Ok(c) => c,
@@ -214,58 +213,25 @@ impl Session {
         })
     }
 
-    /// Waits for the driver's connection and its factor: a connection that does not greet with
-    /// the job's token within GREETING_SECONDS is dropped and the wait goes on, so no other
-    /// process can take the driver's place or hold the builder up.
+    /// Waits for the driver's connection and its factor. Other connections to the port are read
+    /// side by side with it and dropped (accept.rs), so none can take the driver's place or hold
+    /// the builder up; the launcher and the ranks are looked at all the while, so a job that
+    /// failed is reported as such at once, not as a driver that never connected.
     fn connect(
         backend: &PetscBackend,
-        listener: &TcpListener,
+        listener: TcpListener,
         port: u16,
         token: &str,
         watch: &Watch<'_>,
         what: &str,
     ) -> Result<(Connection, Started)> {
-        listener.set_nonblocking(true).map_err(io_error("listening"))?;
-        let began = Instant::now();
-        let deadline = began + Duration::from_secs_f64(backend.connect_timeout_seconds);
-        let mut refused = Vec::new();
-        let mut connection = loop {
-            match listener.accept() {
-                Ok((stream, peer)) => match greeted(stream, token) {
-                    Ok(c) => break c,
-                    Err(why) => {
-                        phases::note(|| format!("a connection from {peer} was dropped: {why}"));
-                        refused.push(format!("{peer}: {why}"));
-                    }
-                },
-                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
-                Err(e) => return Err(io_error("accepting the driver's connection")(e)),
-            }
-            watch.check("the driver to connect")?;
-            if Instant::now() > deadline {
-                let dropped = if refused.is_empty() {
-                    String::new()
-                } else {
-                    format!(" ({} other connections dropped: {})", refused.len(), refused.join("; "))
-                };
-                return Err(BackendError::Unavailable(format!(
-                    "the driver did not connect to {}:{port} within {} s{dropped} (reduction.backend.host must be an \
-                     address the ranks reach the builder at; --connect-timeout or reduction.backend.connect_timeout \
-                     sets the wait); `{}` reported:\n{}",
-                    backend.host,
-                    backend.connect_timeout_seconds,
-                    watch.launched,
-                    tail(&watch.stderr, 12)
-                )));
-            }
-            phases::step(|| {
-                format!(
-                    "waiting for the PETSc driver to connect: {:.0} s of {:.0}",
-                    began.elapsed().as_secs_f64(),
-                    backend.connect_timeout_seconds
-                )
-            });
-            std::thread::sleep(Duration::from_millis(20));
+        let stream = Self::accept_driver(backend, listener, port, token, watch)?;
+        let writer = stream.get_ref().1.try_clone().map_err(io_error("the driver's connection"))?;
+        // from here on a read waits in WATCH_INTERVAL slices, looking at the ranks between them
+        writer.set_read_timeout(Some(WATCH_INTERVAL)).map_err(io_error("the driver's connection"))?;
+        let mut connection = Connection {
+            reader: BufReader::with_capacity(1 << 20, stream),
+            writer: std::io::BufWriter::with_capacity(1 << 20, writer),
         };
         let answer = phases::phase("driver: load, partition and factor", || {
             read_line(&mut connection, watch, "the driver's factor")
@@ -292,6 +258,47 @@ impl Session {
             )
         });
         Ok((connection, started))
+    }
+
+    /// The driver's stream once it has greeted, within the connect timeout, while the launcher
+    /// runs and no rank has stopped or ended. The listener is closed on return: no one else can
+    /// connect once the driver has.
+    fn accept_driver(
+        backend: &PetscBackend,
+        listener: TcpListener,
+        port: u16,
+        token: &str,
+        watch: &Watch<'_>,
+    ) -> Result<DriverStream> {
+        let mut acceptor = Acceptor::new(&listener, token).map_err(io_error("listening"))?;
+        let began = Instant::now();
+        let deadline = began + Duration::from_secs_f64(backend.connect_timeout_seconds);
+        loop {
+            let slice_end = (Instant::now() + CONNECT_WATCH_INTERVAL).min(deadline);
+            if let Some(stream) = acceptor.wait(slice_end).map_err(io_error("accepting the driver's connection"))? {
+                return Ok(stream);
+            }
+            watch.check("the driver to connect")?;
+            if Instant::now() >= deadline {
+                return Err(BackendError::Unavailable(format!(
+                    "the driver did not connect to {}:{port} within {} s{} (reduction.backend.host must be an \
+                     address the ranks reach the builder at; --connect-timeout or reduction.backend.connect_timeout \
+                     sets the wait); `{}` reported:\n{}",
+                    backend.host,
+                    backend.connect_timeout_seconds,
+                    acceptor.drops.summary(),
+                    watch.launched,
+                    tail(&watch.stderr, 12)
+                )));
+            }
+            phases::step(|| {
+                format!(
+                    "waiting for the PETSc driver to connect: {:.0} s of {:.0}",
+                    began.elapsed().as_secs_f64(),
+                    backend.connect_timeout_seconds
+                )
+            });
+        }
     }
 
     /// Rows of the factored matrix.
@@ -451,54 +458,6 @@ fn launcher_command(program: &str, arguments: &[String], stdout: std::fs::File, 
         }
     }
     command
-}
-
-/// The connection of a peer that greets with `token` and the protocol within GREETING_SECONDS;
-/// else why it was dropped.
-/// Why a connection to the builder's port was dropped before it proved to be the driver's.
-#[derive(Debug, thiserror::Error)]
-enum Dropped {
-    #[error("{0}")]
-    Io(#[from] std::io::Error),
-    #[error("it closed without a greeting")]
-    Closed,
-    #[error("no greeting within {GREETING_SECONDS} s")]
-    Silent,
-    #[error("a greeting that is not the driver's")]
-    NotTheDriver,
-    #[error("a wrong token")]
-    WrongToken,
-    #[error("protocol {0} where the builder speaks {PROTOCOL}")]
-    Protocol(serde_json::Value),
-}
-
-fn greeted(stream: TcpStream, token: &str) -> std::result::Result<Connection, Dropped> {
-    stream.set_nonblocking(false)?;
-    stream.set_nodelay(true).ok();
-    stream.set_read_timeout(Some(Duration::from_secs(GREETING_SECONDS)))?;
-    let reader = BufReader::with_capacity(1 << 20, stream.try_clone()?);
-    let writer = std::io::BufWriter::with_capacity(1 << 20, stream);
-    let mut connection = Connection { reader, writer };
-    let mut line = Vec::new();
-    let read = (&mut connection.reader).take(GREETING_BYTES).read_until(b'\n', &mut line);
-    match read {
-        Ok(0) => return Err(Dropped::Closed),
-        Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {
-            return Err(Dropped::Silent);
-        }
-        Err(e) => return Err(e.into()),
-        Ok(_) => {}
-    }
-    let hello: Greeting = serde_json::from_slice(&line).map_err(|_| Dropped::NotTheDriver)?;
-    if hello.hello != token {
-        return Err(Dropped::WrongToken);
-    }
-    if hello.protocol.as_u64() != Some(PROTOCOL) {
-        return Err(Dropped::Protocol(hello.protocol));
-    }
-    // from here on a read waits in WATCH_INTERVAL slices, looking at the ranks between them
-    connection.reader.get_ref().set_read_timeout(Some(WATCH_INTERVAL))?;
-    Ok(connection)
 }
 
 fn timed_out(e: &std::io::Error) -> bool {
