@@ -8,13 +8,14 @@ use crate::accept::{Acceptor, DriverStream};
 use crate::error::{BackendError, Result};
 use crate::heartbeat::{self, Heartbeats};
 use crate::messages::{self, Answer, Factored, Request};
+use crate::process_group::LocalRanks;
 use crate::{job_folder, petsc_binary, process_group};
 use faer::sparse::SparseColMat;
 use faer::{MatMut, MatRef};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
@@ -52,6 +53,8 @@ pub struct Session {
     rows: usize,
     /// The ranks' heartbeat files in the job folder.
     heartbeats: Heartbeats,
+    /// The ranks on this machine, seen while they run.
+    ranks: LocalRanks,
     /// The first failure of a request that could not return an error (a solve inside the
     /// `SpdSolve` trait): reported by `health`.
     failure: Mutex<Option<BackendError>>,
@@ -65,9 +68,10 @@ fn io_error(what: &str) -> impl Fn(std::io::Error) -> BackendError + '_ {
 /// How often a wait for the driver looks at the launcher and the ranks.
 const WATCH_INTERVAL: Duration = Duration::from_secs(1);
 
-/// How often a wait for the driver's connection looks at the launcher and the ranks: a failed
-/// job is named at once, and the look (a walk of /proc) stays cheap.
-const CONNECT_WATCH_INTERVAL: Duration = Duration::from_millis(250);
+/// How often a wait for the driver's connection looks at the launcher and the ranks: often
+/// enough to see a rank that fails as it starts (before its heartbeat watcher does), rarely
+/// enough that the look (a walk of /proc) costs little.
+const CONNECT_WATCH_INTERVAL: Duration = Duration::from_millis(100);
 
 /// The launcher's report (the driver's standard error), for a message: its first lines (mpirun
 /// puts its headline there, "not enough slots"), then its last; or that it said nothing.
@@ -89,36 +93,47 @@ struct Watch<'a> {
     child: &'a Mutex<Child>,
     group: i32,
     heartbeats: &'a Heartbeats,
+    ranks: &'a LocalRanks,
     stderr: PathBuf,
     launched: String,
 }
 
 impl Watch<'_> {
-    /// What the launcher says once the job has ended: its status and report, waited for a few
-    /// seconds (mpirun names the rank that died only as it ends).
-    fn closing_report(&self) -> String {
-        let deadline = Instant::now() + Duration::from_secs(10);
-        let mut status = None;
-        while status.is_none() && Instant::now() < deadline {
-            status = self.child.lock().ok().and_then(|mut c| c.try_wait().ok().flatten());
-            if status.is_none() {
-                std::thread::sleep(Duration::from_millis(50));
+    /// The launcher's exit status once it has ended, waited for `wait` at most.
+    fn launcher_status(&self, wait: Duration) -> Option<ExitStatus> {
+        let deadline = Instant::now() + wait;
+        loop {
+            let status = self.child.lock().ok().and_then(|mut c| c.try_wait().ok().flatten());
+            if status.is_some() || Instant::now() >= deadline {
+                return status;
             }
+            std::thread::sleep(Duration::from_millis(50));
         }
-        let ended =
-            status.map_or_else(|| "the launcher still runs".to_string(), |s| format!("the launcher ended ({s})"));
-        format!("{ended}; `{}` reported:\n{}", self.launched, tail(&self.stderr, 12))
     }
 
-    /// Err when the launcher has ended or a rank is stopped, naming which.
+    /// What the launcher says of the job's end: the rank that failed where its report names it,
+    /// its own status (or that it still runs), and its report.
+    fn report(&self, status: Option<ExitStatus>) -> String {
+        let text = std::fs::read_to_string(&self.stderr).unwrap_or_default();
+        let rank = failed_rank(&text).map_or_else(String::new, |r| format!("{r}; "));
+        let ended =
+            status.map_or_else(|| "the launcher still runs".to_string(), |s| format!("the launcher ended ({s})"));
+        format!("{rank}{ended}; `{}` reported:\n{}", self.launched, tail(&self.stderr, 12))
+    }
+
+    /// What the launcher says once the job has ended, waited for a few seconds (mpirun names
+    /// the rank that died only as it ends).
+    fn closing_report(&self) -> String {
+        self.report(self.launcher_status(Duration::from_secs(10)))
+    }
+
+    /// Err when the launcher has ended or a rank is stopped or gone, naming which.
     fn check(&self, waiting_for: &str) -> Result<()> {
         process_group::park_if_interrupted();
-        let ended = self.child.lock().ok().and_then(|mut c| c.try_wait().ok().flatten());
-        if let Some(status) = ended {
+        if let Some(status) = self.launcher_status(Duration::ZERO) {
             return Err(BackendError::Unavailable(format!(
-                "the launcher ended ({status}) while the builder waited for {waiting_for}; `{}` reported:\n{}",
-                self.launched,
-                tail(&self.stderr, 12)
+                "the job failed while the builder waited for {waiting_for}: {}",
+                self.report(Some(status))
             )));
         }
         if let Some((pid, rank, cmdline)) = process_group::stopped_member(self.group) {
@@ -128,14 +143,47 @@ impl Watch<'_> {
                  {waiting_for}; the job was ended"
             )));
         }
+        // a rank gone while its launcher runs on: the other ranks would wait for it forever
+        if let Some((pid, rank)) = self.ranks.ended(self.group) {
+            let why = format!("rank {rank} (process {pid}) ended while the job ran (it failed or was killed)");
+            return Err(self.rank_ended(&why, waiting_for));
+        }
         // ranks on other nodes, which neither the launcher's exit nor the local processes show
-        if let Some(why) = self.heartbeats.check() {
+        if let Some(trouble) = self.heartbeats.check() {
+            if trouble.ended {
+                return Err(self.rank_ended(&trouble.why, waiting_for));
+            }
             return Err(BackendError::Unavailable(format!(
-                "{why} while the builder waited for {waiting_for}; the job was ended"
+                "{} while the builder waited for {waiting_for}; the job was ended",
+                trouble.why
             )));
         }
         Ok(())
     }
+
+    /// A rank that ended, with what the launcher says of it: one that notices ends within
+    /// moments (mpirun, once it has ended the other ranks), and names how the rank ended.
+    fn rank_ended(&self, why: &str, waiting_for: &str) -> BackendError {
+        BackendError::Unavailable(format!(
+            "{why} while the builder waited for {waiting_for}; the job was ended; {}",
+            self.report(self.launcher_status(Duration::from_secs(1)))
+        ))
+    }
+}
+
+/// The line of the launcher's report that names the rank that failed, in a sentence: mpirun's
+/// own ("noticed that process rank 1 ... exited on signal 9"), MPI_Abort's, the driver's, or
+/// mpirun's "Process name: [[job,1],rank]" with the "Exit code:" after it.
+fn failed_rank(report: &str) -> Option<String> {
+    let lines: Vec<&str> = report.lines().map(str::trim).collect();
+    let named = ["noticed that process rank", "MPI_ABORT was invoked on rank", "driver rank"];
+    if let Some(line) = lines.iter().find(|l| named.iter().any(|n| l.contains(n))) {
+        return Some(format!("a rank failed: {line}"));
+    }
+    let at = lines.iter().position(|l| l.starts_with("Process name:"))?;
+    let rank = lines[at].rsplit(',').next()?.trim_end_matches(']').trim();
+    let code = lines.get(at + 1).and_then(|l| l.strip_prefix("Exit code:")).map(str::trim)?;
+    Some(format!("rank {rank} failed: it exited with code {code}"))
 }
 
 impl Session {
@@ -179,10 +227,12 @@ impl Session {
         process_group::register(group, folder, backend.keep_job_folder);
         let child = Mutex::new(child);
         let heartbeats = Heartbeats::new(folder, heartbeat::SILENCE);
+        let ranks = LocalRanks::default();
         let watch = Watch {
             child: &child,
             group,
             heartbeats: &heartbeats,
+            ranks: &ranks,
             stderr: stderr_path.clone(),
             launched: launched.clone(),
         };
@@ -208,6 +258,7 @@ impl Session {
             keep_folder: backend.keep_job_folder,
             rows: k.nrows(),
             heartbeats,
+            ranks,
             failure: Mutex::new(None),
             started,
         })
@@ -330,6 +381,7 @@ impl Session {
             child: &self.child,
             group: self.group,
             heartbeats: &self.heartbeats,
+            ranks: &self.ranks,
             stderr: self.folder.join("driver.err"),
             launched: self.launched.clone(),
         };
@@ -559,5 +611,25 @@ impl Drop for Session {
         if !self.keep_folder {
             job_folder::remove(&self.folder);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::failed_rank;
+
+    #[test]
+    fn the_failed_rank_is_found_in_the_launchers_report() {
+        let signal =
+            "----\nmpirun noticed that process rank 1 with PID 0 on node vm exited on signal 9 (Killed).\n----";
+        assert_eq!(
+            failed_rank(signal).as_deref(),
+            Some(
+                "a rank failed: mpirun noticed that process rank 1 with PID 0 on node vm exited on signal 9 (Killed)."
+            )
+        );
+        let code = "The first process to do so was:\n\n  Process name: [[14536,1],1]\n  Exit code:    3\n";
+        assert_eq!(failed_rank(code).as_deref(), Some("rank 1 failed: it exited with code 3"));
+        assert_eq!(failed_rank("not enough slots available"), None);
     }
 }
