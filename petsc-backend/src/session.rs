@@ -6,7 +6,7 @@
 use crate::PetscBackend;
 use crate::accept::{Acceptor, DriverStream};
 use crate::error::{BackendError, Result};
-use crate::heartbeat::{self, Heartbeats};
+use crate::heartbeat::{self, Heartbeats, Trouble};
 use crate::messages::{self, Answer, Factored, Request};
 use crate::process_group::LocalRanks;
 use crate::{job_folder, petsc_binary, process_group};
@@ -122,9 +122,37 @@ impl Watch<'_> {
     }
 
     /// What the launcher says once the job has ended, waited for a few seconds (mpirun names
-    /// the rank that died only as it ends).
+    /// the rank that died only as it ends), or, where a rank is gone and the launcher runs on
+    /// without it a second later, that rank.
     fn closing_report(&self) -> String {
-        self.report(self.launcher_status(Duration::from_secs(10)))
+        let deadline = Instant::now() + Duration::from_secs(10);
+        let mut gone: Option<(String, Instant)> = None;
+        loop {
+            if let Some(status) = self.launcher_status(Duration::ZERO) {
+                return self.report(Some(status));
+            }
+            if gone.is_none() {
+                gone = self.rank_trouble().filter(|t| t.ended).map(|t| (t.why, Instant::now()));
+            }
+            let given_up = gone.as_ref().is_some_and(|(_, seen)| seen.elapsed() >= Duration::from_secs(1));
+            if given_up || Instant::now() >= deadline {
+                let why = gone.map_or_else(String::new, |(why, _)| format!("{why}; "));
+                return format!("{why}{}", self.report(None));
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+
+    /// What the ranks tell of the job: a local rank the builder saw that is gone (while its
+    /// launcher runs on, the other ranks would wait for it forever), else what a heartbeat
+    /// tells (ranks on other nodes, which neither the launcher's exit nor the local processes
+    /// show).
+    fn rank_trouble(&self) -> Option<Trouble> {
+        if let Some((pid, rank)) = self.ranks.ended(self.group) {
+            let why = format!("rank {rank} (process {pid}) ended while the job ran (it failed or was killed)");
+            return Some(Trouble { why, ended: true });
+        }
+        self.heartbeats.check()
     }
 
     /// Err when the launcher has ended or a rank is stopped or gone, naming which.
@@ -143,31 +171,17 @@ impl Watch<'_> {
                  {waiting_for}; the job was ended"
             )));
         }
-        // a rank gone while its launcher runs on: the other ranks would wait for it forever
-        if let Some((pid, rank)) = self.ranks.ended(self.group) {
-            let why = format!("rank {rank} (process {pid}) ended while the job ran (it failed or was killed)");
-            return Err(self.rank_ended(&why, waiting_for));
-        }
-        // ranks on other nodes, which neither the launcher's exit nor the local processes show
-        if let Some(trouble) = self.heartbeats.check() {
-            if trouble.ended {
-                return Err(self.rank_ended(&trouble.why, waiting_for));
-            }
-            return Err(BackendError::Unavailable(format!(
-                "{} while the builder waited for {waiting_for}; the job was ended",
-                trouble.why
-            )));
-        }
-        Ok(())
-    }
-
-    /// A rank that ended, with what the launcher says of it: one that notices ends within
-    /// moments (mpirun, once it has ended the other ranks), and names how the rank ended.
-    fn rank_ended(&self, why: &str, waiting_for: &str) -> BackendError {
-        BackendError::Unavailable(format!(
-            "{why} while the builder waited for {waiting_for}; the job was ended; {}",
-            self.report(self.launcher_status(Duration::from_secs(1)))
-        ))
+        let Some(trouble) = self.rank_trouble() else { return Ok(()) };
+        // a launcher that notices a rank's end ends within moments, and names how the rank ended
+        let report = if trouble.ended {
+            format!("; {}", self.report(self.launcher_status(Duration::from_secs(1))))
+        } else {
+            String::new()
+        };
+        Err(BackendError::Unavailable(format!(
+            "{} while the builder waited for {waiting_for}; the job was ended{report}",
+            trouble.why
+        )))
     }
 }
 
