@@ -111,9 +111,11 @@ def test_impostors_never_become_the_driver_and_the_build_finishes(tmp_path):
     out, err = proc.communicate(timeout=300)
     assert proc.returncode == 0, err
     assert (tmp_path / "B.fmu").is_file()
-    # each was dropped with its reason (the silent one after its greeting time)
-    for why in ["a greeting that is not the driver's", "no greeting within 10 s", "a wrong token"]:
+    # each was dropped with its reason; the silent one was never waited for (the driver was
+    # taken beside it, long before its greeting time ended)
+    for why in ["a greeting that is not the driver's", "a wrong token"]:
         assert why in out, out
+    assert "no greeting within" not in out, out
     for s in impostors:
         s.close()
     assert_nothing_left(folder)
