@@ -159,9 +159,12 @@ impl Watch<'_> {
     fn check(&self, waiting_for: &str) -> Result<()> {
         process_group::park_if_interrupted();
         if let Some(status) = self.launcher_status(Duration::ZERO) {
+            let text = std::fs::read_to_string(&self.stderr).unwrap_or_default();
+            let rank = failed_rank(&text).map_or_else(String::new, |r| format!("{r}; "));
             return Err(BackendError::Unavailable(format!(
-                "the job failed while the builder waited for {waiting_for}: {}",
-                self.report(Some(status))
+                "{rank}the launcher ended ({status}) while the builder waited for {waiting_for}; `{}` reported:\n{}",
+                self.launched,
+                tail(&self.stderr, 12)
             )));
         }
         if let Some((pid, rank, cmdline)) = process_group::stopped_member(self.group) {
