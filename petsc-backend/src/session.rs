@@ -134,13 +134,30 @@ impl Watch<'_> {
             if gone.is_none() {
                 gone = self.rank_trouble().filter(|t| t.ended).map(|t| (t.why, Instant::now()));
             }
-            let given_up = gone.as_ref().is_some_and(|(_, seen)| seen.elapsed() >= Duration::from_secs(1));
+            let given_up = gone.as_ref().is_some_and(|(_, seen)| seen.elapsed() >= Duration::from_secs(1))
+                && !self.launcher_names_a_failed_rank();
             if given_up || Instant::now() >= deadline {
                 let why = gone.map_or_else(String::new, |(why, _)| format!("{why}; "));
                 return format!("{why}{}", self.report(None));
             }
             std::thread::sleep(Duration::from_millis(50));
         }
+    }
+
+    /// Whether the launcher's report names a rank that failed: mpirun, which then ends the
+    /// other ranks and itself (a second or more under load).
+    fn launcher_names_a_failed_rank(&self) -> bool {
+        failed_rank(&std::fs::read_to_string(&self.stderr).unwrap_or_default()).is_some()
+    }
+
+    /// The launcher's status once a rank has ended: a launcher that noticed ends within moments,
+    /// one that says nothing of it is taken to run on after a second.
+    fn status_after_a_rank_ended(&self) -> Option<ExitStatus> {
+        let status = self.launcher_status(Duration::from_secs(1));
+        if status.is_none() && self.launcher_names_a_failed_rank() {
+            return self.launcher_status(Duration::from_secs(4));
+        }
+        status
     }
 
     /// What the ranks tell of the job: a local rank the builder saw that is gone (while its
@@ -176,11 +193,8 @@ impl Watch<'_> {
         }
         let Some(trouble) = self.rank_trouble() else { return Ok(()) };
         // a launcher that notices a rank's end ends within moments, and names how the rank ended
-        let report = if trouble.ended {
-            format!("; {}", self.report(self.launcher_status(Duration::from_secs(1))))
-        } else {
-            String::new()
-        };
+        let report =
+            if trouble.ended { format!("; {}", self.report(self.status_after_a_rank_ended())) } else { String::new() };
         Err(BackendError::Unavailable(format!(
             "{} while the builder waited for {waiting_for}; the job was ended{report}",
             trouble.why
