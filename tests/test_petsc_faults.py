@@ -176,7 +176,7 @@ def test_slow_and_silent_connections_do_not_delay_the_driver(tmp_path):
     alone, _ = timed_build(tmp_path, "alone")
     for name, hostile in [("drip", slow_drip), ("silent", six_silent)]:
         seconds, out = timed_build(tmp_path, name, hostile)
-        # measured 2.6 s alone, 2.6 s beside either
+        # measured 2.3 to 3.2 s, alone or beside either (2 cores)
         assert seconds < alone + 1.0, (name, seconds, alone, out)
 
 
@@ -280,7 +280,8 @@ def test_a_rank_that_dies_while_its_launcher_runs_on_is_named_at_once(tmp_path, 
     named = f"rank 1 (process {ranks[1]} on {socket.gethostname()})" if detached else f"rank 1 (process {ranks[1]})"
     assert f"{named} ended while the job ran (it failed or was killed)" in err, err
     assert "reduction.backend.host" not in err, err
-    # seen within 0.2 s, a second for the launcher's report, the job ended: measured 2.2 s
+    # seen within 0.2 s, a second for the launcher's report, the job ended: measured 2.1 s
+    # (local) and 1.3 s (detached)
     assert seconds < 5, (seconds, err)
     assert_nothing_left(folder, within=20.0)
 
