@@ -25,12 +25,26 @@ import traceback
 # The heartbeat watcher (heartbeat.rs in the builder reads its files): run as its own Python,
 # exec'd from a fork of each rank before MPI starts, so that it is no MPI process and its
 # command line does not pass for a rank's. Every second it rewrites heartbeat-<host>-<pid>:
-# rank, host, PID, the rank's state (stopped: /proc's T or t), a counter; it ends with the rank.
+# rank, host, PID, the rank's state (stopped: /proc's T or t), a counter. When the rank is
+# gone (the watcher re-parented) it writes a last beat, "ended", within a fifth of a second:
+# a launcher that keeps running after a rank died (srun without --kill-on-bad-exit, mpirun
+# with --enable-recovery) leaves the other ranks waiting for it, and only this beat tells.
 WATCHER = r"""
 import os, sys, time
 folder, parent, rank, host = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4]
 path = os.path.join(folder, "heartbeat-%s-%d" % (host, parent))
 count = 0
+
+def beat(state):
+    line = "%s %s %d %s %d\n" % (rank, host, parent, state, count)
+    try:
+        fd = os.open(path + ".tmp", os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+        os.write(fd, line.encode())
+        os.close(fd)
+        os.replace(path + ".tmp", path)
+    except OSError:
+        sys.exit(0)
+
 while os.getppid() == parent:
     try:
         with open("/proc/%d/stat" % parent) as f:
@@ -38,15 +52,13 @@ while os.getppid() == parent:
     except OSError:
         break
     count += 1
-    line = "%s %s %d %s %d\n" % (rank, host, parent, "stopped" if state in "Tt" else "running", count)
-    try:
-        fd = os.open(path + ".tmp", os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
-        os.write(fd, line.encode())
-        os.close(fd)
-        os.replace(path + ".tmp", path)
-    except OSError:
-        break
-    time.sleep(1.0)
+    beat("stopped" if state in "Tt" else "running")
+    for _ in range(5):
+        if os.getppid() != parent:
+            break
+        time.sleep(0.2)
+count += 1
+beat("ended")
 """
 
 

@@ -17,6 +17,7 @@
 //! use fmu_builder::pipeline::build;
 //! ```
 
+mod accept;
 pub mod error;
 pub mod heartbeat;
 pub mod job_folder;

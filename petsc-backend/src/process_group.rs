@@ -170,18 +170,52 @@ pub fn stopped_member(group: i32) -> Option<(i32, Option<String>, String)> {
         if !(state == "T" || state == "t") {
             continue;
         }
-        let environ = std::fs::read(format!("/proc/{pid}/environ")).unwrap_or_default();
-        let rank = environ.split(|&b| b == 0).find_map(|v| {
-            let v = String::from_utf8_lossy(v);
-            ["OMPI_COMM_WORLD_RANK=", "PMI_RANK=", "PMIX_RANK=", "SLURM_PROCID="]
-                .iter()
-                .find_map(|k| v.strip_prefix(k).map(str::to_string))
-        });
         let cmdline = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
         let cmdline = String::from_utf8_lossy(&cmdline).replace('\0', " ").trim().to_string();
-        return Some((pid, rank, cmdline));
+        return Some((pid, rank_of(pid), cmdline));
     }
     None
+}
+
+/// The MPI rank of `pid`, where its environment says it.
+fn rank_of(pid: i32) -> Option<String> {
+    let environ = std::fs::read(format!("/proc/{pid}/environ")).ok()?;
+    environ.split(|&b| b == 0).find_map(|v| {
+        let v = String::from_utf8_lossy(v);
+        ["OMPI_COMM_WORLD_RANK=", "PMI_RANK=", "PMIX_RANK=", "SLURM_PROCID="]
+            .iter()
+            .find_map(|k| v.strip_prefix(k).map(str::to_string))
+    })
+}
+
+/// The job's ranks on this machine seen so far, to tell when one has ended while the launcher
+/// runs on: a launcher that outlives a failed rank (srun without --kill-on-bad-exit, mpirun
+/// with --enable-recovery) leaves the other ranks waiting for it, and the whole job with them.
+/// This sees a rank that its heartbeat watcher cannot report: one killed with its watcher
+/// (a signal to its process group) or before the watcher started.
+#[derive(Default)]
+pub struct LocalRanks {
+    seen: Mutex<Vec<(i32, String)>>,
+}
+
+impl LocalRanks {
+    /// A rank seen before that has ended since (gone, or a zombie its launcher left): its pid
+    /// and rank.
+    pub fn ended(&self, group: i32) -> Option<(i32, String)> {
+        let mut seen = self.seen.lock().ok()?;
+        // parents before children: a rank's fork (its heartbeat watcher before it execs) has the
+        // rank's environment, and is told apart by its parent
+        for pid in descendants(group) {
+            let known = |p: i32| seen.iter().any(|&(s, _)| s == p);
+            if known(pid) || stat_of(pid).is_some_and(|(_, parent, _)| known(parent)) {
+                continue;
+            }
+            if let Some(rank) = rank_of(pid) {
+                seen.push((pid, rank));
+            }
+        }
+        seen.iter().find(|&&(pid, _)| !process_alive(pid)).cloned()
+    }
 }
 
 #[cfg(test)]

@@ -4,16 +4,18 @@
 //! little-endian doubles); a failed request is an error naming what the driver reported.
 
 use crate::PetscBackend;
+use crate::accept::{Acceptor, DriverStream};
 use crate::error::{BackendError, Result};
-use crate::heartbeat::{self, Heartbeats};
-use crate::messages::{self, Answer, Factored, Greeting, PROTOCOL, Request};
+use crate::heartbeat::{self, Heartbeats, Trouble};
+use crate::messages::{self, Answer, Factored, Request};
+use crate::process_group::LocalRanks;
 use crate::{job_folder, petsc_binary, process_group};
 use faer::sparse::SparseColMat;
 use faer::{MatMut, MatRef};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
@@ -25,7 +27,7 @@ pub(super) const DRIVER: &str = include_str!("driver.py");
 type Sparse = SparseColMat<usize, f64>;
 
 struct Connection {
-    reader: BufReader<TcpStream>,
+    reader: BufReader<DriverStream>,
     writer: std::io::BufWriter<TcpStream>,
 }
 
@@ -51,6 +53,8 @@ pub struct Session {
     rows: usize,
     /// The ranks' heartbeat files in the job folder.
     heartbeats: Heartbeats,
+    /// The ranks on this machine, seen while they run.
+    ranks: LocalRanks,
     /// The first failure of a request that could not return an error (a solve inside the
     /// `SpdSolve` trait): reported by `health`.
     failure: Mutex<Option<BackendError>>,
@@ -61,14 +65,13 @@ fn io_error(what: &str) -> impl Fn(std::io::Error) -> BackendError + '_ {
     move |e| BackendError::Unavailable(format!("{what}: {e}"))
 }
 
-/// How long a connection may take to greet before it is dropped: the driver greets at once.
-const GREETING_SECONDS: u64 = 10;
-
 /// How often a wait for the driver looks at the launcher and the ranks.
 const WATCH_INTERVAL: Duration = Duration::from_secs(1);
 
-/// Longest greeting line read from a connection (the driver's is about 150 bytes).
-const GREETING_BYTES: u64 = 4096;
+/// How often a wait for the driver's connection looks at the launcher and the ranks: often
+/// enough to see a rank that fails as it starts (before its heartbeat watcher does), rarely
+/// enough that the look (a walk of /proc) costs little.
+const CONNECT_WATCH_INTERVAL: Duration = Duration::from_millis(100);
 
 /// The launcher's report (the driver's standard error), for a message: its first lines (mpirun
 /// puts its headline there, "not enough slots"), then its last; or that it said nothing.
@@ -90,34 +93,93 @@ struct Watch<'a> {
     child: &'a Mutex<Child>,
     group: i32,
     heartbeats: &'a Heartbeats,
+    ranks: &'a LocalRanks,
     stderr: PathBuf,
     launched: String,
 }
 
 impl Watch<'_> {
-    /// What the launcher says once the job has ended: its status and report, waited for a few
-    /// seconds (mpirun names the rank that died only as it ends).
-    fn closing_report(&self) -> String {
-        let deadline = Instant::now() + Duration::from_secs(10);
-        let mut status = None;
-        while status.is_none() && Instant::now() < deadline {
-            status = self.child.lock().ok().and_then(|mut c| c.try_wait().ok().flatten());
-            if status.is_none() {
-                std::thread::sleep(Duration::from_millis(50));
+    /// The launcher's exit status once it has ended, waited for `wait` at most.
+    fn launcher_status(&self, wait: Duration) -> Option<ExitStatus> {
+        let deadline = Instant::now() + wait;
+        loop {
+            let status = self.child.lock().ok().and_then(|mut c| c.try_wait().ok().flatten());
+            if status.is_some() || Instant::now() >= deadline {
+                return status;
             }
+            std::thread::sleep(Duration::from_millis(50));
         }
-        let ended =
-            status.map_or_else(|| "the launcher still runs".to_string(), |s| format!("the launcher ended ({s})"));
-        format!("{ended}; `{}` reported:\n{}", self.launched, tail(&self.stderr, 12))
     }
 
-    /// Err when the launcher has ended or a rank is stopped, naming which.
+    /// What the launcher says of the job's end: the rank that failed where its report names it,
+    /// its own status (or that it still runs), and its report.
+    fn report(&self, status: Option<ExitStatus>) -> String {
+        let text = std::fs::read_to_string(&self.stderr).unwrap_or_default();
+        let rank = failed_rank(&text).map_or_else(String::new, |r| format!("{r}; "));
+        let ended =
+            status.map_or_else(|| "the launcher still runs".to_string(), |s| format!("the launcher ended ({s})"));
+        format!("{rank}{ended}; `{}` reported:\n{}", self.launched, tail(&self.stderr, 12))
+    }
+
+    /// What the launcher says once the job has ended, waited for a few seconds (mpirun names
+    /// the rank that died only as it ends), or, where a rank is gone and the launcher runs on
+    /// without it a second later, that rank.
+    fn closing_report(&self) -> String {
+        let deadline = Instant::now() + Duration::from_secs(10);
+        let mut gone: Option<(String, Instant)> = None;
+        loop {
+            if let Some(status) = self.launcher_status(Duration::ZERO) {
+                return self.report(Some(status));
+            }
+            if gone.is_none() {
+                gone = self.rank_trouble().filter(|t| t.ended).map(|t| (t.why, Instant::now()));
+            }
+            let given_up = gone.as_ref().is_some_and(|(_, seen)| seen.elapsed() >= Duration::from_secs(1))
+                && !self.launcher_names_a_failed_rank();
+            if given_up || Instant::now() >= deadline {
+                let why = gone.map_or_else(String::new, |(why, _)| format!("{why}; "));
+                return format!("{why}{}", self.report(None));
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+
+    /// Whether the launcher's report names a rank that failed: mpirun, which then ends the
+    /// other ranks and itself (a second or more under load).
+    fn launcher_names_a_failed_rank(&self) -> bool {
+        failed_rank(&std::fs::read_to_string(&self.stderr).unwrap_or_default()).is_some()
+    }
+
+    /// The launcher's status once a rank has ended: a launcher that noticed ends within moments,
+    /// one that says nothing of it is taken to run on after a second.
+    fn status_after_a_rank_ended(&self) -> Option<ExitStatus> {
+        let status = self.launcher_status(Duration::from_secs(1));
+        if status.is_none() && self.launcher_names_a_failed_rank() {
+            return self.launcher_status(Duration::from_secs(4));
+        }
+        status
+    }
+
+    /// What the ranks tell of the job: a local rank the builder saw that is gone (while its
+    /// launcher runs on, the other ranks would wait for it forever), else what a heartbeat
+    /// tells (ranks on other nodes, which neither the launcher's exit nor the local processes
+    /// show).
+    fn rank_trouble(&self) -> Option<Trouble> {
+        if let Some((pid, rank)) = self.ranks.ended(self.group) {
+            let why = format!("rank {rank} (process {pid}) ended while the job ran (it failed or was killed)");
+            return Some(Trouble { why, ended: true });
+        }
+        self.heartbeats.check()
+    }
+
+    /// Err when the launcher has ended or a rank is stopped or gone, naming which.
     fn check(&self, waiting_for: &str) -> Result<()> {
         process_group::park_if_interrupted();
-        let ended = self.child.lock().ok().and_then(|mut c| c.try_wait().ok().flatten());
-        if let Some(status) = ended {
+        if let Some(status) = self.launcher_status(Duration::ZERO) {
+            let text = std::fs::read_to_string(&self.stderr).unwrap_or_default();
+            let rank = failed_rank(&text).map_or_else(String::new, |r| format!("{r}; "));
             return Err(BackendError::Unavailable(format!(
-                "the launcher ended ({status}) while the builder waited for {waiting_for}; `{}` reported:\n{}",
+                "{rank}the launcher ended ({status}) while the builder waited for {waiting_for}; `{}` reported:\n{}",
                 self.launched,
                 tail(&self.stderr, 12)
             )));
@@ -129,14 +191,30 @@ impl Watch<'_> {
                  {waiting_for}; the job was ended"
             )));
         }
-        // ranks on other nodes, which neither the launcher's exit nor the local processes show
-        if let Some(why) = self.heartbeats.check() {
-            return Err(BackendError::Unavailable(format!(
-                "{why} while the builder waited for {waiting_for}; the job was ended"
-            )));
-        }
-        Ok(())
+        let Some(trouble) = self.rank_trouble() else { return Ok(()) };
+        // a launcher that notices a rank's end ends within moments, and names how the rank ended
+        let report =
+            if trouble.ended { format!("; {}", self.report(self.status_after_a_rank_ended())) } else { String::new() };
+        Err(BackendError::Unavailable(format!(
+            "{} while the builder waited for {waiting_for}; the job was ended{report}",
+            trouble.why
+        )))
     }
+}
+
+/// The line of the launcher's report that names the rank that failed, in a sentence: mpirun's
+/// own ("noticed that process rank 1 ... exited on signal 9"), MPI_Abort's, the driver's, or
+/// mpirun's "Process name: [[job,1],rank]" with the "Exit code:" after it.
+fn failed_rank(report: &str) -> Option<String> {
+    let lines: Vec<&str> = report.lines().map(str::trim).collect();
+    let named = ["noticed that process rank", "MPI_ABORT was invoked on rank", "driver rank"];
+    if let Some(line) = lines.iter().find(|l| named.iter().any(|n| l.contains(n))) {
+        return Some(format!("a rank failed: {line}"));
+    }
+    let at = lines.iter().position(|l| l.starts_with("Process name:"))?;
+    let rank = lines[at].rsplit(',').next()?.trim_end_matches(']').trim();
+    let code = lines.get(at + 1).and_then(|l| l.strip_prefix("Exit code:")).map(str::trim)?;
+    Some(format!("rank {rank} failed: it exited with code {code}"))
 }
 
 impl Session {
@@ -183,14 +261,16 @@ impl Session {
         process_group::register(group, folder, backend.keep_job_folder);
         let child = Mutex::new(child);
         let heartbeats = Heartbeats::new(folder, heartbeat::SILENCE);
+        let ranks = LocalRanks::default();
         let watch = Watch {
             child: &child,
             group,
             heartbeats: &heartbeats,
+            ranks: &ranks,
             stderr: stderr_path.clone(),
             launched: launched.clone(),
         };
-        let connected = Self::connect(backend, &listener, port, &token, &watch, what);
+        let connected = Self::connect(backend, listener, port, &token, &watch, what);
         drop(watch);
         let (connection, started) = match connected {
             Ok(c) => c,
@@ -212,63 +292,31 @@ impl Session {
             keep_folder: backend.keep_job_folder,
             rows: k.nrows(),
             heartbeats,
+            ranks,
             failure: Mutex::new(None),
             started,
         })
     }
 
-    /// Waits for the driver's connection and its factor: a connection that does not greet with
-    /// the job's token within GREETING_SECONDS is dropped and the wait goes on, so no other
-    /// process can take the driver's place or hold the builder up.
+    /// Waits for the driver's connection and its factor. Other connections to the port are read
+    /// side by side with it and dropped (accept.rs), so none can take the driver's place or hold
+    /// the builder up; the launcher and the ranks are looked at all the while, so a job that
+    /// failed is reported as such at once, not as a driver that never connected.
     fn connect(
         backend: &PetscBackend,
-        listener: &TcpListener,
+        listener: TcpListener,
         port: u16,
         token: &str,
         watch: &Watch<'_>,
         what: &str,
     ) -> Result<(Connection, Started)> {
-        listener.set_nonblocking(true).map_err(io_error("listening"))?;
-        let began = Instant::now();
-        let deadline = began + Duration::from_secs_f64(backend.connect_timeout_seconds);
-        let mut refused = Vec::new();
-        let mut connection = loop {
-            match listener.accept() {
-                Ok((stream, peer)) => match greeted(stream, token) {
-                    Ok(c) => break c,
-                    Err(why) => {
-                        phases::note(|| format!("a connection from {peer} was dropped: {why}"));
-                        refused.push(format!("{peer}: {why}"));
-                    }
-                },
-                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
-                Err(e) => return Err(io_error("accepting the driver's connection")(e)),
-            }
-            watch.check("the driver to connect")?;
-            if Instant::now() > deadline {
-                let dropped = if refused.is_empty() {
-                    String::new()
-                } else {
-                    format!(" ({} other connections dropped: {})", refused.len(), refused.join("; "))
-                };
-                return Err(BackendError::Unavailable(format!(
-                    "the driver did not connect to {}:{port} within {} s{dropped} (reduction.backend.host must be an \
-                     address the ranks reach the builder at; --connect-timeout or reduction.backend.connect_timeout \
-                     sets the wait); `{}` reported:\n{}",
-                    backend.host,
-                    backend.connect_timeout_seconds,
-                    watch.launched,
-                    tail(&watch.stderr, 12)
-                )));
-            }
-            phases::step(|| {
-                format!(
-                    "waiting for the PETSc driver to connect: {:.0} s of {:.0}",
-                    began.elapsed().as_secs_f64(),
-                    backend.connect_timeout_seconds
-                )
-            });
-            std::thread::sleep(Duration::from_millis(20));
+        let stream = Self::accept_driver(backend, listener, port, token, watch)?;
+        let writer = stream.get_ref().1.try_clone().map_err(io_error("the driver's connection"))?;
+        // from here on a read waits in WATCH_INTERVAL slices, looking at the ranks between them
+        writer.set_read_timeout(Some(WATCH_INTERVAL)).map_err(io_error("the driver's connection"))?;
+        let mut connection = Connection {
+            reader: BufReader::with_capacity(1 << 20, stream),
+            writer: std::io::BufWriter::with_capacity(1 << 20, writer),
         };
         let answer = phases::phase("driver: load, partition and factor", || {
             read_line(&mut connection, watch, "the driver's factor")
@@ -295,6 +343,47 @@ impl Session {
             )
         });
         Ok((connection, started))
+    }
+
+    /// The driver's stream once it has greeted, within the connect timeout, while the launcher
+    /// runs and no rank has stopped or ended. The listener is closed on return: no one else can
+    /// connect once the driver has.
+    fn accept_driver(
+        backend: &PetscBackend,
+        listener: TcpListener,
+        port: u16,
+        token: &str,
+        watch: &Watch<'_>,
+    ) -> Result<DriverStream> {
+        let mut acceptor = Acceptor::new(&listener, token).map_err(io_error("listening"))?;
+        let began = Instant::now();
+        let deadline = began + Duration::from_secs_f64(backend.connect_timeout_seconds);
+        loop {
+            let slice_end = (Instant::now() + CONNECT_WATCH_INTERVAL).min(deadline);
+            if let Some(stream) = acceptor.wait(slice_end).map_err(io_error("accepting the driver's connection"))? {
+                return Ok(stream);
+            }
+            watch.check("the driver to connect")?;
+            if Instant::now() >= deadline {
+                return Err(BackendError::Unavailable(format!(
+                    "the driver did not connect to {}:{port} within {} s{} (reduction.backend.host must be an \
+                     address the ranks reach the builder at; --connect-timeout or reduction.backend.connect_timeout \
+                     sets the wait); `{}` reported:\n{}",
+                    backend.host,
+                    backend.connect_timeout_seconds,
+                    acceptor.drops.summary(),
+                    watch.launched,
+                    tail(&watch.stderr, 12)
+                )));
+            }
+            phases::step(|| {
+                format!(
+                    "waiting for the PETSc driver to connect: {:.0} s of {:.0}",
+                    began.elapsed().as_secs_f64(),
+                    backend.connect_timeout_seconds
+                )
+            });
+        }
     }
 
     /// Rows of the factored matrix.
@@ -326,6 +415,7 @@ impl Session {
             child: &self.child,
             group: self.group,
             heartbeats: &self.heartbeats,
+            ranks: &self.ranks,
             stderr: self.folder.join("driver.err"),
             launched: self.launched.clone(),
         };
@@ -456,54 +546,6 @@ fn launcher_command(program: &str, arguments: &[String], stdout: std::fs::File, 
     command
 }
 
-/// The connection of a peer that greets with `token` and the protocol within GREETING_SECONDS;
-/// else why it was dropped.
-/// Why a connection to the builder's port was dropped before it proved to be the driver's.
-#[derive(Debug, thiserror::Error)]
-enum Dropped {
-    #[error("{0}")]
-    Io(#[from] std::io::Error),
-    #[error("it closed without a greeting")]
-    Closed,
-    #[error("no greeting within {GREETING_SECONDS} s")]
-    Silent,
-    #[error("a greeting that is not the driver's")]
-    NotTheDriver,
-    #[error("a wrong token")]
-    WrongToken,
-    #[error("protocol {0} where the builder speaks {PROTOCOL}")]
-    Protocol(serde_json::Value),
-}
-
-fn greeted(stream: TcpStream, token: &str) -> std::result::Result<Connection, Dropped> {
-    stream.set_nonblocking(false)?;
-    stream.set_nodelay(true).ok();
-    stream.set_read_timeout(Some(Duration::from_secs(GREETING_SECONDS)))?;
-    let reader = BufReader::with_capacity(1 << 20, stream.try_clone()?);
-    let writer = std::io::BufWriter::with_capacity(1 << 20, stream);
-    let mut connection = Connection { reader, writer };
-    let mut line = Vec::new();
-    let read = (&mut connection.reader).take(GREETING_BYTES).read_until(b'\n', &mut line);
-    match read {
-        Ok(0) => return Err(Dropped::Closed),
-        Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {
-            return Err(Dropped::Silent);
-        }
-        Err(e) => return Err(e.into()),
-        Ok(_) => {}
-    }
-    let hello: Greeting = serde_json::from_slice(&line).map_err(|_| Dropped::NotTheDriver)?;
-    if hello.hello != token {
-        return Err(Dropped::WrongToken);
-    }
-    if hello.protocol.as_u64() != Some(PROTOCOL) {
-        return Err(Dropped::Protocol(hello.protocol));
-    }
-    // from here on a read waits in WATCH_INTERVAL slices, looking at the ranks between them
-    connection.reader.get_ref().set_read_timeout(Some(WATCH_INTERVAL))?;
-    Ok(connection)
-}
-
 fn timed_out(e: &std::io::Error) -> bool {
     matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut)
 }
@@ -603,5 +645,25 @@ impl Drop for Session {
         if !self.keep_folder {
             job_folder::remove(&self.folder);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::failed_rank;
+
+    #[test]
+    fn the_failed_rank_is_found_in_the_launchers_report() {
+        let signal =
+            "----\nmpirun noticed that process rank 1 with PID 0 on node vm exited on signal 9 (Killed).\n----";
+        assert_eq!(
+            failed_rank(signal).as_deref(),
+            Some(
+                "a rank failed: mpirun noticed that process rank 1 with PID 0 on node vm exited on signal 9 (Killed)."
+            )
+        );
+        let code = "The first process to do so was:\n\n  Process name: [[14536,1],1]\n  Exit code:    3\n";
+        assert_eq!(failed_rank(code).as_deref(), Some("rank 1 failed: it exited with code 3"));
+        assert_eq!(failed_rank("not enough slots available"), None);
     }
 }
