@@ -7,7 +7,28 @@ import shutil
 
 import numpy as np
 from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Model, FMU2Slave
+from fmpy.fmi2 import (FMU2Model, FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+from fmpy.logging import addLoggerProxy
+
+# FMPy's native logger proxy forwards to one global slot, which each simulate_fmu(logger=...)
+# points at callbacks it frees when it returns: an FMU that logs through FMPy's default
+# callbacks after that calls freed memory. The callbacks made here stay alive for the process.
+_KEPT = []
+
+
+def printing_callbacks():
+    """Callbacks whose logger prints each message (as FMPy's default does), kept alive."""
+    def log(env, name, status, category, message):
+        print(f"[{status}] {message.decode(errors='replace') if message else ''}")
+
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(log)
+    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(0)
+    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(0)
+    addLoggerProxy(ctypes.byref(callbacks))
+    _KEPT.append(callbacks)
+    return callbacks
 
 
 class Fmu:
@@ -21,7 +42,7 @@ class Fmu:
         self.kind = kind
         self.fmu = cls(guid=self.md.guid, unzipDirectory=self.dir,
                        modelIdentifier=iface.modelIdentifier, instanceName="test")
-        self.fmu.instantiate(callbacks=callbacks)
+        self.fmu.instantiate(callbacks=callbacks if callbacks is not None else printing_callbacks())
         self.nx = len(self.md.derivatives)
 
     def set(self, **values):

@@ -202,6 +202,34 @@ def setup_messages(path, tolerance):
     return recorder.messages
 
 
+def initialisation_messages(path, kind):
+    """What the FMU logs through fmi2SetupExperiment without a tolerance (as fmusim calls it) and
+    initialisation; every call must return fmi2OK (FMPy raises otherwise)."""
+    from fmu_access import Fmu
+    from test_fmi_robustness import Recorder
+    recorder = Recorder()
+    f = Fmu(path, kind, callbacks=recorder.callbacks)
+    try:
+        f.initialize()
+    finally:
+        f.close(terminate=False)
+        addLoggerProxy(ctypes.byref(fmpy.fmi2.defaultCallbacks))
+    assert all(e[:2] == (1, "logStatusWarning") for e in recorder.entries), recorder.entries
+    return recorder.messages
+
+
+def test_an_unstated_tolerance_on_undamped_modes_is_named(fmus):
+    # fmusim integrates Model Exchange without ever stating a tolerance: the undamped L-beam
+    # warns when initialisation ends, naming the cause and the remedy
+    messages = initialisation_messages(fmus["l-beam"], "ModelExchange")
+    assert len(messages) == 1, messages
+    assert "stated no tolerance" in messages[0] and "14 undamped dynamic modes" in messages[0], messages
+    assert "1e-6 or tighter" in messages[0] and "Co-Simulation" in messages[0]
+    # a damped body, or Co-Simulation (exact for these modes): nothing to say
+    assert initialisation_messages(fmus["bracket"], "ModelExchange") == []
+    assert initialisation_messages(fmus["l-beam"], "CoSimulation") == []
+
+
 def test_a_loose_tolerance_on_undamped_modes_is_named(fmus):
     # the undamped L-beam at the tolerance fmusim and OMSimulator use: the cause and the remedy,
     # logged, with the call succeeding (fmi2OK)
