@@ -448,9 +448,9 @@ pub fn run(work: &Path, short: bool, python: Option<&Path>) -> Result<Vec<Target
         println!();
         let equal_or_better = fmu_error <= chain_error;
         println!(
-            "chain_master / assembly FMU per simulated second (with outputs): **{ratio:.0}x** (step alone: {:.0}x); the target is at least {CHAIN_MASTER_RATIO:.0}x at equal or better accuracy: {} (reported, not checked). Accuracy: the FMU's error {fmu_error:.2e} against chain_master's {chain_error:.2e}: {}. Over the FMU's whole {:.1} s the FMU's error is {:.2e}.\n",
+            "chain_master / assembly FMU per simulated second at the same 1 ms step, with the positions and a joint reaction read: **{ratio:.0}x** (step alone: {:.0}x); the target of at least {CHAIN_MASTER_RATIO:.0}x is at equal or better accuracy, where the FMU takes a longer step{}. Accuracy: the FMU's error {fmu_error:.2e} against chain_master's {chain_error:.2e}: {}. Over the FMU's whole {:.1} s the FMU's error is {:.2e}.\n",
             chain_per_s / fmu_step_only,
-            if ratio >= CHAIN_MASTER_RATIO { "met" } else { "NOT met" },
+            if sweep.is_some() { " (the step sweep below)" } else { " (the step sweep runs in a full run only)" },
             if equal_or_better { "equal or better" } else { "worse" },
             pendulum.steps as f64 * H,
             max_of(&m["assembly"]["error_vs_rigid"])
