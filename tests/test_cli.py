@@ -172,6 +172,21 @@ def test_a_millimetre_part_is_warned_of_before_the_reduction(tmp_path):
     assert any("1.570e7 kg" in w for w in report["warnings"])
 
 
+def test_elements_metres_across_are_warned_of_before_the_reduction(tmp_path):
+    """A 10 x 0.1 x 0.2 mm steel bar in two elements given in millimetres: 10 m across and
+    1 570 kg, plausible, but its elements are 5 m across (the median of their bounding boxes'
+    diagonals: 5.005 m), which no solid mesh has. Said as soon as the mesh is made."""
+    bar = copy.deepcopy(BASE)
+    bar["geometry"]["boxes"] = [{"min": [0, 0, 0], "max": [10, 0.1, 0.2], "elements": [2, 1, 1]}]
+    proc = builder(write(tmp_path, bar, "bar.json"), "-o", tmp_path / "bar.fmu")
+    lines = proc.stderr.splitlines()
+    said = [i for i, line in enumerate(lines) if line.startswith("warning:") and "elements are" in line]
+    assert len(said) == 1, proc.stderr
+    assert "5.005e0 m across" in lines[said[0]] and '"length_unit": "mm"' in lines[said[0]], proc.stderr
+    reduction = next(i for i, line in enumerate(lines) if line.startswith("fmu-builder [") and "reduction basis" in line)
+    assert said[0] < reduction, proc.stderr
+
+
 def test_a_band_of_more_modes_than_a_solve_takes_is_warned_of_before_the_eigen_solve(tmp_path):
     """The 1 m beam (2e-4 m^3 of steel, plausible in size and mass) with reduction.max_frequency
     at 1 MHz: Weyl's count puts 5.9e4 modes below it, the mistake a part in millimetres makes

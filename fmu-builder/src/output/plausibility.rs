@@ -18,6 +18,11 @@ const SIZE_RANGE: [f64; 2] = [1e-4, 100.0];
 /// metres weighs 1e9 times its mass: a 50 x 20 x 2 mm steel plate, 50 m across, is within
 /// SIZE_RANGE but weighs 1.6e7 kg.
 const MASS_LIMIT: f64 = 1e5;
+/// Sizes of solid elements in engineering meshes [m] (the median of their bounding boxes'
+/// diagonals): a 10 um feature to a 2 m block of a coarse mesh. A millimetre mesh read as metres
+/// has elements of metres even where the part's own size is plausible (a 10 mm bar in ten
+/// elements: 10 m across, 1 m elements, 7.9e4 kg).
+const ELEMENT_RANGE: [f64; 2] = [1e-5, 2.0];
 /// The most modes a reduction band holds before the build says so ahead of the eigen-solve: a
 /// few thousand modes take minutes on this machine's cores; a part in millimetres read as
 /// metres puts a billion times as many below the same frequency.
@@ -129,6 +134,53 @@ pub fn band_warning(part: &Part, mass: Option<f64>, max_frequency: f64) -> Optio
     })
 }
 
+/// Elements outside ELEMENT_RANGE, said with the probable slip.
+fn element_warning(part: &Part) -> Option<String> {
+    let e = element_size(&part.mesh).filter(|e| outside(*e, ELEMENT_RANGE))?;
+    let hint = if e > ELEMENT_RANGE[1] {
+        " (a mesh in millimetres? give its unit: \"geometry\": {\"length_unit\": \"mm\"})"
+    } else {
+        " (a mesh in metres given a smaller geometry.length_unit?)"
+    };
+    Some(format!(
+        "the part's elements are {e:.3e} m across (the median of their bounding boxes' diagonals), outside the {:e} .. {} m of engineering meshes{hint}; lengths are in metres unless geometry.length_unit says otherwise",
+        ELEMENT_RANGE[0], ELEMENT_RANGE[1]
+    ))
+}
+
+/// The median over the elements of their bounding boxes' diagonals [m]; None without elements.
+fn element_size(mesh: &crate::input::mesh::Mesh) -> Option<f64> {
+    let mut sizes: Vec<f64> = mesh
+        .offsets
+        .windows(2)
+        .map(|w| {
+            let nodes = &mesh.elements[w[0]..w[1]];
+            let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+            for &n in nodes {
+                for a in 0..3 {
+                    lo[a] = lo[a].min(mesh.nodes[n][a]);
+                    hi[a] = hi[a].max(mesh.nodes[n][a]);
+                }
+            }
+            (0..3).map(|a| (hi[a] - lo[a]).powi(2)).sum::<f64>().sqrt()
+        })
+        .filter(|d| d.is_finite())
+        .collect();
+    if sizes.is_empty() {
+        return None;
+    }
+    let middle = sizes.len() / 2;
+    Some(*sizes.select_nth_unstable_by(middle, f64::total_cmp).1)
+}
+
+/// What the build says as soon as the part is read: [`part_warnings`] and [`band_warning`] of
+/// the input's `reduction.max_frequency`.
+pub fn early_warnings(part: &Part, mass: Option<f64>, max_frequency: Option<f64>) -> Vec<String> {
+    let mut out = part_warnings(part, mass);
+    out.extend(max_frequency.and_then(|f| band_warning(part, mass, f)));
+    out
+}
+
 pub fn part_warnings(part: &Part, mass: Option<f64>) -> Vec<String> {
     let mut out = Vec::new();
     for m in &part.materials {
@@ -157,6 +209,7 @@ pub fn part_warnings(part: &Part, mass: Option<f64>) -> Vec<String> {
             ));
         }
     }
+    let said_before = out.len();
     let size = (!part.mesh.nodes.is_empty()).then(|| model_size(&part.mesh));
     // the mass checked only where a slip could hide in a plausible size: a part across more
     // than a metre (a millimetre mesh read as metres is a thousand times its size)
@@ -189,6 +242,10 @@ pub fn part_warnings(part: &Part, mass: Option<f64>) -> Vec<String> {
             "the part would weigh {m:.3e} kg{across}, more than the {:e} kg of parts a system model holds{mm}; lengths are in metres unless geometry.length_unit says otherwise",
             MASS_LIMIT
         ));
+    }
+    // one slip, one warning: the elements only where the size and the mass looked plausible
+    if out.len() == said_before {
+        out.extend(element_warning(part));
     }
     out
 }

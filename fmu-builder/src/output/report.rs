@@ -289,10 +289,7 @@ pub fn report_of(
             .iter()
             .map(|f| FlangeReport {
                 name: f.name.clone(),
-                role: match f.role {
-                    Role::Motion => "motion".into(),
-                    Role::Force => "force".into(),
-                },
+                role: if f.role == Role::Motion { "motion" } else { "force" }.into(),
                 reference_point: f.reference,
                 slave_nodes: f.slaves.len(),
                 coupling: match &f.coupling {
@@ -313,7 +310,8 @@ pub fn report_of(
         verdict: verdict::of(&accuracy, spec.scene.as_ref().and_then(|s| s.tolerance)),
         accuracy,
     };
-    let early = plausibility::part_warnings(part, (!part.from_matrices).then_some(props.mass));
+    let mass = (!part.from_matrices).then_some(props.mass);
+    let early = plausibility::early_warnings(part, mass, spec.reduction.max_frequency);
     report.said_early = early.len();
     report.warnings = plausibility::warnings(early, part, report.accuracy.full_hz.first().copied(), mount.is_some());
     report

@@ -47,9 +47,7 @@ pub(super) fn prepare(spec: Spec, file: &Path) -> Result<Prepared> {
     })
     .against(file, GEOMETRY)?;
     // a unit slip said now, before a reduction of the wrong part
-    let mass = part_mass(&part, &free);
-    let band = spec.reduction.max_frequency.and_then(|f| plausibility::band_warning(&part, mass, f));
-    for w in plausibility::part_warnings(&part, mass).into_iter().chain(band) {
+    for w in plausibility::early_warnings(&part, part_mass(&part, &free), spec.reduction.max_frequency) {
         phases::warning(|| w);
     }
     let modes = mode_count(&spec, &part, file)?;
