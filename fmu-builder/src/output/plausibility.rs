@@ -20,8 +20,8 @@ const SIZE_RANGE: [f64; 2] = [1e-4, 100.0];
 const MASS_LIMIT: f64 = 1e5;
 /// Sizes of solid elements in engineering meshes [m] (the median of their bounding boxes'
 /// diagonals): a 10 um feature to a 2 m block of a coarse mesh. A millimetre mesh read as metres
-/// has elements of metres even where the part's own size is plausible (a 10 mm bar in ten
-/// elements: 10 m across, 1 m elements, 7.9e4 kg).
+/// has elements of metres even where the part's own size and mass are plausible (a 10 x 0.1 x
+/// 0.2 mm bar in two elements: 10 m long, 1 570 kg, 5 m elements).
 const ELEMENT_RANGE: [f64; 2] = [1e-5, 2.0];
 /// The most modes a reduction band holds before the build says so ahead of the eigen-solve: a
 /// few thousand modes take minutes on this machine's cores; a part in millimetres read as
