@@ -1041,7 +1041,7 @@ mod tests {
         // the host's limit chose the cutoff: its reason and the remedy are named
         assert!(html.contains("500 solver steps"), "{html}");
         assert!(html.contains("reduction.dynamic_cutoff"));
-        assert!(html.contains("stop 2e0 s, step 2e-3 s, tolerance 1e-6"), "{html}");
+        assert!(html.contains("stop 2e0 s, tolerance 1e-6, step 2e-3 s: a thousandth of the run"), "{html}");
         // an undamped dynamic mode: no explicit step is stable, and the page says so
         assert!(html.contains("cannot carry it: the dynamic mode at 300.0000 Hz is undamped"));
         // undamped dynamic modes: the tolerance advice and its field
