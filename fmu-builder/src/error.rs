@@ -109,7 +109,7 @@ impl BuildError {
             | BuildError::Inaccurate(_)
             | BuildError::NotFinite(_)
             | BuildError::Internal(_) => BuildError::InInput { file: file.to_owned(), place, source: Box::new(self) },
-            BuildError::Linalg(LinalgError::Backend(BackendError::Unavailable(_))) => self,
+            BuildError::Linalg(LinalgError::Backend(BackendError::Unavailable { .. })) => self,
             BuildError::Linalg(_) => BuildError::InInput { file: file.to_owned(), place, source: Box::new(self) },
             other => other,
         }
@@ -120,7 +120,9 @@ impl BuildError {
         matches!(
             self,
             BuildError::Singular(_)
-                | BuildError::Linalg(LinalgError::Singular(_) | LinalgError::Backend(BackendError::NotFactored { .. }))
+                | BuildError::Linalg(
+                    LinalgError::Singular { .. } | LinalgError::Backend(BackendError::NotFactored { .. })
+                )
         )
     }
     pub fn io(path: &std::path::Path, source: std::io::Error) -> Self {
@@ -182,19 +184,19 @@ mod tests {
         use super::{BackendError, LinalgError};
         let singular: Vec<BuildError> = vec![
             BuildError::Singular("x".into()),
-            LinalgError::Singular("x".into()).into(),
+            LinalgError::singular("x").into(),
             BackendError::NotFactored { what: "K".into(), reason: "x".into() }.into(),
         ];
         let other: Vec<BuildError> = vec![
             BuildError::Numerical("the stiffness is singular".into()),
-            LinalgError::NotConverged("x".into()).into(),
-            BackendError::Unavailable("x".into()).into(),
+            LinalgError::not_converged("x").into(),
+            BackendError::unavailable("x").into(),
         ];
         assert_eq!((singular.len(), other.len()), (3, 3));
         assert!(singular.iter().all(BuildError::is_singular));
         assert!(!other.iter().any(BuildError::is_singular));
         // the back-end that cannot be reached is not the input's to change
-        let unreachable = BuildError::from(BackendError::Unavailable("mpirun not found".into()));
+        let unreachable = BuildError::from(BackendError::unavailable("mpirun not found"));
         let place = super::InputHint { field: "geometry", hint: "h" };
         assert_eq!(
             unreachable.in_input(Path::new("p.json"), place).to_string(),
@@ -244,13 +246,13 @@ mod tests {
                 },
                 "f.dll: refused as the FMU's win64 binary (--platform-binary win64=...): it is empty",
             ),
-            (BackendError::Unavailable("mpirun not found".into()).into(), "the PETSc back-end: mpirun not found"),
+            (BackendError::unavailable("mpirun not found").into(), "the PETSc back-end: mpirun not found"),
             (
                 BackendError::NotFactored { what: "the stiffness".into(), reason: "singular".into() }.into(),
                 "the stiffness could not be factored by MUMPS: singular",
             ),
             (
-                LinalgError::Singular("the stiffness is not positive definite".into()).into(),
+                LinalgError::singular("the stiffness is not positive definite").into(),
                 "the stiffness is not positive definite",
             ),
             (
