@@ -66,13 +66,13 @@ pub fn file_type_words(t: std::fs::FileType) -> &'static str {
 /// than `memory_bytes` (reading it holds it whole in memory). Decided by the file's metadata
 /// alone: nothing is opened, so a FIFO cannot block.
 pub fn check(path: &Path, kind: FileKind, memory_bytes: f64) -> Result<u64, Refusal> {
-    let meta = std::fs::metadata(path).map_err(|e| Refusal(format!("cannot be read: {e}")))?;
+    let meta = std::fs::metadata(path).map_err(|e| Refusal::caused_by(format!("cannot be read: {e}"), e))?;
     check_metadata(&meta, kind, memory_bytes)
 }
 
 fn check_metadata(meta: &std::fs::Metadata, kind: FileKind, memory_bytes: f64) -> Result<u64, Refusal> {
     if !meta.is_file() {
-        return Err(Refusal(format!(
+        return Err(Refusal::from(format!(
             "is {}, not a regular file; give {} the builder can read to its end",
             file_type_words(meta.file_type()),
             kind.what()
@@ -80,7 +80,7 @@ fn check_metadata(meta: &std::fs::Metadata, kind: FileKind, memory_bytes: f64) -
     }
     let size = meta.len();
     if size > kind.limit() {
-        return Err(Refusal(format!(
+        return Err(Refusal::from(format!(
             "is {}, more than the {} {} may have",
             bytes_words(size),
             bytes_words(kind.limit()),
@@ -88,7 +88,7 @@ fn check_metadata(meta: &std::fs::Metadata, kind: FileKind, memory_bytes: f64) -
         )));
     }
     if size as f64 > memory_bytes {
-        return Err(Refusal(format!(
+        return Err(Refusal::from(format!(
             "is {}, more than the {} of memory this process may use to hold it",
             bytes_words(size),
             bytes_words(memory_bytes as u64)
@@ -106,17 +106,17 @@ pub fn read(path: &Path, kind: FileKind, memory_bytes: f64) -> Result<Vec<u8>, R
         .read(true)
         .custom_flags(libc::O_NONBLOCK)
         .open(path)
-        .map_err(|e| Refusal(format!("cannot be read: {e}")))?;
-    let meta = file.metadata().map_err(|e| Refusal(format!("cannot be read: {e}")))?;
+        .map_err(|e| Refusal::caused_by(format!("cannot be read: {e}"), e))?;
+    let meta = file.metadata().map_err(|e| Refusal::caused_by(format!("cannot be read: {e}"), e))?;
     let size = check_metadata(&meta, kind, memory_bytes)?;
     let bound = kind.limit().min(memory_bytes as u64);
     let mut bytes = Vec::new();
     bytes.try_reserve_exact(size as usize).map_err(|_| {
-        Refusal(format!("is {}, and this process cannot allocate that much to read it", bytes_words(size)))
+        Refusal::from(format!("is {}, and this process cannot allocate that much to read it", bytes_words(size)))
     })?;
-    file.take(bound + 1).read_to_end(&mut bytes).map_err(|e| Refusal(format!("cannot be read: {e}")))?;
+    file.take(bound + 1).read_to_end(&mut bytes).map_err(|e| Refusal::caused_by(format!("cannot be read: {e}"), e))?;
     if bytes.len() as u64 > bound {
-        return Err(Refusal(format!("grew past {} while it was read", bytes_words(bound))));
+        return Err(Refusal::from(format!("grew past {} while it was read", bytes_words(bound))));
     }
     Ok(bytes)
 }
@@ -158,7 +158,7 @@ mod tests {
         let start = Instant::now();
         let e = read(&fifo, FileKind::PlatformBinary, PLENTY).unwrap_err();
         assert!(start.elapsed() < Duration::from_secs(1));
-        assert!(e.0.contains("is a FIFO (named pipe), not a regular file"), "{e}");
+        assert!(e.reason.contains("is a FIFO (named pipe), not a regular file"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
@@ -167,9 +167,9 @@ mod tests {
         let start = Instant::now();
         let e = read(Path::new("/dev/zero"), FileKind::Mesh, PLENTY).unwrap_err();
         assert!(start.elapsed() < Duration::from_secs(1));
-        assert!(e.0.contains("is a character device, not a regular file; give a mesh file"), "{e}");
+        assert!(e.reason.contains("is a character device, not a regular file; give a mesh file"), "{e}");
         let e = read(Path::new("/"), FileKind::Input, PLENTY).unwrap_err();
-        assert!(e.0.starts_with("is a folder"), "{e}");
+        assert!(e.reason.starts_with("is a folder"), "{e}");
     }
 
     #[test]
@@ -181,9 +181,9 @@ mod tests {
         let f = std::fs::File::create(&path).unwrap();
         f.set_len(300 * MIB).unwrap();
         let e = read(&path, FileKind::PlatformBinary, PLENTY).unwrap_err();
-        assert_eq!(e.0, "is 300.0 MiB, more than the 256.0 MiB a runtime binary may have");
+        assert_eq!(e.reason, "is 300.0 MiB, more than the 256.0 MiB a runtime binary may have");
         let e = read(&path, FileKind::Mesh, 100.0 * MIB as f64).unwrap_err();
-        assert!(e.0.contains("more than the 100.0 MiB of memory this process may use"), "{e}");
+        assert!(e.reason.contains("more than the 100.0 MiB of memory this process may use"), "{e}");
         std::fs::write(&path, b"ok").unwrap();
         assert_eq!(read(&path, FileKind::Input, PLENTY).unwrap(), b"ok");
         std::fs::remove_dir_all(&dir).unwrap();

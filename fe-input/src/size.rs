@@ -121,7 +121,7 @@ impl SizeEstimate {
         if self.bytes <= available.bytes {
             return Ok(());
         }
-        Err(crate::error::Refusal(format!(
+        Err(crate::error::Refusal::from(format!(
             "the model would have {} nodes ({} DoFs{}), a stiffness with about {} non-zeros and a sparse Cholesky factor \
              with about {} (nested-dissection estimate): about {} of memory, but {} {} available ({}). Use fewer \
              elements: the factor grows like (DoFs)^(4/3) for a solid part",

@@ -585,9 +585,9 @@ pub(crate) fn check_experiment(path: &Path, experiment: Option<&Experiment>) -> 
 /// fields lie below `at` (empty: the whole file).
 pub(crate) fn check_against_schema(path: &Path, value: &serde_json::Value, at: &str) -> Result<()> {
     let schema: serde_json::Value =
-        serde_json::from_str(SCHEMA).map_err(|e| InputError::Internal(format!("embedded schema: {e}")))?;
+        serde_json::from_str(SCHEMA).map_err(|e| internal(format!("embedded schema: {e}"), e))?;
     let validator = jsonschema::validator_for(&schema)
-        .map_err(|e| InputError::Internal(format!("embedded schema does not compile: {e}")))?;
+        .map_err(|e| internal(format!("embedded schema does not compile: {e}"), e))?;
     let problems = schema_errors::explain(&schema, validator.iter_errors(value));
     if let Some((first, rest)) = problems.split_first() {
         let shown =
@@ -612,10 +612,21 @@ pub(crate) fn below_field(at: &str, field: &str) -> String {
 }
 
 /// `e` with its field put below `at`.
+/// Text that does not parse as JSON, put at its line and column.
+pub(crate) fn not_json(path: &Path, e: serde_json::Error) -> InputError {
+    InputError::field(path, format!("line {} column {}", e.line(), e.column()), format!("not valid JSON: {e}"))
+        .caused_by(e)
+}
+
+/// A failure of what the builder carries inside itself, with the error it came from.
+fn internal(message: String, cause: impl std::error::Error + Send + Sync + 'static) -> InputError {
+    InputError::Internal { message, cause: None }.caused_by(cause)
+}
+
 pub(crate) fn below(at: &str, e: InputError) -> InputError {
     match e {
-        InputError::Field { file, field, message } => {
-            InputError::Field { file, field: below_field(at, &field), message }
+        InputError::Field { file, field, message, cause } => {
+            InputError::Field { file, field: below_field(at, &field), message, cause }
         }
         other => other,
     }
@@ -655,9 +666,7 @@ impl Spec {
 
     /// Parse `text` (read from `path`, used in messages).
     pub fn from_str(path: &Path, text: &str) -> Result<Self> {
-        let value: serde_json::Value = serde_json::from_str(text).map_err(|e| {
-            InputError::field(path, format!("line {} column {}", e.line(), e.column()), format!("not valid JSON: {e}"))
-        })?;
+        let value: serde_json::Value = serde_json::from_str(text).map_err(|e| not_json(path, e))?;
         json_keys::check_unique_keys(path, text)?;
         if value.get("assembly").is_some() {
             return Err(InputError::field(
@@ -677,7 +686,7 @@ impl Spec {
         check_flange_names(path, &value).map_err(|e| below(at, e))?;
         check_against_schema(path, &value, at)?;
         let mut spec: Spec = serde_json::from_value(value).map_err(|e| {
-            InputError::field(path, below_field(at, ""), format!("does not match the input format: {e}"))
+            InputError::field(path, below_field(at, ""), format!("does not match the input format: {e}")).caused_by(e)
         })?;
         spec.check(path).map_err(|e| below(at, e))?;
         spec.keep_connected(path).map_err(|e| below(at, e))?;
@@ -960,7 +969,7 @@ impl Spec {
                     Ok(_) => return Ok(resolved),
                     Err(e) => format!("cannot be read: {e}"),
                 },
-                Err(refusal) => refusal.0,
+                Err(refusal) => refusal.reason,
             },
             Err(e) => format!("cannot be read: {e}"),
         };

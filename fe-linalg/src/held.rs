@@ -51,18 +51,18 @@ impl<'a> HeldSolver<'a> {
         let total = whole.n();
         let h = total - n;
         if g.nrows() != total || g.ncols() != h {
-            return Err(LinalgError::Inconsistent(format!(
+            return Err(LinalgError::inconsistent(format!(
                 "held solves: {} x {} unit responses for {total} rows with {h} held",
                 g.nrows(),
                 g.ncols()
             )));
         }
         let s = Mat::<f64>::from_fn(h, h, |i, j| 0.5 * (g[(n + i, j)] + g[(n + j, i)]));
-        let compliance = s.llt(Side::Lower).map_err(|_| {
-            LinalgError::Singular(
-                "the compliance of the held flange DoFs is not positive definite: a flange master without stiffness"
-                    .into(),
+        let compliance = s.llt(Side::Lower).map_err(|e| {
+            LinalgError::singular(
+                "the compliance of the held flange DoFs is not positive definite: a flange master without stiffness",
             )
+            .caused_by(e)
         })?;
         Ok(Self { whole, n, g, compliance })
     }

@@ -29,7 +29,7 @@ fn accepted_backward_error(n: usize) -> f64 {
 pub fn symmetric_eigen(a: &Mat<f64>, what: &str) -> Result<SymmetricEigen> {
     let n = a.nrows();
     if a.ncols() != n {
-        return Err(LinalgError::Inconsistent(format!("{what}: not a square matrix ({n} x {})", a.ncols())));
+        return Err(LinalgError::inconsistent(format!("{what}: not a square matrix ({n} x {})", a.ncols())));
     }
     if n == 0 {
         return Ok(SymmetricEigen { values: Vec::new(), vectors: Mat::zeros(0, 0) });
@@ -37,13 +37,13 @@ pub fn symmetric_eigen(a: &Mat<f64>, what: &str) -> Result<SymmetricEigen> {
     let sym = nalgebra::DMatrix::<f64>::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
     let scale = sym.amax();
     if !sym.iter().all(|v| v.is_finite()) {
-        return Err(LinalgError::Inconsistent(format!("{what}: the matrix has non-finite entries")));
+        return Err(LinalgError::inconsistent(format!("{what}: the matrix has non-finite entries")));
     }
     // nalgebra's plain `symmetric_eigen` iterates without limit; implicit QR needs a few sweeps
     // per eigenvalue, so 100 n (and at least 1000) only stops a run that would never end
     let sweeps = (100 * n).max(1000);
     let evd = sym.clone().try_symmetric_eigen(f64::EPSILON, sweeps).ok_or_else(|| {
-        LinalgError::NotConverged(format!(
+        LinalgError::not_converged(format!(
             "{what}: the dense eigensolver did not converge in {sweeps} QR iterations (size {n}, entries from {:.1e} to \
              {scale:.1e}): the model's frequencies span more orders than double precision resolves",
             sym.iter().filter(|v| **v != 0.0).fold(f64::INFINITY, |m, v| m.min(v.abs()))
@@ -61,7 +61,7 @@ pub fn symmetric_eigen(a: &Mat<f64>, what: &str) -> Result<SymmetricEigen> {
             (evd.eigenvectors.transpose() * &evd.eigenvectors - nalgebra::DMatrix::<f64>::identity(n, n)).amax();
         let limit = accepted_backward_error(n);
         if !(backward <= limit && orthogonality <= limit) {
-            return Err(LinalgError::NotConverged(format!(
+            return Err(LinalgError::not_converged(format!(
                 "{what}: the dense eigensolver's result is not accurate (backward error {backward:.1e}, loss of orthogonality {orthogonality:.1e}, accepted {limit:.1e}; size {n})"
             )));
         }
@@ -90,18 +90,18 @@ pub fn graded_spd_eigen(c: &Mat<f64>, what: &str) -> Result<SymmetricEigen> {
     }
     let sym = nalgebra::DMatrix::<f64>::from_fn(n, n, |i, j| 0.5 * (c[(i, j)] + c[(j, i)]));
     let chol = nalgebra::Cholesky::new(sym)
-        .ok_or_else(|| LinalgError::Singular(format!("{what} is not positive definite")))?;
+        .ok_or_else(|| LinalgError::singular(format!("{what} is not positive definite")))?;
     let l_inv = chol
         .l()
         .solve_lower_triangular(&nalgebra::DMatrix::<f64>::identity(n, n))
-        .ok_or_else(|| LinalgError::Singular(format!("{what} is singular")))?;
+        .ok_or_else(|| LinalgError::singular(format!("{what} is singular")))?;
     let f = l_inv.transpose() * &l_inv;
     let flexibility = Mat::<f64>::from_fn(n, n, |i, j| f[(i, j)]);
     let e = symmetric_eigen(&flexibility, what)?;
     // descending flexibility = ascending stiffness
     let mu_max = e.values[n - 1];
     if !(mu_max > 0.0) {
-        return Err(LinalgError::Singular(format!("{what} is not positive definite")));
+        return Err(LinalgError::singular(format!("{what} is not positive definite")));
     }
     let soft: Vec<usize> = (0..n).rev().filter(|&k| e.values[k] >= GRADE * mu_max).collect();
     let stiff: Vec<usize> = (0..n).rev().filter(|&k| e.values[k] < GRADE * mu_max).collect();

@@ -4,9 +4,13 @@
 use std::fmt;
 use std::path::PathBuf;
 
-pub use fe_input::error::{InputError, Refusal};
+pub use fe_input::error::{Cause as SharedCause, InputError, Refusal};
 pub use fe_linalg::error::LinalgError;
 pub use petsc_backend::BackendError;
+
+/// The error a failure's words were made from (the system's, a library's), kept as its source so
+/// that a caller can tell it by type; the message users read already says it.
+pub type Cause = Box<dyn std::error::Error + Send + Sync + 'static>;
 
 #[derive(Debug, thiserror::Error)]
 pub enum BuildError {
@@ -18,23 +22,43 @@ pub enum BuildError {
     Linalg(#[from] LinalgError),
     /// A numerical step of the model or the reduction failed (a dynamic stiffness that cannot
     /// be factored at a frequency, a sparse pattern that cannot be built).
-    #[error("{0}")]
-    Numerical(String),
+    #[error("{message}")]
+    Numerical {
+        message: String,
+        #[source]
+        cause: Option<Cause>,
+    },
     /// The part can move without deforming, or a flange's coupling has no unique solution: a
     /// mechanism, a mount that does not hold the part, a part without mass in some direction.
-    #[error("{0}")]
-    Singular(String),
+    #[error("{message}")]
+    Singular {
+        message: String,
+        #[source]
+        cause: Option<Cause>,
+    },
     /// The reduced model fails the checks every build must pass against the full model.
-    #[error("{0}")]
-    Inaccurate(String),
+    #[error("{message}")]
+    Inaccurate {
+        message: String,
+        #[source]
+        cause: Option<Cause>,
+    },
     /// A result (the report, the reduced body's arrays, the FMU's first steps) is NaN or
     /// infinite.
-    #[error("{0}")]
-    NotFinite(String),
+    #[error("{message}")]
+    NotFinite {
+        message: String,
+        #[source]
+        cause: Option<Cause>,
+    },
     /// A check of the builder's own work failed (sizes that must agree, what it serialises): a
     /// defect to report, not an input to change.
-    #[error("{0}")]
-    Internal(String),
+    #[error("{message}")]
+    Internal {
+        message: String,
+        #[source]
+        cause: Option<Cause>,
+    },
     /// A numerical failure put against the part of the input that drives the stage it happened
     /// in, with what to change there: the user fixes their input, not our code.
     #[error("{}: {}{source}{}", .file.display(), field_prefix(.place.field), hint_suffix(.place.hint))]
@@ -54,7 +78,12 @@ pub enum BuildError {
     /// A file that cannot be read, written or used as what it is given for, and why (not a
     /// regular file, too large, a binary of the wrong platform, an export the part cannot give).
     #[error("{}: {message}", .path.display())]
-    File { path: PathBuf, message: String },
+    File {
+        path: PathBuf,
+        message: String,
+        #[source]
+        cause: Option<Cause>,
+    },
     /// A runtime binary of another platform refused as the FMU's binary, and why.
     #[error("{}: refused as the FMU's {platform} binary (--platform-binary {platform}=...): it {reason}", .path.display())]
     Binary {
@@ -65,11 +94,21 @@ pub enum BuildError {
     },
     /// A command-line option's value refused before the build.
     #[error("{option}: {message}")]
-    CommandLine { option: String, message: String },
+    CommandLine {
+        option: String,
+        message: String,
+        #[source]
+        cause: Option<Cause>,
+    },
     /// An output refused before any work: it cannot be written, or would overwrite the input,
     /// another output or (without --force) an existing file. `shown` is the option and its path.
     #[error("{shown}: {reason}")]
-    Destination { shown: String, reason: String },
+    Destination {
+        shown: String,
+        reason: String,
+        #[source]
+        cause: Option<Cause>,
+    },
     /// An export asked for besides the FMU failed after the FMU was written.
     #[error("{option}: {source}; the FMU {} was written", .fmu.display())]
     Export {
@@ -104,12 +143,14 @@ impl BuildError {
     /// it is.
     pub fn in_input(self, file: &std::path::Path, place: InputHint) -> Self {
         match self {
-            BuildError::Numerical(_)
-            | BuildError::Singular(_)
-            | BuildError::Inaccurate(_)
-            | BuildError::NotFinite(_)
-            | BuildError::Internal(_) => BuildError::InInput { file: file.to_owned(), place, source: Box::new(self) },
-            BuildError::Linalg(LinalgError::Backend(BackendError::Unavailable(_))) => self,
+            BuildError::Numerical { .. }
+            | BuildError::Singular { .. }
+            | BuildError::Inaccurate { .. }
+            | BuildError::NotFinite { .. }
+            | BuildError::Internal { .. } => {
+                BuildError::InInput { file: file.to_owned(), place, source: Box::new(self) }
+            }
+            BuildError::Linalg(LinalgError::Backend(BackendError::Unavailable { .. })) => self,
             BuildError::Linalg(_) => BuildError::InInput { file: file.to_owned(), place, source: Box::new(self) },
             other => other,
         }
@@ -119,15 +160,57 @@ impl BuildError {
     pub fn is_singular(&self) -> bool {
         matches!(
             self,
-            BuildError::Singular(_)
-                | BuildError::Linalg(LinalgError::Singular(_) | LinalgError::Backend(BackendError::NotFactored { .. }))
+            BuildError::Singular { .. }
+                | BuildError::Linalg(
+                    LinalgError::Singular { .. } | LinalgError::Backend(BackendError::NotFactored { .. })
+                )
         )
     }
     pub fn io(path: &std::path::Path, source: std::io::Error) -> Self {
         BuildError::Io { path: path.to_owned(), source }
     }
     pub fn file(path: &std::path::Path, message: impl fmt::Display) -> Self {
-        BuildError::File { path: path.to_owned(), message: message.to_string() }
+        BuildError::File { path: path.to_owned(), message: message.to_string(), cause: None }
+    }
+    pub fn numerical(message: impl Into<String>) -> Self {
+        BuildError::Numerical { message: message.into(), cause: None }
+    }
+    pub fn singular(message: impl Into<String>) -> Self {
+        BuildError::Singular { message: message.into(), cause: None }
+    }
+    pub fn inaccurate(message: impl Into<String>) -> Self {
+        BuildError::Inaccurate { message: message.into(), cause: None }
+    }
+    pub fn not_finite(message: impl Into<String>) -> Self {
+        BuildError::NotFinite { message: message.into(), cause: None }
+    }
+    pub fn internal(message: impl Into<String>) -> Self {
+        BuildError::Internal { message: message.into(), cause: None }
+    }
+    pub fn destination(shown: impl Into<String>, reason: impl Into<String>) -> Self {
+        BuildError::Destination { shown: shown.into(), reason: reason.into(), cause: None }
+    }
+    pub fn command_line(option: impl Into<String>, message: impl Into<String>) -> Self {
+        BuildError::CommandLine { option: option.into(), message: message.into(), cause: None }
+    }
+    /// `self` keeping `cause`, the error its message was made from, as its source; the message
+    /// is unchanged. A variant that has its own typed source keeps that one.
+    pub fn caused_by(mut self, cause: impl std::error::Error + Send + Sync + 'static) -> Self {
+        if let BuildError::Input(e) = self {
+            return BuildError::Input(e.caused_by(cause));
+        }
+        match &mut self {
+            BuildError::Numerical { cause: kept, .. }
+            | BuildError::Singular { cause: kept, .. }
+            | BuildError::Inaccurate { cause: kept, .. }
+            | BuildError::NotFinite { cause: kept, .. }
+            | BuildError::Internal { cause: kept, .. }
+            | BuildError::File { cause: kept, .. }
+            | BuildError::CommandLine { cause: kept, .. }
+            | BuildError::Destination { cause: kept, .. } => *kept = Some(Box::new(cause)),
+            _ => {}
+        }
+        self
     }
 }
 
@@ -164,15 +247,34 @@ mod tests {
         use super::InputHint;
         use std::error::Error;
         let place = InputHint { field: "geometry", hint: "check the mesh" };
-        let e = BuildError::Numerical("the stiffness is singular".into()).in_input(Path::new("part.json"), place);
+        let e = BuildError::numerical("the stiffness is singular").in_input(Path::new("part.json"), place);
         assert_eq!(e.to_string(), "part.json: geometry: the stiffness is singular; check the mesh");
         assert_eq!(e.source().map(|s| s.to_string()).as_deref(), Some("the stiffness is singular"));
-        let whole =
-            BuildError::Numerical("no FMU".into()).in_input(Path::new("p.json"), InputHint { field: "", hint: "" });
+        let whole = BuildError::numerical("no FMU").in_input(Path::new("p.json"), InputHint { field: "", hint: "" });
         assert_eq!(whole.to_string(), "p.json: no FMU");
         // an input error is already the input's: unchanged
         let input = BuildError::input(Path::new("p.json"), "flanges", "none");
         assert_eq!(input.in_input(Path::new("q.json"), place).to_string(), "p.json: flanges: none");
+    }
+
+    /// The error a message was made from stays reachable by type, below the same words, in its
+    /// class and when the failure is put against the input.
+    #[test]
+    fn a_kept_cause_changes_neither_the_words_nor_the_class() {
+        use super::InputHint;
+        use std::error::Error;
+        let full = || std::io::Error::from(std::io::ErrorKind::StorageFull);
+        let e = BuildError::singular("the mass is singular").caused_by(full());
+        assert_eq!(e.to_string(), "the mass is singular");
+        assert!(e.is_singular());
+        let placed = e.in_input(Path::new("p.json"), InputHint { field: "material", hint: "" });
+        assert_eq!(placed.to_string(), "p.json: material: the mass is singular");
+        let below = placed.source().and_then(Error::source).and_then(|s| s.downcast_ref::<std::io::Error>());
+        assert_eq!(below.map(std::io::Error::kind), Some(std::io::ErrorKind::StorageFull));
+        // an input's field error keeps it too, through the input stage's own error
+        let input = BuildError::input(Path::new("p.json"), "geometry", "bad").caused_by(full());
+        assert_eq!(input.to_string(), "p.json: geometry: bad");
+        assert!(input.source().is_some_and(|s| s.is::<std::io::Error>()));
     }
 
     /// A failure that means the part can move without deforming is told from the others by
@@ -181,20 +283,20 @@ mod tests {
     fn singular_failures_are_known_by_their_class() {
         use super::{BackendError, LinalgError};
         let singular: Vec<BuildError> = vec![
-            BuildError::Singular("x".into()),
-            LinalgError::Singular("x".into()).into(),
+            BuildError::singular("x"),
+            LinalgError::singular("x").into(),
             BackendError::NotFactored { what: "K".into(), reason: "x".into() }.into(),
         ];
         let other: Vec<BuildError> = vec![
-            BuildError::Numerical("the stiffness is singular".into()),
-            LinalgError::NotConverged("x".into()).into(),
-            BackendError::Unavailable("x".into()).into(),
+            BuildError::numerical("the stiffness is singular"),
+            LinalgError::not_converged("x").into(),
+            BackendError::unavailable("x").into(),
         ];
         assert_eq!((singular.len(), other.len()), (3, 3));
         assert!(singular.iter().all(BuildError::is_singular));
         assert!(!other.iter().any(BuildError::is_singular));
         // the back-end that cannot be reached is not the input's to change
-        let unreachable = BuildError::from(BackendError::Unavailable("mpirun not found".into()));
+        let unreachable = BuildError::from(BackendError::unavailable("mpirun not found"));
         let place = super::InputHint { field: "geometry", hint: "h" };
         assert_eq!(
             unreachable.in_input(Path::new("p.json"), place).to_string(),
@@ -213,21 +315,15 @@ mod tests {
             (
                 BuildError::Input(InputError::Unreadable {
                     path: PathBuf::from("b.json"),
-                    source: Refusal("is a folder".into()),
+                    source: Refusal::from("is a folder"),
                 }),
                 "b.json: cannot read the input: it is a folder",
             ),
             (
-                BuildError::CommandLine {
-                    option: "--platform-binary x".into(),
-                    message: "expected PLATFORM=FILE".into(),
-                },
+                BuildError::command_line("--platform-binary x", "expected PLATFORM=FILE"),
                 "--platform-binary x: expected PLATFORM=FILE",
             ),
-            (
-                BuildError::Destination { shown: "-o B.fmu".into(), reason: "B.fmu exists; pass --force".into() },
-                "-o B.fmu: B.fmu exists; pass --force",
-            ),
+            (BuildError::destination("-o B.fmu", "B.fmu exists; pass --force"), "-o B.fmu: B.fmu exists; pass --force"),
             (
                 BuildError::Export {
                     option: "--report",
@@ -244,23 +340,20 @@ mod tests {
                 },
                 "f.dll: refused as the FMU's win64 binary (--platform-binary win64=...): it is empty",
             ),
-            (BackendError::Unavailable("mpirun not found".into()).into(), "the PETSc back-end: mpirun not found"),
+            (BackendError::unavailable("mpirun not found").into(), "the PETSc back-end: mpirun not found"),
             (
                 BackendError::NotFactored { what: "the stiffness".into(), reason: "singular".into() }.into(),
                 "the stiffness could not be factored by MUMPS: singular",
             ),
             (
-                LinalgError::Singular("the stiffness is not positive definite".into()).into(),
+                LinalgError::singular("the stiffness is not positive definite").into(),
                 "the stiffness is not positive definite",
             ),
             (
-                BuildError::Singular("the reduced stiffness is not positive definite".into()),
+                BuildError::singular("the reduced stiffness is not positive definite"),
                 "the reduced stiffness is not positive definite",
             ),
-            (
-                BuildError::NotFinite("the report's x is not a finite number".into()),
-                "the report's x is not a finite number",
-            ),
+            (BuildError::not_finite("the report's x is not a finite number"), "the report's x is not a finite number"),
         ];
         assert_eq!(cases.len(), 11);
         for (error, words) in cases {

@@ -21,7 +21,8 @@ use std::path::{Path, PathBuf};
 pub fn random_hex(bytes: usize) -> Result<String> {
     let mut buffer = vec![0u8; bytes];
     std::fs::File::open("/dev/urandom").and_then(|mut f| f.read_exact(&mut buffer)).map_err(|e| {
-        BackendError::Unavailable(format!("reading the random source /dev/urandom for the driver's token: {e}"))
+        BackendError::unavailable(format!("reading the random source /dev/urandom for the driver's token: {e}"))
+            .caused_by(e)
     })?;
     Ok(buffer.iter().map(|b| format!("{b:02x}")).collect())
 }
@@ -31,11 +32,12 @@ pub fn random_hex(bytes: usize) -> Result<String> {
 pub fn create(base: &Path) -> Result<PathBuf> {
     let folder = base.join(format!("{PREFIX}{}-{}-{}", host(), std::process::id(), random_hex(8)?));
     std::fs::DirBuilder::new().mode(0o700).create(&folder).map_err(|e| {
-        BackendError::Unavailable(format!(
+        BackendError::unavailable(format!(
             "cannot create the job folder {}: {e}; name a writable folder every rank sees \
              (reduction.backend.job_folder)",
             folder.display()
         ))
+        .caused_by(e)
     })?;
     Ok(folder)
 }
@@ -117,7 +119,7 @@ pub fn private_file(path: &Path) -> Result<std::fs::File> {
         .truncate(true)
         .mode(0o600)
         .open(path)
-        .map_err(|e| BackendError::Unavailable(format!("cannot write {}: {e}", path.display())))
+        .map_err(|e| BackendError::unavailable(format!("cannot write {}: {e}", path.display())).caused_by(e))
 }
 
 /// `private_file` with `text` in it.
@@ -125,7 +127,7 @@ pub fn write_private(path: &Path, text: &str) -> Result<()> {
     use std::io::Write;
     private_file(path)?
         .write_all(text.as_bytes())
-        .map_err(|e| BackendError::Unavailable(format!("cannot write {}: {e}", path.display())))
+        .map_err(|e| BackendError::unavailable(format!("cannot write {}: {e}", path.display())).caused_by(e))
 }
 
 #[cfg(test)]

@@ -26,7 +26,7 @@ mod petsc_binary;
 pub mod process_group;
 pub mod session;
 
-pub use error::{BackendError, LauncherRefusal};
+pub use error::{BackendError, Cause, LauncherRefusal};
 pub use session::Session;
 use std::path::{Path, PathBuf};
 
@@ -112,7 +112,7 @@ impl PetscBackend {
     pub fn preflight(&self, python_named: bool) -> error::Result<(String, String)> {
         let launcher = self.launcher.first().map_or("mpirun", String::as_str);
         if find_program(launcher).is_none() {
-            return Err(BackendError::Unavailable(format!(
+            return Err(BackendError::unavailable(format!(
                 "the launcher `{launcher}` is not found{}; install OpenMPI (mpirun) or name the launcher \
                  (reduction.backend.launcher, --launcher)",
                 if launcher.contains('/') { "" } else { " in PATH" }
@@ -132,7 +132,7 @@ impl PetscBackend {
                 Err(why) => tried.push(format!("{python}: {why}")),
             }
         }
-        Err(BackendError::Unavailable(format!(
+        Err(BackendError::unavailable(format!(
             "no Python that imports petsc4py and mpi4py ({}); install Debian's python3-petsc4py-real \
              and python3-mpi4py, or name the Python that has them (--python, \
              reduction.backend.python)",

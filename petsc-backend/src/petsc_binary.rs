@@ -17,12 +17,12 @@ pub fn write_symmetric(path: &Path, a: &Sparse) -> Result<()> {
     let (n, nnz) = (a.ncols(), a.compute_nnz());
     let fits = |v: usize| i32::try_from(v).ok();
     let (Some(n32), Some(nnz32)) = (fits(n), fits(nnz)) else {
-        return Err(BackendError::Matrix(format!(
+        return Err(BackendError::matrix(format!(
             "a matrix of {n} rows and {nnz} entries is beyond PETSc's 32-bit indices: use a PETSc built with \
              --with-64-bit-indices"
         )));
     };
-    let io = |e: std::io::Error| BackendError::Matrix(format!("writing {}: {e}", path.display()));
+    let io = |e: std::io::Error| BackendError::matrix(format!("writing {}: {e}", path.display())).caused_by(e);
     let mut out = std::io::BufWriter::with_capacity(1 << 20, super::job_folder::private_file(path)?);
     for v in [MAT_FILE_CLASSID, n32, fits(a.nrows()).unwrap_or(i32::MAX), nnz32] {
         out.write_all(&v.to_be_bytes()).map_err(io)?;

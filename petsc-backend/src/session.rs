@@ -62,7 +62,7 @@ pub struct Session {
 }
 
 fn io_error(what: &str) -> impl Fn(std::io::Error) -> BackendError + '_ {
-    move |e| BackendError::Unavailable(format!("{what}: {e}"))
+    move |e| BackendError::unavailable(format!("{what}: {e}")).caused_by(e)
 }
 
 /// How often a wait for the driver looks at the launcher and the ranks.
@@ -178,7 +178,7 @@ impl Watch<'_> {
         if let Some(status) = self.launcher_status(Duration::ZERO) {
             let text = std::fs::read_to_string(&self.stderr).unwrap_or_default();
             let rank = failed_rank(&text).map_or_else(String::new, |r| format!("{r}; "));
-            return Err(BackendError::Unavailable(format!(
+            return Err(BackendError::unavailable(format!(
                 "{rank}the launcher ended ({status}) while the builder waited for {waiting_for}; `{}` reported:\n{}",
                 self.launched,
                 tail(&self.stderr, 12)
@@ -186,7 +186,7 @@ impl Watch<'_> {
         }
         if let Some((pid, rank, cmdline)) = process_group::stopped_member(self.group) {
             let who = rank.map_or_else(|| "a process of the job".to_string(), |r| format!("rank {r}"));
-            return Err(BackendError::Unavailable(format!(
+            return Err(BackendError::unavailable(format!(
                 "{who} (process {pid}: {cmdline}) is stopped (SIGSTOP, a debugger) while the builder waited for \
                  {waiting_for}; the job was ended"
             )));
@@ -195,7 +195,7 @@ impl Watch<'_> {
         // a launcher that notices a rank's end ends within moments, and names how the rank ended
         let report =
             if trouble.ended { format!("; {}", self.report(self.status_after_a_rank_ended())) } else { String::new() };
-        Err(BackendError::Unavailable(format!(
+        Err(BackendError::unavailable(format!(
             "{} while the builder waited for {waiting_for}; the job was ended{report}",
             trouble.why
         )))
@@ -252,10 +252,11 @@ impl Session {
         phases::note(|| format!("launched: {launched}"));
         let mut command = launcher_command(&program, &arguments, stdout, stderr);
         let child = command.spawn().map_err(|e| {
-            BackendError::Unavailable(format!(
+            BackendError::unavailable(format!(
                 "could not start `{program}`: {e}; install OpenMPI (mpirun) or name the launcher \
                  (reduction.backend.launcher, --launcher)"
             ))
+            .caused_by(e)
         })?;
         let group = child.id() as i32;
         process_group::register(group, folder, backend.keep_job_folder);
@@ -365,7 +366,7 @@ impl Session {
             }
             watch.check("the driver to connect")?;
             if Instant::now() >= deadline {
-                return Err(BackendError::Unavailable(format!(
+                return Err(BackendError::unavailable(format!(
                     "the driver did not connect to {}:{port} within {} s{} (reduction.backend.host must be an \
                      address the ranks reach the builder at; --connect-timeout or reduction.backend.connect_timeout \
                      sets the wait); `{}` reported:\n{}",
@@ -394,10 +395,10 @@ impl Session {
     /// One request: `header` (its "doubles" added), the blocks' columns in order; the answer's
     /// header and doubles. An answer with "ok": false is the error.
     fn request(&self, header: Request, blocks: &[MatRef<'_, f64>]) -> Result<(Answer, Vec<f64>)> {
-        let mut c =
-            self.connection.lock().map_err(|_| BackendError::Unavailable("a lost lock on the connection".into()))?;
+        let mut c = self.connection.lock().map_err(|_| BackendError::unavailable("a lost lock on the connection"))?;
         let what = format!("the request {}", header.name());
-        let line = serde_json::to_string(&header).map_err(|e| BackendError::Request(format!("{what}: {e}")))?;
+        let line =
+            serde_json::to_string(&header).map_err(|e| BackendError::request(format!("{what}: {e}")).caused_by(e))?;
         let send = |c: &mut Connection| -> std::io::Result<()> {
             c.writer.write_all(line.as_bytes())?;
             c.writer.write_all(b"\n")?;
@@ -423,7 +424,7 @@ impl Session {
         let answer: Answer = parsed(&line)?;
         let bytes = read_payload(&mut c, 8 * answer.doubles, &watch, &what)?;
         if !answer.ok {
-            return Err(BackendError::Request(format!(
+            return Err(BackendError::request(format!(
                 "the PETSc back-end failed {what}: {}",
                 messages::reason(&answer.error)
             )));
@@ -434,10 +435,11 @@ impl Session {
 
     fn lost(&self, what: &str, e: std::io::Error) -> BackendError {
         process_group::park_if_interrupted();
-        BackendError::Unavailable(format!(
+        BackendError::unavailable(format!(
             "the connection broke during {what} ({e}); the driver reported:\n{}",
             tail(&self.folder.join("driver.err"), 12)
         ))
+        .caused_by(e)
     }
 
     /// x = K^-1 b for every column, through the distributed factor.
@@ -449,7 +451,7 @@ impl Session {
         let (_, x) = self.request(request, &[rhs.as_ref()])?;
         let n = rhs.nrows();
         if x.len() != n * rhs.ncols() {
-            return Err(BackendError::Request(format!(
+            return Err(BackendError::request(format!(
                 "the PETSc back-end returned {} values for {n} x {}",
                 x.len(),
                 rhs.ncols()
@@ -499,10 +501,11 @@ impl Session {
 fn listen(backend: &PetscBackend) -> Result<(TcpListener, u16)> {
     let address = backend.listen_address();
     let listener = TcpListener::bind((address, 0)).map_err(|e| {
-        BackendError::Unavailable(format!(
+        BackendError::unavailable(format!(
             "cannot listen at {address} (reduction.backend.host: the address of this machine the ranks reach \
                  the builder at): {e}"
         ))
+        .caused_by(e)
     })?;
     let port = listener.local_addr().map_err(io_error("opening a port"))?.port();
     Ok((listener, port))
@@ -519,7 +522,8 @@ fn write_job(backend: &PetscBackend, folder: &Path, port: u16, token: &str) -> R
         partitioner: &backend.partitioner,
     };
     let job_path = folder.join("job.json");
-    let text = serde_json::to_string(&job).map_err(|e| BackendError::Unavailable(format!("the job file: {e}")))?;
+    let text = serde_json::to_string(&job)
+        .map_err(|e| BackendError::unavailable(format!("the job file: {e}")).caused_by(e))?;
     job_folder::write_private(&job_path, &text)?;
     Ok(job_path)
 }
@@ -559,7 +563,7 @@ fn read_line(c: &mut Connection, watch: &Watch<'_>, waiting_for: &str) -> Result
         match c.reader.read_until(b'\n', &mut line) {
             Ok(0) => {
                 process_group::park_if_interrupted();
-                return Err(BackendError::Unavailable(format!(
+                return Err(BackendError::unavailable(format!(
                     "the driver closed its connection while the builder waited for {waiting_for}; {}",
                     watch.closing_report()
                 )));
@@ -578,11 +582,11 @@ fn read_line(c: &mut Connection, watch: &Watch<'_>, waiting_for: &str) -> Result
 
 /// A line of the driver's as the message it must be.
 fn parsed<'a, T: serde::Deserialize<'a>>(line: &'a [u8]) -> Result<T> {
-    serde_json::from_slice(line).map_err(|e| not_the_protocol(&e.to_string(), line))
+    serde_json::from_slice(line).map_err(|e| not_the_protocol(&e.to_string(), line).caused_by(e))
 }
 
 fn not_the_protocol(why: &str, line: &[u8]) -> BackendError {
-    BackendError::Unavailable(format!(
+    BackendError::unavailable(format!(
         "an answer that is not the protocol's ({why}): {}",
         String::from_utf8_lossy(line)
     ))
@@ -596,7 +600,7 @@ fn read_payload(c: &mut Connection, count: usize, watch: &Watch<'_>, what: &str)
         match c.reader.read(&mut bytes[got..]) {
             Ok(0) => {
                 process_group::park_if_interrupted();
-                return Err(BackendError::Unavailable(format!(
+                return Err(BackendError::unavailable(format!(
                     "the driver closed its connection mid-answer to {what}; {}",
                     watch.closing_report()
                 )));

@@ -209,9 +209,7 @@ impl AssemblySpec {
     /// Parse and check `text`, read from `path` (named in messages; body files and inline
     /// bodies' files resolve from its folder).
     pub fn from_str(path: &Path, text: &str) -> Result<Self> {
-        let value: serde_json::Value = serde_json::from_str(text).map_err(|e| {
-            InputError::field(path, format!("line {} column {}", e.line(), e.column()), format!("not valid JSON: {e}"))
-        })?;
+        let value: serde_json::Value = serde_json::from_str(text).map_err(|e| crate::spec::not_json(path, e))?;
         json_keys::check_unique_keys(path, text)?;
         if value.get("assembly").is_none() {
             return Err(InputError::field(
@@ -230,8 +228,9 @@ impl AssemblySpec {
             forms::check(path, file)?;
         }
         by_schema?;
-        let file =
-            file.map_err(|e| InputError::field(path, "", format!("does not match the assembly input format: {e}")))?;
+        let file = file.map_err(|e| {
+            InputError::field(path, "", format!("does not match the assembly input format: {e}")).caused_by(e)
+        })?;
         Self::resolve(path, file, inline)
     }
 

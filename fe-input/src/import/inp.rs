@@ -176,8 +176,9 @@ fn collect_lines(
                 } else {
                     files[file].parent().unwrap_or(Path::new("")).join(target)
                 };
-                let sub = super::read_text(&target)
-                    .map_err(|e| err(format!("cannot read included file {}: {}", target.display(), e.message)))?;
+                let sub = super::read_text(&target).map_err(|e| {
+                    err(format!("cannot read included file {}: {}", target.display(), e.message)).caused_by(e)
+                })?;
                 files.push(target);
                 let idx = files.len() - 1;
                 collect_lines(&sub, idx, files, out, depth + 1)?;

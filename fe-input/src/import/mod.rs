@@ -7,6 +7,7 @@
 //! and solid sections. Every error carries the file and line it refers to.
 
 use crate::element::ElementKind;
+use crate::error::Cause;
 use crate::file_read::FileKind;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -81,11 +82,18 @@ pub struct ImportError {
     pub file: PathBuf,
     pub line: usize,
     pub message: String,
+    /// The error the message was made from (the system's, a library's), if any.
+    #[source]
+    pub cause: Option<Cause>,
 }
 
 impl ImportError {
     pub fn new(file: impl Into<PathBuf>, line: usize, message: impl Into<String>) -> Self {
-        ImportError { file: file.into(), line, message: message.into() }
+        ImportError { file: file.into(), line, message: message.into(), cause: None }
+    }
+    /// `self` keeping `cause`, the error its message was made from, as its source.
+    pub fn caused_by(self, cause: impl std::error::Error + Send + Sync + 'static) -> Self {
+        ImportError { cause: Some(Cause::new(cause)), ..self }
     }
 }
 
@@ -113,7 +121,7 @@ pub(crate) fn read_text(path: &Path) -> Result<String, ImportError> {
 /// `read_text` with the size limit of `kind` (matrices may be larger than meshes).
 pub(crate) fn read_text_of_kind(path: &Path, kind: FileKind) -> Result<String, ImportError> {
     crate::file_read::read_text(path, kind, crate::size::Memory::of_this_machine().bytes)
-        .map_err(|e| ImportError::new(path, 0, format!("cannot read the file: it {e}")))
+        .map_err(|e| ImportError::new(path, 0, format!("cannot read the file: it {e}")).caused_by(e))
 }
 
 #[cfg(test)]

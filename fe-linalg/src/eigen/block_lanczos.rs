@@ -104,7 +104,7 @@ impl<'a> BlockLanczos<'a> {
                 this.push(&v, mv);
                 Ok(this)
             }
-            None => Err(LinalgError::Inconsistent("eigensolver: the mass matrix vanishes on the start vectors".into())),
+            None => Err(LinalgError::inconsistent("eigensolver: the mass matrix vanishes on the start vectors")),
         }
     }
 
@@ -312,7 +312,7 @@ impl<'a> BlockLanczos<'a> {
             let idx = dim - 1 - c;
             let theta = s[idx];
             if !(theta > 0.0) {
-                return Err(LinalgError::Inconsistent(format!("eigensolver: non-positive Ritz value {theta:e}")));
+                return Err(LinalgError::inconsistent(format!("eigensolver: non-positive Ritz value {theta:e}")));
             }
             let estimate = (&self.coupling * u.submatrix(dim - p, idx, p, 1)).norm_l2();
             if !exact && estimate > tol * theta {
@@ -366,7 +366,7 @@ impl<'a> BlockLanczos<'a> {
             let idx = free - 1 - c;
             let theta = evd.values[idx];
             if !(theta > 0.0) {
-                return Err(LinalgError::Inconsistent(format!("eigensolver: non-positive held Ritz value {theta:e}")));
+                return Err(LinalgError::inconsistent(format!("eigensolver: non-positive held Ritz value {theta:e}")));
             }
             let yc = z * evd.vectors.col(idx).as_mat();
             let inside = (&tp * &yc - &yc * faer::Scale(theta)).norm_l2();

@@ -108,9 +108,7 @@ impl<'a, 'h> SharedSearch<'a, 'h> {
         let m_g = mul_new(m, g.as_ref());
         for (j, norm) in column_dots(g, &m_g).into_iter().enumerate() {
             if !(norm > 0.0) {
-                return Err(LinalgError::Inconsistent(
-                    "eigensolver: a held DoF's unit-load response has no mass".into(),
-                ));
+                return Err(LinalgError::inconsistent("eigensolver: a held DoF's unit-load response has no mass"));
             }
             let norm = norm.sqrt();
             for i in 0..n {
@@ -182,7 +180,7 @@ impl<'a, 'h> SharedSearch<'a, 'h> {
                 let (worst, at, which) =
                     if worst_held > worst_whole { (worst_held, at_held, "held ") } else { (worst_whole, at_whole, "") };
                 let n = self.k.n();
-                return Err(LinalgError::NotConverged(format!(
+                return Err(LinalgError::not_converged(format!(
                     "eigensolver: {count} modes and {count_held} held modes did not converge with {dim} Lanczos vectors (of {n} DoFs): {which}mode {} has the residual {worst:.1e} (accepted {RESIDUAL_TOL:.0e}); request fewer modes (reduction.modes) or check the mesh for extreme element proportions",
                     at + 1
                 )));

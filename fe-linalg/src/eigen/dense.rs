@@ -59,7 +59,7 @@ pub(super) fn dense_search(
         let (worst, at) = errors.iter().enumerate().fold((0.0f64, 0), worst_of);
         phases::note(|| format!("{keep} of {available} modes, {n} DoFs, backward error {worst:.1e}"));
         if worst > DENSE_BACKWARD_TOL {
-            return Err(LinalgError::NotConverged(format!(
+            return Err(LinalgError::not_converged(format!(
                 "eigensolver: mode {} of the dense solve of this {n}-DoF model has the backward error {worst:.1e} \
                  (accepted {DENSE_BACKWARD_TOL:.0e}): check the mesh for extreme element proportions",
                 at + 1

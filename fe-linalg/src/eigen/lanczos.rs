@@ -92,7 +92,7 @@ fn block_lanczos_search(
             return Ok(below);
         }
         if count > MAX_MODES {
-            return Err(LinalgError::TooLarge(format!(
+            return Err(LinalgError::too_large(format!(
                 "more than {MAX_MODES} modes lie below {:.6e} Hz: lower reduction.max_frequency",
                 omega_max / (2.0 * std::f64::consts::PI)
             )));
@@ -183,7 +183,7 @@ fn all_below(pairs: Eigenpairs, omega_max: f64, min_count: usize, n_free: usize)
 }
 
 fn not_converged(count: usize, dim: usize, n_free: usize, worst: f64, at: usize) -> LinalgError {
-    LinalgError::NotConverged(format!(
+    LinalgError::not_converged(format!(
         "eigensolver: {count} modes did not converge with {dim} Lanczos vectors (of {n_free} DoFs): mode {} has the residual {worst:.1e} (accepted {RESIDUAL_TOL:.0e}); request fewer modes (reduction.modes, max_frequency) or check the mesh for extreme element proportions",
         at + 1
     ))

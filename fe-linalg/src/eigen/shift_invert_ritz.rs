@@ -29,8 +29,9 @@ pub(super) fn shift_invert_ritz(k: &dyn SpdSolve, m: &Sparse, x: Mat<f64>, shift
     drop(mx);
     drop(y);
     let sym = |a: &Mat<f64>| Mat::<f64>::from_fn(count, count, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
-    let l = sym(&h).llt(faer::Side::Lower).map_err(|_| {
-        LinalgError::Inconsistent("eigensolver: the Ritz vectors are not independent in the mass inner product".into())
+    let l = sym(&h).llt(faer::Side::Lower).map_err(|e| {
+        LinalgError::inconsistent("eigensolver: the Ritz vectors are not independent in the mass inner product")
+            .caused_by(e)
     })?;
     let l = l.L().to_owned();
     // C = L^-1 S L^-T

@@ -36,6 +36,7 @@ pub fn add_scaled(a: &Sparse, c: f64, b: &Sparse) -> Result<Sparse> {
             }
         }
     }
-    SparseColMat::try_new_from_triplets(a.nrows(), a.ncols(), &trip)
-        .map_err(|e| LinalgError::Inconsistent(format!("adding sparse matrices: {}", faer_error::creation(&e))))
+    SparseColMat::try_new_from_triplets(a.nrows(), a.ncols(), &trip).map_err(|e| {
+        LinalgError::inconsistent(format!("adding sparse matrices: {}", faer_error::creation(&e))).caused_by(e)
+    })
 }

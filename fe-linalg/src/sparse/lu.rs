@@ -21,7 +21,7 @@ impl LuSolver {
             phases::note(|| format!("n {}, nnz(A) {}", a.nrows(), a.compute_nnz()));
             a.sp_lu()
         })
-        .map_err(|e| LinalgError::Singular(format!("{what} is {}", faer_error::lu(&e))))?;
+        .map_err(|e| LinalgError::singular(format!("{what} is {}", faer_error::lu(&e))).caused_by(e))?;
         Ok(Self { lu, matrix: a.clone() })
     }
 

@@ -54,7 +54,7 @@ fn symbolic_factor(a: &Sparse, what: &str) -> Result<SymbolicCholesky<usize>> {
     let by = if order.is_some() { "METIS nested dissection" } else { "AMD (METIS refused the graph)" };
     phases::note(|| format!("{by}, n {}, nnz(A) {}", a.nrows(), a.compute_nnz()));
     factorize_symbolic_cholesky(a.symbolic(), Side::Lower, ordering, Default::default())
-        .map_err(|e| LinalgError::TooLarge(format!("{what}: its factor {}", faer_error::generic(&e))))
+        .map_err(|e| LinalgError::too_large(format!("{what}: its factor {}", faer_error::generic(&e))).caused_by(e))
 }
 
 /// Bytes of one stored factor entry and its share of the row indices (supernodal storage keeps
@@ -94,7 +94,7 @@ impl<'m> SpdSolver<'m> {
         let symbolic = phases::phase(format!("ordering: {what}"), || symbolic_factor(&a, what))?;
         let entries = symbolic.len_val();
         let mut values = zeroed(entries).ok_or_else(|| {
-            LinalgError::TooLarge(format!(
+            LinalgError::too_large(format!(
                 "{what}: its Cholesky factor needs {:.1} GiB, more than this machine can give; coarsen the mesh",
                 entries as f64 * FACTOR_BYTES_PER_ENTRY / (1u64 << 30) as f64
             ))
@@ -142,7 +142,7 @@ impl<'m> SpdSolver<'m> {
                 {
                     message.push_str(&format!("; the factorisation fails at {}", dof(row)));
                 }
-                Err(LinalgError::Singular(message))
+                Err(LinalgError::singular(message).caused_by(e))
             }
         }
     }

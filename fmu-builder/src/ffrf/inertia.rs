@@ -315,7 +315,7 @@ pub(crate) mod tests {
         let boxes = [BoxRegion { min: [0.0; 3], max: [2.0, 0.5, 0.4], divisions: [3, 2, 1] }];
         let mesh = mesh_boxes(&boxes, ElementKind::Hex20).unwrap();
         let steel = SolidMaterial { name: "steel".into(), elasticity: Elasticity { e: 2.1e11, nu: 0.3 }, rho: 7850.0 };
-        let free = uncoupled(&mesh, &[steel], &|e, m| BuildError::Numerical(format!("{e}: {m}"))).unwrap();
+        let free = uncoupled(&mesh, &[steel], &|e, m| BuildError::numerical(format!("{e}: {m}"))).unwrap();
         let on = |x: f64| (0..mesh.n_nodes()).filter(|&n| mesh.nodes[n][0] == x).collect::<Vec<_>>();
         let flanges = vec![
             Flange {

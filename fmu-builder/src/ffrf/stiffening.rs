@@ -37,7 +37,7 @@ pub fn reduced_geometric_stiffness(
         }
         let coords = mesh.element_coords(e, &mut coords_buf);
         element_geometric_stiffness(kind, coords, material, ue, ks)
-            .map_err(|err| BuildError::Numerical(format!("element {e}: {err}")))?;
+            .map_err(|err| BuildError::numerical(format!("element {e}: {err}")).caused_by(err))?;
         let k = Mat::<f64>::from_fn(nen, nen, |a, b| ks[a * nen + b]);
         for i in 0..3 {
             for (a, &n) in nodes.iter().enumerate() {

@@ -25,7 +25,7 @@ pub(super) fn write(exports: &Exports, built: &Built, fmu: &Path) -> Result<()> 
     let put = &place::write_bytes;
     if let Some(path) = &exports.report {
         let json = serde_json::to_string_pretty(&built.report)
-            .map_err(|e| BuildError::Internal(format!("serialising the report: {e}")))
+            .map_err(|e| BuildError::internal(format!("serialising the report: {e}")).caused_by(e))
             .map_err(failed("--report"))?;
         put(path, json.as_bytes()).map_err(failed("--report"))?;
     }

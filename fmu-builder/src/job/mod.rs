@@ -71,7 +71,7 @@ fn read_input(path: &Path) -> Result<Input> {
     if path == Path::new("-") {
         let mut text = String::new();
         std::io::Read::read_to_string(&mut std::io::stdin(), &mut text)
-            .map_err(|e| BuildError::file(Path::new("<stdin>"), format!("cannot read the input: {e}")))?;
+            .map_err(|e| BuildError::file(Path::new("<stdin>"), format!("cannot read the input: {e}")).caused_by(e))?;
         return Ok(Input { path: PathBuf::from("<stdin>"), text });
     }
     let text = file_read::read_text(path, FileKind::Input, Memory::of_this_machine().bytes)
@@ -129,12 +129,11 @@ fn check_destinations(job: &Job, input: &Input, output: Option<&Path>) -> Result
 fn no_element_exports(job: &Job) -> Result<()> {
     for (option, path) in [("--export-inp", &job.exports.inp), ("--export-free-free", &job.exports.free_free)] {
         if let Some(p) = path {
-            return Err(BuildError::Destination {
-                shown: format!("{option} {}", p.display()),
-                reason: "the part is given by its matrices (geometry.matrices), so it has no elements to export; \
-                         export from the mesh the matrices came from"
-                    .into(),
-            });
+            return Err(BuildError::destination(
+                format!("{option} {}", p.display()),
+                "the part is given by its matrices (geometry.matrices), so it has no elements to export; export \
+                 from the mesh the matrices came from",
+            ));
         }
     }
     Ok(())
@@ -185,10 +184,10 @@ fn build_assembly(job: &Job, input: &Input) -> Result<()> {
         ("--platform-binary", !job.platform_binaries.is_empty()),
     ];
     if let Some((option, _)) = refused.iter().find(|(_, asked)| *asked) {
-        return Err(BuildError::CommandLine {
-            option: option.to_string(),
-            message: format!("{} is an assembly: build each body's input on its own for this", input.path.display()),
-        });
+        return Err(BuildError::command_line(
+            *option,
+            format!("{} is an assembly: build each body's input on its own for this", input.path.display()),
+        ));
     }
     let profile = Profile::new(job.timings);
     let spec = observed(job, &profile, || {

@@ -66,7 +66,9 @@ pub fn uncoupled(
     let mut volume = 0.0;
     for first in (0..mesh.n_elements()).step_by(batch.capacity) {
         let elements = first..mesh.n_elements().min(first + batch.capacity);
-        batch.compute(&graph, mesh, materials, elements.clone()).map_err(|(e, message)| element_error(e, message))?;
+        batch
+            .compute(&graph, mesh, materials, elements.clone())
+            .map_err(|(e, err)| element_error(e, err.to_string()).caused_by(err))?;
         shares.par_iter_mut().try_for_each(|share| share.add_batch(&graph, mesh, &batch, elements.clone()))?;
         batch.add_volume(mesh, materials, elements, &mut volume);
     }
@@ -119,7 +121,7 @@ impl ElementBatch {
         mesh: &Mesh,
         materials: &[SolidMaterial],
         elements: Range<usize>,
-    ) -> std::result::Result<(), (usize, String)> {
+    ) -> std::result::Result<(), (usize, fe::ElementError)> {
         let refused = self.stiffness[..elements.len() * self.stiffness_slot]
             .par_chunks_mut(self.stiffness_slot)
             .zip(self.mass.par_chunks_mut(self.mass_slot))
@@ -127,7 +129,7 @@ impl ElementBatch {
             .zip(elements)
             .filter_map(|(((ke, me), slots), e)| {
                 find_pair_slots(graph, mesh.element(e), slots);
-                element_matrices(mesh, materials, e, ke, me).err().map(|err| (e, err.to_string()))
+                element_matrices(mesh, materials, e, ke, me).err().map(|err| (e, err))
             })
             .min_by_key(|(e, _)| *e);
         refused.map_or(Ok(()), Err)
@@ -233,7 +235,7 @@ impl<'a> ColumnShare<'a> {
                 let slot = slots[a * nen + b];
                 if slot == NOT_IN_PATTERN {
                     let node_a = nodes[a];
-                    return Err(BuildError::Internal(format!(
+                    return Err(BuildError::internal(format!(
                         "nodes {node_a} and {node_b} share an element but not the pattern"
                     )));
                 }
@@ -257,7 +259,7 @@ impl<'a> ColumnShare<'a> {
 pub fn isotropic_mass(nodal: &SparseColMat<usize, f64>) -> Result<SparseColMat<usize, f64>> {
     let nn = nodal.ncols();
     if nodal.nrows() != nn {
-        return Err(BuildError::Internal(format!("the nodal mass is {} x {nn}, not square", nodal.nrows())));
+        return Err(BuildError::internal(format!("the nodal mass is {} x {nn}, not square", nodal.nrows())));
     }
     let entries: usize = (0..nn).map(|b| nodal.row_idx_of_col_raw(b).len()).sum();
     let mut col_ptr = Vec::with_capacity(3 * nn + 1);
@@ -390,7 +392,7 @@ pub(crate) mod tests {
     #[test]
     fn assembly_equals_the_triplet_route() {
         let (mesh, materials) = mixed_mesh();
-        let free = uncoupled(&mesh, &materials, &|e, m| BuildError::Numerical(format!("{e}: {m}"))).unwrap();
+        let free = uncoupled(&mesh, &materials, &|e, m| BuildError::numerical(format!("{e}: {m}"))).unwrap();
         let (k, nodal) = triplet_assembly(&mesh, &materials);
         assert_same(&free.stiffness, &k, "stiffness");
         assert_same(&free.nodal_mass, &nodal, "nodal mass");
@@ -431,7 +433,7 @@ pub(crate) mod tests {
         let refused = |inverted: &[usize]| {
             let (mut mesh, materials) = mixed_mesh();
             inverted.iter().for_each(|&e| invert(&mut mesh, e));
-            let err = uncoupled(&mesh, &materials, &|e, m| BuildError::Numerical(format!("element {e}: {m}")));
+            let err = uncoupled(&mesh, &materials, &|e, m| BuildError::numerical(format!("element {e}: {m}")));
             err.err().unwrap().to_string()
         };
         // the hex8 is element 2, the tet4 element 3, computed in one batch by any thread

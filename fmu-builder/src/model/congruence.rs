@@ -61,7 +61,7 @@ pub(crate) fn symmetric_congruence(
     what: &str,
 ) -> Result<SparseColMat<usize, f64>> {
     if a.nrows() != images.len() || a.ncols() != images.len() {
-        return Err(BuildError::Internal(format!(
+        return Err(BuildError::internal(format!(
             "coupling the {what}: the matrix is {} x {} but the coupling maps {} DoFs",
             a.nrows(),
             a.ncols(),
@@ -69,7 +69,7 @@ pub(crate) fn symmetric_congruence(
         )));
     }
     if let Some(&(g, _)) = images.all_terms().iter().find(|(g, _)| *g >= n) {
-        return Err(BuildError::Internal(format!("coupling the {what}: DoF {g} beyond the {n} coupled DoFs")));
+        return Err(BuildError::internal(format!("coupling the {what}: DoF {g} beyond the {n} coupled DoFs")));
     }
     let preimages = Preimages::of(images, n);
     let product = Product { a, images, sole: sole_images(images, &preimages), preimages: &preimages };
@@ -300,7 +300,7 @@ fn symmetric_product(product: &Product<'_>, what: &str) -> Result<SparseColMat<u
     drop(b);
     let b = product.fill(product.column_starts());
     let failed = |e: faer::sparse::FaerError| {
-        BuildError::Numerical(format!("symmetrising the coupled {what}: {}", faer_error::generic(&e)))
+        BuildError::numerical(format!("symmetrising the coupled {what}: {}", faer_error::generic(&e))).caused_by(e)
     };
     let bt = b.as_ref().transpose().to_col_major().map_err(failed)?;
     faer::sparse::ops::binary_op(b.as_ref(), bt.as_ref(), |x, y| {

@@ -65,7 +65,7 @@ fn select(selector: &NodeSelector, part: &Part, size: f64) -> std::result::Resul
             Some(nodes) => nodes.to_vec(),
             None => {
                 let known: Vec<&str> = part.node_sets.keys().map(|k| k.as_str()).collect();
-                return Err(Refusal(format!(
+                return Err(Refusal::from(format!(
                     "there is no node set \"{name}\" ({})",
                     if known.is_empty() {
                         "the part has no node sets".to_string()
@@ -92,7 +92,10 @@ fn select(selector: &NodeSelector, part: &Part, size: f64) -> std::result::Resul
         }
         NodeSelector::BoxFace { box_index, face } => {
             let Some(b) = part.boxes.get(*box_index) else {
-                return Err(Refusal(format!("there is no box {box_index}: the part has {} box(es)", part.boxes.len())));
+                return Err(Refusal::from(format!(
+                    "there is no box {box_index}: the part has {} box(es)",
+                    part.boxes.len()
+                )));
             };
             let (axis, upper) = face.axis_side();
             let level = if upper { b.max[axis] } else { b.min[axis] };
@@ -286,7 +289,7 @@ mod tests {
         let selector: NodeSelector = serde_json::from_str(json).unwrap();
         select(&selector, part, model_size(&part.mesh))
             .map(|s| s.iter().map(|&i| part.mesh.nodes[i]).collect())
-            .map_err(|e| e.0)
+            .map_err(|e| e.reason)
     }
 
     #[test]

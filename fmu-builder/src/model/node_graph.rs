@@ -20,7 +20,7 @@ impl NodeGraph {
     pub(crate) fn of_mesh(mesh: &Mesh) -> Result<Self> {
         let nn = mesh.n_nodes();
         if let Some(&bad) = mesh.elements.iter().find(|&&a| a >= nn) {
-            return Err(BuildError::Internal(format!("an element names node {bad} of a mesh of {nn} nodes")));
+            return Err(BuildError::internal(format!("an element names node {bad} of a mesh of {nn} nodes")));
         }
         let incidence = Incidence::of_mesh(mesh);
         let mut col_ptr = Vec::with_capacity(nn + 1);

@@ -148,7 +148,7 @@ fn box_part(spec: &Spec, file: &Path) -> Result<Part> {
             MeshError::UnsupportedElement { .. } => "geometry.element".to_string(),
             _ => "geometry.boxes".to_string(),
         };
-        BuildError::input(file, field, e.to_string())
+        BuildError::input(file, field, e.to_string()).caused_by(e)
     })?;
     let m = spec.material.unwrap_or_default();
     let (Some(e), Some(nu), Some(rho)) = (m.e, m.nu, m.rho) else {
@@ -483,7 +483,7 @@ fn nodal_mass(mass: &SparseColMat<usize, f64>, file: &Path) -> Result<SparseColM
         trip.push(Triplet::new(a, b, m[0][0]));
     }
     SparseColMat::try_new_from_triplets(n, n, &trip)
-        .map_err(|e| BuildError::Numerical(format!("nodal mass: {}", faer_error::creation(&e))))
+        .map_err(|e| BuildError::numerical(format!("nodal mass: {}", faer_error::creation(&e))).caused_by(e))
 }
 
 #[cfg(test)]

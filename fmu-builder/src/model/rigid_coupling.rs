@@ -153,7 +153,7 @@ fn couplings(nodes: &[[f64; 3]], flanges: &[Flange], node: &mut [NodeDofs]) -> R
             FlangeCoupling::Distributing { weights } => {
                 let points: Vec<[f64; 3]> = f.slaves.iter().map(|&s| nodes[s]).collect();
                 let refused = |why| {
-                    BuildError::Singular(format!(
+                    BuildError::singular(format!(
                         "the distributing coupling of flange \"{}\" is singular ({why:?})",
                         f.name
                     ))
@@ -332,7 +332,7 @@ mod tests {
     #[test]
     fn coupled_matrices_are_the_congruence_and_exactly_symmetric() {
         let (mesh, materials) = mixed_mesh();
-        let mut free = uncoupled(&mesh, &materials, &|e, m| BuildError::Numerical(format!("{e}: {m}"))).unwrap();
+        let mut free = uncoupled(&mesh, &materials, &|e, m| BuildError::numerical(format!("{e}: {m}"))).unwrap();
         free.damping = Some(free.mass.clone());
         let flanges = flanges(&mesh.nodes);
         let model = rigid_coupling(&free, &mesh.nodes, &flanges, [1.0, 0.5, 0.5]).unwrap();

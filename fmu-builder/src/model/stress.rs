@@ -40,7 +40,7 @@ pub fn nodal_stresses(part: &Part, nodes: &[usize], u: MatRef<'_, f64>) -> Resul
             let mut out = vec![[0.0; 6]; conn.len() * k];
             let material = &part.materials[mesh.material[e]].elasticity;
             element_nodal_stresses(kind, coords, material, &ue, k, &mut out)
-                .map_err(|err| part.element_error(e, err.to_string()))?;
+                .map_err(|err| part.element_error(e, err.to_string()).caused_by(err))?;
             for (a, &n) in conn.iter().enumerate() {
                 let s = slot[n];
                 if s == NOT_WANTED {

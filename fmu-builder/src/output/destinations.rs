@@ -285,13 +285,13 @@ fn writable_folder(folder: &Path, shown: &str) -> Result<(), BuildError> {
             let _ = std::fs::remove_file(&probe);
             Ok(())
         }
-        Err(e) => Err(refuse(shown, format!("cannot write into the folder {}: {e}", folder.display()))),
+        Err(e) => Err(refuse(shown, format!("cannot write into the folder {}: {e}", folder.display())).caused_by(e)),
     }
 }
 
 /// The refusal of a destination: `shown` is its option and path as the user wrote them.
 fn refuse(shown: &str, reason: String) -> BuildError {
-    BuildError::Destination { shown: shown.to_string(), reason }
+    BuildError::destination(shown, reason)
 }
 
 #[cfg(test)]

@@ -30,7 +30,7 @@ pub fn first_non_finite<T: Serialize>(value: &T) -> Option<String> {
 pub fn check_report<T: Serialize>(report: &T) -> Result<()> {
     match first_non_finite(report) {
         None => Ok(()),
-        Some(path) => Err(BuildError::NotFinite(format!(
+        Some(path) => Err(BuildError::not_finite(format!(
             "the report's {path} is not a finite number (NaN or infinite): {LIKELY_CAUSES}"
         ))),
     }
@@ -43,7 +43,7 @@ pub fn check_reduced(body: &ReducedBody) -> Result<()> {
     let container = body.to_container();
     for (key, values) in container.arrays() {
         if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-            return Err(BuildError::NotFinite(format!(
+            return Err(BuildError::not_finite(format!(
                 "the reduced body's {} has a non-finite entry ({} at index {i}): {LIKELY_CAUSES}",
                 array_words(body, key),
                 values[i]
@@ -52,7 +52,7 @@ pub fn check_reduced(body: &ReducedBody) -> Result<()> {
     }
     // the cutoff may be infinite (every mode dynamic), never NaN
     if body.dynamic_cutoff.is_nan() {
-        return Err(BuildError::NotFinite(format!(
+        return Err(BuildError::not_finite(format!(
             "the dynamic cutoff is NaN: check reduction.dynamic_cutoff; {LIKELY_CAUSES}"
         )));
     }
@@ -105,7 +105,7 @@ pub fn smoke_step(body: &ReducedBody) -> Result<()> {
         .collect();
     let mut fmu = BodyFmu::from_reduced(body.clone());
     let failed = |what: &str, e: fmi2::ModelError| {
-        BuildError::NotFinite(format!("the FMU's first steps fail ({what}): {e}; {LIKELY_CAUSES}"))
+        BuildError::not_finite(format!("the FMU's first steps fail ({what}): {e}; {LIKELY_CAUSES}")).caused_by(e)
     };
     fmu.enter_initialization(0.0).map_err(|e| failed("initialisation", e))?;
     fmu.exit_initialization().map_err(|e| failed("initialisation", e))?;
@@ -134,7 +134,7 @@ pub fn smoke_step(body: &ReducedBody) -> Result<()> {
         for &(vr, name) in &outputs {
             let v = fmu.get_real(vr).map_err(|e| failed(phase, e))?;
             if !v.is_finite() {
-                return Err(BuildError::NotFinite(format!(
+                return Err(BuildError::not_finite(format!(
                     "the FMU's output {name} is {v} after 5 steps of 1 ms {phase}: {LIKELY_CAUSES}"
                 )));
             }

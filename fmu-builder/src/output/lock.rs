@@ -42,8 +42,9 @@ pub fn lock_path(path: &Path) -> Option<PathBuf> {
 /// `quiet`.
 pub fn lock(path: &Path, shown: &str, wait: bool, quiet: bool) -> Result<Option<OutputLock>, BuildError> {
     let Some(lock_path) = lock_path(path) else { return Ok(None) };
-    let refuse = |reason: String| BuildError::Destination { shown: shown.to_string(), reason };
-    let cannot = |e: std::io::Error| refuse(format!("cannot lock it through {}: {e}", lock_path.display()));
+    let refuse = |reason: String| BuildError::destination(shown, reason);
+    let cannot =
+        |e: std::io::Error| refuse(format!("cannot lock it through {}: {e}", lock_path.display())).caused_by(e);
     loop {
         let mut file = std::fs::OpenOptions::new()
             .read(true)

@@ -78,16 +78,17 @@ pub fn write_fmu(
         },
     };
     let xml = fmu::model_description_xml(&info, &table).map_err(|e| {
-        BuildError::Numerical(format!(
+        BuildError::numerical(format!(
             "{e}: a flange's name (flanges[].name) collides with another variable of the FMU; rename the flange"
         ))
+        .caused_by(e)
     })?;
     let mut listed = spec.clone();
     listed.reduction.backend = listed.reduction.backend.packaged();
     let input = documentation::input_listing(&listed)
-        .map_err(|e| BuildError::Internal(format!("serialising the input: {e}")))?;
+        .map_err(|e| BuildError::internal(format!("serialising the input: {e}")).caused_by(e))?;
     let report_json = serde_json::to_vec_pretty(&report.as_packaged())
-        .map_err(|e| BuildError::Internal(format!("serialising the report: {e}")))?;
+        .map_err(|e| BuildError::internal(format!("serialising the report: {e}")).caused_by(e))?;
     let binaries = runtime_binaries(&xml, others)?;
     let archive = fmu::FmuArchive {
         model_description: xml,
@@ -123,7 +124,7 @@ fn runtime_binaries<'a>(xml: &str, others: &'a [PlatformBinary]) -> Result<Vec<(
 fn generation_time() -> Result<String> {
     let secs = match std::env::var("SOURCE_DATE_EPOCH") {
         Ok(text) => text.trim().parse::<u64>().ok().filter(|s| (0..253_402_300_800).contains(s)).ok_or_else(|| {
-            BuildError::Numerical(format!(
+            BuildError::numerical(format!(
                 "the environment variable SOURCE_DATE_EPOCH is {text:?}: expected whole seconds since 1970-01-01 UTC"
             ))
         })?,
@@ -167,13 +168,14 @@ pub fn write_assembly_fmu(
         },
     };
     let xml = fmu::assembly_description::assembly_description_xml(&info, table).map_err(|e| {
-        BuildError::Numerical(format!(
+        BuildError::numerical(format!(
             "{e}: a body's, joint's or external flange's name collides with another variable of the FMU; rename it"
         ))
+        .caused_by(e)
     })?;
     let binaries = runtime_binaries(&xml, others)?;
-    let input =
-        serde_json::to_string_pretty(spec).map_err(|e| BuildError::Internal(format!("serialising the input: {e}")))?;
+    let input = serde_json::to_string_pretty(spec)
+        .map_err(|e| BuildError::internal(format!("serialising the input: {e}")).caused_by(e))?;
     let archive = fmu::FmuArchive {
         model_description: xml,
         model_identifier: &id,

@@ -11,7 +11,7 @@
 //! replace a file that appeared meanwhile (RENAME_NOREPLACE).
 
 use super::temp_files::{self, Registered};
-use crate::error::{BuildError, Result};
+use crate::error::{BuildError, Refusal, Result};
 use std::cell::RefCell;
 use std::fs::{File, OpenOptions};
 use std::io::Write;
@@ -50,12 +50,14 @@ impl Drop for Guard {
 
 /// Writes `bytes` at `path` through a temporary file and a checked rename.
 pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
-    write_with(path, |mut file| file.write_all(bytes).and_then(|_| file.sync_all()).map_err(|e| io_words(&e)))
+    write_with(path, |mut file| {
+        file.write_all(bytes).and_then(|_| file.sync_all()).map_err(|e| Refusal::caused_by(io_words(&e), e))
+    })
 }
 
 /// Writes `path` through a temporary file that `fill` writes (and syncs), then a checked rename.
 /// A failure of `fill` is its message; the temporary file is removed on every failure.
-pub fn write_with(path: &Path, fill: impl FnOnce(File) -> std::result::Result<(), String>) -> Result<()> {
+pub fn write_with(path: &Path, fill: impl FnOnce(File) -> std::result::Result<(), Refusal>) -> Result<()> {
     let name = path.file_name().ok_or_else(|| BuildError::file(path, "is not a file path"))?;
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
@@ -63,9 +65,10 @@ pub fn write_with(path: &Path, fill: impl FnOnce(File) -> std::result::Result<()
     };
     let (file, temp) = create_temp(dir, name).map_err(|e| {
         BuildError::file(path, format!("cannot create a temporary file in {}: {}", dir.display(), io_words(&e)))
+            .caused_by(e)
     })?;
     fill(file).map_err(|m| {
-        BuildError::file(path, format!("{m}; nothing was written there (the unfinished file was removed)"))
+        BuildError::file(path, format!("{m}; nothing was written there (the unfinished file was removed)")).caused_by(m)
     })?;
     GUARDED.with(|g| put_in_place(&temp.path, path, g.borrow().as_ref()))?;
     temp.disarm();
@@ -126,7 +129,7 @@ pub fn put_in_place(temp: &Path, dest: &Path, guarded: Option<&Guarded>) -> Resu
     let shown = guarded
         .and_then(|g| g.outputs.iter().find(|(_, p)| p == dest))
         .map_or_else(|| dest.display().to_string(), |(option, p)| format!("{option} {}", p.display()));
-    let refuse = |reason: String| BuildError::Destination { shown: shown.clone(), reason };
+    let refuse = |reason: String| BuildError::destination(shown.clone(), reason);
     if let Some(reason) = changed_meanwhile(dest, guarded) {
         return Err(refuse(reason));
     }
@@ -141,7 +144,8 @@ pub fn put_in_place(temp: &Path, dest: &Path, guarded: Option<&Guarded>) -> Resu
         Err(e) => Err(BuildError::file(
             dest,
             format!("cannot move the finished file {} into place: {}", temp.display(), io_words(&e)),
-        )),
+        )
+        .caused_by(e)),
     }
 }
 

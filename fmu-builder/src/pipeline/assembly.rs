@@ -199,14 +199,16 @@ fn check(d: &AssemblyDescription, file: &Path) -> Result<AssemblyFmu> {
         AssemblyError::Body { body, .. } => format!("assembly.bodies ('{body}')"),
         _ => "assembly".to_string(),
     };
-    let fmu = AssemblyFmu::new(d).map_err(|e| field(file, place(&e), e.to_string()))?;
+    let fmu = AssemblyFmu::new(d).map_err(|e| field(file, place(&e), e.to_string()).caused_by(e))?;
     let mut trial = fmu.assembly().clone();
-    trial.start_run(0.0).map_err(|e| field(file, place(&e), format!("at the start: {e}")))?;
+    trial.start_run(0.0).map_err(|e| field(file, place(&e), format!("at the start: {e}")).caused_by(e))?;
     for _ in 0..10 {
-        trial.do_step(d.solver.max_step).map_err(|e| field(file, place(&e), format!("in the first steps: {e}")))?;
+        trial
+            .do_step(d.solver.max_step)
+            .map_err(|e| field(file, place(&e), format!("in the first steps: {e}")).caused_by(e))?;
     }
     if trial.motion.pos.iter().chain(&trial.motion.vel).any(|x| !x.is_finite()) {
-        return Err(BuildError::NotFinite(format!("{}: the assembly's first steps are not finite", file.display())));
+        return Err(BuildError::not_finite(format!("{}: the assembly's first steps are not finite", file.display())));
     }
     Ok(fmu)
 }

@@ -220,5 +220,5 @@ fn report(
 
 /// An internal check that failed: the build stops rather than write a wrong FMU.
 pub(super) fn internal_check(what: String) -> BuildError {
-    BuildError::Internal(format!("internal check failed: {what}"))
+    BuildError::internal(format!("internal check failed: {what}"))
 }

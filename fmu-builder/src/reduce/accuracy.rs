@@ -111,7 +111,7 @@ pub fn accuracy(
     // static compliance: B^T K^-1 B with B the unit loads at the force flanges' master DoFs
     let x = flange_shapes;
     if x.nrows() != nc || x.ncols() != 6 * force_flanges.len() {
-        return Err(BuildError::Internal(format!(
+        return Err(BuildError::internal(format!(
             "accuracy comparison: {} x {} flange shapes for {nc} DoFs and {} force flanges",
             x.nrows(),
             x.ncols(),
@@ -177,7 +177,7 @@ pub fn enforce(accuracy: &Accuracy) -> Result<()> {
     let below: Vec<usize> =
         (0..n).filter(|&i| accuracy.reduced_hz[i] < accuracy.full_hz[i] * (1.0 - RAYLEIGH_RITZ_TOL)).collect();
     if let Some(&i) = below.first() {
-        return Err(BuildError::Inaccurate(format!(
+        return Err(BuildError::inaccurate(format!(
             "the reduced model is not a valid projection of the FE model: {} of its {n} lowest frequencies lie below the full model's (mode {}: {:.6} Hz reduced vs {:.6} Hz full); the reduction basis lost accuracy, no FMU was written",
             below.len(),
             i + 1,
@@ -187,7 +187,7 @@ pub fn enforce(accuracy: &Accuracy) -> Result<()> {
     }
     let e = accuracy.compliance_max_relative_error;
     if !(e <= COMPLIANCE_TOL) {
-        return Err(BuildError::Inaccurate(format!(
+        return Err(BuildError::inaccurate(format!(
             "the reduced model's static flange compliance deviates from the full model's by {e:.2e} (relative to its largest entry; accepted {COMPLIANCE_TOL:.0e}): the reduction basis lost a static direction, no FMU was written"
         )));
     }

@@ -116,10 +116,9 @@ pub fn orthonormalise(model: &Assembled, v: Mat<f64>) -> Result<(Mat<f64>, Vec<f
     let norms0 = scale_to_unit_m_norm(&mut w, &mut mw);
     let kept = gram_schmidt(model, &mut w, &mut mw, &norms0);
     if kept == 0 {
-        return Err(BuildError::Numerical(
+        return Err(BuildError::numerical(
             "the reduction basis is empty: every candidate shape (modes, static flange and load shapes) depends on the \
-             others or has no mass; request modes (reduction.modes or max_frequency) or a force flange, and check material.rho"
-                .into(),
+             others or has no mass; request modes (reduction.modes or max_frequency) or a force flange, and check material.rho",
         ));
     }
     drop(mw);
@@ -207,19 +206,19 @@ fn rayleigh_ritz(model: &Assembled, mut w: Mat<f64>, kept: usize) -> Result<(Mat
     let r = w.ncols();
     let kr = w.transpose() * &kw;
     let c = Mat::<f64>::from_fn(r, r, |i, j| 0.5 * (kr[(i, j)] + kr[(j, i)]));
-    let evd = graded_spd_eigen(&c, "the reduced stiffness").map_err(|_| {
-        BuildError::Singular(
+    let evd = graded_spd_eigen(&c, "the reduced stiffness").map_err(|e| {
+        BuildError::singular(
             "the reduced stiffness is not positive definite: the part can move without deforming (a mounted part not held \
-             by its mount, or a mechanism: pieces joined only at a node or an edge)"
-                .into(),
+             by its mount, or a mechanism: pieces joined only at a node or an edge)",
         )
+        .caused_by(e)
     })?;
     let s = &evd.values;
     let mut omega = Vec::with_capacity(r);
     for i in 0..r {
         let lambda = s[i];
         if !(lambda > 0.0) {
-            return Err(BuildError::Singular(format!(
+            return Err(BuildError::singular(format!(
                 "reduced stiffness has a non-positive eigenvalue {lambda:e}: the part can move without deforming (a mounted \
                  part not held by its mount, or a mechanism: pieces joined only at a node or an edge)"
             )));

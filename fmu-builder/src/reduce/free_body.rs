@@ -26,7 +26,7 @@ pub fn rigid_deflation(mass: &Sparse, r: Mat<f64>) -> Result<Deflation> {
     let gram = r.transpose() * &mr;
     let l = gram
         .llt(Side::Lower)
-        .map_err(|e| crate::error::BuildError::Singular(format!("the rigid-body mass matrix is singular ({e}): the part has no mass in some direction; check material.rho")))?
+        .map_err(|e| crate::error::BuildError::singular(format!("the rigid-body mass matrix is singular ({e}): the part has no mass in some direction; check material.rho")).caused_by(e))?
         .L()
         .to_owned();
     let mut yt = r.transpose().to_owned();

@@ -104,12 +104,12 @@ impl FullResponse {
                 }
             }
         }
-        let union = SparseColMat::<usize, f64>::try_new_from_triplets(nc, nc, &trip)
-            .map_err(|e| BuildError::Numerical(format!("pattern of K + M: {}", faer_error::creation(&e))))?;
-        let pattern = union
-            .symbolic()
-            .to_owned()
-            .map_err(|e| BuildError::Numerical(format!("pattern of K + M: {}", faer_error::generic(&e))))?;
+        let union = SparseColMat::<usize, f64>::try_new_from_triplets(nc, nc, &trip).map_err(|e| {
+            BuildError::numerical(format!("pattern of K + M: {}", faer_error::creation(&e))).caused_by(e)
+        })?;
+        let pattern = union.symbolic().to_owned().map_err(|e| {
+            BuildError::numerical(format!("pattern of K + M: {}", faer_error::generic(&e))).caused_by(e)
+        })?;
         let slots = |a: &crate::linalg::sparse::Sparse| -> Vec<usize> {
             let mut out = Vec::with_capacity(a.val().len());
             for j in 0..nc {
@@ -164,14 +164,14 @@ impl FullResponse {
         }
         let z = SparseColMat::<usize, c64>::new(self.pattern.clone(), values);
         if self.symbolic.is_none() {
-            self.symbolic = Some(
-                faer::sparse::linalg::solvers::SymbolicLu::try_new(z.symbolic())
-                    .map_err(|e| BuildError::Numerical(format!("symbolic LU: {}", faer_error::generic(&e))))?,
-            );
+            self.symbolic = Some(faer::sparse::linalg::solvers::SymbolicLu::try_new(z.symbolic()).map_err(|e| {
+                BuildError::numerical(format!("symbolic LU: {}", faer_error::generic(&e))).caused_by(e)
+            })?);
         }
-        let symbolic = self.symbolic.clone().ok_or_else(|| BuildError::Internal("symbolic LU missing".into()))?;
-        let lu = faer::sparse::linalg::solvers::Lu::try_new_with_symbolic(symbolic, z.as_ref())
-            .map_err(|e| BuildError::Numerical(format!("dynamic stiffness at {hz} Hz is {}", faer_error::lu(&e))))?;
+        let symbolic = self.symbolic.clone().ok_or_else(|| BuildError::internal("symbolic LU missing"))?;
+        let lu = faer::sparse::linalg::solvers::Lu::try_new_with_symbolic(symbolic, z.as_ref()).map_err(|e| {
+            BuildError::numerical(format!("dynamic stiffness at {hz} Hz is {}", faer_error::lu(&e))).caused_by(e)
+        })?;
         // Z = S^-1 Zs S^-1: x = S Zs^-1 S b
         let sc = &self.scale;
         let mut x = Mat::<c64>::from_fn(nc, self.b.ncols(), |i, j| c64::new(self.b[(i, j)] * sc[i], 0.0));

@@ -76,11 +76,12 @@ pub(super) fn check_mass_semidefinite(mass: &SparseColMat<usize, f64>, path: &Pa
                 }
             }
         }
-        SparseColMat::try_new_from_triplets(mass.nrows(), mass.ncols(), &t)
-            .map_err(|e| ImportError::new(path, 0, format!("mass matrix: {}", fe_linalg::faer_error::creation(&e))))?
+        SparseColMat::try_new_from_triplets(mass.nrows(), mass.ncols(), &t).map_err(|e| {
+            ImportError::new(path, 0, format!("mass matrix: {}", fe_linalg::faer_error::creation(&e))).caused_by(e)
+        })?
     };
     if let Err(e) = lifted.sp_cholesky(Side::Lower) {
-        let why = match e {
+        let why = match &e {
             faer::sparse::linalg::LltError::Numeric(_) => {
                 "its Cholesky factorisation meets a non-positive pivot".to_string()
             }
@@ -95,7 +96,8 @@ pub(super) fn check_mass_semidefinite(mass: &SparseColMat<usize, f64>, path: &Pa
                 "mass matrix is indefinite (not positive semi-definite): {why}. Check that the mass matrix \
                  belongs to the same model and DoF order as the stiffness and the DoF map"
             ),
-        ));
+        )
+        .caused_by(e));
     }
     Ok(())
 }

@@ -53,6 +53,7 @@ impl SymMatrix {
                 0,
                 format!("cannot build the sparse matrix: {}", fe_linalg::faer_error::creation(&e)),
             )
+            .caused_by(e)
         })
     }
 }

@@ -50,7 +50,7 @@ use std::path::Path;
 pub fn read_msh(path: &Path) -> Result<ImportedMesh, ImportError> {
     use crate::file_read::{self, FileKind};
     let bytes = file_read::read(path, FileKind::Mesh, crate::size::Memory::of_this_machine().bytes)
-        .map_err(|e| ImportError::new(path, 0, format!("cannot read the file: it {e}")))?;
+        .map_err(|e| ImportError::new(path, 0, format!("cannot read the file: it {e}")).caused_by(e))?;
     parse_msh_bytes(&bytes, path)
 }
 

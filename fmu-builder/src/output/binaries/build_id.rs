@@ -12,12 +12,12 @@ use fmu_runtime::{BUILD_ID, BUILD_ID_MARKER};
 pub fn check(data: &[u8], expected: &str) -> Result<(), Refusal> {
     let found = identities(data);
     if found.is_empty() {
-        return Err(Refusal(format!(
+        return Err(Refusal::from(format!(
             "carries no fmu-runtime build identity ({BUILD_ID_MARKER}...): it is not a build of this project's fmu-runtime, or of one older than the identity; build it from the source of this builder (fmu-runtime {expected})"
         )));
     }
     match found.iter().find(|id| id.as_str() != expected) {
-        Some(other) => Err(Refusal(format!(
+        Some(other) => Err(Refusal::from(format!(
             "was built from fmu-runtime {other}, this builder's runtime is {expected} (version + hash of fmu-runtime/src and fmi2/src): build it from the same commit as the builder"
         ))),
         None => Ok(()),
@@ -64,10 +64,10 @@ mod tests {
 
     #[test]
     fn a_missing_or_foreign_identity_is_refused() {
-        let e = check(b"no identity here", own()).unwrap_err().0;
+        let e = check(b"no identity here", own()).unwrap_err().reason;
         assert!(e.contains("carries no fmu-runtime build identity"), "{e}");
         let foreign = format!("xx{BUILD_ID_MARKER}0.0.9+src.0123456789abcdef\0yy");
-        let e = check(foreign.as_bytes(), own()).unwrap_err().0;
+        let e = check(foreign.as_bytes(), own()).unwrap_err().reason;
         assert!(e.contains("was built from fmu-runtime 0.0.9+src.0123456789abcdef"), "{e}");
         // a marker at the very end, or without its NUL, is no identity
         assert!(identities(BUILD_ID_MARKER.as_bytes()).is_empty());

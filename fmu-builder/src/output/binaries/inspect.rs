@@ -13,7 +13,7 @@ use super::platform::{Format, Platform, Processor};
 /// Ok when `data` can be `platform`'s binary exporting `required`; else what is wrong.
 pub fn check(platform: Platform, data: &[u8], required: &[&str]) -> Result<(), Refusal> {
     let kind = FileKind::parse(data).map_err(|_| {
-        Refusal(format!(
+        Refusal::from(format!(
             "is not a shared library in a format this tool reads (PE, ELF, Mach-O); {platform} needs {}",
             platform.format().describe()
         ))
@@ -25,7 +25,7 @@ pub fn check(platform: Platform, data: &[u8], required: &[&str]) -> Result<(), R
         FileKind::MachOFat64 => {
             check_universal(platform, MachOFatFile::<object::macho::FatArch64>::parse(data), data, required)
         }
-        FileKind::Archive => Err(Refusal(format!(
+        FileKind::Archive => Err(Refusal::from(format!(
             "is an archive (a static or import library, such as fmu_runtime.dll.lib), not a shared library; {platform} needs {}, e.g. {} from `cargo build -p fmu-runtime --release`",
             platform.format().describe(),
             platform.runtime_file()
@@ -37,7 +37,8 @@ pub fn check(platform: Platform, data: &[u8], required: &[&str]) -> Result<(), R
 /// One binary (not universal); `check_processor` is false for the other slices of a universal
 /// Mach-O file, which serve hosts of other processors.
 fn check_single(platform: Platform, data: &[u8], required: &[&str], check_processor: bool) -> Result<(), Refusal> {
-    let file = object::File::parse(data).map_err(|e| Refusal(format!("cannot be read as an object file: {e}")))?;
+    let file = object::File::parse(data)
+        .map_err(|e| Refusal::caused_by(format!("cannot be read as an object file: {e}"), e))?;
     let expected = platform.format();
     let found = match &file {
         object::File::Pe32(_) | object::File::Pe64(_) => Some(Format::Pe),
@@ -48,10 +49,10 @@ fn check_single(platform: Platform, data: &[u8], required: &[&str], check_proces
     match found {
         Some(f) if f == expected => {}
         Some(f) => {
-            return Err(Refusal(format!("is {}, not {} as {platform} needs", f.describe(), expected.describe())));
+            return Err(Refusal::from(format!("is {}, not {} as {platform} needs", f.describe(), expected.describe())));
         }
         None => {
-            return Err(Refusal(format!(
+            return Err(Refusal::from(format!(
                 "is an object file (COFF), not a shared library; {platform} needs {}",
                 expected.describe()
             )));
@@ -85,7 +86,7 @@ fn check_architecture(platform: Platform, found: Architecture) -> Result<(), Ref
             );
         }
     }
-    Err(Refusal(reason))
+    Err(Refusal::from(reason))
 }
 
 fn describe_architecture(a: Architecture) -> String {
@@ -110,7 +111,7 @@ fn check_shared_library(file: &object::File) -> Result<(), Refusal> {
         _ => match file.kind() {
             object::ObjectKind::Dynamic => Ok(()),
             object::ObjectKind::Executable => Err("is a Windows program (.exe), not a DLL".into()),
-            other => Err(Refusal(format!("is not a DLL (kind {other:?})"))),
+            other => Err(Refusal::from(format!("is not a DLL (kind {other:?})"))),
         },
     }
 }
@@ -121,7 +122,7 @@ fn elf_shared_library<Elf: FileHeader<Endian = Endianness>>(f: &ElfFile<Elf>) ->
         object::elf::ET_DYN => {}
         object::elf::ET_EXEC => return Err("is a program (ELF type EXEC), not a shared library".into()),
         object::elf::ET_REL => return Err("is an object file (ELF type REL), not a shared library".into()),
-        other => return Err(Refusal(format!("is not a shared library (ELF type {other})"))),
+        other => return Err(Refusal::from(format!("is not a shared library (ELF type {other})"))),
     }
     if f.elf_program_headers().iter().any(|p| p.p_type(endian) == object::elf::PT_INTERP) {
         return Err("is a program (it names a program interpreter), not a shared library".into());
@@ -134,12 +135,12 @@ fn macho_shared_library<Mach: MachHeader<Endian = Endianness>>(f: &MachOFile<Mac
         object::macho::MH_DYLIB | object::macho::MH_BUNDLE => Ok(()),
         object::macho::MH_EXECUTE => Err("is a program (Mach-O MH_EXECUTE), not a dynamic library".into()),
         object::macho::MH_OBJECT => Err("is an object file (Mach-O MH_OBJECT), not a dynamic library".into()),
-        other => Err(Refusal(format!("is not a dynamic library (Mach-O file type {other})"))),
+        other => Err(Refusal::from(format!("is not a dynamic library (Mach-O file type {other})"))),
     }
 }
 
 fn check_exports(file: &object::File, required: &[&str]) -> Result<(), Refusal> {
-    let exports = file.exports().map_err(|e| Refusal(format!("its export table cannot be read: {e}")))?;
+    let exports = file.exports().map_err(|e| Refusal::caused_by(format!("its export table cannot be read: {e}"), e))?;
     // Mach-O prefixes C symbols with an underscore
     let strip = matches!(file, object::File::MachO32(_) | object::File::MachO64(_));
     let names: std::collections::HashSet<&[u8]> =
@@ -148,7 +149,7 @@ fn check_exports(file: &object::File, required: &[&str]) -> Result<(), Refusal> 
     if missing.is_empty() {
         Ok(())
     } else {
-        Err(Refusal(format!(
+        Err(Refusal::from(format!(
             "does not export {} of the {} fmi2 functions the FMU's modelDescription.xml needs: {}",
             missing.len(),
             required.len(),
@@ -166,12 +167,12 @@ fn check_universal<Fat: FatArch>(
     required: &[&str],
 ) -> Result<(), Refusal> {
     if platform.format() != Format::MachO {
-        return Err(Refusal(format!(
+        return Err(Refusal::from(format!(
             "is a universal macOS binary (Mach-O), not {} as {platform} needs",
             platform.format().describe()
         )));
     }
-    let fat = parsed.map_err(|e| Refusal(format!("cannot be read as a universal Mach-O binary: {e}")))?;
+    let fat = parsed.map_err(|e| Refusal::caused_by(format!("cannot be read as a universal Mach-O binary: {e}"), e))?;
     let wanted = match platform.processor() {
         Processor::X86 => Architecture::I386,
         Processor::X86_64 => Architecture::X86_64,
@@ -179,17 +180,19 @@ fn check_universal<Fat: FatArch>(
     let mut found = Vec::new();
     for arch in fat.arches() {
         let a = arch.architecture();
-        let slice = arch
-            .data(data)
-            .map_err(|e| Refusal(format!("has a slice for {} that cannot be read: {e}", describe_architecture(a))))?;
-        check_single(platform, slice, required, false)
-            .map_err(|e| Refusal(format!("has a slice for {} that {e}", describe_architecture(a))))?;
+        let slice = arch.data(data).map_err(|e| {
+            Refusal::caused_by(format!("has a slice for {} that cannot be read: {e}", describe_architecture(a)), e)
+        })?;
+        check_single(platform, slice, required, false).map_err(|e| Refusal {
+            reason: format!("has a slice for {} that {e}", describe_architecture(a)),
+            cause: e.cause,
+        })?;
         found.push(describe_architecture(a));
     }
     if fat.arches().iter().any(|a| a.architecture() == wanted) {
         Ok(())
     } else {
-        Err(Refusal(format!(
+        Err(Refusal::from(format!(
             "is a universal binary with slices for {} but none for {}, which {platform} is",
             found.join(", "),
             platform.processor().describe()
@@ -207,13 +210,13 @@ mod tests {
     fn the_embedded_runtime_is_a_valid_linux64_binary_and_nothing_else() {
         let all = fmi2_functions::model_exchange_and_co_simulation();
         check(Platform::Linux64, RUNTIME_SO, &all).unwrap();
-        let e = check(Platform::Win64, RUNTIME_SO, &all).unwrap_err().0;
+        let e = check(Platform::Win64, RUNTIME_SO, &all).unwrap_err().reason;
         assert!(e.contains("is a Linux shared object (ELF), not a Windows DLL (PE)"), "{e}");
-        let e = check(Platform::Darwin64, RUNTIME_SO, &all).unwrap_err().0;
+        let e = check(Platform::Darwin64, RUNTIME_SO, &all).unwrap_err().reason;
         assert!(e.contains("Mach-O"), "{e}");
-        let e = check(Platform::Linux32, RUNTIME_SO, &all).unwrap_err().0;
+        let e = check(Platform::Linux32, RUNTIME_SO, &all).unwrap_err().reason;
         assert!(e.contains("is built for x86-64, but linux32 is x86 (32-bit)"), "{e}");
-        let e = check(Platform::Linux64, RUNTIME_SO, &["fmi2DoStep", "fmi3DoStep"]).unwrap_err().0;
+        let e = check(Platform::Linux64, RUNTIME_SO, &["fmi2DoStep", "fmi3DoStep"]).unwrap_err().reason;
         assert!(e.contains("does not export 1 of the 2 fmi2 functions") && e.ends_with(": fmi3DoStep"), "{e}");
     }
 
@@ -224,7 +227,7 @@ mod tests {
             assert!(check(Platform::Linux64, bad, &all).is_err());
         }
         // an import library (fmu_runtime.dll.lib): an archive, not the DLL
-        let e = check(Platform::Win64, format!("!<arch>\n{:60}", "").as_bytes(), &all).unwrap_err().0;
+        let e = check(Platform::Win64, format!("!<arch>\n{:60}", "").as_bytes(), &all).unwrap_err().reason;
         assert!(e.contains("archive") && e.contains("fmu_runtime.dll"), "{e}");
         // a universal header whose slice lies beyond the file
         let mut fat = Vec::new();
@@ -240,7 +243,7 @@ mod tests {
         }
         fat.resize(offset as usize, 0);
         fat.extend_from_slice(RUNTIME_SO);
-        let e = check(Platform::Darwin64, &fat, &all).unwrap_err().0;
+        let e = check(Platform::Darwin64, &fat, &all).unwrap_err().reason;
         assert!(e.starts_with("has a slice for x86-64 that is a Linux shared object (ELF)"), "{e}");
     }
 }

@@ -30,15 +30,13 @@ impl PlatformBinary {
     /// Model Exchange and Co-Simulation (as every FMU of this builder does).
     pub fn from_arg(arg: &str) -> Result<Self, BuildError> {
         let (name, file) = arg.split_once('=').filter(|(n, f)| !n.is_empty() && !f.is_empty()).ok_or_else(|| {
-            BuildError::CommandLine {
-                option: format!("--platform-binary {arg}"),
-                message: "expected PLATFORM=FILE, e.g. win64=fmu_runtime.dll (platforms: win32, win64, linux32, linux64, darwin32, darwin64)".into(),
-            }
+            BuildError::command_line(
+                format!("--platform-binary {arg}"),
+                "expected PLATFORM=FILE, e.g. win64=fmu_runtime.dll (platforms: win32, win64, linux32, linux64, darwin32, darwin64)",
+            )
         })?;
-        let platform = Platform::parse(name).map_err(|reason| BuildError::CommandLine {
-            option: format!("--platform-binary {arg}"),
-            message: reason.0,
-        })?;
+        let platform = Platform::parse(name)
+            .map_err(|reason| BuildError::command_line(format!("--platform-binary {arg}"), reason.reason))?;
         let path = PathBuf::from(file);
         let binary = Self::read(platform, &path)?;
         binary.check(&fmi2_functions::model_exchange_and_co_simulation())?;
@@ -50,7 +48,7 @@ impl PlatformBinary {
             return Err(refused(
                 path,
                 platform,
-                Refusal(format!("is a folder; give the {} file", platform.runtime_file())),
+                Refusal::from(format!("is a folder; give the {} file", platform.runtime_file())),
             ));
         }
         use crate::input::{file_read, size::Memory};
@@ -76,14 +74,14 @@ fn refused(path: &Path, platform: Platform, reason: Refusal) -> BuildError {
 pub fn check_distinct(binaries: &[PlatformBinary]) -> Result<(), BuildError> {
     for (i, b) in binaries.iter().enumerate() {
         if let Some(first) = binaries[..i].iter().find(|o| o.platform == b.platform) {
-            return Err(BuildError::CommandLine {
-                option: format!("--platform-binary {}", b.platform),
-                message: format!(
+            return Err(BuildError::command_line(
+                format!("--platform-binary {}", b.platform),
+                format!(
                     "given twice ({} and {}); an FMU has one binary per platform",
                     first.path.display(),
                     b.path.display()
                 ),
-            });
+            ));
         }
     }
     Ok(())

@@ -58,7 +58,7 @@ impl Platform {
     pub fn parse(name: &str) -> Result<Self, crate::error::Refusal> {
         Self::ALL.into_iter().find(|p| p.name() == name).ok_or_else(|| {
             let names: Vec<&str> = Self::ALL.iter().map(|p| p.name()).collect();
-            crate::error::Refusal(format!(
+            crate::error::Refusal::from(format!(
                 "'{name}' is not an FMI 2.0 platform: expected one of {} (FMI 2.0 names x86 and x86-64 platforms only, none for aarch64/arm64)",
                 names.join(", ")
             ))
@@ -134,7 +134,7 @@ mod tests {
         for p in Platform::ALL {
             assert_eq!(Platform::parse(p.name()), Ok(p));
         }
-        let e = Platform::parse("aarch64-linux").unwrap_err().0;
+        let e = Platform::parse("aarch64-linux").unwrap_err().reason;
         assert!(e.contains("win32, win64, linux32, linux64, darwin32, darwin64") && e.contains("aarch64"), "{e}");
         assert!(Platform::parse("Win64").is_err());
     }

@@ -31,8 +31,8 @@ pub struct FmuArchive<'a> {
 
 /// Writes the FMU at `path`, replacing an existing file only once the new one is complete.
 pub fn write_fmu(path: &Path, a: &FmuArchive) -> Result<(), BuildError> {
-    let entries = entries(a).map_err(|e| BuildError::file(path, e.0))?;
-    place::write_with(path, |file| write_zip(file, &entries).map_err(|e| e.0))
+    let entries = entries(a).map_err(|e| BuildError::file(path, e.reason))?;
+    place::write_with(path, |file| write_zip(file, &entries))
 }
 
 /// One archive entry: full name inside the zip, content, unix mode.
@@ -44,7 +44,7 @@ struct Entry<'a> {
 
 fn entries<'a>(a: &'a FmuArchive) -> Result<Vec<Entry<'a>>, Refusal> {
     if !is_model_identifier(a.model_identifier) {
-        return Err(Refusal(format!("model identifier '{}' is not a valid C identifier", a.model_identifier)));
+        return Err(Refusal::from(format!("model identifier '{}' is not a valid C identifier", a.model_identifier)));
     }
     if a.binaries.is_empty() {
         return Err("there is no binary for any platform".into());
@@ -53,7 +53,7 @@ fn entries<'a>(a: &'a FmuArchive) -> Result<Vec<Entry<'a>>, Refusal> {
         vec![Entry { name: "modelDescription.xml".into(), data: a.model_description.as_bytes(), mode: 0o644 }];
     for (platform, data) in &a.binaries {
         if data.is_empty() {
-            return Err(Refusal(format!("the {platform} binary is empty")));
+            return Err(Refusal::from(format!("the {platform} binary is empty")));
         }
         let name = format!("binaries/{platform}/{}.{}", a.model_identifier, platform.extension());
         // Importers dlopen this file: it must be executable once extracted.
@@ -61,14 +61,14 @@ fn entries<'a>(a: &'a FmuArchive) -> Result<Vec<Entry<'a>>, Refusal> {
     }
     for (folder, files) in [("resources", &a.resources), ("documentation", &a.documentation)] {
         for (name, data) in files {
-            check_relative(name).map_err(|m| Refusal(format!("{folder} entry '{name}': {m}")))?;
+            check_relative(name).map_err(|m| Refusal::from(format!("{folder} entry '{name}': {m}")))?;
             list.push(Entry { name: format!("{folder}/{name}"), data, mode: 0o644 });
         }
     }
     let mut seen = HashSet::new();
     for e in &list {
         if !seen.insert(e.name.as_str()) {
-            return Err(Refusal(format!("the archive would contain '{}' twice", e.name)));
+            return Err(Refusal::from(format!("the archive would contain '{}' twice", e.name)));
         }
     }
     Ok(list)
@@ -110,7 +110,7 @@ fn write_zip(file: File, entries: &[Entry]) -> Result<(), Refusal> {
     }
     let target = zip.finish().map_err(|e| failed("finishing the archive", e))?;
     if target.failed {
-        return Err(Refusal("a write of the archive failed".into()));
+        return Err(Refusal::from("a write of the archive failed"));
     }
     let file = target.file.into_inner().map_err(|e| failed("flushing the archive", e.into_error().into()))?;
     file.sync_all().map_err(|e| failed("syncing the archive", e.into()))
@@ -158,8 +158,8 @@ impl Seek for Target {
 /// A failed step of the archive's write; a full disk or the file size limit said as such.
 fn failed(step: &str, e: zip::result::ZipError) -> Refusal {
     match e {
-        zip::result::ZipError::Io(io) => Refusal(format!("{step}: {}", place::io_words(&io))),
-        other => Refusal(format!("{step}: {other}")),
+        zip::result::ZipError::Io(io) => Refusal::caused_by(format!("{step}: {}", place::io_words(&io)), io),
+        other => Refusal::caused_by(format!("{step}: {other}"), other),
     }
 }
 

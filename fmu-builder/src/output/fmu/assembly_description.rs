@@ -2,6 +2,7 @@
 //! assembly table (the one definition the binary serves), every output depending on every input
 //! (the joints couple all of them).
 
+use crate::error::SharedCause;
 use std::io;
 
 use fmi2::Causality;
@@ -30,8 +31,9 @@ pub fn assembly_description_xml(info: &ModelInfo, table: &AssemblyTable) -> Resu
         UNITS.iter().filter(|(u, _)| table.variables.iter().any(|v| v.unit == Some(*u))).copied().collect();
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
     write_document(&mut w, info, table, &units)
-        .map_err(|e| FmuError::Description(format!("writing the XML failed: {e}")))?;
-    String::from_utf8(w.into_inner()).map_err(|e| FmuError::Description(format!("the XML is not UTF-8: {e}")))
+        .map_err(|e| FmuError::Xml { what: "writing the XML failed", cause: SharedCause::new(e) })?;
+    String::from_utf8(w.into_inner())
+        .map_err(|e| FmuError::Xml { what: "the XML is not UTF-8", cause: SharedCause::new(e) })
 }
 
 fn write_document(w: &mut W, info: &ModelInfo, table: &AssemblyTable, units: &[(&str, [i32; 4])]) -> io::Result<()> {

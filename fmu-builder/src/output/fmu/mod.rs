@@ -19,12 +19,19 @@ pub enum FmuError {
     /// variable or attribute.
     #[error("modelDescription.xml: {0}")]
     Description(String),
+    /// The XML could not be written, or is not UTF-8 (`what` says which): a defect of the writer.
+    #[error("modelDescription.xml: {what}: {cause}")]
+    Xml {
+        what: &'static str,
+        #[source]
+        cause: crate::error::SharedCause,
+    },
 }
 
 // So that the build pipeline can use `?` on packaging steps.
 impl From<FmuError> for BuildError {
     fn from(e: FmuError) -> Self {
-        BuildError::Internal(e.to_string())
+        BuildError::internal(e.to_string()).caused_by(e)
     }
 }
 

@@ -6,6 +6,7 @@
 //! (possibly empty) dependency lists everywhere, because an absent attribute means "depends on
 //! everything".
 
+use crate::error::SharedCause;
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::io;
 
@@ -51,8 +52,10 @@ pub fn model_description_xml(info: &ModelInfo, table: &VariableTable) -> Result<
     check_info(info)?;
     let plan = Plan::new(table)?;
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
-    write_document(&mut w, info, &plan).map_err(|e| FmuError::Description(format!("writing the XML failed: {e}")))?;
-    String::from_utf8(w.into_inner()).map_err(|e| FmuError::Description(format!("the XML is not UTF-8: {e}")))
+    write_document(&mut w, info, &plan)
+        .map_err(|e| FmuError::Xml { what: "writing the XML failed", cause: SharedCause::new(e) })?;
+    String::from_utf8(w.into_inner())
+        .map_err(|e| FmuError::Xml { what: "the XML is not UTF-8", cause: SharedCause::new(e) })
 }
 
 /// A time as xs:dateTime in UTC (`YYYY-MM-DDThh:mm:ssZ`), from seconds since the Unix epoch
