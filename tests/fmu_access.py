@@ -9,24 +9,22 @@ import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import (FMU2Model, FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
                        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-from fmpy.logging import addLoggerProxy
 
-# FMPy's native logger proxy forwards to one global slot, which each simulate_fmu(logger=...)
-# points at callbacks it frees when it returns: an FMU that logs through FMPy's default
-# callbacks after that calls freed memory. The callbacks made here stay alive for the process.
+# FMPy's native logger proxy forwards every proxied FMU's messages to one global target, which
+# each simulate_fmu(logger=...) points at a logger it frees when it returns: an FMU that then logs
+# through FMPy's default callbacks calls freed memory, and re-pointing the target here would take
+# the messages from a test's recorder. So an FMU given no callbacks gets a logger of its own that
+# bypasses the proxy (it sees the format string, not the formatted text, and drops it: tests that
+# read messages give a recorder), kept alive for the process.
 _KEPT = []
 
 
-def printing_callbacks():
-    """Callbacks whose logger prints each message (as FMPy's default does), kept alive."""
-    def log(env, name, status, category, message):
-        print(f"[{status}] {message.decode(errors='replace') if message else ''}")
-
+def quiet_callbacks():
+    """Callbacks whose logger is called directly and says nothing, kept alive."""
     callbacks = fmi2CallbackFunctions()
-    callbacks.logger = fmi2CallbackLoggerTYPE(log)
+    callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, category, message: None)
     callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(0)
     callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(0)
-    addLoggerProxy(ctypes.byref(callbacks))
     _KEPT.append(callbacks)
     return callbacks
 
@@ -42,7 +40,7 @@ class Fmu:
         self.kind = kind
         self.fmu = cls(guid=self.md.guid, unzipDirectory=self.dir,
                        modelIdentifier=iface.modelIdentifier, instanceName="test")
-        self.fmu.instantiate(callbacks=callbacks if callbacks is not None else printing_callbacks())
+        self.fmu.instantiate(callbacks=callbacks if callbacks is not None else quiet_callbacks())
         self.nx = len(self.md.derivatives)
 
     def set(self, **values):

@@ -44,9 +44,17 @@ def builder(*args, timeout=300, **kw):
     return proc
 
 
+def as_a_terminal_starts_it():
+    """SIGINT and SIGTERM at their defaults in the builder, as a shell in a terminal starts it: a
+    test run in the background (a non-interactive shell's `&`) inherits SIGINT ignored, which the
+    builder rightly keeps ignoring."""
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_DFL)
+
+
 def start(*args, **kw):
     return subprocess.Popen([str(BUILDER), *map(str, args)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, **kw)
+                            text=True, preexec_fn=as_a_terminal_starts_it, **kw)
 
 
 def wait_for_line(proc, text):
