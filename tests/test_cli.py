@@ -172,6 +172,17 @@ def test_a_millimetre_part_is_warned_of_before_the_reduction(tmp_path):
     assert any("1.570e7 kg" in w for w in report["warnings"])
 
 
+def said_once_before(stderr, words, phase):
+    """The one warning line holding `words`, checked to come before the progress line of
+    `phase`."""
+    lines = stderr.splitlines()
+    said = [i for i, line in enumerate(lines) if line.startswith("warning:") and words in line]
+    assert len(said) == 1, stderr
+    start = next(i for i, line in enumerate(lines) if line.startswith("fmu-builder [") and phase in line)
+    assert said[0] < start, stderr
+    return lines[said[0]]
+
+
 def test_elements_metres_across_are_warned_of_before_the_reduction(tmp_path):
     """A 10 x 0.1 x 0.2 mm steel bar in two elements given in millimetres: 10 m across and
     1 570 kg, plausible, but its elements are 5 m across (the median of their bounding boxes'
@@ -179,12 +190,9 @@ def test_elements_metres_across_are_warned_of_before_the_reduction(tmp_path):
     bar = copy.deepcopy(BASE)
     bar["geometry"]["boxes"] = [{"min": [0, 0, 0], "max": [10, 0.1, 0.2], "elements": [2, 1, 1]}]
     proc = builder(write(tmp_path, bar, "bar.json"), "-o", tmp_path / "bar.fmu")
-    lines = proc.stderr.splitlines()
-    said = [i for i, line in enumerate(lines) if line.startswith("warning:") and "elements are" in line]
-    assert len(said) == 1, proc.stderr
-    assert "5.005e0 m across" in lines[said[0]] and '"length_unit": "mm"' in lines[said[0]], proc.stderr
-    reduction = next(i for i, line in enumerate(lines) if line.startswith("fmu-builder [") and "reduction basis" in line)
-    assert said[0] < reduction, proc.stderr
+    warning = said_once_before(proc.stderr, "elements are", "reduction basis")
+    # sqrt(5^2 + 0.1^2 + 0.2^2) = 5.005: one element's bounding box
+    assert "5.005e0 m across" in warning and '"length_unit": "mm"' in warning, warning
 
 
 def test_a_band_of_more_modes_than_a_solve_takes_is_warned_of_before_the_eigen_solve(tmp_path):
@@ -196,13 +204,9 @@ def test_a_band_of_more_modes_than_a_solve_takes_is_warned_of_before_the_eigen_s
     beam["reduction"].pop("modes")
     beam["reduction"]["max_frequency"] = 1e6
     proc = builder(write(tmp_path, beam, "beam.json"), "-o", tmp_path / "beam.fmu")
-    lines = proc.stderr.splitlines()
-    said = [i for i, line in enumerate(lines) if line.startswith("warning:") and "Weyl" in line]
-    assert len(said) == 1, proc.stderr
+    warning = said_once_before(proc.stderr, "Weyl", "eigen-solve")
     # 5.9e4 by the formula for this steel (E 210 GPa, nu 0.3, rho 7850): the count's two digits
-    assert "about 5.9e4 modes" in lines[said[0]] and '"length_unit": "mm"' in lines[said[0]], proc.stderr
-    solve = next(i for i, line in enumerate(lines) if line.startswith("fmu-builder [") and "eigen-solve" in line)
-    assert said[0] < solve, proc.stderr
+    assert "about 5.9e4 modes" in warning and '"length_unit": "mm"' in warning, warning
 
 
 def test_the_summary_states_what_the_scene_allows_and_refuses(tmp_path):
